@@ -1,0 +1,121 @@
+"""Abstract interface every planar walker model implements.
+
+A walker is described in *floating-base* coordinates ``q`` (length ``n``): ``q[0], q[1]`` are the
+(x, y) position of the centre of the stance ("right", index 0) foot's arc in a frame aligned with
+the ground (x along the ground, y normal to it), ``q[2]`` the absolute angle of the stance leg
+from the ground normal (counter-clockwise positive) and the remaining entries relative joint
+angles. Positive stance-leg angular velocity rolls the walker towards ``-x``: walking direction
+is ``-x`` throughout the package. Gravity may be tilted by a slope angle ``slope`` (rad); the
+ground then descends towards ``-x`` (downhill walking).
+
+The equations of motion have the form (PyDy/sympy.physics.mechanics naming)
+
+.. math:: M(q) \\ddot q + h(q, \\dot q) = B u + A^T \\lambda,
+
+with ``h`` the Coriolis, centrifugal and gravity terms (:meth:`PlanarWalker.bias_forces`).
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+FloatArray = NDArray[np.float64]
+Foot = Literal["right", "left"]
+
+__all__ = ["Foot", "PlanarWalker", "gravity_vector"]
+
+
+def gravity_vector(gravity: ArrayLike, slope: ArrayLike = 0.0) -> FloatArray:
+    """Gravity in the ground-aligned frame for a slope descending towards ``-x``.
+
+    Parameters
+    ----------
+    gravity : array_like
+        Magnitude ``g`` (m/s^2).
+    slope : array_like
+        Slope angle ``gamma`` (rad), >= 0 for downhill walking towards ``-x``.
+
+    Returns
+    -------
+    ndarray, shape (..., 2)
+        ``g (-sin gamma, -cos gamma)`` (m/s^2).
+    """
+    g = np.asarray(gravity, dtype=float)
+    gam = np.asarray(slope, dtype=float)
+    return np.stack(np.broadcast_arrays(-g * np.sin(gam), -g * np.cos(gam)), axis=-1)
+
+
+class PlanarWalker(ABC):
+    """Abstract planar biped in floating-base coordinates (see module docstring)."""
+
+    #: Names of the generalized coordinates, in order.
+    coordinate_names: tuple[str, ...]
+
+    @property
+    def n_coordinates(self) -> int:
+        """Number of generalized coordinates ``n`` in flight."""
+        return len(self.coordinate_names)
+
+    @property
+    @abstractmethod
+    def total_mass(self) -> FloatArray:
+        """Total mass (kg)."""
+
+    @property
+    @abstractmethod
+    def foot_radii(self) -> tuple[FloatArray, FloatArray]:
+        """Foot arc radii (m) of the stance ("right") and swing ("left") foot."""
+
+    @abstractmethod
+    def mass_matrix(self, q: ArrayLike) -> FloatArray:
+        """Mass matrix ``M(q)``, shape (..., n, n)."""
+
+    @abstractmethod
+    def bias_forces(self, q: ArrayLike, q_dot: ArrayLike, slope: ArrayLike = 0.0) -> FloatArray:
+        """Velocity-product and gravity terms ``h`` in ``M q_ddot + h = Q``, shape (..., n)."""
+
+    @abstractmethod
+    def potential_energy(self, q: ArrayLike, slope: ArrayLike = 0.0) -> FloatArray:
+        """Gravitational potential energy (J), zero at the ground frame origin, shape (...)."""
+
+    @abstractmethod
+    def contact_jacobian(self, q: ArrayLike, foot: Foot) -> FloatArray:
+        """Rolling-contact Jacobian of a foot on the ground, shape (..., 2, n).
+
+        Rows: tangential (x) and normal (y) velocity of the foot's material contact point.
+        """
+
+    @abstractmethod
+    def contact_jacobian_rate(self, q: ArrayLike, q_dot: ArrayLike, foot: Foot) -> FloatArray:
+        """``A_dot q_dot`` for the foot's contact Jacobian, shape (..., 2)."""
+
+    @abstractmethod
+    def foot_clearance(self, q: ArrayLike, foot: Foot) -> FloatArray:
+        """Height (m) of the foot arc's lowest point above the ground, shape (...)."""
+
+    @abstractmethod
+    def contact_point(self, q: ArrayLike, foot: Foot) -> FloatArray:
+        """Ground point below the foot's arc centre (x, y) (m), shape (..., 2)."""
+
+    @abstractmethod
+    def swap_legs(self, q: ArrayLike, q_dot: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Relabel the state so that the left (striking) foot becomes the stance foot."""
+
+    @abstractmethod
+    def actuation_matrix(self) -> FloatArray:
+        """Matrix ``B`` (n, n_u) mapping actuator torques to generalized forces."""
+
+    def kinetic_energy(self, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
+        """Kinetic energy ``1/2 q_dot^T M q_dot`` (J), shape (...)."""
+        v = np.asarray(q_dot, dtype=float)
+        return np.asarray(0.5 * np.einsum("...i,...ij,...j->...", v, self.mass_matrix(q), v))
+
+    def mechanical_energy(
+        self, q: ArrayLike, q_dot: ArrayLike, slope: ArrayLike = 0.0
+    ) -> FloatArray:
+        """Kinetic plus potential energy (J), shape (...)."""
+        return self.kinetic_energy(q, q_dot) + self.potential_energy(q, slope)

@@ -1,0 +1,353 @@
+"""The compass-gait biped with circular feet of Font & Kövecses (2008).
+
+Coordinates (4 DOF in flight), see ``shared/MODEL.md``:
+
+- ``q1, q2``: position of ``P_R``, the centre of the right foot's arc;
+- ``q3``: absolute angle of the right leg from the vertical (counter-clockwise positive);
+- ``q4``: angle of the left leg relative to the right one.
+
+With ``e(theta) = (-sin theta, cos theta)`` and ``s = l - R``: hip ``H = P_R + s e(q3)``, left arc
+centre ``P_L = H - s e(q3 + q4)``, leg centres of mass ``H - b e(leg angle)``.
+
+The mass matrix is assembled by hand from the point Jacobians,
+``M = sum_i m_i J_i^T J_i + I (w_R w_R^T + w_L w_L^T)``; ``tests/`` check it against an
+independent sympy Lagrangian derivation. Every function broadcasts over leading axes of ``q`` and
+over array-valued parameters (e.g. a grid of foot radii).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields, replace
+from typing import Any, NamedTuple, final
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from heelstrike.models.base import Foot, PlanarWalker, gravity_vector
+
+FloatArray = NDArray[np.float64]
+
+__all__ = ["CompassGait", "CompassPositions", "heel_strike_state"]
+
+
+class WalkerParameterError(ValueError):
+    """Raised when walker parameters are physically invalid."""
+
+
+class CompassPositions(NamedTuple):
+    """Positions (m) of the compass gait's points, each of shape (..., 2)."""
+
+    hip: FloatArray
+    right_foot_centre: FloatArray
+    left_foot_centre: FloatArray
+    right_contact: FloatArray
+    left_contact: FloatArray
+    right_leg_com: FloatArray
+    left_leg_com: FloatArray
+
+
+def _e(theta: FloatArray) -> FloatArray:
+    """Unit vector up a leg at absolute angle ``theta``: ``(-sin, cos)``, shape (..., 2)."""
+    return np.stack((-np.sin(theta), np.cos(theta)), axis=-1)
+
+
+def _de(theta: FloatArray) -> FloatArray:
+    """Derivative of :func:`_e`: ``(-cos, -sin)``, shape (..., 2)."""
+    return np.stack((-np.cos(theta), -np.sin(theta)), axis=-1)
+
+
+def _q(q: ArrayLike, n: int = 4, name: str = "q") -> FloatArray:
+    arr = np.asarray(q, dtype=float)
+    if arr.ndim < 1 or arr.shape[-1] != n:
+        raise ValueError(f"{name} must have shape (..., {n}), got {arr.shape}")
+    return arr
+
+
+@final
+@dataclass(frozen=True, kw_only=True, eq=False)
+class CompassGait(PlanarWalker):
+    """Compass-gait biped with circular feet (paper Fig. 1).
+
+    Defaults are the paper's values: ``mH = 2 m = 10 kg``, ``a = b = 0.5 m``, ``l = 1 m``.
+    Any parameter may be an array; arrays broadcast with the leading axes of states.
+
+    Parameters
+    ----------
+    hip_mass : float
+        Hip point mass ``mH`` (kg), > 0.
+    leg_mass : float
+        Mass ``m`` of each leg (kg), > 0.
+    leg_length : float
+        Leg length ``l`` from hip to the foot's lowest point (m), > 0.
+    leg_com_from_hip : float
+        Distance ``b`` from the hip to a leg's centre of mass (m), ``0 < b < l``.
+    foot_radius : float
+        Foot arc radius ``R`` (m), ``0 <= R <= l``; the arc centre lies on the leg at ``l - R``
+        from the hip. ``R = 0`` is the point-foot compass gait, ``R = l`` McGeer's wheel.
+    leg_inertia : float
+        Moment of inertia of each leg about its centre of mass (kg m^2), >= 0 (default 0:
+        point-mass legs, as in the paper).
+    gravity : float
+        Gravitational acceleration ``g`` (m/s^2), > 0.
+    """
+
+    hip_mass: Any = 10.0
+    leg_mass: Any = 5.0
+    leg_length: Any = 1.0
+    leg_com_from_hip: Any = 0.5
+    foot_radius: Any = 0.0
+    leg_inertia: Any = 0.0
+    gravity: Any = 9.81
+
+    coordinate_names = ("q1", "q2", "q3", "q4")
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            val = np.asarray(getattr(self, f.name), dtype=float)
+            if not np.all(np.isfinite(val)):
+                raise WalkerParameterError(f"{f.name} must be finite, got {val}")
+            object.__setattr__(self, f.name, float(val) if val.ndim == 0 else val)
+        checks = [
+            (np.all(np.asarray(self.hip_mass) > 0), "hip_mass must be > 0 (kg)"),
+            (np.all(np.asarray(self.leg_mass) > 0), "leg_mass must be > 0 (kg)"),
+            (np.all(np.asarray(self.leg_length) > 0), "leg_length must be > 0 (m)"),
+            (np.all(np.asarray(self.gravity) > 0), "gravity must be > 0 (m/s^2)"),
+            (np.all(np.asarray(self.leg_inertia) >= 0), "leg_inertia must be >= 0 (kg m^2)"),
+            (
+                np.all((self.leg_com_from_hip > 0) & (self.leg_com_from_hip < self.leg_length)),
+                "leg_com_from_hip must satisfy 0 < b < leg_length (m)",
+            ),
+            (
+                np.all((self.foot_radius >= 0) & (self.foot_radius <= self.leg_length)),
+                "foot_radius must satisfy 0 <= R <= leg_length (m)",
+            ),
+        ]
+        for ok, msg in checks:
+            if not ok:
+                raise WalkerParameterError(msg)
+
+    # -- convenience --------------------------------------------------------------------------
+    def replace(self, **changes: Any) -> CompassGait:
+        """Return a copy with some parameters changed (validated again)."""
+        return replace(self, **changes)
+
+    @property
+    def leg_com_from_foot(self) -> Any:
+        """Distance ``a = l - b`` (m) from a foot's lowest point to the leg's centre of mass."""
+        return self.leg_length - self.leg_com_from_hip
+
+    @property
+    def total_mass(self) -> FloatArray:
+        return np.asarray(self.hip_mass + 2.0 * self.leg_mass)
+
+    @property
+    def foot_radii(self) -> tuple[FloatArray, FloatArray]:
+        R = np.asarray(self.foot_radius, dtype=float)
+        return R, R
+
+    def _p(self, name: str, q: FloatArray) -> FloatArray:
+        """Parameter broadcast to the leading shape of ``q``."""
+        return np.asarray(getattr(self, name), dtype=float)
+
+    # -- kinematics ---------------------------------------------------------------------------
+    def _point_jacobians(self, q: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Jacobians (..., 2, 4) of the hip, right-leg and left-leg centres of mass."""
+        l, b, R = (self._p(k, q) for k in ("leg_length", "leg_com_from_hip", "foot_radius"))
+        s = l - R
+        q3, q34 = q[..., 2], q[..., 2] + q[..., 3]
+        de3, de34 = _de(q3), _de(q34)
+        shape = np.broadcast_shapes(q3.shape, s.shape)
+        eye = np.broadcast_to(np.eye(2), (*shape, 2, 2))
+        zero = np.zeros((*shape, 2))
+
+        def jac(col3: FloatArray, col4: FloatArray) -> FloatArray:
+            cols = np.broadcast_arrays(col3, col4, zero)
+            return np.concatenate((eye, cols[0][..., None], cols[1][..., None]), axis=-1)
+
+        J_H = jac(s[..., None] * de3, zero)
+        J_R = jac((s - b)[..., None] * de3, zero)
+        J_L = jac(s[..., None] * de3 - b[..., None] * de34, -b[..., None] * de34)
+        return J_H, J_R, J_L
+
+    def positions(self, q: ArrayLike) -> CompassPositions:
+        """Positions of hip, foot centres, contact points and leg centres of mass (m)."""
+        q_ = _q(q)
+        l, b, R = (self._p(k, q_) for k in ("leg_length", "leg_com_from_hip", "foot_radius"))
+        s = (l - R)[..., None]
+        P_R = q_[..., 0:2]
+        e3, e34 = _e(q_[..., 2]), _e(q_[..., 2] + q_[..., 3])
+        H = P_R + s * e3
+        P_L = H - s * e34
+        down = np.stack(np.broadcast_arrays(np.zeros_like(R), -R), axis=-1)
+        return CompassPositions(
+            hip=H,
+            right_foot_centre=np.broadcast_to(P_R, H.shape),
+            left_foot_centre=P_L,
+            right_contact=P_R + down,
+            left_contact=P_L + down,
+            right_leg_com=H - b[..., None] * e3,
+            left_leg_com=H - b[..., None] * e34,
+        )
+
+    def contact_point(self, q: ArrayLike, foot: Foot) -> FloatArray:
+        pos = self.positions(q)
+        return pos.right_contact if _foot(foot) == "right" else pos.left_contact
+
+    def foot_clearance(self, q: ArrayLike, foot: Foot) -> FloatArray:
+        return np.asarray(self.contact_point(q, foot)[..., 1])
+
+    # -- dynamics -----------------------------------------------------------------------------
+    def mass_matrix(self, q: ArrayLike) -> FloatArray:
+        """Mass matrix ``M(q)`` of eq. (1), shape (..., 4, 4).
+
+        ``M = mH J_H^T J_H + m (J_R^T J_R + J_L^T J_L) + I (w_R w_R^T + w_L w_L^T)`` with
+        ``w_R = (0, 0, 1, 0)``, ``w_L = (0, 0, 1, 1)`` the legs' angular-velocity rows.
+        """
+        q_ = _q(q)
+        J_H, J_R, J_L = self._point_jacobians(q_)
+        mH, m, inertia = (self._p(k, q_) for k in ("hip_mass", "leg_mass", "leg_inertia"))
+
+        def jtj(J: FloatArray) -> FloatArray:
+            return np.asarray(np.swapaxes(J, -1, -2) @ J)
+
+        M = mH[..., None, None] * jtj(J_H) + m[..., None, None] * (jtj(J_R) + jtj(J_L))
+        rot = np.zeros((4, 4))
+        rot[2:, 2:] = [[2.0, 1.0], [1.0, 1.0]]
+        return np.asarray(M + inertia[..., None, None] * rot)
+
+    def bias_forces(self, q: ArrayLike, q_dot: ArrayLike, slope: ArrayLike = 0.0) -> FloatArray:
+        """``h = C(q, q_dot) q_dot + dV/dq`` so that ``M q_ddot + h = Q``, shape (..., 4).
+
+        For a point ``r = P_R + sum_k c_k e(theta_k)`` the velocity-product acceleration is
+        ``-sum_k c_k e(theta_k) theta_dot_k^2``; ``h = sum_i m_i J_i^T (a_i - g)``.
+        """
+        q_, qd = _q(q), _q(q_dot, name="q_dot")
+        l, b, R = (self._p(k, q_) for k in ("leg_length", "leg_com_from_hip", "foot_radius"))
+        mH, m = self._p("hip_mass", q_), self._p("leg_mass", q_)
+        s = (l - R)[..., None]
+        w3 = qd[..., 2][..., None]
+        w34 = (qd[..., 2] + qd[..., 3])[..., None]
+        e3, e34 = _e(q_[..., 2]), _e(q_[..., 2] + q_[..., 3])
+        g = gravity_vector(self.gravity, slope)
+        a_H = -s * e3 * w3**2
+        a_R = -(s - b[..., None]) * e3 * w3**2
+        a_L = a_H + b[..., None] * e34 * w34**2
+        J_H, J_R, J_L = self._point_jacobians(q_)
+
+        def jt(J: FloatArray, f: FloatArray) -> FloatArray:
+            return np.einsum("...ji,...j->...i", J, f)
+
+        return np.asarray(
+            mH[..., None] * jt(J_H, a_H - g)
+            + m[..., None] * (jt(J_R, a_R - g) + jt(J_L, a_L - g))
+        )
+
+    def potential_energy(self, q: ArrayLike, slope: ArrayLike = 0.0) -> FloatArray:
+        pos = self.positions(q)
+        g = gravity_vector(self.gravity, slope)
+        mH, m = np.asarray(self.hip_mass), np.asarray(self.leg_mass)
+
+        def dot(r: FloatArray) -> FloatArray:
+            return np.asarray(np.sum(r * g, axis=-1))
+
+        return np.asarray(-(mH * dot(pos.hip) + m * (dot(pos.right_leg_com) + dot(pos.left_leg_com))))
+
+    def contact_jacobian(self, q: ArrayLike, foot: Foot) -> FloatArray:
+        """Rolling-contact Jacobian, eqs. (4)-(5) of the paper, valid for any configuration.
+
+        Right foot: ``[[1, 0, R, 0], [0, 1, 0, 0]]``. Left foot: the velocity of ``P_L`` plus
+        ``R (q3_dot + q4_dot)`` in x; at ``q4 = -2 q3`` it reduces to eq. (5).
+        """
+        q_ = _q(q)
+        R = self._p("foot_radius", q_)
+        shape = np.broadcast_shapes(q_.shape[:-1], R.shape)
+        A = np.zeros((*shape, 2, 4))
+        A[..., 0, 0] = 1.0
+        A[..., 1, 1] = 1.0
+        if _foot(foot) == "right":
+            A[..., 0, 2] = R
+            return A
+        s = self._p("leg_length", q_) - R
+        q3, q34 = q_[..., 2], q_[..., 2] + q_[..., 3]
+        A[..., 0, 2] = -s * np.cos(q3) + s * np.cos(q34) + R
+        A[..., 0, 3] = s * np.cos(q34) + R
+        A[..., 1, 2] = -s * np.sin(q3) + s * np.sin(q34)
+        A[..., 1, 3] = s * np.sin(q34)
+        return A
+
+    def contact_jacobian_rate(self, q: ArrayLike, q_dot: ArrayLike, foot: Foot) -> FloatArray:
+        q_, qd = _q(q), _q(q_dot, name="q_dot")
+        R = self._p("foot_radius", q_)
+        shape = np.broadcast_shapes(q_.shape[:-1], qd.shape[:-1], R.shape)
+        if _foot(foot) == "right":
+            return np.zeros((*shape, 2))
+        s = (self._p("leg_length", q_) - R)[..., None]
+        w3 = qd[..., 2][..., None]
+        w34 = (qd[..., 2] + qd[..., 3])[..., None]
+        e3, e34 = _e(q_[..., 2]), _e(q_[..., 2] + q_[..., 3])
+        return np.asarray(np.broadcast_to(-s * e3 * w3**2 + s * e34 * w34**2, (*shape, 2)))
+
+    def swap_legs(self, q: ArrayLike, q_dot: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Relabel so that the left foot becomes the "right" (stance) foot.
+
+        ``q1, q2 <- P_L``, ``q3 <- q3 + q4``, ``q4 <- -q4``; velocities by the chain rule.
+        """
+        q_, qd = _q(q), _q(q_dot, name="q_dot")
+        pos = self.positions(q_)
+        s = (self._p("leg_length", q_) - self._p("foot_radius", q_))[..., None]
+        w3 = qd[..., 2][..., None]
+        w34 = (qd[..., 2] + qd[..., 3])[..., None]
+        vL = qd[..., 0:2] + s * (_de(q_[..., 2]) * w3 - _de(q_[..., 2] + q_[..., 3]) * w34)
+        q_new = np.concatenate(
+            (pos.left_foot_centre, (q_[..., 2] + q_[..., 3])[..., None], -q_[..., 3:4]), axis=-1
+        )
+        qd_new = np.concatenate(
+            np.broadcast_arrays(vL, (qd[..., 2] + qd[..., 3])[..., None], -qd[..., 3:4]), axis=-1
+        )
+        return q_new, qd_new
+
+    def actuation_matrix(self) -> FloatArray:
+        """Hip torque (on the left leg, reaction on the right) acts on ``q4``: ``B = e4``."""
+        return np.array([[0.0], [0.0], [0.0], [1.0]])
+
+
+def _foot(foot: str) -> str:
+    if foot not in ("right", "left"):
+        raise ValueError(f"foot must be 'right' or 'left', got {foot!r}")
+    return foot
+
+
+def heel_strike_state(
+    walker: CompassGait,
+    impact_angle: ArrayLike,
+    *,
+    q3_dot: ArrayLike = 1.0,
+    q4_dot: ArrayLike = 0.0,
+) -> tuple[FloatArray, FloatArray]:
+    """Pre-impact state of the paper's heel-strike study (MODEL.md).
+
+    Right foot on the ground and rolling (``q2 = R``, ``q1_dot = -R q3_dot``, ``q2_dot = 0``),
+    legs symmetric (``q4 = -2 q3``), ``q1 = 0``.
+
+    Parameters
+    ----------
+    walker : CompassGait
+        The walker (its ``foot_radius`` may be an array).
+    impact_angle : array_like
+        ``q3`` at impact (rad).
+    q3_dot, q4_dot : array_like
+        Pre-impact angular velocities (rad/s); the paper uses 1 and 0.
+
+    Returns
+    -------
+    q, q_dot : ndarray, shape (..., 4)
+        Broadcast over ``impact_angle``, the velocities and the walker's parameters.
+    """
+    q3 = np.asarray(impact_angle, dtype=float)
+    w3 = np.asarray(q3_dot, dtype=float)
+    w4 = np.asarray(q4_dot, dtype=float)
+    R = np.asarray(walker.foot_radius, dtype=float)
+    q3, w3, w4, R = np.broadcast_arrays(q3, w3, w4, R)
+    q = np.stack((np.zeros_like(q3), R, q3, -2.0 * q3), axis=-1)
+    q_dot = np.stack((-R * w3, np.zeros_like(q3), w3, w4), axis=-1)
+    return q, q_dot

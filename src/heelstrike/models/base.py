@@ -109,6 +109,31 @@ class PlanarWalker(ABC):
     def actuation_matrix(self) -> FloatArray:
         """Matrix ``B`` (n, n_u) mapping actuator torques to generalized forces."""
 
+    def heel_strike_function(self, q: ArrayLike) -> FloatArray:
+        """Smooth function that crosses zero upwards when the swing foot strikes ahead.
+
+        Used as the terminal event of single support once the stance leg has passed the
+        vertical. The default is minus the swing foot's clearance; walkers override it with a
+        form free of the mid-stance scuffing root (see :class:`~heelstrike.models.CompassGait`).
+        """
+        return np.asarray(-self.foot_clearance(q, "left"))
+
+    def section_to_state(self, z: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Map Poincare-section coordinates ``z`` (just after heel strike) to ``(q, q_dot)``.
+
+        The stance foot's contact point is placed at ``x = 0``.
+        """
+        raise NotImplementedError(f"{type(self).__name__} defines no Poincare section")
+
+    def state_to_section(self, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
+        """Inverse of :meth:`section_to_state` (position along the ground is dropped)."""
+        raise NotImplementedError(f"{type(self).__name__} defines no Poincare section")
+
+    @property
+    def section_names(self) -> tuple[str, ...]:
+        """Names of the Poincare-section coordinates."""
+        raise NotImplementedError(f"{type(self).__name__} defines no Poincare section")
+
     def kinetic_energy(self, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
         """Kinetic energy ``1/2 q_dot^T M q_dot`` (J), shape (...)."""
         v = np.asarray(q_dot, dtype=float)

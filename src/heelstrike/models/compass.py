@@ -298,13 +298,54 @@ class CompassGait(PlanarWalker):
         w3 = qd[..., 2][..., None]
         w34 = (qd[..., 2] + qd[..., 3])[..., None]
         vL = qd[..., 0:2] + s * (_de(q_[..., 2]) * w3 - _de(q_[..., 2] + q_[..., 3]) * w34)
+        lead_q = pos.left_foot_centre.shape[:-1]
         q_new = np.concatenate(
-            (pos.left_foot_centre, (q_[..., 2] + q_[..., 3])[..., None], -q_[..., 3:4]), axis=-1
+            (
+                pos.left_foot_centre,
+                np.broadcast_to((q_[..., 2] + q_[..., 3])[..., None], (*lead_q, 1)),
+                np.broadcast_to(-q_[..., 3:4], (*lead_q, 1)),
+            ),
+            axis=-1,
         )
+        lead = np.broadcast_shapes(vL.shape[:-1], qd.shape[:-1])
         qd_new = np.concatenate(
-            np.broadcast_arrays(vL, (qd[..., 2] + qd[..., 3])[..., None], -qd[..., 3:4]), axis=-1
+            (
+                np.broadcast_to(vL, (*lead, 2)),
+                np.broadcast_to((qd[..., 2] + qd[..., 3])[..., None], (*lead, 1)),
+                np.broadcast_to(-qd[..., 3:4], (*lead, 1)),
+            ),
+            axis=-1,
         )
         return q_new, qd_new
+
+    def heel_strike_function(self, q: ArrayLike) -> FloatArray:
+        """``2 q3 + q4``: zero when the legs are symmetric, rising through zero at heel strike.
+
+        With the stance foot rolling (``q2 = R``) the swing foot's clearance is
+        ``2 (l - R) sin((2 q3 + q4)/2) sin(q4/2)``; this drops the ``sin(q4/2)`` factor, whose
+        root is the mid-stance scuffing of the swing foot that the compass-gait convention
+        ignores. Once ``q3 > 0`` an upward crossing means the swing foot lands ahead.
+        """
+        q_ = _q(q)
+        return np.asarray(2.0 * q_[..., 2] + q_[..., 3])
+
+    @property
+    def section_names(self) -> tuple[str, ...]:
+        return ("q3", "q3_dot", "q4_dot")
+
+    def section_to_state(self, z: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """``z = (q3, q3_dot, q4_dot)`` just after heel strike: ``q4 = -2 q3``, foot rolling."""
+        z_ = _q(z, 3, "z")
+        R = np.asarray(self.foot_radius, dtype=float)
+        q3, w3, w4 = np.broadcast_arrays(z_[..., 0], z_[..., 1], z_[..., 2])
+        Rb = np.broadcast_to(R, q3.shape)
+        q = np.stack((np.zeros_like(q3), Rb, q3, -2.0 * q3), axis=-1)
+        q_dot = np.stack((-Rb * w3, np.zeros_like(q3), w3, w4), axis=-1)
+        return q, q_dot
+
+    def state_to_section(self, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
+        q_, qd = _q(q), _q(q_dot, name="q_dot")
+        return np.stack(np.broadcast_arrays(q_[..., 2], qd[..., 2], qd[..., 3]), axis=-1)
 
     def actuation_matrix(self) -> FloatArray:
         """Hip torque (on the left leg, reaction on the right) acts on ``q4``: ``B = e4``."""

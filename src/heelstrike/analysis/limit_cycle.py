@@ -1,0 +1,518 @@
+"""Periodic gaits: Poincare map, Newton's method, Floquet multipliers, continuation.
+
+The Poincare section is the state just after heel strike (after the legs are relabelled),
+parametrised by the walker's section coordinates ``z`` (for the compass gait
+``z = (q3, q3_dot, q4_dot)`` with ``q4 = -2 q3``). The map ``P`` integrates one step and applies
+the impact; a period-one gait is a fixed point ``P(z*) = z*``. Its stability is given by the
+eigenvalues (Floquet multipliers) of the Jacobian ``DP(z*)``, estimated by central differences:
+the gait is stable if all have modulus < 1. A real multiplier leaving the unit circle through
+-1 while a parameter varies is a period-doubling bifurcation (Goswami, Thuilot & Espiau 1998).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from heelstrike.dynamics.hybrid import PushOff, WalkResult, simulate
+from heelstrike.dynamics.single_support import TorqueLaw
+from heelstrike.models.base import PlanarWalker
+
+FloatArray = NDArray[np.float64]
+
+__all__ = [
+    "BifurcationDiagram",
+    "Continuation",
+    "GaitNotFoundError",
+    "LimitCycle",
+    "PoincareMap",
+    "bifurcation_diagram",
+    "continue_limit_cycle",
+    "find_limit_cycle",
+]
+
+
+class GaitNotFoundError(RuntimeError):
+    """No periodic gait was found (the message says why)."""
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class PoincareMap:
+    """The step-to-step map on the post-impact section.
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+        Must define :meth:`~PlanarWalker.section_to_state` and ``state_to_section``.
+    slope : float
+        Ground slope (rad).
+    torque, push_off : optional
+        Actuation (see :func:`heelstrike.dynamics.hybrid.simulate`).
+    rtol, atol : float
+        Integrator tolerances.
+    max_step_duration : float
+        Time bound of one step (s).
+    """
+
+    walker: PlanarWalker
+    slope: float = 0.0
+    torque: TorqueLaw | None = None
+    push_off: PushOff | None = None
+    rtol: float = 1e-11
+    atol: float = 1e-11
+    max_step_duration: float = 5.0
+
+    def walk(self, z: ArrayLike, steps: int = 1) -> WalkResult:
+        """Simulate ``steps`` steps from the section point ``z``."""
+        q, q_dot = self.walker.section_to_state(np.asarray(z, dtype=float))
+        return simulate(
+            self.walker,
+            q,
+            q_dot,
+            slope=self.slope,
+            steps=steps,
+            torque=self.torque,
+            push_off=self.push_off,
+            rtol=self.rtol,
+            atol=self.atol,
+            max_step_duration=self.max_step_duration,
+        )
+
+    def __call__(self, z: ArrayLike) -> FloatArray:
+        """``P(z)``; NaNs if the step fails (fall, no strike, trailing foot stays...)."""
+        res = self.walk(z, 1)
+        if not res.ok:
+            return np.full(np.shape(z), np.nan)
+        return np.asarray(self.walker.state_to_section(res.final_q, res.final_q_dot))
+
+    def jacobian(self, z: ArrayLike, step: float = 1e-6) -> FloatArray:
+        """Central-difference Jacobian ``DP(z)``, shape (d, d)."""
+        z_ = np.asarray(z, dtype=float)
+        d = z_.size
+        Jac = np.empty((d, d))
+        for i in range(d):
+            dz = np.zeros(d)
+            dz[i] = step * max(1.0, abs(z_[i]))
+            Jac[:, i] = (self(z_ + dz) - self(z_ - dz)) / (2.0 * dz[i])
+        return Jac
+
+
+@dataclass(frozen=True, kw_only=True)
+class LimitCycle:
+    """A period-one gait and its energetics.
+
+    Attributes
+    ----------
+    fixed_point : ndarray, shape (d,)
+        Section coordinates just after heel strike (names in ``section_names``).
+    q, q_dot : ndarray, shape (n,)
+        Full post-impact state (stance contact at x = 0).
+    period : float
+        Step duration (s).
+    step_length : float
+        Distance walked along the ground per step (m).
+    speed : float
+        Mean walking speed along the ground, ``step_length / period`` (m/s).
+    impact_angle : float
+        Stance-leg angle ``q3`` at heel strike (rad).
+    multipliers : ndarray of complex, shape (d,)
+        Floquet multipliers, largest modulus first.
+    stable : bool
+        All multipliers inside the unit circle.
+    collision_loss : float
+        Kinetic energy lost at heel strike per step, ``T_c`` for an inert impact (J).
+    kinetic_energy_pre, kinetic_energy_admissible : float
+        ``T`` and ``T_a`` just before impact (J).
+    eta : float
+        Collision loss per distance, ``collision_loss / step_length`` (J/m), paper eq. (16).
+    potential_energy_released : float
+        Potential energy released per step (J); balances the losses on a passive gait.
+    actuator_work : float
+        Actuator work per step (J).
+    residual : float
+        ``|P(z*) - z*|`` at convergence.
+    iterations : int
+        Newton iterations used.
+    slope : float
+        Ground slope (rad).
+    walk : WalkResult
+        One simulated period from the fixed point.
+    """
+
+    fixed_point: FloatArray
+    section_names: tuple[str, ...]
+    q: FloatArray
+    q_dot: FloatArray
+    period: float
+    step_length: float
+    speed: float
+    impact_angle: float
+    multipliers: NDArray[np.complex128]
+    stable: bool
+    collision_loss: float
+    kinetic_energy_pre: float
+    kinetic_energy_admissible: float
+    eta: float
+    potential_energy_released: float
+    actuator_work: float
+    residual: float
+    iterations: int
+    slope: float
+    walk: WalkResult
+
+    @property
+    def spectral_radius(self) -> float:
+        """Largest multiplier modulus."""
+        return float(np.max(np.abs(self.multipliers)))
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready summary (SI units; angles in rad)."""
+        return {
+            "period": self.period,
+            "step_length": self.step_length,
+            "speed": self.speed,
+            "impact_angle": self.impact_angle,
+            "multipliers": [float(abs(m)) for m in self.multipliers],
+            "multipliers_complex": [[float(m.real), float(m.imag)] for m in self.multipliers],
+            "stable": bool(self.stable),
+            "collision_loss": self.collision_loss,
+            "eta": self.eta,
+            "potential_energy_released": self.potential_energy_released,
+            "actuator_work": self.actuator_work,
+            "kinetic_energy_pre": self.kinetic_energy_pre,
+            "kinetic_energy_admissible": self.kinetic_energy_admissible,
+            "fixed_point": dict(zip(self.section_names, map(float, self.fixed_point), strict=True)),
+            "slope": self.slope,
+            "residual": self.residual,
+        }
+
+
+def _default_guesses(walker: PlanarWalker) -> list[FloatArray]:
+    """Candidate post-impact states of a compass-like walker (coarse grid)."""
+    out = []
+    for a in (0.15, 0.2, 0.25, 0.3, 0.35):
+        for w3 in (0.6, 0.9, 1.2, 1.6):
+            for w4 in (-1.5, -0.8, -0.3, 0.2):
+                out.append(np.array([-a, w3, w4]))
+    return out
+
+
+def _automatic_guess(pmap: PoincareMap, progress: bool = False) -> FloatArray:
+    """A starting point for Newton: the best of a coarse grid, refined by iterating the map."""
+    coarse = replace(pmap, rtol=1e-7, atol=1e-8)
+    scored: list[tuple[float, FloatArray]] = []
+    guesses = _default_guesses(pmap.walker)
+    for z in _progress(guesses, progress, "searching for a gait"):
+        z1 = coarse(z)
+        if np.all(np.isfinite(z1)):
+            scored.append((float(np.linalg.norm(z1 - z)), z))
+    if not scored:
+        raise GaitNotFoundError(
+            "no step could be completed from any of the automatic initial guesses"
+        )
+    scored.sort(key=lambda s: s[0])
+    best, best_err = scored[0][1], scored[0][0]
+    for _, z in scored[:4]:
+        zi = z
+        for _ in range(40):
+            z1 = coarse(zi)
+            if not np.all(np.isfinite(z1)):
+                break
+            err = float(np.linalg.norm(z1 - zi))
+            zi = z1
+            if err < best_err:
+                best, best_err = zi, err
+            if err < 1e-6:
+                break
+    return np.asarray(best)
+
+
+def _progress(items: Sequence[Any], enabled: bool, desc: str) -> Iterable[Any]:
+    if not enabled:
+        return items
+    from tqdm.auto import tqdm
+
+    return tqdm(items, desc=desc, leave=False)
+
+
+def find_limit_cycle(
+    walker: PlanarWalker,
+    *,
+    slope: float = 0.0,
+    guess: ArrayLike | None = None,
+    torque: TorqueLaw | None = None,
+    push_off: PushOff | None = None,
+    tol: float = 1e-10,
+    max_iter: int = 25,
+    fd_step: float = 1e-6,
+    rtol: float = 1e-11,
+    atol: float = 1e-11,
+    progress: bool = False,
+) -> LimitCycle:
+    """Find a period-one gait with Newton's method on the Poincare map.
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+        Walker with a Poincare section (e.g. :class:`~heelstrike.models.CompassGait`).
+    slope : float
+        Ground slope (rad).
+    guess : array_like, optional
+        Section coordinates to start from; automatic (grid search and map iteration) if None.
+    torque, push_off : optional
+        Actuation laws.
+    tol : float
+        Convergence tolerance on ``|P(z) - z|``.
+    max_iter : int
+        Maximum Newton iterations.
+    fd_step : float
+        Relative finite-difference step for the Jacobian.
+    rtol, atol : float
+        Integrator tolerances.
+    progress : bool
+        Show a progress bar during the automatic search.
+
+    Returns
+    -------
+    LimitCycle
+
+    Raises
+    ------
+    GaitNotFoundError
+        If no step can be taken, Newton diverges, or the iteration does not converge.
+    """
+    pmap = PoincareMap(
+        walker=walker, slope=slope, torque=torque, push_off=push_off, rtol=rtol, atol=atol
+    )
+    z = _automatic_guess(pmap, progress) if guess is None else np.asarray(guess, dtype=float)
+    residual = np.inf
+    it = 0
+    for it in range(1, max_iter + 1):
+        Pz = pmap(z)
+        if not np.all(np.isfinite(Pz)):
+            raise GaitNotFoundError(
+                f"the walker fails to take a step from the Newton iterate {np.round(z, 6)}"
+            )
+        F = Pz - z
+        residual = float(np.linalg.norm(F))
+        if residual < tol:
+            break
+        Jac = pmap.jacobian(z, fd_step)
+        if not np.all(np.isfinite(Jac)):
+            raise GaitNotFoundError("a step failed while estimating the Jacobian")
+        try:
+            dz = np.linalg.solve(Jac - np.eye(z.size), -F)
+        except np.linalg.LinAlgError as exc:
+            raise GaitNotFoundError("singular Newton system (a multiplier equals 1)") from exc
+        # damped step: keep the walker taking steps
+        lam = 1.0
+        while lam > 1e-3:
+            z_try = z + lam * dz
+            if np.all(np.isfinite(pmap(z_try))):
+                break
+            lam *= 0.5
+        z = z + lam * dz
+    else:
+        raise GaitNotFoundError(
+            f"Newton did not converge in {max_iter} iterations (residual {residual:.2e})"
+        )
+    return _characterise(pmap, z, residual, it, fd_step)
+
+
+def _characterise(
+    pmap: PoincareMap, z: FloatArray, residual: float, iterations: int, fd_step: float
+) -> LimitCycle:
+    walker = pmap.walker
+    walk = pmap.walk(z, 1)
+    rec = walk.impacts[0]
+    Jac = pmap.jacobian(z, fd_step)
+    mult = np.linalg.eigvals(Jac).astype(complex)
+    mult = mult[np.argsort(-np.abs(mult), kind="stable")]
+    q, q_dot = walker.section_to_state(z)
+    return LimitCycle(
+        fixed_point=np.asarray(z, dtype=float),
+        section_names=walker.section_names,
+        q=q,
+        q_dot=q_dot,
+        period=rec.step_duration,
+        step_length=rec.step_length,
+        speed=rec.step_length / rec.step_duration,
+        impact_angle=rec.impact_angle,
+        multipliers=mult,
+        stable=bool(np.all(np.abs(mult) < 1.0)),
+        collision_loss=rec.energy_lost,
+        kinetic_energy_pre=rec.kinetic_energy,
+        kinetic_energy_admissible=rec.kinetic_energy_admissible,
+        eta=rec.energy_lost / rec.step_length,
+        potential_energy_released=rec.potential_energy_released,
+        actuator_work=rec.actuator_work,
+        residual=residual,
+        iterations=iterations,
+        slope=pmap.slope,
+        walk=walk,
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class Continuation:
+    """A branch of period-one gaits along a parameter.
+
+    Attributes
+    ----------
+    parameter : str
+        Name of the varied parameter (``"slope"`` or a walker field).
+    values : ndarray, shape (K,)
+        Parameter values where a gait was found (SI units; rad for the slope).
+    cycles : tuple of LimitCycle
+        The gait at each value.
+    period_doubling : ndarray, shape (P,)
+        Parameter values (linearly interpolated) where a real multiplier crosses -1.
+    stopped : str or None
+        Why the branch ended early, if it did.
+    """
+
+    parameter: str
+    values: FloatArray
+    cycles: tuple[LimitCycle, ...]
+    period_doubling: FloatArray
+    stopped: str | None
+
+    @property
+    def spectral_radius(self) -> FloatArray:
+        return np.asarray([c.spectral_radius for c in self.cycles])
+
+
+def continue_limit_cycle(
+    walker: PlanarWalker,
+    parameter: str,
+    values: ArrayLike,
+    *,
+    slope: float = 0.0,
+    guess: ArrayLike | None = None,
+    progress: bool = False,
+    **kwargs: Any,
+) -> Continuation:
+    """Natural-parameter continuation of a period-one gait.
+
+    Each gait is found by Newton's method started from the previous one. Period doubling is
+    detected where the most negative real multiplier crosses -1 between consecutive values.
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+        Walker (a frozen dataclass: non-slope parameters are changed with ``replace``).
+    parameter : str
+        ``"slope"`` or the name of a walker field (e.g. ``"foot_radius"``, ``"hip_mass"``).
+    values : array_like, shape (K,)
+        Parameter values, in order.
+    slope : float
+        Slope (rad) when ``parameter`` is not the slope.
+    guess : array_like, optional
+        Section coordinates near the first gait.
+    **kwargs
+        Passed to :func:`find_limit_cycle`.
+    """
+    vals = np.asarray(values, dtype=float)
+    cycles: list[LimitCycle] = []
+    found: list[float] = []
+    stopped = None
+    z = None if guess is None else np.asarray(guess, dtype=float)
+    for v in _progress(list(vals), progress, f"continuation in {parameter}"):
+        if parameter == "slope":
+            w, s = walker, float(v)
+        else:
+            w, s = replace(walker, **{parameter: float(v)}), slope  # type: ignore[type-var]
+        try:
+            c = find_limit_cycle(w, slope=s, guess=z, **kwargs)
+        except GaitNotFoundError as exc:
+            stopped = f"{parameter} = {v:g}: {exc}"
+            break
+        cycles.append(c)
+        found.append(float(v))
+        z = c.fixed_point
+    pd: list[float] = []
+    for a, b, ca, cb in zip(found[:-1], found[1:], cycles[:-1], cycles[1:], strict=True):
+        ma, mb = _most_negative_real(ca.multipliers), _most_negative_real(cb.multipliers)
+        if ma is not None and mb is not None and (ma + 1.0) * (mb + 1.0) < 0:
+            pd.append(a + (b - a) * (ma + 1.0) / (ma - mb))
+    return Continuation(
+        parameter=parameter,
+        values=np.asarray(found),
+        cycles=tuple(cycles),
+        period_doubling=np.asarray(pd),
+        stopped=stopped,
+    )
+
+
+def _most_negative_real(mult: NDArray[np.complex128]) -> float | None:
+    real = [m.real for m in mult if abs(m.imag) < 1e-9 * max(1.0, abs(m))]
+    return min(real) if real else None
+
+
+@dataclass(frozen=True, kw_only=True)
+class BifurcationDiagram:
+    """Steady-state step-to-step values along the slope (brute force, as Goswami et al. 1998).
+
+    Attributes
+    ----------
+    slopes : ndarray, shape (K,)
+        Slopes (rad).
+    impact_angles, periods : ndarray, shape (K, N)
+        The last ``N`` impact angles (rad) and step durations (s) after the transient; NaN
+        where the walker fell.
+    """
+
+    slopes: FloatArray
+    impact_angles: FloatArray
+    periods: FloatArray
+
+    def branches(self, decimals: int = 6) -> NDArray[np.int_]:
+        """Number of distinct steady values per slope (1: period one, 2: period two ...)."""
+        out = []
+        for row in self.impact_angles:
+            r = row[np.isfinite(row)]
+            out.append(len(np.unique(np.round(r, decimals))) if r.size else 0)
+        return np.asarray(out)
+
+
+def bifurcation_diagram(
+    walker: PlanarWalker,
+    slopes: ArrayLike,
+    *,
+    guess: ArrayLike | None = None,
+    transient: int = 60,
+    record: int = 16,
+    rtol: float = 1e-9,
+    atol: float = 1e-10,
+    progress: bool = False,
+    callback: Callable[[int], None] | None = None,
+) -> BifurcationDiagram:
+    """Brute-force bifurcation diagram over increasing slopes.
+
+    For each slope the walker is released from the previous slope's last post-impact state
+    (the first from ``guess`` or an automatically found gait), walks ``transient`` steps, and
+    the next ``record`` impact angles and step durations are stored.
+    """
+    sl = np.asarray(slopes, dtype=float)
+    K = sl.size
+    angles = np.full((K, record), np.nan)
+    periods = np.full((K, record), np.nan)
+    if guess is None:
+        z = find_limit_cycle(walker, slope=float(sl[0]), rtol=rtol, atol=atol).fixed_point
+    else:
+        z = np.asarray(guess, dtype=float)
+    for i in _progress(list(range(K)), progress, "bifurcation diagram"):
+        pmap = PoincareMap(walker=walker, slope=float(sl[i]), rtol=rtol, atol=atol)
+        res = pmap.walk(z, transient + record)
+        rec = res.impacts[transient:]
+        angles[i, : len(rec)] = [r.impact_angle for r in rec]
+        periods[i, : len(rec)] = [r.step_duration for r in rec]
+        if res.ok:
+            z = walker.state_to_section(res.final_q, res.final_q_dot)
+        if callback is not None:
+            callback(i)
+    return BifurcationDiagram(slopes=sl, impact_angles=angles, periods=periods)

@@ -1,0 +1,485 @@
+"""Hybrid walking simulation: single support, heel strike by the paper's projector, leg swap.
+
+One step is integrated in two phases with scipy's ``solve_ivp`` (DOP853):
+
+1. *before mid-stance* (stance angle ``q3 < 0``) until ``q3`` rises through 0; if the stance leg
+   stops and rolls back first, the walker has fallen backward;
+2. *after mid-stance* until the walker's heel-strike function rises through zero (the swing
+   foot lands ahead of the stance foot).
+
+**Scuffing convention.** A rigid straight-legged compass gait's swing foot passes through the
+ground near mid-stance, when the legs are nearly parallel. As is classical for the compass gait
+(Goswami et al. 1998; Garcia et al. 1998), this is ignored: a heel strike is only looked for
+after mid-stance, and the compass walker's event function ``2 q3 + q4`` has no root at the
+scuffing configuration ``q4 = 0``.
+
+At heel strike the impact is resolved with :func:`heel_strike` (``q_dot+ = P_a q_dot-`` with the
+striking foot's Jacobian, eq. 13), the trailing foot must lift (its contact point's normal
+velocity after impact must be positive), and the legs are relabelled.
+
+Failures are reported in :attr:`WalkResult.status`, never raised from inside the integrator.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from enum import Enum
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.integrate import solve_ivp
+
+from heelstrike.core.impact import ImpactResult, impact
+from heelstrike.dynamics.events import Event, to_scipy
+from heelstrike.dynamics.single_support import SingleSupport, TorqueLaw
+from heelstrike.models.base import PlanarWalker
+
+FloatArray = NDArray[np.float64]
+
+__all__ = [
+    "ImpactRecord",
+    "PushOff",
+    "WalkResult",
+    "WalkStatus",
+    "heel_strike",
+    "simulate",
+]
+
+#: An impulsive actuation applied just before heel strike: ``(walker, q, q_dot) ->
+#: (q_dot_after, work)``; the work (J) is what the actuator does on the walker.
+PushOff = Callable[[PlanarWalker, FloatArray, FloatArray], tuple[FloatArray, float]]
+
+
+class WalkStatus(str, Enum):
+    """How a simulation ended."""
+
+    COMPLETED = "completed"
+    FELL_FORWARD = "fell_forward"
+    FELL_BACKWARD = "fell_backward"
+    TRAILING_FOOT_STAYS = "trailing_foot_stays"
+    LOST_CONTACT = "lost_contact"
+    SLIPPED = "slipped"
+    NO_HEEL_STRIKE = "no_heel_strike"
+    INTEGRATION_FAILED = "integration_failed"
+
+
+_MESSAGES = {
+    WalkStatus.COMPLETED: "all requested steps were taken",
+    WalkStatus.FELL_FORWARD: "the stance leg fell forward to the ground",
+    WalkStatus.FELL_BACKWARD: "the walker stopped before mid-stance and fell backward",
+    WalkStatus.TRAILING_FOOT_STAYS: (
+        "after heel strike the trailing foot does not lift (q2_dot+ <= 0): double support "
+        "would begin, which this gait model does not allow"
+    ),
+    WalkStatus.LOST_CONTACT: "the ground's normal force on the stance foot became negative",
+    WalkStatus.SLIPPED: "the stance foot needs more friction than the given coefficient",
+    WalkStatus.NO_HEEL_STRIKE: "no heel strike within the time bound of a step",
+    WalkStatus.INTEGRATION_FAILED: "the integrator failed",
+}
+
+
+@dataclass(frozen=True, kw_only=True)
+class ImpactRecord:
+    """One heel strike of a simulation (pre-swap labels: the "left" foot strikes).
+
+    Attributes
+    ----------
+    step : int
+        Index of the step that this impact ends (0-based).
+    time : float
+        Time of impact (s).
+    q : ndarray, shape (n,)
+        Configuration at impact.
+    q_dot_minus, q_dot_plus : ndarray, shape (n,)
+        Velocities before (after any push-off) and after heel strike.
+    impact_angle : float
+        Stance-leg angle ``q3`` at heel strike (rad).
+    kinetic_energy, kinetic_energy_constrained, kinetic_energy_admissible : float
+        ``T``, ``T_c``, ``T_a`` just before impact (J), eq. (10).
+    energy_lost : float
+        Kinetic energy dissipated by the impact (J); ``T_c`` for an inert impact.
+    impulse : ndarray, shape (2,)
+        Ground impulse on the striking foot (tangential, normal) (N s).
+    step_length : float
+        Distance along the ground (m) from the stance foot's contact point at the start of the
+        step to the striking foot's contact point; ``2 (l - R) sin q3 + 2 R q3`` on a
+        symmetric periodic gait.
+    trailing_normal_velocity : float
+        Normal velocity of the trailing foot's contact point after impact (m/s), > 0 to lift.
+    potential_energy_released : float
+        Drop of potential energy from the start of the step to the impact (J).
+    actuator_work : float
+        Work done by the actuators during the step, push-off included (J).
+    push_off_work : float
+        Work of the impulsive push-off alone (J).
+    """
+
+    step: int
+    time: float
+    q: FloatArray
+    q_dot_minus: FloatArray
+    q_dot_plus: FloatArray
+    impact_angle: float
+    kinetic_energy: float
+    kinetic_energy_constrained: float
+    kinetic_energy_admissible: float
+    energy_lost: float
+    impulse: FloatArray
+    step_length: float
+    trailing_normal_velocity: float
+    potential_energy_released: float
+    actuator_work: float
+    push_off_work: float
+    step_duration: float
+
+
+@dataclass(frozen=True, kw_only=True)
+class WalkResult:
+    """Outcome of :func:`simulate`.
+
+    Attributes
+    ----------
+    status : WalkStatus
+        How the simulation ended; ``message`` explains it.
+    t : ndarray, shape (N,)
+        Times (s).
+    q, q_dot : ndarray, shape (N, n)
+        States, the current stance foot labelled "right", in the ground frame.
+    stance_leg : ndarray of int, shape (N,)
+        Which physical leg is the stance leg (0: the initial stance leg, 1: the other).
+    step : ndarray of int, shape (N,)
+        Step index of every sample.
+    actuator_work : ndarray, shape (N,)
+        Cumulative actuator work (J) from the start (push-offs added at impacts).
+    impacts : tuple of ImpactRecord
+        Every heel strike, in order.
+    final_q, final_q_dot : ndarray, shape (n,)
+        Last state (after the last impact's relabelling if the walk completed).
+    slope : float
+        Ground slope (rad).
+    """
+
+    status: WalkStatus
+    message: str
+    t: FloatArray
+    q: FloatArray
+    q_dot: FloatArray
+    stance_leg: NDArray[np.int_]
+    step: NDArray[np.int_]
+    actuator_work: FloatArray
+    impacts: tuple[ImpactRecord, ...]
+    final_q: FloatArray
+    final_q_dot: FloatArray
+    slope: float
+
+    @property
+    def ok(self) -> bool:
+        """True if every requested step was taken."""
+        return self.status is WalkStatus.COMPLETED
+
+    @property
+    def n_steps(self) -> int:
+        """Number of completed heel strikes."""
+        return len(self.impacts)
+
+    def impact_array(self, name: str) -> FloatArray:
+        """Stack one :class:`ImpactRecord` field over all impacts."""
+        return np.asarray([getattr(r, name) for r in self.impacts], dtype=float)
+
+
+def heel_strike(
+    walker: PlanarWalker,
+    q: ArrayLike,
+    q_dot: ArrayLike,
+    *,
+    restitution: float = 0.0,
+) -> tuple[ImpactResult, FloatArray]:
+    """Resolve the left foot's heel strike with the paper's projector.
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+    q, q_dot : array_like, shape (..., n)
+        Pre-impact state (stance foot labelled "right").
+    restitution : float
+        Restitution of the constrained velocity (0: inert, the paper).
+
+    Returns
+    -------
+    result : ImpactResult
+        The decomposition with ``A = A_L(q)``.
+    trailing_normal_velocity : ndarray, shape (...)
+        Normal velocity of the trailing ("right") foot's contact point after impact (m/s).
+    """
+    M = walker.mass_matrix(q)
+    A = walker.contact_jacobian(q, "left")
+    res = impact(M, A, q_dot, restitution=restitution)
+    A_R = walker.contact_jacobian(q, "right")
+    v_trailing = np.einsum("...ij,...j->...i", A_R, res.velocity_post)[..., 1]
+    return res, np.asarray(v_trailing)
+
+
+@dataclass(frozen=True, kw_only=True)
+class _Segment:
+    t: FloatArray
+    x: FloatArray  # (N, 2m + 1)
+    event: str | None
+    failed: bool
+
+
+def _integrate(
+    support: SingleSupport,
+    q_ref: FloatArray,
+    x0: FloatArray,
+    t0: float,
+    t_end: float,
+    events: list[Event],
+    rtol: float,
+    atol: float,
+    max_step: float,
+) -> _Segment:
+    if t_end <= t0:
+        return _Segment(t=np.array([t0]), x=x0[None, :], event=None, failed=False)
+    sol: Any = solve_ivp(
+        support.rhs,
+        (t0, t_end),
+        x0,
+        method="DOP853",
+        rtol=rtol,
+        atol=atol,
+        max_step=max_step,
+        events=to_scipy(events),
+        args=(q_ref,),
+    )
+    ts, xs = sol.t, sol.y.T
+    hit: str | None = None
+    if sol.status == 1:
+        for ev, t_ev, x_ev in zip(events, sol.t_events, sol.y_events, strict=True):
+            if len(t_ev) and ev.terminal:
+                hit = ev.name
+                ts = np.append(ts[:-1], t_ev[0])
+                xs = np.vstack((xs[:-1], x_ev[0]))
+                break
+    return _Segment(t=ts, x=xs, event=hit, failed=sol.status < 0)
+
+
+def simulate(
+    walker: PlanarWalker,
+    q0: ArrayLike,
+    q_dot0: ArrayLike,
+    *,
+    slope: float = 0.0,
+    steps: int = 1,
+    torque: TorqueLaw | None = None,
+    push_off: PushOff | None = None,
+    restitution: float = 0.0,
+    friction: float | None = None,
+    max_step_duration: float = 5.0,
+    rtol: float = 1e-10,
+    atol: float = 1e-10,
+    max_step: float = np.inf,
+    torque_resets_each_step: bool = True,
+) -> WalkResult:
+    """Simulate a walker for a number of steps.
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+        The walker model.
+    q0, q_dot0 : array_like, shape (n,)
+        Initial state with the stance foot on the ground and rolling (``A_R q_dot0 = 0``).
+    slope : float
+        Ground slope (rad), downhill towards ``-x``.
+    steps : int
+        Number of heel strikes to simulate.
+    torque : TorqueLaw, optional
+        Actuator law in single support (time since the step's start, q, q_dot) -> u.
+    push_off : PushOff, optional
+        Impulsive actuation applied just before each heel strike.
+    restitution : float
+        Restitution of the heel strike's constrained velocity (0: the paper's inert impact).
+    friction : float, optional
+        Coulomb coefficient; if given, a stance foot needing more friction ends the walk.
+    max_step_duration : float
+        Time bound (s) for one step; exceeding it ends the walk with ``no_heel_strike``.
+    rtol, atol : float
+        Integrator tolerances.
+    max_step : float
+        Largest integrator step (s).
+    torque_resets_each_step : bool
+        Whether the torque law's time restarts at 0 at every step (default) or runs on.
+
+    Returns
+    -------
+    WalkResult
+    """
+    if steps < 1:
+        raise ValueError("steps must be >= 1")
+    q = np.array(q0, dtype=float)
+    qd = np.array(q_dot0, dtype=float)
+    n = walker.n_coordinates
+    if q.shape != (n,) or qd.shape != (n,):
+        raise ValueError(f"q0 and q_dot0 must have shape ({n},)")
+    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
+        raise ValueError("initial state must be finite")
+    support = SingleSupport(walker=walker, slope=slope, torque=torque)
+    m = len(support.free_coordinates)
+    R = float(np.asarray(walker.foot_radii[0]))
+    if abs(q[1] - R) > 1e-9 or np.max(np.abs(walker.contact_jacobian(q, "right") @ qd)) > 1e-9:
+        raise ValueError(
+            "initial state must have the stance foot on the ground (q2 = R) and rolling "
+            "without slip (q1_dot = -R q3_dot, q2_dot = 0)"
+        )
+
+    ts: list[FloatArray] = []
+    xs: list[FloatArray] = []
+    qrefs: list[FloatArray] = []
+    legs: list[NDArray[np.int_]] = []
+    step_ids: list[NDArray[np.int_]] = []
+    impacts: list[ImpactRecord] = []
+    t = 0.0
+    work = 0.0
+    stance = 0
+    status = WalkStatus.COMPLETED
+
+    def normal_force(t_: float, x: FloatArray, q_ref: FloatArray, t_step: float) -> float:
+        q_, qd_ = support.unpack(x[: 2 * m], q_ref)
+        return float(support.ground_reaction(t_ - t_step, q_, qd_)[1])
+
+    for k in range(steps):
+        q_ref = q.copy()
+        t_step = t
+        x = np.concatenate((support.pack(q, qd), [work]))
+        V_start = float(walker.potential_energy(q, slope))
+        contact_start = float(walker.contact_point(q, "right")[0])
+        work_start = work
+        step_support = support
+        if torque is not None and torque_resets_each_step:
+            law = torque
+
+            def shifted(tt: float, q_: FloatArray, qd_: FloatArray, _t0: float = t_step) -> Any:
+                return law(tt - _t0, q_, qd_)
+
+            step_support = SingleSupport(walker=walker, slope=slope, torque=shifted)
+
+        def nf(tt: float, xx: FloatArray, _r: FloatArray = q_ref) -> float:
+            q_, qd_ = step_support.unpack(xx[: 2 * m], _r)
+            return float(step_support.ground_reaction(tt, q_, qd_)[1])
+
+        common = [Event(name="lost_contact", function=nf, direction=-1)]
+        if friction is not None:
+            mu = float(friction)
+
+            def slip(tt: float, xx: FloatArray, _r: FloatArray = q_ref) -> float:
+                q_, qd_ = step_support.unpack(xx[: 2 * m], _r)
+                lam = step_support.ground_reaction(tt, q_, qd_)
+                return float(mu * lam[1] - abs(lam[0]))
+
+            common.append(Event(name="slipped", function=slip, direction=-1))
+        t_limit = t_step + max_step_duration
+        phases = []
+        if x[0] < 0.0:
+            phases.append(
+                [
+                    Event(name="midstance", function=lambda tt, xx: xx[0], direction=1),
+                    Event(name="fell_backward", function=lambda tt, xx: xx[m], direction=-1),
+                    *common,
+                ]
+            )
+        phases.append(
+            [
+                Event(
+                    name="heel_strike",
+                    function=lambda tt, xx, _r=q_ref: float(
+                        walker.heel_strike_function(step_support.unpack(xx[: 2 * m], _r)[0])
+                    ),
+                    direction=1,
+                ),
+                Event(name="fell_backward", function=lambda tt, xx: xx[0], direction=-1),
+                Event(
+                    name="fell_forward", function=lambda tt, xx: xx[0] - 0.5 * np.pi, direction=1
+                ),
+                *common,
+            ]
+        )
+        ended: str | None = None
+        for events in phases:
+            seg = _integrate(step_support, q_ref, x, t, t_limit, events, rtol, atol, max_step)
+            ts.append(seg.t)
+            xs.append(seg.x)
+            qrefs.append(np.broadcast_to(q_ref, (len(seg.t), n)))
+            legs.append(np.full(len(seg.t), stance))
+            step_ids.append(np.full(len(seg.t), k))
+            t, x = float(seg.t[-1]), seg.x[-1].copy()
+            if seg.failed:
+                ended = "integration_failed"
+                break
+            if seg.event is None:
+                ended = "no_heel_strike"
+                break
+            if seg.event not in ("midstance", "heel_strike"):
+                ended = seg.event
+                break
+        work = float(x[-1])
+        if ended is not None:
+            status = WalkStatus(ended)
+            q, qd = step_support.unpack(x[: 2 * m], q_ref)
+            break
+
+        # -- heel strike -----------------------------------------------------------------------
+        q, qd = step_support.unpack(x[: 2 * m], q_ref)
+        push_work = 0.0
+        if push_off is not None:
+            qd, push_work = push_off(walker, q, qd)
+            qd = np.asarray(qd, dtype=float)
+            work += float(push_work)
+        res, v_trailing = heel_strike(walker, q, qd, restitution=restitution)
+        qd_plus = np.asarray(res.velocity_post)
+        impacts.append(
+            ImpactRecord(
+                step=k,
+                time=t,
+                q=q.copy(),
+                q_dot_minus=qd.copy(),
+                q_dot_plus=qd_plus.copy(),
+                impact_angle=float(q[2]),
+                kinetic_energy=float(res.kinetic_energy),
+                kinetic_energy_constrained=float(res.kinetic_energy_constrained),
+                kinetic_energy_admissible=float(res.kinetic_energy_admissible),
+                energy_lost=float(res.energy_lost),
+                impulse=np.asarray(res.constraint_impulse, dtype=float).copy(),
+                step_length=contact_start - float(walker.contact_point(q, "left")[0]),
+                trailing_normal_velocity=float(v_trailing),
+                potential_energy_released=V_start - float(walker.potential_energy(q, slope)),
+                actuator_work=work - work_start,
+                push_off_work=float(push_work),
+                step_duration=t - t_step,
+            )
+        )
+        if not float(v_trailing) > 1e-12:
+            status = WalkStatus.TRAILING_FOOT_STAYS
+            qd = qd_plus
+            break
+        q, qd = walker.swap_legs(q, qd_plus)
+        stance = 1 - stance
+
+    t_all = np.concatenate(ts)
+    x_all = np.concatenate(xs)
+    ref_all = np.concatenate(qrefs)
+    q_all, qd_all = support.unpack(x_all[:, : 2 * m], ref_all)
+    return WalkResult(
+        status=status,
+        message=_MESSAGES[status],
+        t=t_all,
+        q=q_all,
+        q_dot=qd_all,
+        stance_leg=np.concatenate(legs),
+        step=np.concatenate(step_ids),
+        actuator_work=x_all[:, -1],
+        impacts=tuple(impacts),
+        final_q=np.asarray(q),
+        final_q_dot=np.asarray(qd),
+        slope=float(slope),
+    )

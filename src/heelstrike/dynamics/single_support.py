@@ -1,0 +1,181 @@
+"""Single-support dynamics: the stance foot rolls without slipping on a slope.
+
+In floating-base coordinates ``q`` (see :mod:`heelstrike.models.base`) the stance foot's rolling
+constraint ``A_R q_dot = 0`` with ``A_R = [[1, 0, R, 0...], [0, 1, 0, 0...]]`` is integrable:
+``q1 = c - R q3`` and ``q2 = R``. The free coordinates ``theta = q[2:]`` (less any locked joints)
+therefore parametrise single support with a *constant* basis ``J`` of the null space of ``A_R``,
+``q_dot = J theta_dot``, and Lagrange's equations reduce to
+
+.. math:: J^T M(q) J \\, \\ddot\\theta = J^T (B u - h(q, \\dot q)),
+
+the same ``M`` and ``h`` as the impact and flight models (one source of truth). The contact force
+follows from the constrained form ``M q_ddot + h = B u + A^T lambda``:
+``lambda = (A M^-1 A^T)^-1 A M^-1 (h - B u)`` (tangential, normal) in N.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from heelstrike.models.base import PlanarWalker
+
+FloatArray = NDArray[np.float64]
+
+__all__ = ["SingleSupport", "TorqueLaw"]
+
+
+class TorqueLaw(Protocol):
+    """An actuator law ``u = law(t, q, q_dot)``: torques (N m), shape ``(n_u,)``.
+
+    ``t`` is the time since the start of the current step (s); ``q``, ``q_dot`` the walker's
+    full state in floating-base coordinates with the current stance foot as the "right" foot.
+    """
+
+    def __call__(self, t: float, q: FloatArray, q_dot: FloatArray) -> FloatArray: ...
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class SingleSupport:
+    """Single-support phase of a walker on a slope.
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+        The walker model (``M``, ``h``, Jacobians).
+    slope : float
+        Ground slope ``gamma`` (rad), descending towards ``-x`` (the walking direction).
+    torque : TorqueLaw or None
+        Actuator law for the walker's actuated joints (``B`` of the walker); None: passive.
+    locked : tuple of int
+        Indices of joint coordinates (``>= 3``) held fixed (e.g. locked knees).
+    """
+
+    walker: PlanarWalker
+    slope: float = 0.0
+    torque: TorqueLaw | Callable[[float, FloatArray, FloatArray], FloatArray] | None = None
+    locked: tuple[int, ...] = ()
+    _free: tuple[int, ...] = field(init=False, repr=False)
+    _basis: FloatArray = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        n = self.walker.n_coordinates
+        for i in self.locked:
+            if not 3 <= i < n:
+                raise ValueError(f"locked coordinate index {i} must be in [3, {n})")
+        free = tuple(i for i in range(2, n) if i not in self.locked)
+        R = float(np.asarray(self.walker.foot_radii[0]))
+        J = np.zeros((n, len(free)))
+        for col, i in enumerate(free):
+            J[i, col] = 1.0
+        J[0, 0] = -R  # q1_dot = -R q3_dot (rolling)
+        object.__setattr__(self, "_free", free)
+        object.__setattr__(self, "_basis", J)
+        if not np.isfinite(self.slope):
+            raise ValueError("slope must be finite (rad)")
+
+    @property
+    def free_coordinates(self) -> tuple[int, ...]:
+        """Indices of ``q`` integrated as ``theta`` (the stance angle first)."""
+        return self._free
+
+    @property
+    def basis(self) -> FloatArray:
+        """Constant null-space basis ``J`` (n, m) of the stance constraint: ``q_dot = J theta_dot``."""
+        return self._basis
+
+    # -- state maps --------------------------------------------------------------------------
+    def pack(self, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
+        """Integrator state ``(theta, theta_dot)`` of a full state; shape (2 m,)."""
+        q_, qd = np.asarray(q, dtype=float), np.asarray(q_dot, dtype=float)
+        idx = list(self._free)
+        return np.concatenate((q_[..., idx], qd[..., idx]), axis=-1)
+
+    def unpack(self, x: ArrayLike, q_ref: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Full ``(q, q_dot)`` from ``x = (theta, theta_dot)`` and a reference ``q_ref``.
+
+        ``q_ref`` fixes the locked joints and the rolling offset ``c = q1 + R q3``.
+        """
+        x_ = np.asarray(x, dtype=float)
+        ref = np.asarray(q_ref, dtype=float)
+        m = len(self._free)
+        theta, theta_dot = x_[..., :m], x_[..., m : 2 * m]
+        J = self._basis
+        q = np.broadcast_to(ref, (*theta.shape[:-1], ref.shape[-1])).copy()
+        q[..., list(self._free)] = theta
+        R = -J[0, 0]
+        q[..., 0] = ref[..., 0] + R * ref[..., 2] - R * theta[..., 0]
+        q[..., 1] = R
+        q_dot = np.einsum("ij,...j->...i", J, theta_dot)
+        return q, q_dot
+
+    # -- dynamics ----------------------------------------------------------------------------
+    def _u(self, t: float, q: FloatArray, q_dot: FloatArray) -> FloatArray:
+        n_u = self.walker.actuation_matrix().shape[1]
+        if self.torque is None:
+            return np.zeros((*q.shape[:-1], n_u))
+        return np.asarray(self.torque(t, q, q_dot), dtype=float)
+
+    def generalized_actuation(self, t: float, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
+        """``B u`` (..., n): actuator torques as generalized forces."""
+        q_, qd = np.asarray(q, dtype=float), np.asarray(q_dot, dtype=float)
+        B = self.walker.actuation_matrix()
+        return np.asarray(np.einsum("ij,...j->...i", B, self._u(t, q_, qd)))
+
+    def reduced_mass_matrix(self, q: ArrayLike) -> FloatArray:
+        """``J^T M(q) J``, shape (..., m, m)."""
+        J = self._basis
+        return np.asarray(J.T @ self.walker.mass_matrix(q) @ J)
+
+    def reduced_forcing(self, t: float, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
+        """``J^T (B u - h)``, shape (..., m): right-hand side of the reduced equations."""
+        h = self.walker.bias_forces(q, q_dot, self.slope)
+        f = self.generalized_actuation(t, q, q_dot) - h
+        return np.asarray(np.einsum("ij,...i->...j", self._basis, f))
+
+    def accelerations(self, t: float, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
+        """Full ``q_ddot = J theta_ddot`` (..., n) in single support."""
+        Mr = self.reduced_mass_matrix(q)
+        Fr = self.reduced_forcing(t, q, q_dot)
+        theta_dd = np.linalg.solve(Mr, Fr[..., None])[..., 0]
+        return np.asarray(np.einsum("ij,...j->...i", self._basis, theta_dd))
+
+    def ground_reaction(self, t: float, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
+        """Contact force on the stance foot ``lambda = (tangential, normal)`` (N), (..., 2).
+
+        From ``M q_ddot + h = B u + A^T lambda`` with ``A q_ddot = 0`` (``A_dot = 0`` for the
+        rolling stance foot): ``lambda = (A M^-1 A^T)^-1 A M^-1 (h - B u)``.
+        """
+        q_, qd = np.asarray(q, dtype=float), np.asarray(q_dot, dtype=float)
+        M = self.walker.mass_matrix(q_)
+        A = self.walker.contact_jacobian(q_, "right")
+        rhs = self.walker.bias_forces(q_, qd, self.slope) - self.generalized_actuation(t, q_, qd)
+        X = np.linalg.solve(M, np.concatenate((np.swapaxes(A, -1, -2), rhs[..., None]), axis=-1))
+        W = A @ X[..., :2]
+        return np.asarray(np.linalg.solve(W, (A @ X[..., 2:])[..., :])[..., 0])
+
+    def actuator_power(self, t: float, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
+        """Mechanical power of the actuators ``(B u) . q_dot`` (W), shape (...)."""
+        qd = np.asarray(q_dot, dtype=float)
+        return np.asarray(np.sum(self.generalized_actuation(t, q, qd) * qd, axis=-1))
+
+    def rhs(self, t: float, x: FloatArray, q_ref: FloatArray) -> FloatArray:
+        """Time derivative of ``(theta, theta_dot, W_act)`` for ``solve_ivp``.
+
+        The last entry integrates the actuator work (J) along the motion.
+        """
+        m = len(self._free)
+        q, q_dot = self.unpack(x[: 2 * m], q_ref)
+        Mr = self.reduced_mass_matrix(q)
+        Fr = self.reduced_forcing(t, q, q_dot)
+        theta_dd = np.linalg.solve(Mr, Fr)
+        power = self.actuator_power(t, q, q_dot) if self.torque is not None else 0.0
+        out = np.empty(2 * m + 1)
+        out[:m] = x[m : 2 * m]
+        out[m : 2 * m] = theta_dd
+        out[2 * m] = power
+        return out

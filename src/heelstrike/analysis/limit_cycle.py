@@ -192,17 +192,22 @@ class LimitCycle:
 
 
 def _default_guesses(walker: PlanarWalker) -> list[FloatArray]:
-    """Candidate post-impact states of a compass-like walker (coarse grid)."""
+    """Candidate post-impact section states of a compass-like walker (coarse grid)."""
     out = []
-    for a in (0.15, 0.2, 0.25, 0.3, 0.35):
-        for w3 in (0.6, 0.9, 1.2, 1.6):
-            for w4 in (-1.5, -0.8, -0.3, 0.2):
+    for a in (0.1, 0.17, 0.24, 0.31, 0.38, 0.45, 0.55):
+        for w3 in (0.5, 0.8, 1.1, 1.4, 1.8, 2.3):
+            for w4 in (-1.5, -0.9, -0.5, -0.2, 0.1):
                 out.append(np.array([-a, w3, w4]))
     return out
 
 
 def _automatic_guess(pmap: PoincareMap, progress: bool = False) -> FloatArray:
-    """A starting point for Newton: the best of a coarse grid, refined by iterating the map."""
+    """A starting point for Newton.
+
+    A coarse grid of post-impact states is mapped once; from the most nearly periodic ones the
+    map is iterated (a passive walker settles onto a stable gait). A state that converges under
+    iteration (an attractor) is preferred; otherwise the most nearly periodic state is used.
+    """
     coarse = replace(pmap, rtol=1e-7, atol=1e-8)
     scored: list[tuple[float, FloatArray]] = []
     guesses = _default_guesses(pmap.walker)
@@ -216,18 +221,18 @@ def _automatic_guess(pmap: PoincareMap, progress: bool = False) -> FloatArray:
         )
     scored.sort(key=lambda s: s[0])
     best, best_err = scored[0][1], scored[0][0]
-    for _, z in scored[:4]:
+    for _, z in scored[:6]:
         zi = z
-        for _ in range(40):
+        for _ in range(60):
             z1 = coarse(zi)
             if not np.all(np.isfinite(z1)):
                 break
             err = float(np.linalg.norm(z1 - zi))
             zi = z1
+            if err < 1e-6:
+                return np.asarray(zi)  # an attracting gait
             if err < best_err:
                 best, best_err = zi, err
-            if err < 1e-6:
-                break
     return np.asarray(best)
 
 

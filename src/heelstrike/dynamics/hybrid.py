@@ -344,10 +344,6 @@ def simulate(
     stance = 0
     status = WalkStatus.COMPLETED
 
-    def normal_force(t_: float, x: FloatArray, q_ref: FloatArray, t_step: float) -> float:
-        q_, qd_ = support.unpack(x[: 2 * m], q_ref)
-        return float(support.ground_reaction(t_ - t_step, q_, qd_)[1])
-
     for k in range(steps):
         q_ref = q.copy()
         t_step = t
@@ -405,6 +401,17 @@ def simulate(
             ]
         )
         ended: str | None = None
+        # A crossing cannot be detected if the step already starts past it.
+        for ev in common:
+            if ev.function(t, x) <= 0.0:
+                ended = ev.name
+                phases = []
+                ts.append(np.array([t]))
+                xs.append(x[None, :])
+                qrefs.append(q_ref[None, :])
+                legs.append(np.array([stance]))
+                step_ids.append(np.array([k]))
+                break
         for events in phases:
             seg = _integrate(step_support, q_ref, x, t, t_limit, events, rtol, atol, max_step)
             ts.append(seg.t)

@@ -46,9 +46,10 @@ class ClassicalCompass:
         acc = np.linalg.solve(M, -C - G)
         return [w1, w2, acc[0], acc[1]]
 
-    def _points(self, p1, p2, w1, w2, foot=np.zeros(2)):
+    def _points(self, p1, p2, w1, w2, foot=None):
         """Positions and velocities of hip, stance COM, swing COM (true-vertical frame)."""
         a, b, l = self.a, self.b, self.l
+        foot = np.zeros(2) if foot is None else foot
 
         def e(t):
             return np.array([-np.sin(t), np.cos(t)])
@@ -106,7 +107,9 @@ class ClassicalCompass:
             return x[0] - gam
 
         midstance.terminal, midstance.direction = True, 1
-        s1 = solve_ivp(self.eom, (0, 5), x0, method="DOP853", rtol=rtol, atol=atol, events=midstance)
+        s1 = solve_ivp(
+            self.eom, (0, 5), x0, method="DOP853", rtol=rtol, atol=atol, events=midstance
+        )
         s2 = solve_ivp(
             self.eom, (s1.t[-1], 5), s1.y[:, -1], method="DOP853", rtol=rtol, atol=atol,
             events=strike,

@@ -65,6 +65,7 @@ class PoincareMap:
     rtol: float = 1e-11
     atol: float = 1e-11
     max_step_duration: float = 5.0
+    max_step: float = np.inf
 
     def walk(self, z: ArrayLike, steps: int = 1) -> WalkResult:
         """Simulate ``steps`` steps from the section point ``z``."""
@@ -80,6 +81,7 @@ class PoincareMap:
             rtol=self.rtol,
             atol=self.atol,
             max_step_duration=self.max_step_duration,
+            max_step=self.max_step,
         )
 
     def __call__(self, z: ArrayLike) -> FloatArray:
@@ -296,7 +298,12 @@ def find_limit_cycle(
     z = _automatic_guess(pmap, progress) if guess is None else np.asarray(guess, dtype=float)
     residual = np.inf
     it = 0
-    for it in range(1, max_iter + 1):
+    while True:
+        it += 1
+        if it > max_iter:
+            raise GaitNotFoundError(
+                f"Newton did not converge in {max_iter} iterations (residual {residual:.2e})"
+            )
         Pz = pmap(z)
         if not np.all(np.isfinite(Pz)):
             raise GaitNotFoundError(
@@ -321,10 +328,6 @@ def find_limit_cycle(
                 break
             lam *= 0.5
         z = z + lam * dz
-    else:
-        raise GaitNotFoundError(
-            f"Newton did not converge in {max_iter} iterations (residual {residual:.2e})"
-        )
     return _characterise(pmap, z, residual, it, fd_step)
 
 

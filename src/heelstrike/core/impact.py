@@ -32,8 +32,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
-    "ImpactResult",
     "ImpactInputError",
+    "ImpactResult",
     "admissible_projector",
     "constrained_projector",
     "decompose_impulse",

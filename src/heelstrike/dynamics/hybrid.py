@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from enum import Enum
+from enum import StrEnum
 from typing import Any
 
 import numpy as np
@@ -52,7 +52,7 @@ __all__ = [
 PushOff = Callable[[PlanarWalker, FloatArray, FloatArray], tuple[FloatArray, float]]
 
 
-class WalkStatus(str, Enum):
+class WalkStatus(StrEnum):
     """How a simulation ended."""
 
     COMPLETED = "completed"
@@ -265,6 +265,67 @@ def _integrate(
     return _Segment(t=ts, x=xs, event=hit, failed=sol.status < 0)
 
 
+@dataclass(frozen=True, kw_only=True)
+class _ShiftedTorque:
+    """A torque law whose clock restarts at ``t0`` (the start of a step)."""
+
+    law: TorqueLaw
+    t0: float
+
+    def __call__(self, t: float, q: FloatArray, q_dot: FloatArray) -> FloatArray:
+        return self.law(t - self.t0, q, q_dot)
+
+
+def _step_events(
+    walker: PlanarWalker,
+    support: SingleSupport,
+    q_ref: FloatArray,
+    friction: float | None,
+    *,
+    before: bool,
+) -> tuple[list[Event], list[list[Event]]]:
+    """Events of one step: contact checks common to both phases, and the phases' own."""
+    m = len(support.free_coordinates)
+
+    def state(x: FloatArray) -> tuple[FloatArray, FloatArray]:
+        return support.unpack(x[: 2 * m], q_ref)
+
+    def normal(t: float, x: FloatArray) -> float:
+        return float(support.ground_reaction(t, *state(x))[1])
+
+    common = [Event(name="lost_contact", function=normal, direction=-1)]
+    if friction is not None:
+        mu = float(friction)
+
+        def slip(t: float, x: FloatArray) -> float:
+            lam = support.ground_reaction(t, *state(x))
+            return float(mu * lam[1] - abs(lam[0]))
+
+        common.append(Event(name="slipped", function=slip, direction=-1))
+
+    def strike(t: float, x: FloatArray) -> float:
+        return float(walker.heel_strike_function(state(x)[0]))
+
+    phases: list[list[Event]] = []
+    if before:
+        phases.append(
+            [
+                Event(name="midstance", function=lambda t, x: x[0], direction=1),
+                Event(name="fell_backward", function=lambda t, x: x[m], direction=-1),
+                *common,
+            ]
+        )
+    phases.append(
+        [
+            Event(name="heel_strike", function=strike, direction=1),
+            Event(name="fell_backward", function=lambda t, x: x[0], direction=-1),
+            Event(name="fell_forward", function=lambda t, x: x[0] - 0.5 * np.pi, direction=1),
+            *common,
+        ]
+    )
+    return common, phases
+
+
 def simulate(
     walker: PlanarWalker,
     q0: ArrayLike,
@@ -353,53 +414,11 @@ def simulate(
         work_start = work
         step_support = support
         if torque is not None and torque_resets_each_step:
-            law = torque
-
-            def shifted(tt: float, q_: FloatArray, qd_: FloatArray, _t0: float = t_step) -> Any:
-                return law(tt - _t0, q_, qd_)
-
-            step_support = SingleSupport(walker=walker, slope=slope, torque=shifted)
-
-        def nf(tt: float, xx: FloatArray, _r: FloatArray = q_ref) -> float:
-            q_, qd_ = step_support.unpack(xx[: 2 * m], _r)
-            return float(step_support.ground_reaction(tt, q_, qd_)[1])
-
-        common = [Event(name="lost_contact", function=nf, direction=-1)]
-        if friction is not None:
-            mu = float(friction)
-
-            def slip(tt: float, xx: FloatArray, _r: FloatArray = q_ref) -> float:
-                q_, qd_ = step_support.unpack(xx[: 2 * m], _r)
-                lam = step_support.ground_reaction(tt, q_, qd_)
-                return float(mu * lam[1] - abs(lam[0]))
-
-            common.append(Event(name="slipped", function=slip, direction=-1))
-        t_limit = t_step + max_step_duration
-        phases = []
-        if x[0] < 0.0:
-            phases.append(
-                [
-                    Event(name="midstance", function=lambda tt, xx: xx[0], direction=1),
-                    Event(name="fell_backward", function=lambda tt, xx: xx[m], direction=-1),
-                    *common,
-                ]
+            step_support = SingleSupport(
+                walker=walker, slope=slope, torque=_ShiftedTorque(law=torque, t0=t_step)
             )
-        phases.append(
-            [
-                Event(
-                    name="heel_strike",
-                    function=lambda tt, xx, _r=q_ref: float(
-                        walker.heel_strike_function(step_support.unpack(xx[: 2 * m], _r)[0])
-                    ),
-                    direction=1,
-                ),
-                Event(name="fell_backward", function=lambda tt, xx: xx[0], direction=-1),
-                Event(
-                    name="fell_forward", function=lambda tt, xx: xx[0] - 0.5 * np.pi, direction=1
-                ),
-                *common,
-            ]
-        )
+        common, phases = _step_events(walker, step_support, q_ref, friction, before=x[0] < 0.0)
+        t_limit = t_step + max_step_duration
         ended: str | None = None
         # A crossing cannot be detected if the step already starts past it.
         for ev in common:

@@ -85,7 +85,10 @@ class SingleSupport:
 
     @property
     def basis(self) -> FloatArray:
-        """Constant null-space basis ``J`` (n, m) of the stance constraint: ``q_dot = J theta_dot``."""
+        """Constant null-space basis ``J`` (n, m) of the stance constraint.
+
+        ``q_dot = J theta_dot``.
+        """
         return self._basis
 
     # -- state maps --------------------------------------------------------------------------

@@ -250,7 +250,8 @@ class CompassGait(PlanarWalker):
         def dot(r: FloatArray) -> FloatArray:
             return np.asarray(np.sum(r * g, axis=-1))
 
-        return np.asarray(-(mH * dot(pos.hip) + m * (dot(pos.right_leg_com) + dot(pos.left_leg_com))))
+        legs = dot(pos.right_leg_com) + dot(pos.left_leg_com)
+        return np.asarray(-(mH * dot(pos.hip) + m * legs))
 
     def contact_jacobian(self, q: ArrayLike, foot: Foot) -> FloatArray:
         """Rolling-contact Jacobian, eqs. (4)-(5) of the paper, valid for any configuration.

@@ -18,8 +18,9 @@ from heelstrike.analysis.limit_cycle import (
     continue_limit_cycle,
     find_limit_cycle,
 )
-from heelstrike.dynamics.hybrid import WalkStatus, simulate
+from heelstrike.dynamics.hybrid import WalkStatus, ground_reaction, simulate
 from heelstrike.dynamics.single_support import SingleSupport
+from heelstrike.models.base import gravity_vector
 from heelstrike.models.compass import CompassGait
 
 SLOPE3 = np.deg2rad(3.0)
@@ -235,6 +236,31 @@ def test_ground_reaction_static_weight():
     lam = sup.ground_reaction(0.0, q, np.zeros(4))
     assert lam[1] == pytest.approx(float(walker.total_mass) * 9.81)
     assert lam[0] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_ground_reaction_along_walk_matches_centre_of_mass_acceleration():
+    """Newton for the whole walker: F_ground + m g = m a_com (a_com by finite differences)."""
+    walker = CompassGait(foot_radius=0.3)
+    q, qd = walker.section_to_state([-0.38628396, 1.41932714, -0.96794436])
+    walk = simulate(walker, q, qd, slope=SLOPE3, steps=1, max_step=1e-3, rtol=1e-12, atol=1e-12)
+    gr = ground_reaction(walker, walk)
+    assert np.all(gr.normal > 0) and np.all(gr.required_friction < 1.0)
+    pos = walker.positions(walk.q)
+    com = (10.0 * pos.hip + 5.0 * pos.right_leg_com + 5.0 * pos.left_leg_com) / 20.0
+    sup = SingleSupport(walker=walker, slope=SLOPE3)
+    for i in range(50, walk.t.size - 50, 97):
+        dt = 1e-4
+        qdd = sup.accelerations(0.0, walk.q[i], walk.q_dot[i])
+
+        def c(h, i=i, qdd=qdd):
+            qq = walk.q[i] + walk.q_dot[i] * h + 0.5 * qdd * h * h
+            p = walker.positions(qq)
+            return (10.0 * p.hip + 5.0 * p.right_leg_com + 5.0 * p.left_leg_com) / 20.0
+
+        a_com = (c(dt) - 2 * c(0.0) + c(-dt)) / dt**2
+        np.testing.assert_allclose(c(0.0), com[i], atol=1e-12)
+        force = 20.0 * (a_com - gravity_vector(9.81, SLOPE3))
+        np.testing.assert_allclose([gr.tangential[i], gr.normal[i]], force, atol=1e-4)
 
 
 # --------------------------------------------------------------------------------------------

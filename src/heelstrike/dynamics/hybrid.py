@@ -39,6 +39,7 @@ from heelstrike.models.base import PlanarWalker
 FloatArray = NDArray[np.float64]
 
 __all__ = [
+    "GroundReaction",
     "ImpactRecord",
     "PushOff",
     "WalkResult",
@@ -187,6 +188,53 @@ class WalkResult:
     def impact_array(self, name: str) -> FloatArray:
         """Stack one :class:`ImpactRecord` field over all impacts."""
         return np.asarray([getattr(r, name) for r in self.impacts], dtype=float)
+
+
+@dataclass(frozen=True, kw_only=True)
+class GroundReaction:
+    """Contact force on the stance foot along a walk.
+
+    Attributes
+    ----------
+    t : ndarray, shape (N,)
+        Times (s).
+    tangential, normal : ndarray, shape (N,)
+        Force of the ground on the stance foot along and normal to the ground (N).
+    required_friction : ndarray, shape (N,)
+        ``|tangential| / normal``: the smallest Coulomb coefficient that prevents slipping.
+    """
+
+    t: FloatArray
+    tangential: FloatArray
+    normal: FloatArray
+    required_friction: FloatArray
+
+
+def ground_reaction(
+    walker: PlanarWalker, walk: WalkResult, torque: TorqueLaw | None = None
+) -> GroundReaction:
+    """Ground reaction on the stance foot at every sample of a walk.
+
+    ``torque`` must be the law the walk was simulated with (None for a passive walk); its time
+    argument is the time since the start of each step.
+    """
+    if torque is None:
+        passive = SingleSupport(walker=walker, slope=walk.slope)
+        lam = passive.ground_reaction(0.0, walk.q, walk.q_dot)
+    else:
+        starts = {int(k): float(walk.t[walk.step == k][0]) for k in np.unique(walk.step)}
+        sup = SingleSupport(walker=walker, slope=walk.slope, torque=torque)
+        lam = np.array(
+            [
+                sup.ground_reaction(float(t) - starts[int(k)], q, qd)
+                for t, k, q, qd in zip(walk.t, walk.step, walk.q, walk.q_dot, strict=True)
+            ]
+        ).reshape(-1, 2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        mu = np.where(lam[:, 1] > 0, np.abs(lam[:, 0]) / lam[:, 1], np.inf)
+    return GroundReaction(
+        t=walk.t, tangential=lam[:, 0], normal=lam[:, 1], required_friction=mu
+    )
 
 
 def heel_strike(

@@ -1,0 +1,480 @@
+"""Build a :class:`~heelstrike.models.base.PlanarWalker` from a description.
+
+A new walker is a description (:mod:`heelstrike.models.description`, TOML or dataclasses), not a
+derivation: :func:`build` derives the equations of motion with sympy, generates batched numpy
+source (``sympy.cse``), caches it on disk and returns the compiled functions; :class:`BuiltWalker`
+wraps them with parameter values. Parameters stay symbolic in the generated code, so changing a
+value (``load_walker("compass", R=0.3)``) never re-derives anything.
+
+Disk cache
+----------
+Generated modules live in ``$HEELSTRIKE_CACHE_DIR`` (default ``$XDG_CACHE_HOME/heelstrike`` or
+``~/.cache/heelstrike``) under ``models/<sha256>.py``, keyed by the description's structure
+(everything except parameter values), the package version and :data:`CODEGEN_VERSION`. A cache
+hit needs neither sympy nor any derivation.
+
+Knee locks
+----------
+Joints declared ``lockable`` (e.g. knees) are listed by :attr:`BuiltWalker.lockable_joints`
+(coordinate indices, all ``>= 3``) with their lock angles :attr:`BuiltWalker.lock_angles`.
+A lock is the holonomic constraint ``q[j] = lock_angle``; its Jacobian (constant rows ``e_j``)
+is :meth:`BuiltWalker.lock_jacobian`. A knee strike is an inert impact with ``A`` = that row
+(:func:`heelstrike.core.impact`); a locked phase is simulated by removing ``j`` from the free
+coordinates (``SingleSupport(locked=(j, ...))``).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import importlib.resources
+import os
+import tempfile
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from heelstrike.models.base import Foot, PlanarWalker
+from heelstrike.models.description import (
+    ModelDescriptionError,
+    WalkerDescription,
+    evaluate_expression,
+    read_description,
+)
+
+FloatArray = NDArray[np.float64]
+
+__all__ = [
+    "CODEGEN_VERSION",
+    "BuiltWalker",
+    "GeneratedModel",
+    "build",
+    "cache_dir",
+    "load_walker",
+    "shipped_walkers",
+]
+
+#: Bumped whenever the generated code changes meaning; part of the cache key.
+CODEGEN_VERSION = "1"
+
+_MEMORY: dict[str, GeneratedModel] = {}
+
+
+def _package_version() -> str:
+    try:
+        return version("heelstrike")
+    except PackageNotFoundError:  # pragma: no cover
+        return "0.0.0"
+
+
+def cache_dir() -> Path:
+    """Directory of the generated-code cache (see the module docstring)."""
+    env = os.environ.get("HEELSTRIKE_CACHE_DIR")
+    if env:
+        return Path(env)
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    return (Path(xdg) if xdg else Path.home() / ".cache") / "heelstrike"
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class GeneratedModel:
+    """The compiled functions of one walker structure.
+
+    Attributes
+    ----------
+    key : str
+        sha256 cache key.
+    source : str
+        Generated Python source.
+    namespace : mapping
+        The module's globals (functions ``mass_matrix``, ``bias_forces``, ...).
+    path : Path or None
+        Cache file the source was read from or written to.
+    from_cache : bool
+        True if the source came from the disk cache (no sympy derivation).
+    """
+
+    key: str
+    source: str
+    namespace: Mapping[str, Any]
+    path: Path | None
+    from_cache: bool
+
+    def fn(self, name: str) -> Callable[..., Any]:
+        """A generated function by name."""
+        f = self.namespace[name]
+        assert callable(f)
+        return f
+
+
+def _key(desc: WalkerDescription) -> str:
+    text = f"{CODEGEN_VERSION}\n{_package_version()}\n{desc.structure_key()}"
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _compile(source: str, path: Path | str) -> dict[str, Any]:
+    ns: dict[str, Any] = {"__name__": f"heelstrike_generated_{Path(path).stem[:12]}"}
+    exec(compile(source, str(path), "exec"), ns)
+    return ns
+
+
+def build(desc: WalkerDescription, *, use_cache: bool = True) -> GeneratedModel:
+    """Derive (or fetch from the caches) the numeric functions of a walker structure.
+
+    Parameters
+    ----------
+    desc : WalkerDescription
+        The walker.
+    use_cache : bool
+        Read and write the in-process and disk caches (default True).
+
+    Returns
+    -------
+    GeneratedModel
+    """
+    key = _key(desc)
+    if use_cache and key in _MEMORY:
+        return _MEMORY[key]
+    path = cache_dir() / "models" / f"{key}.py"
+    if use_cache and path.is_file():
+        source = path.read_text(encoding="utf-8")
+        try:
+            ns = _compile(source, path)
+            model = GeneratedModel(
+                key=key, source=source, namespace=MappingProxyType(ns), path=path, from_cache=True
+            )
+            _MEMORY[key] = model
+            return model
+        except Exception:  # corrupt cache file: regenerate below
+            pass
+    from heelstrike.models._codegen import generate_source  # sympy only on a miss
+
+    source = generate_source(desc, key)
+    ns = _compile(source, path)
+    written: Path | None = None
+    if use_cache:
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
+            with os.fdopen(fd, "w", encoding="utf-8") as fh:
+                fh.write(source)
+            os.replace(tmp, path)  # atomic: concurrent builders never see partial files
+            written = path
+        except OSError:  # read-only home etc.: still usable, just not cached
+            written = None
+    model = GeneratedModel(
+        key=key, source=source, namespace=MappingProxyType(ns), path=written, from_cache=False
+    )
+    if use_cache:
+        _MEMORY[key] = model
+    return model
+
+
+def _arr(x: ArrayLike, n: int, name: str) -> FloatArray:
+    a = np.asarray(x, dtype=float)
+    if a.ndim < 1 or a.shape[-1] != n:
+        raise ValueError(f"{name} must have shape (..., {n}), got {a.shape}")
+    return a
+
+
+class BuiltWalker(PlanarWalker):
+    """A walker whose equations were derived from a :class:`WalkerDescription`.
+
+    Parameters
+    ----------
+    description : WalkerDescription
+        The walker.
+    use_cache : bool
+        Use the generated-code caches (default True).
+    **params : float or array_like
+        Parameter values overriding the description's defaults; arrays broadcast against the
+        leading axes of states (e.g. a grid of foot radii).
+
+    Notes
+    -----
+    Coordinates: ``q = (x, y, theta_root, joint angles...)`` (:attr:`coordinate_names`);
+    ``x, y`` is the stance foot's arc centre. All methods broadcast over leading axes.
+    """
+
+    def __init__(
+        self, description: WalkerDescription, *, use_cache: bool = True, **params: ArrayLike
+    ) -> None:
+        unknown = sorted(set(params) - set(description.param_names))
+        if unknown:
+            raise ModelDescriptionError(
+                f"params.{unknown[0]}: unknown parameter (known: {list(description.param_names)})"
+            )
+        values: dict[str, Any] = description.default_params
+        for k, v in params.items():
+            a = np.asarray(v, dtype=float)
+            values[k] = float(a) if a.ndim == 0 else a
+        description.check_values(values)
+        self.description = description
+        self.coordinate_names = description.coordinate_names
+        self.model = build(description, use_cache=use_cache)
+        self._values: dict[str, Any] = values
+        self._p = tuple(values[k] for k in description.param_names)
+        n = len(self.coordinate_names)
+        self._n = n
+        links = description.links
+        self.lockable_joints: tuple[int, ...] = tuple(
+            j for j, lk in enumerate(links[1:], start=3) if lk.joint and lk.joint.lockable
+        )
+        self.actuated_joints: tuple[int, ...] = tuple(
+            j for j, lk in enumerate(links[1:], start=3) if lk.joint and lk.joint.actuated
+        )
+        self.lock_angles: tuple[Any, ...] = tuple(
+            self._eval(links[j - 2].joint.lock_angle)  # type: ignore[union-attr]
+            for j in self.lockable_joints
+        )
+        self.point_names: tuple[str, ...] = tuple(self.model.namespace["POINT_NAMES"])
+        if "swap_coordinates" in self.model.namespace and all(
+            np.ndim(v) == 0 for v in values.values()
+        ):
+            self.check_swap_symmetry()
+
+    # -- parameters ---------------------------------------------------------------------------
+    def _eval(self, v: Any) -> Any:
+        return evaluate_expression(v, self._values)
+
+    @property
+    def params(self) -> dict[str, Any]:
+        """Current parameter values."""
+        return dict(self._values)
+
+    def replace(self, **params: ArrayLike) -> BuiltWalker:
+        """A copy with some parameter values changed (no re-derivation)."""
+        merged: dict[str, Any] = dict(self._values)
+        merged.update(params)
+        return BuiltWalker(self.description, use_cache=True, **merged)
+
+    def __repr__(self) -> str:
+        vals = ", ".join(f"{k}={v!r}" for k, v in self._values.items())
+        return f"BuiltWalker({self.description.name!r}, {vals})"
+
+    # -- PlanarWalker ---------------------------------------------------------------------------
+    @property
+    def total_mass(self) -> FloatArray:
+        d = self.description
+        masses = [self._eval(lk.mass) for lk in d.links] + [
+            self._eval(pm.mass) for pm in d.point_masses
+        ]
+        return np.asarray(sum(masses))
+
+    @property
+    def foot_radii(self) -> tuple[FloatArray, FloatArray]:
+        st, sw = self.description.feet
+        return np.asarray(self._eval(st.radius)), np.asarray(self._eval(sw.radius))
+
+    def mass_matrix(self, q: ArrayLike) -> FloatArray:
+        """Mass matrix ``M(q)`` (kg, kg m, kg m^2), shape (..., n, n)."""
+        return np.asarray(self.model.fn("mass_matrix")(_arr(q, self._n, "q"), self._p))
+
+    def bias_forces(self, q: ArrayLike, q_dot: ArrayLike, slope: ArrayLike = 0.0) -> FloatArray:
+        """``h`` in ``M q_ddot + h = B u + A^T lambda`` (N, N m), shape (..., n).
+
+        Coriolis, centrifugal and gravity terms; gravity ``g (-sin slope, -cos slope)``.
+        """
+        return np.asarray(
+            self.model.fn("bias_forces")(
+                _arr(q, self._n, "q"),
+                _arr(q_dot, self._n, "q_dot"),
+                self._p,
+                np.asarray(slope, dtype=float),
+            )
+        )
+
+    def potential_energy(self, q: ArrayLike, slope: ArrayLike = 0.0) -> FloatArray:
+        """Gravitational potential energy (J), zero at the frame origin, shape (...)."""
+        return np.asarray(
+            self.model.fn("potential_energy")(
+                _arr(q, self._n, "q"), self._p, np.asarray(slope, dtype=float)
+            )
+        )
+
+    @staticmethod
+    def _foot(foot: str) -> str:
+        if foot == "right":
+            return "stance"
+        if foot == "left":
+            return "swing"
+        raise ValueError(f"foot must be 'right' or 'left', got {foot!r}")
+
+    def contact_jacobian(self, q: ArrayLike, foot: Foot) -> FloatArray:
+        """Rolling-contact Jacobian (tangential, normal rows), shape (..., 2, n).
+
+        ``foot = "right"`` is the stance foot, ``"left"`` the swing foot.
+        """
+        f = self.model.fn(f"contact_jacobian_{self._foot(foot)}")
+        return np.asarray(f(_arr(q, self._n, "q"), self._p))
+
+    def contact_jacobian_rate(self, q: ArrayLike, q_dot: ArrayLike, foot: Foot) -> FloatArray:
+        """``A_dot q_dot`` of a foot's rolling contact (m/s^2), shape (..., 2)."""
+        f = self.model.fn(f"contact_jacobian_rate_{self._foot(foot)}")
+        return np.asarray(f(_arr(q, self._n, "q"), _arr(q_dot, self._n, "q_dot"), self._p))
+
+    def foot_centre(self, q: ArrayLike, foot: Foot) -> FloatArray:
+        """Arc centre of a foot (m), shape (..., 2)."""
+        f = self.model.fn(f"foot_centre_{self._foot(foot)}")
+        return np.asarray(f(_arr(q, self._n, "q"), self._p))
+
+    def contact_point(self, q: ArrayLike, foot: Foot) -> FloatArray:
+        """Ground point ``R`` below the foot's arc centre (m), shape (..., 2)."""
+        c = self.foot_centre(q, foot)
+        R = self.foot_radii[0 if self._foot(foot) == "stance" else 1]
+        return np.asarray(c - np.stack(np.broadcast_arrays(np.zeros_like(R), R), axis=-1))
+
+    def foot_clearance(self, q: ArrayLike, foot: Foot) -> FloatArray:
+        """Height of the foot arc's lowest point above the ground (m), shape (...)."""
+        return np.asarray(self.contact_point(q, foot)[..., 1])
+
+    def swap_legs(self, q: ArrayLike, q_dot: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Relabel so that the swing foot becomes the stance foot (links swap with their mirrors).
+
+        ``q' = (c_swing, theta_{mirror(root)}, theta'_child - theta'_parent, ...)`` with
+        ``theta'_k = theta_{mirror(k)}`` (unmirrored links such as a torso keep their absolute
+        angle); ``q_dot' = (dq'/dq) q_dot``.
+
+        Raises
+        ------
+        NotImplementedError
+            If the description declares no mirrors.
+        """
+        if "swap_coordinates" not in self.model.namespace:
+            raise NotImplementedError(
+                f"walker {self.description.name!r} declares no link mirrors: no leg swap"
+            )
+        q_ = _arr(q, self._n, "q")
+        qd = _arr(q_dot, self._n, "q_dot")
+        q_new = np.asarray(self.model.fn("swap_coordinates")(q_, self._p))
+        J = self.model.fn("swap_jacobian")(q_, self._p)
+        return q_new, np.asarray(np.einsum("...ij,...j->...i", J, qd))
+
+    def actuation_matrix(self) -> FloatArray:
+        """``B`` (n, n_u): column ``e_j`` for each actuated joint (torque across the joint)."""
+        B = np.zeros((self._n, len(self.actuated_joints)))
+        for col, j in enumerate(self.actuated_joints):
+            B[j, col] = 1.0
+        return B
+
+    # -- extras -------------------------------------------------------------------------------
+    def lock_jacobian(self, joints: tuple[int, ...] | None = None) -> FloatArray:
+        """Jacobian of joint-lock constraints ``q[j] = lock_angle``, shape (k, n).
+
+        Parameters
+        ----------
+        joints : tuple of int, optional
+            Coordinate indices to lock (default: all :attr:`lockable_joints`).
+        """
+        js = self.lockable_joints if joints is None else tuple(joints)
+        for j in js:
+            if j not in self.lockable_joints:
+                raise ValueError(
+                    f"coordinate {j} ({self.coordinate_names[j]}) is not a lockable joint"
+                )
+        A = np.zeros((len(js), self._n))
+        for r, j in enumerate(js):
+            A[r, j] = 1.0
+        return A
+
+    def joint_index(self, name: str) -> int:
+        """Coordinate index of a coordinate/joint name."""
+        return self.coordinate_names.index(name)
+
+    def positions(self, q: ArrayLike) -> dict[str, FloatArray]:
+        """Named points (m): each link's ``.proximal``, ``.distal``, ``.com``; point masses;
+        ``stance_foot.centre/.contact``, ``swing_foot.centre/.contact``. Each (..., 2)."""
+        P = self.model.fn("points")(_arr(q, self._n, "q"), self._p)
+        return {name: np.asarray(P[..., k, :]) for k, name in enumerate(self.point_names)}
+
+    @property
+    def segments(self) -> tuple[tuple[str, str], ...]:
+        """Point-name pairs to draw as line segments (one per link)."""
+        return tuple((f"{lk.name}.proximal", f"{lk.name}.distal") for lk in self.description.links)
+
+    def link_angles(self, q: ArrayLike) -> dict[str, FloatArray]:
+        """Absolute angle (rad) of every link, shape (...)."""
+        q_ = _arr(q, self._n, "q")
+        out: dict[str, FloatArray] = {}
+        for j, lk in enumerate(self.description.links, start=2):
+            base = out[lk.parent] if lk.parent is not None else 0.0
+            out[lk.name] = np.asarray(base + q_[..., j])
+        return out
+
+    def check_swap_symmetry(self, n_samples: int = 3, seed: int = 0, rtol: float = 1e-9) -> None:
+        """Check numerically that the leg swap is a symmetry of the walker.
+
+        At random states: ``M = J_s^T M(q') J_s``, ``V(q') = V(q)`` at two slopes, the new
+        swing foot centre is the old stance foot centre, and every link's COM maps onto its
+        mirror's.
+
+        Raises
+        ------
+        ModelDescriptionError
+            ``link[i].mirror: ...`` when the mirrors do not describe a symmetry.
+        """
+        rng = np.random.default_rng(seed)
+        q = rng.uniform(-0.6, 0.6, (n_samples, self._n))
+        qd = rng.normal(size=(n_samples, self._n))
+        q2, _ = self.swap_legs(q, qd)
+        J = self.model.fn("swap_jacobian")(q, self._p)
+        M1 = self.mass_matrix(q)
+        M2 = np.swapaxes(J, -1, -2) @ self.mass_matrix(q2) @ J
+        scale = np.max(np.abs(M1))
+        ok = np.allclose(M1, M2, rtol=rtol, atol=rtol * scale)
+        for slope in (0.0, 0.3):
+            V1, V2 = self.potential_energy(q, slope), self.potential_energy(q2, slope)
+            ok &= np.allclose(V1, V2, rtol=rtol, atol=rtol * np.max(np.abs(V1)) + 1e-12)
+        ok &= np.allclose(self.foot_centre(q2, "left"), q[..., :2], atol=1e-9)
+        pos1, pos2 = self.positions(q), self.positions(q2)
+        names = {lk.name: lk.mirror or lk.name for lk in self.description.links}
+        for a, b in names.items():
+            ok &= np.allclose(pos2[f"{a}.com"], pos1[f"{b}.com"], atol=1e-9)
+        if not ok:
+            raise ModelDescriptionError(
+                "link[0].mirror: the declared mirrors do not make the leg swap a symmetry "
+                "(mass matrix, potential energy, feet or centres of mass do not map)"
+            )
+
+
+def shipped_walkers() -> tuple[str, ...]:
+    """Names of the descriptions shipped in ``heelstrike/walkers``."""
+    root = importlib.resources.files("heelstrike") / "walkers"
+    return tuple(sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".toml")))
+
+
+def load_walker(
+    name_or_path: str | os.PathLike[str], *, use_cache: bool = True, **param_overrides: ArrayLike
+) -> BuiltWalker:
+    """Load a shipped walker by name (``"compass"``, ``"kneed"``, ``"torso"``) or a TOML file.
+
+    Parameters
+    ----------
+    name_or_path : str or path
+        Shipped name or path to a ``.toml`` description.
+    use_cache : bool
+        Use the generated-code caches.
+    **param_overrides : float or array_like
+        Parameter values, e.g. ``R=0.3``.
+
+    Examples
+    --------
+    >>> w = load_walker("compass", R=0.2)
+    >>> w.mass_matrix([0.0, 0.2, 0.1, -0.2]).shape
+    (4, 4)
+    """
+    s = os.fspath(name_or_path)
+    if s.endswith(".toml") or os.sep in s or Path(s).is_file():
+        desc = read_description(s)
+    else:
+        res = importlib.resources.files("heelstrike") / "walkers" / f"{s}.toml"
+        if not res.is_file():
+            raise ValueError(f"unknown walker {s!r}; shipped: {shipped_walkers()}")
+        with importlib.resources.as_file(res) as p:
+            desc = read_description(p)
+    return BuiltWalker(desc, use_cache=use_cache, **param_overrides)

@@ -1,0 +1,731 @@
+"""Declarative descriptions of planar tree-structured walkers.
+
+A walker is a *description*, not a derivation: a tree of rigid links connected by revolute
+joints, two circular-arc feet and optional point masses, with named numeric parameters. The
+builder (:mod:`heelstrike.models.builder`) derives the equations of motion from it.
+
+Geometry conventions (those of the paper, ``shared/MODEL.md``)
+--------------------------------------------------------------
+- Angles are absolute, from the ground normal, counter-clockwise positive; walking is towards
+  ``-x``. ``e(theta) = (-sin theta, cos theta)`` and the *forward* unit vector
+  ``f(theta) = de/dtheta = (-cos theta, -sin theta)`` (``-x`` when the link is vertical).
+- Every link has a *proximal* point (its joint on the parent; for the root, its lower end) and
+  runs a distance ``length`` in its *distal* direction ``sigma e(theta)``, with ``sigma = +1`` for
+  ``direction = "up"`` (default of the root, e.g. a stance leg or a torso) and ``-1`` for
+  ``direction = "down"`` (default of the other links, e.g. a hanging swing leg).
+- A point on a link is given by ``(along, offset)``: the point
+  ``proximal + along * sigma e(theta) + offset * f(theta)``.
+- Coordinates ``q = (x, y, theta_root, q_1, ..., q_k)``: the stance foot's arc centre, the root
+  link's absolute angle, then the relative joint angles ``q_j = theta_child - theta_parent`` in
+  tree order (links sorted so that parents precede children, otherwise in file order).
+
+Numeric fields accept a number or an expression string in the parameters (``"l - R"``), parsed
+safely (numbers, parameter names, ``+ - * / **``, ``pi``, ``sqrt``, ``sin``, ``cos``).
+
+TOML format
+-----------
+::
+
+    name = "compass"
+    [params]                # numeric defaults; every name may be overridden when loading
+    l = 1.0
+    R = 0.0
+    g = 9.81                # gravity (m/s^2); defaults to 9.81 if absent
+    [[link]]
+    name = "stance_leg"     # no parent: the root, carries the stance foot
+    length = "l"
+    mass = "m"
+    com = "l - b"           # along the link from its proximal point (m)
+    com_offset = 0.0        # optional, forward offset (m)
+    inertia = 0.0           # optional, about the COM (kg m^2)
+    mirror = "swing_leg"    # optional, for the leg swap
+    [[link]]
+    name = "swing_leg"
+    parent = "stance_leg"
+    attach = "l"            # optional, along the parent (default: the parent's distal end)
+    joint = { name = "hip", actuated = true, lockable = false, lock_angle = 0.0 }
+    ...
+    [[foot]]
+    link = "stance_leg"
+    radius = "R"
+    centre = "R"            # optional, along the link (default: radius from the root's
+                            # proximal end, or length - radius on another link)
+    [[point_mass]]
+    name = "hip"
+    link = "stance_leg"
+    at = "l"
+    mass = "mH"
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+import math
+import operator
+import tomllib
+from collections.abc import Callable, Mapping
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "Expr",
+    "FootSpec",
+    "JointSpec",
+    "LinkSpec",
+    "ModelDescriptionError",
+    "PointMassSpec",
+    "WalkerDescription",
+    "evaluate_expression",
+    "parse_description",
+    "read_description",
+]
+
+#: A number or an expression string in the walker's parameters.
+Expr = float | str
+
+
+class ModelDescriptionError(ValueError):
+    """A walker description is malformed; the message starts with the offending field path."""
+
+
+# -- safe expressions ---------------------------------------------------------------------------
+
+_BINOPS: dict[type, Callable[[Any, Any], Any]] = {
+    ast.Add: operator.add,
+    ast.Sub: operator.sub,
+    ast.Mult: operator.mul,
+    ast.Div: operator.truediv,
+    ast.Pow: operator.pow,
+}
+_FUNCS = ("sqrt", "sin", "cos")
+
+
+def _check_ast(node: ast.AST, names: Mapping[str, Any] | None, path: str) -> None:
+    """Raise unless ``node`` uses only numbers, known names, + - * / **, sqrt/sin/cos."""
+    if isinstance(node, ast.Expression):
+        _check_ast(node.body, names, path)
+    elif isinstance(node, ast.Constant):
+        if isinstance(node.value, bool) or not isinstance(node.value, int | float):
+            raise ModelDescriptionError(f"{path}: only numeric constants are allowed")
+    elif isinstance(node, ast.Name):
+        if node.id != "pi" and names is not None and node.id not in names:
+            raise ModelDescriptionError(f"{path}: unknown parameter {node.id!r}")
+    elif isinstance(node, ast.BinOp) and type(node.op) in _BINOPS:
+        _check_ast(node.left, names, path)
+        _check_ast(node.right, names, path)
+    elif isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub | ast.UAdd):
+        _check_ast(node.operand, names, path)
+    elif (
+        isinstance(node, ast.Call)
+        and isinstance(node.func, ast.Name)
+        and node.func.id in _FUNCS
+        and len(node.args) == 1
+        and not node.keywords
+    ):
+        _check_ast(node.args[0], names, path)
+    else:
+        raise ModelDescriptionError(
+            f"{path}: unsupported expression syntax ({type(node).__name__})"
+        )
+
+
+def _parse_expr(text: str, path: str) -> ast.Expression:
+    try:
+        tree = ast.parse(text, mode="eval")
+    except SyntaxError as exc:
+        raise ModelDescriptionError(f"{path}: invalid expression {text!r}") from exc
+    return tree
+
+
+def evaluate_expression(
+    value: Expr,
+    names: Mapping[str, Any],
+    *,
+    funcs: Mapping[str, Callable[[Any], Any]] | None = None,
+    pi: Any = math.pi,
+    path: str = "<expr>",
+) -> Any:
+    """Evaluate a field value with the given parameter values (numeric or symbolic).
+
+    Parameters
+    ----------
+    value : float or str
+        A number, or an expression in the parameter names.
+    names : mapping
+        Parameter name -> value (floats, arrays or sympy symbols).
+    funcs : mapping, optional
+        Implementations of ``sqrt``, ``sin``, ``cos`` (default: numpy's).
+    pi : optional
+        Value of ``pi`` (e.g. ``sympy.pi`` for symbolic evaluation).
+    path : str
+        Field path used in error messages.
+    """
+    if not isinstance(value, str):
+        return float(value)
+    tree = _parse_expr(value, path)
+    _check_ast(tree, names, path)
+    fns: Mapping[str, Callable[[Any], Any]] = funcs or {
+        "sqrt": np.sqrt,
+        "sin": np.sin,
+        "cos": np.cos,
+    }
+
+    def ev(node: ast.AST) -> Any:
+        if isinstance(node, ast.Expression):
+            return ev(node.body)
+        if isinstance(node, ast.Constant):
+            return float(node.value) if isinstance(node.value, float) else node.value
+        if isinstance(node, ast.Name):
+            return pi if node.id == "pi" else names[node.id]
+        if isinstance(node, ast.BinOp):
+            return _BINOPS[type(node.op)](ev(node.left), ev(node.right))
+        if isinstance(node, ast.UnaryOp):
+            v = ev(node.operand)
+            return -v if isinstance(node.op, ast.USub) else v
+        assert isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
+        return fns[node.func.id](ev(node.args[0]))
+
+    return ev(tree)
+
+
+# -- dataclasses --------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, kw_only=True)
+class JointSpec:
+    """Revolute joint connecting a link to its parent.
+
+    Attributes
+    ----------
+    name : str
+        Coordinate name of the joint (relative angle ``theta_child - theta_parent``, rad).
+    actuated : bool
+        A torque acts across the joint (column ``e_j`` of the actuation matrix ``B``).
+    lockable : bool
+        The joint can lock (e.g. a knee hitting its stop); see
+        :meth:`~heelstrike.models.builder.BuiltWalker.lock_jacobian`.
+    lock_angle : float or str
+        Relative angle (rad) at which the joint locks.
+    """
+
+    name: str
+    actuated: bool = False
+    lockable: bool = False
+    lock_angle: Expr = 0.0
+
+
+@dataclass(frozen=True, kw_only=True)
+class LinkSpec:
+    """A rigid link (see the module docstring for the geometry conventions).
+
+    Attributes
+    ----------
+    name : str
+        Unique name.
+    parent : str or None
+        Parent link; None for the root (the link carrying the stance foot).
+    length : float or str
+        Distance (m) from the proximal to the distal point, > 0.
+    mass : float or str
+        Mass (kg), > 0.
+    com, com_offset : float or str
+        Centre of mass along the link from the proximal point and forward offset (m).
+    inertia : float or str
+        Moment of inertia about the centre of mass (kg m^2), >= 0.
+    direction : str
+        ``"up"`` or ``"down"``: the distal direction is ``+e(theta)`` or ``-e(theta)``.
+    attach, attach_offset : float or str or None
+        Point on the parent where the joint sits (along, forward offset; m). ``attach = None``
+        means the parent's distal end. Ignored for the root.
+    joint : JointSpec or None
+        The joint to the parent (None for the root).
+    mirror : str or None
+        The link this one becomes when the legs are swapped (None: itself, e.g. a torso).
+    """
+
+    name: str
+    parent: str | None = None
+    length: Expr
+    mass: Expr
+    com: Expr
+    com_offset: Expr = 0.0
+    inertia: Expr = 0.0
+    direction: str = "up"
+    attach: Expr | None = None
+    attach_offset: Expr = 0.0
+    joint: JointSpec | None = None
+    mirror: str | None = None
+
+
+@dataclass(frozen=True, kw_only=True)
+class FootSpec:
+    """A circular-arc foot rigidly attached to a link.
+
+    Attributes
+    ----------
+    link : str
+        The link carrying the foot.
+    radius : float or str
+        Arc radius ``R`` (m), >= 0 (0: point foot).
+    centre, centre_offset : float or str
+        Arc centre on the link (along, forward offset; m).
+    name : str
+        ``"stance"`` (the foot on the root link) or ``"swing"``.
+    """
+
+    name: str
+    link: str
+    radius: Expr
+    centre: Expr
+    centre_offset: Expr = 0.0
+
+
+@dataclass(frozen=True, kw_only=True)
+class PointMassSpec:
+    """A point mass rigidly attached to a link (e.g. the hip mass ``mH``).
+
+    Attributes
+    ----------
+    name : str
+        Unique name.
+    link : str
+        The carrying link.
+    at, offset : float or str
+        Position on the link (along, forward offset; m).
+    mass : float or str
+        Mass (kg), > 0.
+    """
+
+    name: str
+    link: str
+    at: Expr
+    offset: Expr = 0.0
+    mass: Expr
+
+
+@dataclass(frozen=True, kw_only=True)
+class WalkerDescription:
+    """A validated walker description.
+
+    Attributes
+    ----------
+    name : str
+        Model name.
+    params : tuple of (str, float)
+        Default parameter values, sorted by name; always contains ``g`` (m/s^2).
+    links : tuple of LinkSpec
+        Links in tree order (root first, parents before children).
+    feet : tuple of FootSpec
+        ``(stance, swing)``.
+    point_masses : tuple of PointMassSpec
+        Extra point masses.
+    source : str
+        Where the description came from (file path or ``"<dict>"``); not part of the model.
+    """
+
+    name: str
+    params: tuple[tuple[str, float], ...]
+    links: tuple[LinkSpec, ...]
+    feet: tuple[FootSpec, FootSpec]
+    point_masses: tuple[PointMassSpec, ...] = ()
+    source: str = field(default="<dict>", compare=False)
+
+    @property
+    def param_names(self) -> tuple[str, ...]:
+        """Parameter names in the order the generated functions take them."""
+        return tuple(k for k, _ in self.params)
+
+    @property
+    def default_params(self) -> dict[str, float]:
+        """Default parameter values."""
+        return dict(self.params)
+
+    @property
+    def root(self) -> LinkSpec:
+        """The root link (carries the stance foot)."""
+        return self.links[0]
+
+    def link(self, name: str) -> LinkSpec:
+        """The link called ``name``."""
+        for lk in self.links:
+            if lk.name == name:
+                return lk
+        raise KeyError(name)
+
+    @property
+    def coordinate_names(self) -> tuple[str, ...]:
+        """``("x", "y", <root link name>, <joint names in tree order>)``."""
+        joints = tuple(lk.joint.name for lk in self.links[1:] if lk.joint is not None)
+        return ("x", "y", self.root.name, *joints)
+
+    def structure_key(self) -> str:
+        """Canonical JSON of everything the derivation depends on (not parameter values)."""
+        d = asdict(self)
+        d.pop("source")
+        d["params"] = [k for k, _ in self.params]
+        return json.dumps(d, sort_keys=True, default=str)
+
+    def check_values(self, values: Mapping[str, Any]) -> None:
+        """Check the physical signs of all fields for the given parameter values.
+
+        Raises
+        ------
+        ModelDescriptionError
+            E.g. ``link[2].mass: must be > 0`` (indices in tree order).
+        """
+
+        def ev(v: Expr, path: str) -> Any:
+            out = np.asarray(evaluate_expression(v, values, path=path), dtype=float)
+            if not np.all(np.isfinite(out)):
+                raise ModelDescriptionError(f"{path}: must be finite")
+            return out
+
+        for k, v in values.items():
+            if not np.all(np.isfinite(np.asarray(v, dtype=float))):
+                raise ModelDescriptionError(f"params.{k}: must be finite")
+        if not np.all(np.asarray(values["g"], dtype=float) > 0):
+            raise ModelDescriptionError("params.g: must be > 0")
+        for i, lk in enumerate(self.links):
+            p = f"link[{i}]"
+            if not np.all(ev(lk.mass, f"{p}.mass") > 0):
+                raise ModelDescriptionError(f"{p}.mass: must be > 0")
+            if not np.all(ev(lk.length, f"{p}.length") > 0):
+                raise ModelDescriptionError(f"{p}.length: must be > 0")
+            if not np.all(ev(lk.inertia, f"{p}.inertia") >= 0):
+                raise ModelDescriptionError(f"{p}.inertia: must be >= 0")
+            ev(lk.com, f"{p}.com")
+            ev(lk.com_offset, f"{p}.com_offset")
+            if lk.attach is not None:
+                ev(lk.attach, f"{p}.attach")
+            ev(lk.attach_offset, f"{p}.attach_offset")
+            if lk.joint is not None:
+                ev(lk.joint.lock_angle, f"{p}.joint.lock_angle")
+        for i, ft in enumerate(self.feet):
+            p = f"foot[{i}]"
+            if not np.all(ev(ft.radius, f"{p}.radius") >= 0):
+                raise ModelDescriptionError(f"{p}.radius: must be >= 0")
+            ev(ft.centre, f"{p}.centre")
+            ev(ft.centre_offset, f"{p}.centre_offset")
+        for i, pm in enumerate(self.point_masses):
+            p = f"point_mass[{i}]"
+            if not np.all(ev(pm.mass, f"{p}.mass") > 0):
+                raise ModelDescriptionError(f"{p}.mass: must be > 0")
+            ev(pm.at, f"{p}.at")
+            ev(pm.offset, f"{p}.offset")
+
+
+# -- parsing ------------------------------------------------------------------------------------
+
+_LINK_KEYS = {
+    "name",
+    "parent",
+    "length",
+    "mass",
+    "com",
+    "com_offset",
+    "inertia",
+    "direction",
+    "attach",
+    "attach_offset",
+    "joint",
+    "mirror",
+}
+_LINK_REQUIRED = ("name", "length", "mass", "com")
+_JOINT_KEYS = {"name", "actuated", "lockable", "lock_angle"}
+_FOOT_KEYS = {"name", "link", "radius", "centre", "centre_offset"}
+_FOOT_REQUIRED = ("link", "radius")
+_PM_KEYS = {"name", "link", "at", "offset", "mass"}
+_PM_REQUIRED = ("link", "at", "mass")
+_TOP_KEYS = {"name", "params", "link", "foot", "point_mass", "description", "reference"}
+_NUMERIC = {
+    "length",
+    "mass",
+    "com",
+    "com_offset",
+    "inertia",
+    "attach",
+    "attach_offset",
+    "lock_angle",
+    "radius",
+    "centre",
+    "centre_offset",
+    "at",
+    "offset",
+}
+
+
+def _table(obj: Any, path: str) -> dict[str, Any]:
+    if not isinstance(obj, Mapping):
+        raise ModelDescriptionError(f"{path}: must be a table")
+    return dict(obj)
+
+
+def _check_keys(
+    tab: Mapping[str, Any], allowed: set[str], required: tuple[str, ...], path: str
+) -> None:
+    for k in tab:
+        if k not in allowed:
+            raise ModelDescriptionError(f"{path}.{k}: unknown key (allowed: {sorted(allowed)})")
+    for k in required:
+        if k not in tab:
+            raise ModelDescriptionError(f"{path}.{k}: missing required field")
+
+
+def _expr(tab: Mapping[str, Any], key: str, params: Mapping[str, float], path: str) -> Expr:
+    v = tab[key]
+    p = f"{path}.{key}"
+    if isinstance(v, bool) or not isinstance(v, int | float | str):
+        raise ModelDescriptionError(f"{p}: must be a number or an expression string")
+    if isinstance(v, str):
+        _check_ast(_parse_expr(v, p), params, p)
+        return v
+    if not math.isfinite(v):
+        raise ModelDescriptionError(f"{p}: must be finite")
+    return float(v)
+
+
+def _str(tab: Mapping[str, Any], key: str, path: str) -> str:
+    v = tab[key]
+    if not isinstance(v, str) or not v:
+        raise ModelDescriptionError(f"{path}.{key}: must be a non-empty string")
+    return v
+
+
+def _bool(tab: Mapping[str, Any], key: str, path: str) -> bool:
+    v = tab.get(key, False)
+    if not isinstance(v, bool):
+        raise ModelDescriptionError(f"{path}.{key}: must be true or false")
+    return v
+
+
+def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> WalkerDescription:
+    """Validate a description given as nested mappings (the parsed TOML) and build it.
+
+    Parameters
+    ----------
+    data : mapping
+        Top-level keys ``name``, ``params``, ``link`` (list), ``foot`` (list of two) and
+        optionally ``point_mass`` (list), ``description``, ``reference`` (free text).
+    source : str
+        Origin, for messages.
+
+    Raises
+    ------
+    ModelDescriptionError
+        With a message ``<path>: <problem>``, e.g. ``link[2].mass: must be > 0`` (indices as
+        written in the input).
+    """
+    top = _table(data, "<top>")
+    for k in top:
+        if k not in _TOP_KEYS:
+            raise ModelDescriptionError(f"{k}: unknown key (allowed: {sorted(_TOP_KEYS)})")
+    name = top.get("name", Path(source).stem if source != "<dict>" else "walker")
+    if not isinstance(name, str):
+        raise ModelDescriptionError("name: must be a string")
+    raw_params = _table(top.get("params", {}), "params")
+    params: dict[str, float] = {}
+    for k, v in raw_params.items():
+        if not k.isidentifier() or k in ("pi", "use_cache", *_FUNCS):
+            raise ModelDescriptionError(f"params.{k}: invalid parameter name")
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+            raise ModelDescriptionError(f"params.{k}: must be a finite number")
+        params[k] = float(v)
+    params.setdefault("g", 9.81)
+
+    raw_links = top.get("link")
+    if not isinstance(raw_links, list) or not raw_links:
+        raise ModelDescriptionError("link: at least one [[link]] table is required")
+    links: list[LinkSpec] = []
+    for i, raw in enumerate(raw_links):
+        p = f"link[{i}]"
+        tab = _table(raw, p)
+        _check_keys(tab, _LINK_KEYS, _LINK_REQUIRED, p)
+        kw: dict[str, Any] = {"name": _str(tab, "name", p)}
+        for key in ("parent", "mirror"):
+            if key in tab:
+                kw[key] = _str(tab, key, p)
+        for key in ("length", "mass", "com", "com_offset", "inertia", "attach", "attach_offset"):
+            if key in tab:
+                kw[key] = _expr(tab, key, params, p)
+        is_root = "parent" not in tab
+        direction = tab.get("direction", "up" if is_root else "down")
+        if direction not in ("up", "down"):
+            raise ModelDescriptionError(f"{p}.direction: must be 'up' or 'down'")
+        kw["direction"] = direction
+        if "joint" in tab:
+            if is_root:
+                raise ModelDescriptionError(f"{p}.joint: the root link has no joint")
+            jt = _table(tab["joint"], f"{p}.joint")
+            _check_keys(jt, _JOINT_KEYS, (), f"{p}.joint")
+            kw["joint"] = JointSpec(
+                name=_str(jt, "name", f"{p}.joint") if "name" in jt else kw["name"],
+                actuated=_bool(jt, "actuated", f"{p}.joint"),
+                lockable=_bool(jt, "lockable", f"{p}.joint"),
+                lock_angle=_expr(jt, "lock_angle", params, f"{p}.joint")
+                if "lock_angle" in jt
+                else 0.0,
+            )
+        elif not is_root:
+            kw["joint"] = JointSpec(name=kw["name"])
+        links.append(LinkSpec(**kw))
+
+    # names, parents, cycles, single root
+    index = {}
+    for i, lk in enumerate(links):
+        if lk.name in index:
+            raise ModelDescriptionError(f"link[{i}].name: duplicate link name {lk.name!r}")
+        index[lk.name] = i
+    roots = [i for i, lk in enumerate(links) if lk.parent is None]
+    for i, lk in enumerate(links):
+        if lk.parent is not None and lk.parent not in index:
+            raise ModelDescriptionError(f"link[{i}].parent: unknown link {lk.parent!r}")
+    for i, lk in enumerate(links):
+        seen = [lk.name]
+        cur = lk
+        while cur.parent is not None:
+            cur = links[index[cur.parent]]
+            if cur.name in seen:
+                loop = " -> ".join([*seen[seen.index(cur.name) :], cur.name])
+                raise ModelDescriptionError(f"link[{i}].parent: cycle {loop}")
+            seen.append(cur.name)
+    if len(roots) != 1:
+        raise ModelDescriptionError(
+            f"link: exactly one root link (without parent) is required, found {len(roots)}"
+        )
+    joint_names = [lk.joint.name for lk in links if lk.joint is not None]
+    for i, lk in enumerate(links):
+        if lk.joint is not None and (
+            joint_names.count(lk.joint.name) > 1
+            or lk.joint.name in ("x", "y", links[roots[0]].name)
+        ):
+            raise ModelDescriptionError(f"link[{i}].joint.name: duplicate coordinate name")
+    # tree order: root first, then repeatedly the first (file order) link whose parent is placed
+    order = [roots[0]]
+    placed = {links[roots[0]].name}
+    while len(order) < len(links):
+        for i, lk in enumerate(links):
+            if i not in order and lk.parent in placed:
+                order.append(i)
+                placed.add(lk.name)
+                break
+
+    # mirrors
+    for i, lk in enumerate(links):
+        if lk.mirror is None:
+            continue
+        if lk.mirror not in index:
+            raise ModelDescriptionError(f"link[{i}].mirror: unknown link {lk.mirror!r}")
+        other = links[index[lk.mirror]]
+        if other.mirror != lk.name and not (other.mirror is None and other.name == lk.name):
+            raise ModelDescriptionError(
+                f"link[{i}].mirror: {lk.mirror!r} must mirror {lk.name!r} back"
+            )
+
+    # feet
+    raw_feet = top.get("foot")
+    if not isinstance(raw_feet, list) or len(raw_feet) != 2:
+        n = len(raw_feet) if isinstance(raw_feet, list) else 0
+        raise ModelDescriptionError(f"foot: exactly two [[foot]] tables are required, found {n}")
+    feet_by_role: dict[str, FootSpec] = {}
+    for i, raw in enumerate(raw_feet):
+        p = f"foot[{i}]"
+        tab = _table(raw, p)
+        _check_keys(tab, _FOOT_KEYS, _FOOT_REQUIRED, p)
+        link_name = _str(tab, "link", p)
+        if link_name not in index:
+            raise ModelDescriptionError(f"{p}.link: unknown link {link_name!r}")
+        role = "stance" if link_name == links[roots[0]].name else "swing"
+        if "name" in tab and tab["name"] != role:
+            raise ModelDescriptionError(
+                f"{p}.name: must be {role!r} (the stance foot is the one on the root link)"
+            )
+        if role in feet_by_role:
+            raise ModelDescriptionError(
+                f"{p}.link: exactly one foot must be on the root link {links[roots[0]].name!r}"
+            )
+        radius = _expr(tab, "radius", params, p)
+        lk = links[index[link_name]]
+        if "centre" in tab:
+            centre = _expr(tab, "centre", params, p)
+        elif role == "stance":
+            centre = radius
+        else:
+            centre = f"({lk.length}) - ({radius})"
+        feet_by_role[role] = FootSpec(
+            name=role,
+            link=link_name,
+            radius=radius,
+            centre=centre,
+            centre_offset=_expr(tab, "centre_offset", params, p) if "centre_offset" in tab else 0.0,
+        )
+    if "stance" not in feet_by_role:
+        raise ModelDescriptionError(
+            f"foot: one foot must be on the root link {links[roots[0]].name!r}"
+        )
+    swing_link = feet_by_role["swing"].link
+    root_mirror = links[roots[0]].mirror
+    if root_mirror is not None and root_mirror != swing_link:
+        raise ModelDescriptionError(
+            f"link[{roots[0]}].mirror: the root must mirror the swing foot's link {swing_link!r}"
+        )
+
+    # point masses
+    raw_pm = top.get("point_mass", [])
+    if not isinstance(raw_pm, list):
+        raise ModelDescriptionError("point_mass: must be an array of tables")
+    pms: list[PointMassSpec] = []
+    for i, raw in enumerate(raw_pm):
+        p = f"point_mass[{i}]"
+        tab = _table(raw, p)
+        _check_keys(tab, _PM_KEYS, _PM_REQUIRED, p)
+        link_name = _str(tab, "link", p)
+        if link_name not in index:
+            raise ModelDescriptionError(f"{p}.link: unknown link {link_name!r}")
+        pms.append(
+            PointMassSpec(
+                name=_str(tab, "name", p) if "name" in tab else f"point_mass_{i}",
+                link=link_name,
+                at=_expr(tab, "at", params, p),
+                offset=_expr(tab, "offset", params, p) if "offset" in tab else 0.0,
+                mass=_expr(tab, "mass", params, p),
+            )
+        )
+
+    desc = WalkerDescription(
+        name=name,
+        params=tuple(sorted(params.items())),
+        links=tuple(links[i] for i in order),
+        feet=(feet_by_role["stance"], feet_by_role["swing"]),
+        point_masses=tuple(pms),
+        source=source,
+    )
+    try:
+        desc.check_values(desc.default_params)
+    except ModelDescriptionError as exc:
+        # report link indices as written in the input, not in tree order
+        msg = str(exc)
+        if msg.startswith("link["):
+            k_tree = int(msg[5 : msg.index("]")])
+            msg = f"link[{order[k_tree]}]" + msg[msg.index("]") + 1 :]
+        raise ModelDescriptionError(msg) from None
+    return desc
+
+
+def read_description(path: str | Path) -> WalkerDescription:
+    """Read and validate a TOML walker description.
+
+    Raises
+    ------
+    ModelDescriptionError
+        On TOML syntax errors or a malformed description (message names the field).
+    """
+    p = Path(path)
+    try:
+        data = tomllib.loads(p.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise ModelDescriptionError(f"{p.name}: invalid TOML: {exc}") from exc
+    return parse_description(data, source=str(p))

@@ -126,6 +126,112 @@ def _command(add: Callable[[Any], None]) -> Callable[[Any], None]:
     return add
 
 
+# -- heel strike and the paper's figures (issue 2) ---------------------------------------------
+@_command
+def _add_reproduce(sub: Any) -> None:
+    p = sub.add_parser(
+        "reproduce",
+        help="reproduce the paper's Figs. 2, 3a and 3b",
+        description="Write Figs. 2, 3a and 3b of Font & Kövecses (2008) as PNG and PDF, with "
+        "one CSV of data per figure, and print the paths written (one per line).",
+    )
+    p.add_argument("--out", default="figures", help="output directory (default: figures)")
+    p.set_defaults(func=_run_reproduce)
+
+
+def _run_reproduce(args: argparse.Namespace) -> int:
+    from heelstrike.plots import reproduce_paper
+
+    try:
+        paths = reproduce_paper(args.out)
+    except OSError as exc:
+        raise CliError(f"cannot write to {args.out!r}: {exc.strerror or exc}") from exc
+    for path in paths:
+        print(path)
+    return 0
+
+
+@_command
+def _add_impact(sub: Any) -> None:
+    p = sub.add_parser(
+        "impact",
+        help="energy decomposition of one heel strike",
+        description="Decompose the pre-impact kinetic energy of a heel strike of the "
+        "circular-feet compass gait into the constrained part T_c (lost) and the admissible "
+        "part T_a (kept), with the post-impact velocities, the ground impulse and the loss per "
+        "metre eta = T_c / L_S (Font & Kövecses 2008, eqs. 5-16).",
+    )
+    _add_walker_options(p)
+    p.add_argument("--angle", type=parse_angle, required=True,
+                   help="impact angle q3, 0 < q3 < 90deg, e.g. 20deg")
+    p.add_argument("--q3dot", type=float, default=1.0,
+                   help="pre-impact stance-leg rate q3_dot (rad/s, default 1)")
+    p.add_argument("--q4dot", type=float, default=0.0,
+                   help="pre-impact inter-leg rate q4_dot (rad/s, default 0)")
+    p.add_argument("--restitution", type=float, default=0.0,
+                   help="restitution e of the constrained velocity, 0 <= e <= 1 (default 0)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=_run_impact)
+
+
+def _run_impact(args: argparse.Namespace) -> int:
+    from heelstrike.analysis.heel_strike import heel_strike_study
+
+    if not 0.0 < args.angle < math.pi / 2:
+        raise CliError(
+            f"--angle must satisfy 0 < q3 < 90deg (leading foot ahead), got "
+            f"{math.degrees(args.angle):g} deg"
+        )
+    walker = _walker_from_args(args)
+    s = heel_strike_study(walker, args.angle, q3_dot=args.q3dot, q4_dot=args.q4dot,
+                          restitution=args.restitution)
+    d: dict[str, Any] = {
+        "T": float(s.kinetic_energy),
+        "T_c": float(s.kinetic_energy_constrained),
+        "T_a": float(s.kinetic_energy_admissible),
+        "eta": float(s.eta),
+        "step_length": float(s.step_length),
+        "qdot_plus": [float(v) for v in s.velocity_post],
+        "impulse": [float(v) for v in s.constraint_impulse],
+        "trailing_foot_lifts": bool(s.trailing_foot_lifts),
+        "qdot_minus": [float(v) for v in s.velocity_pre],
+        "T_plus": float(s.kinetic_energy_post),
+        "energy_lost": float(s.energy_lost),
+        "radius": float(s.foot_radius),
+        "impact_angle": float(s.impact_angle),
+        "restitution": float(s.restitution),
+        "degenerate_wheel": bool(s.degenerate_wheel),
+    }
+    if args.json:
+        _print_json(d)
+        return 0
+    T = d["T"]
+    share = (lambda x: f"({100.0 * x / T:5.1f} % of T)") if T > 0 else (lambda x: "")
+    print(f"heel strike: R = {d['radius']:g} m, q3 = {math.degrees(args.angle):g} deg, "
+          f"q3_dot- = {args.q3dot:g} rad/s, q4_dot- = {args.q4dot:g} rad/s, "
+          f"e = {args.restitution:g}")
+    print(f"  kinetic energy before   T      {T:12.6f} J")
+    print(f"  constrained part        T_c    {d['T_c']:12.6f} J  {share(d['T_c'])}")
+    print(f"  admissible part         T_a    {d['T_a']:12.6f} J  {share(d['T_a'])}")
+    print(f"  energy lost             |W|    {d['energy_lost']:12.6f} J")
+    print(f"  kinetic energy after    T+     {d['T_plus']:12.6f} J")
+    print(f"  step length             L_S    {d['step_length']:12.6f} m")
+    print(f"  loss per metre          eta    {d['eta']:12.6f} J/m")
+    print("  velocities                       before        after")
+    units = ("m/s", "m/s", "rad/s", "rad/s")
+    for i, unit in enumerate(units):
+        name = f"q{i + 1}_dot ({unit})"
+        print(f"    {name:<28}{d['qdot_minus'][i]:12.6f} {d['qdot_plus'][i]:12.6f}")
+    lx, ly = d["impulse"]
+    print(f"  ground impulse on the striking foot (x, y)  {lx:.6f}, {ly:.6f} N s")
+    if d["degenerate_wheel"]:
+        verdict = "no: R = l, McGeer's wheel (degenerate, q2_dot+ = 0)"
+    else:
+        verdict = "yes" if d["trailing_foot_lifts"] else "no (impact not admissible)"
+    print(f"  trailing foot lifts     {verdict}")
+    return 0
+
+
 # -- gaits (issue 3) ---------------------------------------------------------------------------
 def _parse_guess(text: str | None) -> list[float] | None:
     if text is None:
@@ -263,6 +369,160 @@ def _run_bifurcation(args: argparse.Namespace) -> int:
     )
     for path in paths:
         print(path)
+    return 0
+
+
+# -- basin of attraction and stable-gait map (issue 6) ------------------------------------------
+def _parse_grid(text: str) -> tuple[int, int]:
+    parts = str(text).lower().split("x")
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        n1, n2 = int(parts[0]), int(parts[1])
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"invalid grid {text!r}: use e.g. 400x400") from None
+    if n1 < 1 or n2 < 1:
+        raise argparse.ArgumentTypeError(f"invalid grid {text!r}: sizes must be >= 1")
+    return n1, n2
+
+
+@_command
+def _add_basin(sub: Any) -> None:
+    p = sub.add_parser(
+        "basin",
+        help="basin of attraction of the passive gait",
+        description="Basin of attraction (Schwab & Wisse 2001) of the passive period-one gait on "
+        "the post-impact (q3, q3_dot) slice through the fixed point (q4_dot at its fixed-point "
+        "value), computed with the compiled ensemble. Writes basin.png and basin.nc.",
+    )
+    _add_walker_options(p)
+    p.add_argument("--slope", type=parse_angle, default=parse_angle("3deg"),
+                   help="slope angle (default 3deg)")
+    p.add_argument("--grid", type=_parse_grid, default=(400, 400),
+                   help="N_Q3xN_Q3DOT grid points (default 400x400)")
+    p.add_argument("--q3-range", type=lambda t: parse_range(t, parse_angle),
+                   default=(-0.5, -0.05, None), help="Q3MIN:Q3MAX post-impact stance angles "
+                   "(default -0.5:-0.05 rad); write --q3-range=-0.5:-0.05")
+    p.add_argument("--q3dot-range", type=parse_range, default=(0.3, 2.3, None),
+                   help="MIN:MAX post-impact stance velocities in rad/s (default 0.3:2.3)")
+    p.add_argument("--steps", type=_positive_int, default=60,
+                   help="largest number of steps per initial state (default 60)")
+    p.add_argument("--tol", type=float, default=1e-3,
+                   help="convergence radius around the fixed point (default 1e-3)")
+    p.add_argument("--out", default="basin", help="output directory (default ./basin)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=_run_basin)
+
+
+def _run_basin(args: argparse.Namespace) -> int:
+    from heelstrike.analysis.basin import basin_of_attraction, write_basin
+    from heelstrike.analysis.limit_cycle import GaitNotFoundError
+
+    walker = _walker_from_args(args)
+    a0, a1, _ = args.q3_range
+    b0, b1, _ = args.q3dot_range
+    if not (a0 < a1 and b0 < b1):
+        raise CliError("--q3-range and --q3dot-range need MIN < MAX")
+    if not args.tol > 0:
+        raise CliError("--tol must be > 0")
+    try:
+        basin = basin_of_attraction(
+            walker, args.slope, grid=args.grid, ranges=((a0, a1), (b0, b1)), steps=args.steps,
+            tol=args.tol, progress=not args.json and sys.stderr.isatty(),
+        )
+    except GaitNotFoundError as exc:
+        raise CliError(f"no gait found at slope {math.degrees(args.slope):g} deg: {exc}") from exc
+    png, nc = write_basin(basin, args.out)
+    if args.json:
+        _print_json({
+            "converging_fraction": basin.converging_fraction,
+            "fractions": basin.fractions(),
+            "fixed_point": dict(zip(("q3", "q3_dot", "q4_dot"),
+                                    map(float, basin.fixed_point), strict=True)),
+            "grid": list(args.grid),
+            "steps": args.steps,
+            "slope": args.slope,
+            "elapsed": basin.elapsed,
+            "figure": str(png),
+            "data": str(nc),
+        })
+        return 0
+    print(f"basin of attraction, R = {args.radius:g} m, slope = {math.degrees(args.slope):g} deg, "
+          f"grid {args.grid[0]}x{args.grid[1]}, up to {args.steps} steps")
+    print(f"  {'fixed point':20s} q3 = {basin.fixed_point[0]:.6f} rad, q3_dot = "
+          f"{basin.fixed_point[1]:.6f} rad/s, q4_dot = {basin.fixed_point[2]:.6f} rad/s")
+    print(f"  {'converging':20s} {100 * basin.converging_fraction:.3f} % of the grid")
+    for name, frac in basin.fractions().items():
+        if frac > 0 and name != "converged":
+            print(f"  {name.replace('_', ' '):20s} {100 * frac:.3f} %")
+    print(f"  {'ensemble time':20s} {basin.elapsed:.1f} s")
+    print(png)
+    print(nc)
+    return 0
+
+
+@_command
+def _add_map(sub: Any) -> None:
+    p = sub.add_parser(
+        "map",
+        help="stable passive gaits over foot radius and slope",
+        description="Period-one passive gaits over (foot radius, slope): spectral radius, "
+        "stability and the period-doubling slope per radius (continuation along the slope with "
+        "the compiled step map). Writes gait_map.png and gait_map.nc.",
+        conflict_handler="resolve",  # --radius below replaces the walker option by a range
+    )
+    _add_walker_options(p)
+    p.add_argument("--radius", type=parse_range, default=(0.0, 0.6, 7),
+                   help="START:STOP[:COUNT] foot radii in m (default 0:0.6:7)")
+    p.add_argument("--slope", type=lambda t: parse_range(t, parse_angle),
+                   default=(math.radians(1.0), math.radians(6.0), 21),
+                   help="START:STOP[:COUNT] slopes, e.g. 1deg:6deg:21 (default)")
+    p.add_argument("--out", default="gait_map", help="output directory (default ./gait_map)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=_run_map)
+
+
+def _run_map(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from heelstrike.analysis.gait_map import gait_map, write_gait_map
+    from heelstrike.analysis.limit_cycle import GaitNotFoundError
+
+    r0, r1, nr = args.radius
+    s0, s1, ns = args.slope
+    if not 0 <= r0 <= r1 <= args.leg_length:
+        raise CliError("--radius needs 0 <= START <= STOP <= leg length")
+    if not 0 < s0 < s1:
+        raise CliError("--slope needs 0 < START < STOP")
+    radii = np.linspace(r0, r1, nr or 7)
+    slopes = np.linspace(s0, s1, ns or 21)
+    base = _walker_from_args(argparse.Namespace(**{**vars(args), "radius": float(radii[0])}))
+    try:
+        gmap = gait_map(base, radii, slopes, progress=not args.json and sys.stderr.isatty())
+    except GaitNotFoundError as exc:
+        raise CliError(f"no starting gait found: {exc}") from exc
+    png, nc = write_gait_map(gmap, args.out)
+    ds = gmap.dataset
+    pd = [None if not np.isfinite(v) else float(v) for v in gmap.period_doubling_slope]
+    stable = ds["stable"].values
+    if args.json:
+        _print_json({
+            "foot_radius": radii.tolist(),
+            "slope": slopes.tolist(),
+            "stable_fraction": float(np.mean(stable)),
+            "period_doubling_slope": pd,
+            "gait_found_fraction": float(np.mean(np.isfinite(ds["spectral_radius"].values))),
+            "figure": str(png),
+            "data": str(nc),
+        })
+        return 0
+    print(f"stable passive gaits: {int(stable.sum())} of {stable.size} (R, slope) points")
+    for R, v, row in zip(radii, pd, stable, strict=True):
+        pd_text = "none in range" if v is None else f"{math.degrees(v):.3f} deg"
+        print(f"  R = {R:6.3f} m: stable at {int(row.sum()):3d}/{row.size} slopes, "
+              f"period doubling {pd_text}")
+    print(png)
+    print(nc)
     return 0
 
 

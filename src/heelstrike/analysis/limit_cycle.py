@@ -56,6 +56,10 @@ class PoincareMap:
         Integrator tolerances.
     max_step_duration : float
         Time bound of one step (s).
+    method : {"scipy", "compiled"}
+        ``"scipy"``: :func:`~heelstrike.dynamics.hybrid.simulate` (any walker, actuation);
+        ``"compiled"``: :func:`~heelstrike.dynamics.compiled.step_map_compiled` for ``P(z)``
+        (passive :class:`~heelstrike.models.CompassGait` only; ``walk`` still uses scipy).
     """
 
     walker: PlanarWalker
@@ -66,11 +70,22 @@ class PoincareMap:
     atol: float = 1e-11
     max_step_duration: float = 5.0
     max_step: float = np.inf
+    method: str = "scipy"
+    #: Step simulator with :func:`~heelstrike.dynamics.hybrid.simulate`'s signature (None: that
+    #: function), e.g. :func:`heelstrike.dynamics.phased.simulate_phased` for described walkers.
+    simulator: Callable[..., WalkResult] | None = None
+
+    def __post_init__(self) -> None:
+        if self.method not in ("scipy", "compiled"):
+            raise ValueError(f"method must be 'scipy' or 'compiled', got {self.method!r}")
+        if self.method == "compiled" and (self.torque is not None or self.push_off is not None):
+            raise ValueError("method='compiled' supports passive walkers only")
 
     def walk(self, z: ArrayLike, steps: int = 1) -> WalkResult:
         """Simulate ``steps`` steps from the section point ``z``."""
         q, q_dot = self.walker.section_to_state(np.asarray(z, dtype=float))
-        return simulate(
+        sim = simulate if self.simulator is None else self.simulator
+        return sim(
             self.walker,
             q,
             q_dot,
@@ -86,6 +101,17 @@ class PoincareMap:
 
     def __call__(self, z: ArrayLike) -> FloatArray:
         """``P(z)``; NaNs if the step fails (fall, no strike, trailing foot stays...)."""
+        if self.method == "compiled":
+            from heelstrike.dynamics.compiled import step_map_compiled
+
+            return step_map_compiled(
+                self.walker,  # type: ignore[arg-type]
+                z,
+                self.slope,
+                rtol=self.rtol,
+                atol=self.atol,
+                max_step_duration=self.max_step_duration,
+            ).z
         res = self.walk(z, 1)
         if not res.ok:
             return np.full(np.shape(z), np.nan)
@@ -259,6 +285,8 @@ def find_limit_cycle(
     rtol: float = 1e-11,
     atol: float = 1e-11,
     progress: bool = False,
+    method: str = "scipy",
+    simulator: Callable[..., WalkResult] | None = None,
 ) -> LimitCycle:
     """Find a period-one gait with Newton's method on the Poincare map.
 
@@ -282,6 +310,12 @@ def find_limit_cycle(
         Integrator tolerances.
     progress : bool
         Show a progress bar during the automatic search.
+    method : {"scipy", "compiled"}
+        Poincare map used by Newton (see :class:`PoincareMap`); the returned cycle's ``walk``
+        and energetics always come from the scipy reference.
+    simulator : callable, optional
+        Step simulator (see :class:`PoincareMap`), e.g.
+        :func:`heelstrike.dynamics.phased.simulate_phased` for described walkers.
 
     Returns
     -------
@@ -293,7 +327,8 @@ def find_limit_cycle(
         If no step can be taken, Newton diverges, or the iteration does not converge.
     """
     pmap = PoincareMap(
-        walker=walker, slope=slope, torque=torque, push_off=push_off, rtol=rtol, atol=atol
+        walker=walker, slope=slope, torque=torque, push_off=push_off, rtol=rtol, atol=atol,
+        method=method, simulator=simulator,
     )
     z = _automatic_guess(pmap, progress) if guess is None else np.asarray(guess, dtype=float)
     residual = np.inf

@@ -1,0 +1,101 @@
+"""Basin of attraction and stable-gait map (compiled ensemble), and their commands."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from heelstrike.analysis.basin import OUTCOMES, basin_of_attraction, write_basin
+from heelstrike.analysis.gait_map import gait_map, newton_gait
+from heelstrike.cli import main
+from heelstrike.dynamics.hybrid import simulate
+from heelstrike.models.compass import CompassGait
+
+SLOPE3 = np.deg2rad(3.0)
+Z3 = np.array([-0.27102868, 1.09238359, -0.71500964])
+
+
+@pytest.fixture(scope="module")
+def basin():
+    return basin_of_attraction(
+        CompassGait(), SLOPE3, grid=(31, 29), ranges=((-0.5, -0.05), (0.3, 2.3)),
+        steps=40, fixed_point=Z3,
+    )
+
+
+def test_basin_dataset_and_classification(basin, tmp_path):
+    ds = basin.dataset
+    assert ds["outcome"].shape == (31, 29)
+    assert ds["q3"].attrs["units"] == "rad" and ds["q3_dot"].attrs["units"] == "rad s-1"
+    assert 0.0 < basin.converging_fraction < 0.5
+    assert basin.converging_fraction == pytest.approx(float(np.mean(ds["outcome"] == 0)))
+    assert sum(basin.fractions().values()) == pytest.approx(1.0)
+    # the grid point nearest the fixed point converges; slow launches fall backward
+    assert int(ds["outcome"].sel(q3=Z3[0], q3_dot=Z3[1], method="nearest")) == 0
+    slow = int(ds["outcome"].sel(q3=-0.5, q3_dot=0.3, method="nearest"))
+    assert OUTCOMES[slow] == "fell_backward"
+    png, nc = write_basin(basin, tmp_path)
+    assert png.stat().st_size > 10_000
+    back = xr.open_dataset(nc)
+    np.testing.assert_array_equal(back["outcome"].values, ds["outcome"].values)
+
+
+def test_basin_outcomes_agree_with_reference_simulation(basin):
+    """A sample of grid points: the scipy reference reaches the same fate."""
+    ds = basin.dataset
+    walker = CompassGait()
+    rng = np.random.default_rng(0)
+    codes = ds["outcome"].values
+    picks = []
+    for code in np.unique(codes):
+        idx = np.argwhere(codes == code)
+        picks += [tuple(idx[k]) for k in rng.choice(len(idx), min(2, len(idx)), replace=False)]
+    for i, j in picks:
+        z = np.array([ds["q3"].values[i], ds["q3_dot"].values[j], Z3[2]])
+        q, qd = walker.section_to_state(z)
+        name = OUTCOMES[codes[i, j]]
+        steps = int(ds["steps"].values[i, j])
+        if name == "converged":
+            res = simulate(walker, q, qd, slope=SLOPE3, steps=steps, rtol=1e-9, atol=1e-9)
+            assert res.ok
+            zf = walker.state_to_section(res.final_q, res.final_q_dot)
+            assert np.linalg.norm(zf - Z3) < 1e-3
+        else:
+            res = simulate(walker, q, qd, slope=SLOPE3, steps=steps + 1, rtol=1e-9, atol=1e-9)
+            assert res.status.value == name
+            assert res.n_steps == steps
+
+
+def test_gait_map_period_doubling_of_point_feet_near_4_4_deg():
+    slopes = np.deg2rad([3.0, 4.0, 5.0])
+    gm = gait_map(CompassGait(), [0.0, 0.3], slopes)
+    ds = gm.dataset
+    np.testing.assert_allclose(ds["fixed_point"].sel(foot_radius=0.0).values[0], Z3, atol=1e-7)
+    assert ds["stable"].sel(foot_radius=0.0).values.tolist() == [True, True, False]
+    pd = gm.period_doubling_slope
+    assert np.degrees(pd[0]) == pytest.approx(4.40, abs=0.03)
+    assert np.isnan(pd[1])  # R = 0.3 m stays stable up to 5 deg
+    assert bool(ds["stable"].sel(foot_radius=0.3).all())
+    # the multipliers' sign change brackets the refined slope
+    g = newton_gait(CompassGait(), float(pd[0]) + 0.002, Z3)
+    assert g.most_negative_real < -1.0
+    assert ds["period"].sel(foot_radius=0.0).values[0] == pytest.approx(0.7343, abs=1e-4)
+
+
+def test_basin_and_map_commands(tmp_path, capsys):
+    assert main(["basin", "--grid", "12x10", "--steps", "20", "--out", str(tmp_path / "b"),
+                 "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert 0 < d["converging_fraction"] < 1
+    assert (tmp_path / "b" / "basin.png").exists() and (tmp_path / "b" / "basin.nc").exists()
+    assert main(["map", "--radius", "0:0.1:2", "--slope", "3deg:3.5deg:2",
+                 "--out", str(tmp_path / "m"), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["stable_fraction"] == 1.0 and d["period_doubling_slope"] == [None, None]
+    assert (tmp_path / "m" / "gait_map.png").exists()
+    assert main(["basin", "--grid", "0x3"]) == 2
+    assert "invalid grid" in capsys.readouterr().err
+    assert main(["map", "--slope", "3deg:1deg"]) == 2

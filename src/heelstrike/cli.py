@@ -107,6 +107,44 @@ def _walker_from_args(args: argparse.Namespace) -> Any:
     )
 
 
+def _add_model_options(p: argparse.ArgumentParser) -> None:
+    """``--model`` (a TOML description or shipped name) and repeatable ``--param NAME=VALUE``."""
+    g = p.add_argument_group("described walker (overrides the compass-gait options)")
+    g.add_argument("--model", default=None, metavar="FILE_OR_NAME",
+                   help="walker description: a .toml file or a shipped name "
+                   "(compass, kneed, torso)")
+    g.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                   help="set a description parameter (SI units), repeatable, e.g. R=0.2")
+
+
+def _model_from_args(args: argparse.Namespace) -> Any:
+    from heelstrike.dynamics.phased import load_phased_walker
+
+    params: dict[str, float] = {}
+    for item in args.param:
+        name, sep, value = item.partition("=")
+        try:
+            if not sep or not name.strip():
+                raise ValueError
+            params[name.strip()] = float(value)
+        except ValueError:
+            raise CliError(f"invalid --param {item!r}: use NAME=VALUE, e.g. R=0.2") from None
+    try:
+        return load_phased_walker(args.model, **params)
+    except OSError as exc:
+        raise CliError(f"cannot read model {args.model!r}: {exc.strerror or exc}") from exc
+
+
+def _parse_floats(text: str, option: str, n: int | None = None) -> list[float]:
+    try:
+        vals = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise CliError(f"invalid {option} {text!r}: use comma-separated numbers") from None
+    if n is not None and len(vals) != n:
+        raise CliError(f"invalid {option} {text!r}: expected {n} comma-separated numbers")
+    return vals
+
+
 def _print_json(obj: Any) -> None:
     json.dump(obj, sys.stdout, allow_nan=False)
     sys.stdout.write("\n")
@@ -162,8 +200,14 @@ def _add_impact(sub: Any) -> None:
         "metre eta = T_c / L_S (Font & Kövecses 2008, eqs. 5-16).",
     )
     _add_walker_options(p)
-    p.add_argument("--angle", type=parse_angle, required=True,
-                   help="impact angle q3, 0 < q3 < 90deg, e.g. 20deg")
+    _add_model_options(p)
+    p.add_argument("--angle", type=parse_angle, default=None,
+                   help="impact angle q3, 0 < q3 < 90deg, e.g. 20deg (required unless --state)")
+    p.add_argument("--state", default=None, metavar="Q1,...,QN",
+                   help="with --model: full pre-impact configuration (m, rad) instead of --angle")
+    p.add_argument("--velocity", default=None, metavar="QD1,...,QDN",
+                   help="with --model and --state: pre-impact velocities (m/s, rad/s); default: "
+                   "stance rate --q3dot, foot rolling, joints at rest")
     p.add_argument("--q3dot", type=float, default=1.0,
                    help="pre-impact stance-leg rate q3_dot (rad/s, default 1)")
     p.add_argument("--q4dot", type=float, default=0.0,
@@ -174,9 +218,51 @@ def _add_impact(sub: Any) -> None:
     p.set_defaults(func=_run_impact)
 
 
+def _run_impact_model(args: argparse.Namespace) -> int:
+    from heelstrike.analysis.model_gaits import model_heel_strike, symmetric_heel_strike_state
+
+    walker = _model_from_args(args)
+    n = walker.n_coordinates
+    if args.state is not None:
+        q = _parse_floats(args.state, "--state", n)
+        if args.velocity is not None:
+            qd = _parse_floats(args.velocity, "--velocity", n)
+        else:
+            R = float(walker.foot_radii[0])
+            qd = [0.0] * n
+            qd[2], qd[0] = args.q3dot, -R * args.q3dot
+    else:
+        if args.angle is None:
+            raise CliError("give --angle (symmetric heel strike) or --state with --model")
+        if not 0.0 < args.angle < math.pi / 2:
+            raise CliError(f"--angle must satisfy 0 < angle < 90deg, got "
+                           f"{math.degrees(args.angle):g} deg")
+        q_, qd_ = symmetric_heel_strike_state(walker, args.angle, stance_rate=args.q3dot)
+        q, qd = list(q_), list(qd_)
+        if args.velocity is not None:
+            qd = _parse_floats(args.velocity, "--velocity", n)
+    s = model_heel_strike(walker, q, qd)
+    d = s.to_dict()
+    d["model"] = walker.description.name
+    d["coordinates"] = list(walker.coordinate_names)
+    if args.json:
+        _print_json(d)
+        return 0
+    print(f"heel strike of '{d['model']}' ({', '.join(d['coordinates'])})")
+    for key, unit in (("T", "J"), ("T_c", "J"), ("T_a", "J"), ("T_plus", "J"),
+                      ("step_length", "m"), ("eta", "J/m")):
+        print(f"  {key:<12} {d[key]:12.6f} {unit}")
+    print(f"  trailing foot lifts  {'yes' if d['trailing_foot_lifts'] else 'no'}")
+    return 0
+
+
 def _run_impact(args: argparse.Namespace) -> int:
     from heelstrike.analysis.heel_strike import heel_strike_study
 
+    if args.model is not None:
+        return _run_impact_model(args)
+    if args.angle is None:
+        raise CliError("--angle is required (e.g. --angle 20deg)")
     if not 0.0 < args.angle < math.pi / 2:
         raise CliError(
             f"--angle must satisfy 0 < q3 < 90deg (leading foot ahead), got "
@@ -254,18 +340,56 @@ def _add_gait(sub: Any) -> None:
         "slope, its stability (Floquet multipliers) and energetics.",
     )
     _add_walker_options(p)
+    _add_model_options(p)
     p.add_argument("--slope", type=parse_angle, default=parse_angle("3deg"),
                    help="slope angle, e.g. 3deg (default 3deg)")
     p.add_argument("--guess", default=None,
                    help="post-impact Q3,Q3DOT,Q4DOT to start Newton from (rad, rad/s); "
-                   "write --guess=-0.27,1.09,-0.72 when Q3 is negative")
+                   "write --guess=-0.27,1.09,-0.72 when Q3 is negative (with --model: the "
+                   "walker's section coordinates)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=_run_gait)
+
+
+def _run_gait_model(args: argparse.Namespace) -> int:
+    from heelstrike.analysis.limit_cycle import GaitNotFoundError
+    from heelstrike.analysis.model_gaits import find_model_gait
+
+    walker = _model_from_args(args)
+    guess = None
+    if args.guess is not None:
+        guess = _parse_floats(args.guess, "--guess", len(walker.section_names))
+    try:
+        gait = find_model_gait(walker, slope=args.slope, guess=guess)
+    except GaitNotFoundError as exc:
+        raise CliError(f"no gait found at slope {math.degrees(args.slope):g} deg: {exc}") from exc
+    d = gait.to_dict()
+    d["model"] = walker.description.name
+    if args.json:
+        _print_json(d)
+        return 0
+    c = gait.cycle
+    fp = ", ".join(f"{k} = {v:.6f}" for k, v in d["fixed_point"].items())
+    print(f"passive gait of '{d['model']}', slope = {math.degrees(args.slope):g} deg")
+    print(f"  fixed point (just after heel strike): {fp}")
+    print(f"  period          {c.period:10.5f} s")
+    print(f"  step length     {c.step_length:10.5f} m")
+    print(f"  speed           {c.speed:10.5f} m/s")
+    print(f"  |multipliers|   {', '.join(f'{abs(m):.4f}' for m in c.multipliers)}")
+    print(f"  stable          {'yes' if c.stable else 'no'}")
+    for imp in d["impacts"]:
+        print(f"  {imp['kind']:<15} T_c = {imp['T_c']:.6f} J")
+    print(f"  collision loss  {gait.collision_loss:10.5f} J/step (sum of T_c)")
+    print(f"  energy released {gait.potential_energy_released:10.5f} J/step (gravity)")
+    print(f"  eta             {gait.eta:10.5f} J/m")
+    return 0
 
 
 def _run_gait(args: argparse.Namespace) -> int:
     from heelstrike.analysis.limit_cycle import GaitNotFoundError, find_limit_cycle
 
+    if args.model is not None:
+        return _run_gait_model(args)
     walker = _walker_from_args(args)
     try:
         cycle = find_limit_cycle(
@@ -523,6 +647,60 @@ def _run_map(args: argparse.Namespace) -> int:
               f"period doubling {pd_text}")
     print(png)
     print(nc)
+    return 0
+
+
+# -- described walkers: heel-strike maps over two swept quantities (issue 5) ---------------------
+def _sweep(text: str) -> tuple[str, float, float, int]:
+    name, sep, rest = text.partition(":")
+    if not sep or not name:
+        raise argparse.ArgumentTypeError(
+            f"invalid sweep {text!r}: use NAME:START:STOP:COUNT (NAME a parameter or 'angle')"
+        )
+    conv = parse_angle if name == "angle" else float
+    start, stop, count = parse_range(rest, conv)
+    if count is None:
+        raise argparse.ArgumentTypeError(f"invalid sweep {text!r}: COUNT is required")
+    return name, start, stop, count
+
+
+@_command
+def _add_impact_map(sub: Any) -> None:
+    p = sub.add_parser(
+        "impact-map",
+        help="map T_c, T_a and eta at heel strike over two swept quantities",
+        description="For a described walker, sweep two description parameters (or one and "
+        "the impact angle, NAME 'angle') and map the constrained and admissible kinetic "
+        "energies and the loss per metre at a symmetric heel strike (stance rate --q3dot, "
+        "joints at rest). Writes impact_map.png and impact_map.csv and prints their paths.",
+    )
+    _add_model_options(p)
+    p.add_argument("--x", type=_sweep, required=True, metavar="NAME:START:STOP:COUNT")
+    p.add_argument("--y", type=_sweep, required=True, metavar="NAME:START:STOP:COUNT")
+    p.add_argument("--angle", type=parse_angle, default=parse_angle("20deg"),
+                   help="impact angle when not swept (default 20deg)")
+    p.add_argument("--q3dot", type=float, default=1.0, help="stance rate (rad/s, default 1)")
+    p.add_argument("--out", default="impact_map", help="output directory")
+    p.set_defaults(func=_run_impact_map)
+
+
+def _run_impact_map(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from heelstrike.analysis.model_gaits import impact_map
+    from heelstrike.plots_models import write_impact_map
+
+    if args.model is None:
+        raise CliError("--model is required (a .toml file or compass, kneed, torso)")
+    walker = _model_from_args(args)
+    axes = [(n, np.linspace(a, b, c)) for n, a, b, c in (args.x, args.y)]
+    m = impact_map(walker, axes[0], axes[1], angle=args.angle, stance_rate=args.q3dot)
+    try:
+        paths = write_impact_map(m, args.out)
+    except OSError as exc:
+        raise CliError(f"cannot write to {args.out!r}: {exc.strerror or exc}") from exc
+    for path in paths:
+        print(path)
     return 0
 
 

@@ -1,0 +1,204 @@
+"""The heel-strike study of Font & Kövecses (2008), section "Results and Discussion".
+
+The right foot is on the ground and rolling (``q2 = R``), the legs are symmetric
+(``q4 = -2 q3``) and the left foot strikes the ground. The pre-impact velocities are prescribed
+(the paper: ``q3_dot = 1 rad/s``, ``q4_dot = 0``). The impact is resolved by the impact algebra
+of :mod:`heelstrike.core.impact` with ``A = A_L`` (eq. 5) evaluated at the pre-impact state; the
+energy lost per metre walked is ``eta = |W_col| / L_S`` (eq. 16) with the step length
+``L_S = 2 (l - R) sin q3 + 2 R q3``.
+
+Every function broadcasts: the impact angle and any walker parameter may be arrays, e.g.
+``heel_strike_study(CompassGait(foot_radius=R[None, :]), q3[:, None])`` gives results of shape
+``(len(q3), len(R))``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from heelstrike.core.impact import ImpactResult, impact
+from heelstrike.models.compass import CompassGait, heel_strike_state
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+__all__ = ["LIFT_TOLERANCE", "HeelStrikeStudy", "heel_strike_study", "step_length"]
+
+#: Relative tolerance on the trailing foot's post-impact vertical velocity ``q2_dot+``: the foot
+#: lifts if ``q2_dot+ > LIFT_TOLERANCE * l (|q3_dot-| + |q4_dot-|)``. It absorbs round-off, so that
+#: McGeer's wheel (``R = l``, where ``q2_dot+ = 0`` exactly) is reported as not lifting.
+LIFT_TOLERANCE = 1e-9
+
+
+def step_length(walker: CompassGait, impact_angle: ArrayLike) -> FloatArray:
+    """Step length ``L_S = 2 (l - R) sin q3 + 2 R q3`` (m), the denominator of eq. (16).
+
+    The distance between the two contact points at heel strike (``2 (l - R) sin q3``) plus the
+    arc ``2 R q3`` rolled by the stance foot while its leg turns from ``-q3`` to ``q3``.
+
+    Parameters
+    ----------
+    walker : CompassGait
+        Supplies ``l`` and ``R`` (m); may hold arrays.
+    impact_angle : array_like
+        ``q3`` at impact (rad).
+
+    Returns
+    -------
+    ndarray, shape broadcast of ``impact_angle`` and the walker's parameters
+        ``L_S`` (m).
+    """
+    q3 = np.asarray(impact_angle, dtype=float)
+    l = np.asarray(walker.leg_length, dtype=float)
+    R = np.asarray(walker.foot_radius, dtype=float)
+    return np.asarray(2.0 * (l - R) * np.sin(q3) + 2.0 * R * q3)
+
+
+@dataclass(frozen=True, kw_only=True)
+class HeelStrikeStudy:
+    """Energy decomposition of one (batched) heel strike of the circular-feet compass gait.
+
+    All arrays share the broadcast shape ``(...)`` of the impact angle and the walker's
+    parameters, with a trailing axis where stated.
+
+    Attributes
+    ----------
+    impact_angle : ndarray, shape (...)
+        ``q3`` at impact (rad).
+    foot_radius : ndarray, shape (...)
+        ``R`` (m).
+    leg_length : ndarray, shape (...)
+        ``l`` (m).
+    restitution : float
+        Coefficient ``e`` of the constrained velocity (0 in the paper).
+    state : ndarray, shape (..., 4)
+        Pre-impact configuration ``q`` (m, m, rad, rad), ``q4 = -2 q3``.
+    velocity_pre : ndarray, shape (..., 4)
+        ``q_dot-`` (m/s, m/s, rad/s, rad/s).
+    velocity_post : ndarray, shape (..., 4)
+        ``q_dot+``; ``P_a q_dot-`` for ``e = 0`` (eq. 13).
+    constraint_impulse : ndarray, shape (..., 2)
+        ``lambda`` (N s): tangential (x) and normal (y) ground impulse on the striking foot.
+    kinetic_energy : ndarray, shape (...)
+        Pre-impact kinetic energy ``T`` (J), eq. (1).
+    kinetic_energy_constrained : ndarray, shape (...)
+        ``T_c`` (J), eq. (10): the part lost in an inert impact.
+    kinetic_energy_admissible : ndarray, shape (...)
+        ``T_a`` (J), eq. (10): the part kept.
+    kinetic_energy_post : ndarray, shape (...)
+        ``T+`` (J).
+    energy_lost : ndarray, shape (...)
+        ``|W_col| = T- - T+ = (1 - e^2) T_c`` (J), eq. (15).
+    step_length : ndarray, shape (...)
+        ``L_S = 2 (l - R) sin q3 + 2 R q3`` (m).
+    eta : ndarray, shape (...)
+        Energy lost per metre walked, ``|W_col| / L_S`` (J/m), eq. (16); ``nan`` where
+        ``L_S = 0`` (``q3 = 0``).
+    trailing_foot_lifts : ndarray of bool, shape (...)
+        ``q2_dot+ > LIFT_TOLERANCE * l (|q3_dot-| + |q4_dot-|)``: the impact is admissible
+        (the trailing, right foot leaves the ground). False at ``R = l``, where ``q2_dot+ = 0``.
+    degenerate_wheel : ndarray of bool, shape (...)
+        ``R = l`` (McGeer's synthetic wheel): both feet are arcs of one circle about the hip,
+        nothing is lost (``T_c = 0``) and the trailing foot neither lifts nor presses.
+    impact : ImpactResult
+        The full result of :func:`heelstrike.core.impact.impact` (projectors, impulses).
+    """
+
+    impact_angle: FloatArray
+    foot_radius: FloatArray
+    leg_length: FloatArray
+    restitution: float
+    state: FloatArray
+    velocity_pre: FloatArray
+    velocity_post: FloatArray
+    constraint_impulse: FloatArray
+    kinetic_energy: FloatArray
+    kinetic_energy_constrained: FloatArray
+    kinetic_energy_admissible: FloatArray
+    kinetic_energy_post: FloatArray
+    energy_lost: FloatArray
+    step_length: FloatArray
+    eta: FloatArray
+    trailing_foot_lifts: BoolArray
+    degenerate_wheel: BoolArray
+    impact: ImpactResult
+
+    @property
+    def trailing_foot_velocity(self) -> FloatArray:
+        """``q2_dot+`` (m/s), vertical post-impact velocity of the trailing foot's centre."""
+        return np.asarray(self.velocity_post[..., 1])
+
+
+def heel_strike_study(
+    walker: CompassGait,
+    impact_angle: ArrayLike,
+    *,
+    q3_dot: ArrayLike = 1.0,
+    q4_dot: ArrayLike = 0.0,
+    restitution: float = 0.0,
+) -> HeelStrikeStudy:
+    """Decompose the kinetic energy at heel strike and the loss per metre (paper eqs. 5-16).
+
+    Parameters
+    ----------
+    walker : CompassGait
+        The walker; any parameter may be an array broadcasting with ``impact_angle``.
+    impact_angle : array_like
+        ``q3`` at impact (rad), ``q4 = -2 q3``.
+    q3_dot, q4_dot : array_like
+        Pre-impact angular velocities (rad/s); the paper prescribes 1 and 0. The stance foot
+        rolls: ``q1_dot = -R q3_dot``, ``q2_dot = 0``.
+    restitution : float
+        ``e`` in [0, 1] applied to the constrained velocity; 0 is the paper's inert impact.
+
+    Returns
+    -------
+    HeelStrikeStudy
+        Broadcast over all inputs.
+
+    Raises
+    ------
+    heelstrike.core.impact.ImpactInputError
+        For non-finite angles or velocities or ``restitution`` outside [0, 1].
+    """
+    q, q_dot = heel_strike_state(walker, impact_angle, q3_dot=q3_dot, q4_dot=q4_dot)
+    M = walker.mass_matrix(q)
+    A = walker.contact_jacobian(q, "left")
+    res = impact(M, A, q_dot, restitution=restitution)
+    shape = res.kinetic_energy.shape
+
+    def bc(x: ArrayLike) -> FloatArray:
+        return np.asarray(np.broadcast_to(np.asarray(x, dtype=float), shape))
+
+    q3 = bc(q[..., 2])
+    R = bc(walker.foot_radius)
+    l = bc(walker.leg_length)
+    L_S = bc(step_length(walker, q3))
+    eta = np.full(shape, np.nan)
+    np.divide(res.energy_lost, L_S, out=eta, where=L_S > 0)
+    qd_pre = np.broadcast_to(q_dot, (*shape, 4))
+    scale = l * (np.abs(qd_pre[..., 2]) + np.abs(qd_pre[..., 3]))
+    lifts = res.velocity_post[..., 1] > LIFT_TOLERANCE * scale
+    return HeelStrikeStudy(
+        impact_angle=q3,
+        foot_radius=R,
+        leg_length=l,
+        restitution=res.restitution,
+        state=np.asarray(np.broadcast_to(q, (*shape, 4))),
+        velocity_pre=res.velocity_pre,
+        velocity_post=res.velocity_post,
+        constraint_impulse=res.constraint_impulse,
+        kinetic_energy=res.kinetic_energy,
+        kinetic_energy_constrained=res.kinetic_energy_constrained,
+        kinetic_energy_admissible=res.kinetic_energy_admissible,
+        kinetic_energy_post=res.kinetic_energy_post,
+        energy_lost=res.energy_lost,
+        step_length=L_S,
+        eta=eta,
+        trailing_foot_lifts=np.asarray(lifts, dtype=bool),
+        degenerate_wheel=np.asarray(np.isclose(R, l, rtol=1e-12, atol=0.0), dtype=bool),
+        impact=res,
+    )

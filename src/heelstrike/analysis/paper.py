@@ -1,0 +1,270 @@
+"""Data of the figures of Font & Kövecses (2008): Fig. 2, Fig. 3a and Fig. 3b.
+
+This module computes (and writes as CSV) what the figures show; the drawing is in
+:mod:`heelstrike.plots`, which also holds :func:`heelstrike.plots.reproduce_paper`.
+
+Conventions shared by the figures
+---------------------------------
+- The paper's walker (``mH = 2 m = 10 kg``, ``a = b = 0.5 m``, ``l = 1 m``) and pre-impact
+  velocities ``q3_dot = 1 rad/s``, ``q4_dot = 0``.
+- Impact angles run over ``(0, 45 deg]``: the grid starts one step above 0 because at ``q3 = 0``
+  the step length vanishes and ``eta`` (eq. 16) is undefined.
+- Only admissible impacts are shown (the trailing foot lifts, ``q2_dot+ > 0``), as in the paper.
+- ``R = l`` (McGeer's synthetic wheel) is degenerate: both feet are arcs of one circle about the
+  hip, so the impact changes nothing, ``T_c = 0`` and ``q2_dot+ = 0`` exactly. It is the limit
+  ``R -> l`` of admissible impacts (``q2_dot+ > 0`` for every ``R < l`` near ``l``), and the paper
+  plots it, so the figures keep it, flagged by the ``degenerate_wheel`` column.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from numpy.typing import ArrayLike, NDArray
+
+from heelstrike.analysis.heel_strike import heel_strike_study
+from heelstrike.models.compass import CompassGait
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+__all__ = [
+    "FIGURE_RADII",
+    "MAX_IMPACT_ANGLE",
+    "Figure3bData",
+    "PaperFigureData",
+    "figure2_data",
+    "figure3a_data",
+    "figure3b_data",
+    "heel_strike_table",
+    "impact_angle_grid",
+    "paper_figure_data",
+    "write_figure_data",
+]
+
+#: Foot radii (m) of the curves of Figs. 2 and 3a.
+FIGURE_RADII: tuple[float, ...] = (0.0, 0.25, 0.5, 0.75, 1.0)
+#: Largest impact angle of the figures (rad): 45 deg.
+MAX_IMPACT_ANGLE: float = float(np.deg2rad(45.0))
+
+
+def impact_angle_grid(n: int = 180, max_angle: float = MAX_IMPACT_ANGLE) -> FloatArray:
+    """``n`` evenly spaced impact angles in ``(0, max_angle]`` (rad), shape (n,).
+
+    The grid is ``max_angle * (1..n) / n``: it starts one step above 0, where ``eta`` is
+    undefined (zero step length).
+    """
+    if n < 1:
+        raise ValueError(f"n must be >= 1, got {n}")
+    if not (np.isfinite(max_angle) and max_angle > 0):
+        raise ValueError(f"max_angle must be a positive angle (rad), got {max_angle}")
+    return np.asarray(max_angle * np.arange(1, n + 1) / n, dtype=float)
+
+
+def heel_strike_table(
+    walker: CompassGait | None = None,
+    radii: ArrayLike = FIGURE_RADII,
+    impact_angles: ArrayLike | None = None,
+    *,
+    q3_dot: float = 1.0,
+    q4_dot: float = 0.0,
+) -> pd.DataFrame:
+    """Long table of the heel-strike study over radii x impact angles, all impacts.
+
+    Parameters
+    ----------
+    walker : CompassGait, optional
+        Scalar-parameter walker (paper defaults); its ``foot_radius`` is replaced by ``radii``.
+    radii : array_like, shape (n_R,)
+        Foot radii ``R`` (m).
+    impact_angles : array_like, shape (n_q3,), optional
+        ``q3`` (rad); default :func:`impact_angle_grid`.
+    q3_dot, q4_dot : float
+        Pre-impact angular velocities (rad/s).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``n_R * n_q3`` rows ordered by ``R`` then ``q3``; columns ``R_m, q3_deg, q3_rad, T_J,
+        T_c_J, T_a_J, energy_lost_J, step_length_m, eta_J_per_m, q2_dot_plus_m_per_s,
+        trailing_foot_lifts, degenerate_wheel, admissible``.
+    """
+    w = CompassGait() if walker is None else walker
+    R = np.atleast_1d(np.asarray(radii, dtype=float))
+    q3 = impact_angle_grid() if impact_angles is None else np.asarray(impact_angles, float)
+    q3 = np.atleast_1d(q3)
+    s = heel_strike_study(w.replace(foot_radius=R[:, None]), q3[None, :],
+                          q3_dot=q3_dot, q4_dot=q4_dot)
+    lifts = s.trailing_foot_lifts
+    data = {
+        "R_m": s.foot_radius,
+        "q3_deg": np.rad2deg(s.impact_angle),
+        "q3_rad": s.impact_angle,
+        "T_J": s.kinetic_energy,
+        "T_c_J": s.kinetic_energy_constrained,
+        "T_a_J": s.kinetic_energy_admissible,
+        "energy_lost_J": s.energy_lost,
+        "step_length_m": s.step_length,
+        "eta_J_per_m": s.eta,
+        "q2_dot_plus_m_per_s": s.trailing_foot_velocity,
+        "trailing_foot_lifts": lifts,
+        "degenerate_wheel": s.degenerate_wheel,
+        "admissible": lifts | s.degenerate_wheel,
+    }
+    return pd.DataFrame({k: np.ravel(v) for k, v in data.items()})
+
+
+def figure2_data(
+    walker: CompassGait | None = None,
+    radii: ArrayLike = FIGURE_RADII,
+    impact_angles: ArrayLike | None = None,
+) -> pd.DataFrame:
+    """Data of Fig. 2: ``T_c`` and ``T_a`` (J) against ``q3`` for several ``R``.
+
+    Admissible impacts only (plus the degenerate wheel ``R = l``, see the module docstring).
+    Columns as :func:`heel_strike_table`.
+    """
+    table = heel_strike_table(walker, radii, impact_angles)
+    return table[table["admissible"]].reset_index(drop=True)
+
+
+def figure3a_data(
+    walker: CompassGait | None = None,
+    radii: ArrayLike = FIGURE_RADII,
+    impact_angles: ArrayLike | None = None,
+) -> pd.DataFrame:
+    """Data of Fig. 3a: ``eta`` (J/m, eq. 16) against ``q3`` for several ``R``.
+
+    Admissible impacts only (plus the degenerate wheel). Columns as :func:`heel_strike_table`.
+    """
+    return figure2_data(walker, radii, impact_angles)
+
+
+@dataclass(frozen=True, kw_only=True)
+class Figure3bData:
+    """Data of Fig. 3b: ``eta`` over the (``q3``, ``R``) plane.
+
+    Attributes
+    ----------
+    impact_angle : ndarray, shape (n_q3,)
+        ``q3`` (rad), in ``(0, 45 deg]``.
+    foot_radius : ndarray, shape (n_R,)
+        ``R`` (m), in ``[0, l]``.
+    eta : ndarray, shape (n_R, n_q3)
+        Energy lost per metre (J/m), ``nan`` where the impact is not admissible (white).
+    eta_all : ndarray, shape (n_R, n_q3)
+        ``eta`` everywhere (J/m).
+    q2_dot_plus : ndarray, shape (n_R, n_q3)
+        Post-impact ``q2_dot+`` (m/s); its zero level is the dashed boundary.
+    admissible : ndarray of bool, shape (n_R, n_q3)
+        Trailing foot lifts, or the degenerate wheel ``R = l``.
+    degenerate_wheel : ndarray of bool, shape (n_R,)
+        ``R = l``.
+    """
+
+    impact_angle: FloatArray
+    foot_radius: FloatArray
+    eta: FloatArray
+    eta_all: FloatArray
+    q2_dot_plus: FloatArray
+    admissible: BoolArray
+    degenerate_wheel: BoolArray
+
+    def to_frame(self) -> pd.DataFrame:
+        """Long table, one row per grid point (``R`` major): ``R_m, q3_deg, q3_rad,
+        eta_J_per_m, q2_dot_plus_m_per_s, admissible, degenerate_wheel``; ``eta`` is
+        ``nan`` where not admissible."""
+        Rg, qg = np.meshgrid(self.foot_radius, self.impact_angle, indexing="ij")
+        wheel = np.broadcast_to(self.degenerate_wheel[:, None], Rg.shape)
+        return pd.DataFrame(
+            {
+                "R_m": Rg.ravel(),
+                "q3_deg": np.rad2deg(qg).ravel(),
+                "q3_rad": qg.ravel(),
+                "eta_J_per_m": self.eta.ravel(),
+                "q2_dot_plus_m_per_s": self.q2_dot_plus.ravel(),
+                "admissible": self.admissible.ravel(),
+                "degenerate_wheel": wheel.ravel(),
+            }
+        )
+
+
+def figure3b_data(
+    walker: CompassGait | None = None,
+    radii: ArrayLike | None = None,
+    impact_angles: ArrayLike | None = None,
+) -> Figure3bData:
+    """Data of Fig. 3b: ``eta`` (J/m) over a grid of ``q3`` (rad) and ``R`` (m).
+
+    Parameters
+    ----------
+    walker : CompassGait, optional
+        Scalar-parameter walker (paper defaults).
+    radii : array_like, shape (n_R,), optional
+        Default: 101 values evenly spaced in ``[0, l]``.
+    impact_angles : array_like, shape (n_q3,), optional
+        Default: :func:`impact_angle_grid`.
+    """
+    w = CompassGait() if walker is None else walker
+    l = float(np.asarray(w.leg_length))
+    R = np.linspace(0.0, l, 101) if radii is None else np.asarray(radii, dtype=float)
+    q3 = impact_angle_grid() if impact_angles is None else np.asarray(impact_angles, float)
+    s = heel_strike_study(w.replace(foot_radius=R[:, None]), q3[None, :])
+    admissible = s.trailing_foot_lifts | s.degenerate_wheel
+    return Figure3bData(
+        impact_angle=q3,
+        foot_radius=R,
+        eta=np.where(admissible, s.eta, np.nan),
+        eta_all=s.eta,
+        q2_dot_plus=s.trailing_foot_velocity,
+        admissible=admissible,
+        degenerate_wheel=s.degenerate_wheel[:, 0],
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class PaperFigureData:
+    """The data of the paper's three figures (see the ``figure*_data`` functions)."""
+
+    figure2: pd.DataFrame
+    figure3a: pd.DataFrame
+    figure3b: Figure3bData
+
+
+def paper_figure_data(walker: CompassGait | None = None) -> PaperFigureData:
+    """Compute the data of Figs. 2, 3a and 3b for ``walker`` (default: the paper's)."""
+    return PaperFigureData(
+        figure2=figure2_data(walker),
+        figure3a=figure3a_data(walker),
+        figure3b=figure3b_data(walker),
+    )
+
+
+def write_figure_data(data: PaperFigureData, out_dir: str | Path) -> list[Path]:
+    """Write ``fig2.csv``, ``fig3a.csv`` and ``fig3b.csv`` into ``out_dir`` (created).
+
+    Returns
+    -------
+    list of Path
+        The files written, in figure order.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    fig2_cols = ["R_m", "q3_deg", "q3_rad", "T_J", "T_c_J", "T_a_J", "q2_dot_plus_m_per_s",
+                 "trailing_foot_lifts", "degenerate_wheel"]
+    fig3a_cols = ["R_m", "q3_deg", "q3_rad", "eta_J_per_m", "energy_lost_J", "step_length_m",
+                  "q2_dot_plus_m_per_s", "trailing_foot_lifts", "degenerate_wheel"]
+    frames = {
+        "fig2.csv": data.figure2[fig2_cols],
+        "fig3a.csv": data.figure3a[fig3a_cols],
+        "fig3b.csv": data.figure3b.to_frame(),
+    }
+    paths = []
+    for name, frame in frames.items():
+        path = out / name
+        frame.to_csv(path, index=False, float_format="%.12g")
+        paths.append(path)
+    return paths

@@ -1,0 +1,159 @@
+"""CLI contracts of ``heelstrike impact`` and ``heelstrike reproduce`` (issue 2)."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from heelstrike.analysis.heel_strike import heel_strike_study
+from heelstrike.cli import main
+from heelstrike.models.compass import CompassGait
+
+IMPACT_KEYS = {"T", "T_c", "T_a", "eta", "step_length", "qdot_plus", "impulse",
+               "trailing_foot_lifts"}
+
+
+def _impact_json(argv: list[str], capsys: pytest.CaptureFixture[str]) -> dict:
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    lines = captured.out.strip().splitlines()
+    assert len(lines) == 1, captured.out
+    d = json.loads(lines[0])
+    assert isinstance(d, dict)
+    return d
+
+
+@pytest.mark.parametrize(
+    ("argv", "R", "q3", "kwargs", "walker_kw"),
+    [
+        (["--radius", "0.25", "--angle", "20deg"], 0.25, np.deg2rad(20), {}, {}),
+        (["--radius", "0", "--angle", "0.5rad"], 0.0, 0.5, {}, {}),
+        (["--radius", "0.6", "--angle", "0.3", "--q3dot", "1.7", "--q4dot", "-0.4",
+          "--restitution", "0.3", "--leg-inertia", "0.2", "--hip-mass", "4"],
+         0.6, 0.3, {"q3_dot": 1.7, "q4_dot": -0.4, "restitution": 0.3},
+         {"leg_inertia": 0.2, "hip_mass": 4.0}),
+    ],
+)
+def test_impact_json_matches_library(argv, R, q3, kwargs, walker_kw, capsys):
+    d = _impact_json(["impact", *argv, "--json"], capsys)
+    assert IMPACT_KEYS <= d.keys()
+    s = heel_strike_study(CompassGait(foot_radius=R, **walker_kw), q3, **kwargs)
+    assert d["T"] == pytest.approx(float(s.kinetic_energy), rel=1e-12)
+    assert d["T_c"] == pytest.approx(float(s.kinetic_energy_constrained), rel=1e-12)
+    assert d["T_a"] == pytest.approx(float(s.kinetic_energy_admissible), rel=1e-12)
+    assert d["eta"] == pytest.approx(float(s.eta), rel=1e-12)
+    assert d["step_length"] == pytest.approx(float(s.step_length), rel=1e-12)
+    assert d["qdot_plus"] == pytest.approx(list(s.velocity_post), rel=1e-12, abs=1e-15)
+    assert d["impulse"] == pytest.approx(list(s.constraint_impulse), rel=1e-12, abs=1e-15)
+    assert d["trailing_foot_lifts"] is bool(s.trailing_foot_lifts)
+    assert len(d["qdot_plus"]) == 4 and len(d["impulse"]) == 2
+    # physics through the CLI: energy balance
+    assert d["T_c"] + d["T_a"] == pytest.approx(d["T"], rel=1e-12)
+
+
+def test_impact_json_lift_flag_follows_the_physics(capsys):
+    lifts = _impact_json(["impact", "--radius", "0", "--angle", "10deg", "--json"], capsys)
+    stays = _impact_json(["impact", "--radius", "0", "--angle", "40deg", "--json"], capsys)
+    wheel = _impact_json(["impact", "--radius", "1", "--angle", "20deg", "--json"], capsys)
+    assert lifts["trailing_foot_lifts"] is True and lifts["qdot_plus"][1] > 0
+    assert stays["trailing_foot_lifts"] is False and stays["qdot_plus"][1] < 0
+    assert wheel["trailing_foot_lifts"] is False and wheel["T_c"] == pytest.approx(0, abs=1e-12)
+
+
+def test_impact_table_is_readable(capsys):
+    assert main(["impact", "--radius", "0.25", "--angle", "20deg"]) == 0
+    out = capsys.readouterr().out
+    s = heel_strike_study(CompassGait(foot_radius=0.25), np.deg2rad(20.0))
+    assert f"{float(s.kinetic_energy_constrained):.6f}" in out
+    assert f"{float(s.eta):.6f}" in out
+    for word in ("T_c", "T_a", "eta", "J/m", "lifts"):
+        assert word in out
+
+
+BAD = [
+    ["impact", "--radius", "2", "--angle", "20deg"],
+    ["impact", "--radius", "-1", "--angle", "20deg"],
+    ["impact", "--radius", "0.2", "--angle", "abc"],
+    ["impact", "--radius", "0.2"],
+    ["impact", "--angle", "0deg"],
+    ["impact", "--angle", "-10deg"],
+    ["impact", "--angle", "20deg", "--restitution", "1.5"],
+    ["impact", "--angle", "20deg", "--q3dot", "nan"],
+    ["impact", "--angle", "20deg", "--com-from-hip", "1"],
+    ["impact", "--angle", "20deg", "--json", "--radius", "x"],
+    ["reproduce", "--bogus"],
+]
+
+
+@pytest.mark.parametrize("argv", BAD)
+def test_bad_input_gives_one_line_error(argv, capsys):
+    assert main(argv) != 0
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1
+    assert lines[0].startswith("heelstrike: error:")
+    assert "Traceback" not in captured.err
+
+
+def _entry_point() -> list[str]:
+    exe = shutil.which("heelstrike", path=str(Path(sys.executable).parent))
+    return [exe] if exe else [sys.executable, "-m", "heelstrike.cli"]
+
+
+def test_installed_entry_point_json_and_errors():
+    ok = subprocess.run([*_entry_point(), "impact", "--radius", "0.25", "--angle", "20deg",
+                         "--json"], capture_output=True, text=True, timeout=120)
+    assert ok.returncode == 0, ok.stderr
+    d = json.loads(ok.stdout)
+    assert IMPACT_KEYS <= d.keys()
+    s = heel_strike_study(CompassGait(foot_radius=0.25), np.deg2rad(20.0))
+    assert d["T_c"] == pytest.approx(float(s.kinetic_energy_constrained), rel=1e-12)
+    for argv in (["--radius", "2", "--angle", "20deg"], ["--angle", "abc"]):
+        bad = subprocess.run([*_entry_point(), "impact", *argv], capture_output=True, text=True,
+                             timeout=120)
+        assert bad.returncode != 0
+        assert bad.stdout == ""
+        lines = bad.stderr.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("heelstrike: error:")
+        assert "Traceback" not in bad.stderr
+
+
+def test_reproduce_writes_figures_and_data(tmp_path, capsys):
+    out = tmp_path / "figs"
+    assert main(["reproduce", "--out", str(out)]) == 0
+    printed = [Path(p) for p in capsys.readouterr().out.strip().splitlines()]
+    expected = {out / f"{fig}.{ext}" for fig in ("fig2", "fig3a", "fig3b")
+                for ext in ("png", "pdf", "csv")}
+    assert set(printed) == expected and len(printed) == 9
+    for p in expected:
+        assert p.stat().st_size > 0
+    assert (out / "fig3b.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert (out / "fig2.pdf").read_bytes()[:5] == b"%PDF-"
+    # the CSVs hold the physics: spot-check against the library
+    fig2 = pd.read_csv(out / "fig2.csv")
+    row = fig2[(fig2["R_m"] == 0.25)].iloc[10]
+    s = heel_strike_study(CompassGait(foot_radius=0.25), row["q3_rad"])
+    assert row["T_c_J"] == pytest.approx(float(s.kinetic_energy_constrained), rel=1e-10)
+    assert row["T_a_J"] == pytest.approx(float(s.kinetic_energy_admissible), rel=1e-10)
+    fig3a = pd.read_csv(out / "fig3a.csv")
+    assert (fig3a.loc[fig3a["R_m"] == 1.0, "eta_J_per_m"].abs() < 1e-12).all()
+    fig3b = pd.read_csv(out / "fig3b.csv")
+    big_R = fig3b[fig3b["R_m"] > 0.4]
+    assert big_R["admissible"].all() and big_R["eta_J_per_m"].notna().all()
+    assert fig3b.loc[~fig3b["admissible"], "eta_J_per_m"].isna().all()
+
+
+def test_reproduce_into_unwritable_place_fails_cleanly(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    assert main(["reproduce", "--out", str(blocker / "sub")]) != 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("heelstrike: error:")

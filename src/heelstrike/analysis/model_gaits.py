@@ -1,0 +1,443 @@
+"""Gaits, energy books and heel-strike maps of described walkers (TOML models).
+
+- :func:`find_model_gait`: a period-one gait of a :class:`~heelstrike.models.builder.BuiltWalker`
+  through :func:`~heelstrike.analysis.limit_cycle.find_limit_cycle` with
+  :func:`~heelstrike.dynamics.phased.simulate_phased` (knee strikes and heel strikes), and its
+  energy book: per step, ``actuator work + potential energy released = sum of T_c`` over the
+  step's impacts (Font & Kövecses 2008, eqs. 14-15) on the periodic gait.
+- :func:`model_heel_strike`: the impact decomposition of a heel strike of any described walker.
+- :func:`impact_map`: ``T_c``, ``T_a`` and ``eta`` at heel strike over a grid of two swept
+  description parameters (or a parameter and the impact angle): the paper's Figs. 2-3 for any
+  walker.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from heelstrike.analysis.limit_cycle import (
+    GaitNotFoundError,
+    LimitCycle,
+    PoincareMap,
+    find_limit_cycle,
+)
+from heelstrike.core.complementarity import CandidateContact, resolve_impact
+from heelstrike.dynamics.hybrid import PushOff
+from heelstrike.dynamics.phased import (
+    PhasedImpact,
+    PhasedWalker,
+    PhasedWalkResult,
+    simulate_phased,
+)
+from heelstrike.dynamics.single_support import TorqueLaw
+from heelstrike.models.builder import BuiltWalker
+
+FloatArray = NDArray[np.float64]
+
+__all__ = [
+    "ANGLE",
+    "ImpactMap",
+    "ModelGait",
+    "ModelHeelStrike",
+    "find_model_gait",
+    "impact_map",
+    "model_heel_strike",
+    "symmetric_heel_strike_state",
+]
+
+#: Name of the impact angle as a swept quantity of :func:`impact_map`.
+ANGLE = "angle"
+
+
+# -- gaits --------------------------------------------------------------------------------------
+@dataclass(frozen=True, kw_only=True)
+class ModelGait:
+    """A period-one gait of a described walker with its energy book.
+
+    Attributes
+    ----------
+    cycle : LimitCycle
+        Fixed point, period, multipliers... (``cycle.collision_loss`` is the heel strike's only).
+    impacts : tuple of PhasedImpact
+        Every impact of one period (knee strikes, then the heel strike).
+    collision_loss : float
+        Sum of ``T_c`` over the step's impacts (J).
+    actuator_work : float
+        Actuator work per step, push-off included (J).
+    potential_energy_released : float
+        Potential energy released per step (J).
+    energy_residual : float
+        ``actuator_work + potential_energy_released - collision_loss`` (J); ~0 on the gait.
+    """
+
+    cycle: LimitCycle
+    impacts: tuple[PhasedImpact, ...]
+    collision_loss: float
+    actuator_work: float
+    potential_energy_released: float
+    energy_residual: float
+
+    @property
+    def eta(self) -> float:
+        """Total collision loss per metre walked (J/m)."""
+        return self.collision_loss / self.cycle.step_length
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready summary: the compass-gait keys, ``collision_loss`` the step total, and
+        ``impacts`` listing each impact's kind, ``T``, ``T_c``, ``T_a`` (J)."""
+        d = self.cycle.to_dict()
+        d["collision_loss"] = self.collision_loss
+        d["eta"] = self.eta
+        d["actuator_work"] = self.actuator_work
+        d["potential_energy_released"] = self.potential_energy_released
+        d["energy_residual"] = self.energy_residual
+        d["impacts"] = [
+            {
+                "kind": e.kind,
+                "T": e.kinetic_energy,
+                "T_c": e.kinetic_energy_constrained,
+                "T_a": e.kinetic_energy_admissible,
+                "time": e.time,
+            }
+            for e in self.impacts
+        ]
+        return d
+
+
+def _grid_guesses(walker: PhasedWalker) -> list[FloatArray]:
+    d = len(walker.section_names)
+    n_ang = d - len(walker._section_v)
+    out = []
+    for a, w, h in itertools.product(
+        (-0.1, -0.15, -0.2, -0.25, -0.3), (0.6, 0.8, 1.0, 1.2, 1.4, 1.6), (-1.0, -0.6, -0.3, 0.0)
+    ):
+        z = np.zeros(d)
+        z[0] = a
+        z[n_ang] = w
+        z[n_ang + 1] = h
+        if n_ang > 1:  # further joints (e.g. a torso) held upright: relative angle -a
+            z[1:n_ang] = -a
+            z[n_ang + 2 :] = -w
+        out.append(z)
+    return out
+
+
+def find_model_gait(
+    walker: BuiltWalker,
+    *,
+    slope: float = 0.0,
+    guess: ArrayLike | None = None,
+    torque: TorqueLaw | None = None,
+    push_off: PushOff | None = None,
+    tol: float = 1e-10,
+    max_iter: int = 20,
+    rtol: float = 1e-11,
+    atol: float = 1e-11,
+) -> ModelGait:
+    """Find a period-one gait of a described walker and its energy book.
+
+    Parameters
+    ----------
+    walker : BuiltWalker
+        Any described walker (wrapped in :class:`PhasedWalker` for its section).
+    slope : float
+        Ground slope (rad).
+    guess : array_like, optional
+        Section coordinates (``PhasedWalker.section_names``) to start Newton from; if None, a
+        coarse grid of post-impact states is mapped once and Newton starts from the most nearly
+        periodic ones.
+    torque, push_off : optional
+        Actuation (see :func:`~heelstrike.dynamics.phased.simulate_phased`).
+    tol, max_iter, rtol, atol
+        Newton tolerance and iterations; integrator tolerances.
+
+    Returns
+    -------
+    ModelGait
+
+    Raises
+    ------
+    GaitNotFoundError
+    """
+    w = PhasedWalker.from_built(walker)
+    kw: dict[str, Any] = dict(
+        slope=slope, torque=torque, push_off=push_off, simulator=simulate_phased
+    )
+    if guess is not None:
+        starts = [np.asarray(guess, dtype=float)]
+    else:
+        coarse = PoincareMap(walker=w, rtol=1e-7, atol=1e-8, **kw)
+        scored = []
+        for z in _grid_guesses(w):
+            z1 = coarse(z)
+            if np.all(np.isfinite(z1)):
+                scored.append((float(np.linalg.norm(z1 - z)), z))
+        if not scored:
+            raise GaitNotFoundError("no step could be completed from any automatic guess")
+        scored.sort(key=lambda s: s[0])
+        starts = [z for _, z in scored[:5]]
+    last: Exception | None = None
+    for z0 in starts:
+        try:
+            cycle = find_limit_cycle(
+                w, guess=z0, tol=tol, max_iter=max_iter, rtol=rtol, atol=atol, **kw
+            )
+            break
+        except GaitNotFoundError as exc:
+            last = exc
+    else:
+        raise GaitNotFoundError(str(last))
+    walk = cycle.walk
+    assert isinstance(walk, PhasedWalkResult)
+    impacts = walk.events
+    loss = float(sum(e.kinetic_energy_constrained for e in impacts))
+    rec = walk.impacts[0]
+    return ModelGait(
+        cycle=cycle,
+        impacts=impacts,
+        collision_loss=loss,
+        actuator_work=rec.actuator_work,
+        potential_energy_released=rec.potential_energy_released,
+        energy_residual=rec.actuator_work + rec.potential_energy_released - loss,
+    )
+
+
+# -- single heel strike -------------------------------------------------------------------------
+def symmetric_heel_strike_state(
+    walker: BuiltWalker, angle: float, *, stance_rate: float = 1.0
+) -> tuple[FloatArray, FloatArray]:
+    """Pre-impact state of the paper's heel-strike study for a described walker.
+
+    Stance angle ``angle`` (rad); lockable joints at their lock angles; a joint named ``torso``
+    held upright (relative angle ``-angle``); other joints 0, except the hip, which solves zero
+    swing-foot clearance (the symmetric configuration for straight symmetric legs).
+    Velocities: stance rate ``stance_rate`` (rad/s), all joint rates
+    0, stance foot rolling.
+
+    Returns
+    -------
+    q, q_dot : ndarray, shape (n,)
+    """
+    w = PhasedWalker.from_built(walker)
+    n = w.n_coordinates
+    R = float(np.asarray(w.foot_radii[0]))
+    q = np.zeros(n)
+    q[1] = R
+    q[2] = angle
+    for j, a in zip(w.lockable_joints, w.lock_angles, strict=True):
+        q[j] = float(a)
+    if "torso" in w.coordinate_names:
+        q[w.joint_index("torso")] = -angle
+    q = w.touchdown_configuration(q)
+    qd = np.zeros(n)
+    qd[2] = stance_rate
+    qd[0] = -R * stance_rate
+    return q, qd
+
+
+@dataclass(frozen=True, kw_only=True)
+class ModelHeelStrike:
+    """Decomposition of one heel strike of a described walker (all energies in J).
+
+    Attributes
+    ----------
+    T, T_c, T_a, T_plus : float
+        Kinetic energy before, its constrained (lost) and admissible parts, after.
+    q, q_dot_minus, q_dot_plus : ndarray, shape (n,)
+    impulse : ndarray, shape (k,)
+        Impulses of the active rows (N s).
+    step_length : float
+        Length of the symmetric step ending in this impact (m): stance contact to striking
+        contact along the ground plus the stance foot's rolling ``2 R q[2]``; the paper's
+        ``L_S = 2 (l - R) sin q3 + 2 R q3`` for the compass gait.
+    eta : float
+        ``T_c / step_length`` (J/m).
+    trailing_foot_lifts : bool
+        Complementarity decision (``resolve_impact``) for the trailing foot.
+    trailing_normal_velocity : float
+        Its normal velocity after impact (m/s).
+    """
+
+    T: float
+    T_c: float
+    T_a: float
+    T_plus: float
+    q: FloatArray
+    q_dot_minus: FloatArray
+    q_dot_plus: FloatArray
+    impulse: FloatArray
+    step_length: float
+    eta: float
+    trailing_foot_lifts: bool
+    trailing_normal_velocity: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary."""
+        return {
+            "T": self.T,
+            "T_c": self.T_c,
+            "T_a": self.T_a,
+            "T_plus": self.T_plus,
+            "energy_lost": self.T_c,
+            "eta": self.eta,
+            "step_length": self.step_length,
+            "q": [float(v) for v in self.q],
+            "qdot_minus": [float(v) for v in self.q_dot_minus],
+            "qdot_plus": [float(v) for v in self.q_dot_plus],
+            "impulse": [float(v) for v in self.impulse],
+            "trailing_foot_lifts": self.trailing_foot_lifts,
+            "trailing_normal_velocity": self.trailing_normal_velocity,
+        }
+
+
+def model_heel_strike(walker: BuiltWalker, q: ArrayLike, q_dot: ArrayLike) -> ModelHeelStrike:
+    """Heel strike of a described walker at ``(q, q_dot)`` (swing foot striking).
+
+    The striking foot's rows and all knee locks are bilateral, the trailing foot a unilateral
+    candidate decided by :func:`~heelstrike.core.complementarity.resolve_impact`.
+
+    Parameters
+    ----------
+    walker : BuiltWalker
+    q, q_dot : array_like, shape (n,)
+        Pre-impact state (rad, m, rad/s, m/s).
+    """
+    q_ = np.asarray(q, dtype=float)
+    qd = np.asarray(q_dot, dtype=float)
+    n = walker.n_coordinates
+    if q_.shape != (n,) or qd.shape != (n,):
+        raise ValueError(
+            f"state and velocity need {n} values each ({', '.join(walker.coordinate_names)})"
+        )
+    A_lock = walker.lock_jacobian() if walker.lockable_joints else np.zeros((0, n))
+    M = walker.mass_matrix(q_)
+    bil = np.vstack((walker.contact_jacobian(q_, "left"), A_lock))
+    mc = resolve_impact(
+        M, qd, bil, [CandidateContact.from_jacobian(walker.contact_jacobian(q_, "right"))]
+    )
+    R = float(np.asarray(walker.foot_radii[0]))
+    L = float(walker.contact_point(q_, "right")[0] - walker.contact_point(q_, "left")[0])
+    L += 2.0 * R * float(q_[2])  # rolling of the stance foot over a symmetric step
+    T_c = mc.kinetic_energy_constrained
+    return ModelHeelStrike(
+        T=mc.kinetic_energy,
+        T_c=T_c,
+        T_a=mc.kinetic_energy_admissible,
+        T_plus=float(mc.impact.kinetic_energy_post),
+        q=q_,
+        q_dot_minus=qd,
+        q_dot_plus=np.asarray(mc.velocity_post),
+        impulse=np.asarray(mc.impact.constraint_impulse),
+        step_length=L,
+        eta=T_c / L if L > 0 else float("nan"),
+        trailing_foot_lifts=mc.modes[0] == "separate" and float(mc.normal_velocity[0]) > 0,
+        trailing_normal_velocity=float(mc.normal_velocity[0]),
+    )
+
+
+# -- maps over two swept quantities -------------------------------------------------------------
+@dataclass(frozen=True, kw_only=True)
+class ImpactMap:
+    """Heel-strike energetics over a grid of two swept quantities.
+
+    Attributes
+    ----------
+    x_name, y_name : str
+        Swept description parameters, or :data:`ANGLE` (the stance angle at impact, rad).
+    x, y : ndarray, shape (nx,), (ny,)
+        Values (SI units).
+    T, T_c, T_a, eta, step_length, trailing_normal_velocity : ndarray, shape (ny, nx)
+        At each grid point (J, J, J, J/m, m, m/s); NaN where the walker is invalid.
+    lifts : ndarray of bool, shape (ny, nx)
+        The trailing foot lifts (the impact is admissible).
+    angle : float
+        Impact angle (rad) when it is not swept.
+    stance_rate : float
+        Pre-impact stance-leg rate (rad/s).
+    walker_name : str
+    """
+
+    x_name: str
+    y_name: str
+    x: FloatArray
+    y: FloatArray
+    T: FloatArray
+    T_c: FloatArray
+    T_a: FloatArray
+    eta: FloatArray
+    step_length: FloatArray
+    trailing_normal_velocity: FloatArray
+    lifts: NDArray[np.bool_]
+    angle: float
+    stance_rate: float
+    walker_name: str
+
+
+def impact_map(
+    walker: BuiltWalker,
+    x: tuple[str, Sequence[float] | FloatArray],
+    y: tuple[str, Sequence[float] | FloatArray],
+    *,
+    angle: float = 0.3,
+    stance_rate: float = 1.0,
+) -> ImpactMap:
+    """Map ``T_c``, ``T_a``, ``eta`` at heel strike over two swept quantities.
+
+    Parameters
+    ----------
+    walker : BuiltWalker
+        Base walker (its parameter values are used for everything not swept).
+    x, y : (name, values)
+        A description parameter name or :data:`ANGLE` and its values (SI units, rad).
+    angle : float
+        Impact angle (rad) when :data:`ANGLE` is not swept.
+    stance_rate : float
+        Pre-impact stance-leg rate (rad/s), the paper's ``q3_dot = 1``.
+
+    Returns
+    -------
+    ImpactMap
+
+    Raises
+    ------
+    ValueError
+        Unknown parameter name, or the same quantity on both axes.
+    """
+    (xn, xv), (yn, yv) = x, y
+    if xn == yn:
+        raise ValueError(f"x and y must differ, both are {xn!r}")
+    for name in (xn, yn):
+        if name != ANGLE and name not in walker.params:
+            raise ValueError(
+                f"unknown parameter {name!r}; known: {sorted(walker.params)} or {ANGLE!r}"
+            )
+    xa, ya = np.asarray(xv, dtype=float), np.asarray(yv, dtype=float)
+    shape = (ya.size, xa.size)
+    out = {k: np.full(shape, np.nan) for k in ("T", "T_c", "T_a", "eta", "L", "v")}
+    lifts = np.zeros(shape, dtype=bool)
+    for i, yy in enumerate(ya):
+        for j, xx in enumerate(xa):
+            vals = {xn: float(xx), yn: float(yy)}
+            ang = vals.pop(ANGLE, angle)
+            try:
+                w = walker.replace(**vals) if vals else walker
+                q, qd = symmetric_heel_strike_state(w, ang, stance_rate=stance_rate)
+                hs = model_heel_strike(w, q, qd)
+            except ValueError:
+                continue
+            out["T"][i, j], out["T_c"][i, j], out["T_a"][i, j] = hs.T, hs.T_c, hs.T_a
+            out["eta"][i, j], out["L"][i, j] = hs.eta, hs.step_length
+            out["v"][i, j] = hs.trailing_normal_velocity
+            lifts[i, j] = hs.trailing_foot_lifts
+    return ImpactMap(
+        x_name=xn, y_name=yn, x=xa, y=ya, T=out["T"], T_c=out["T_c"], T_a=out["T_a"],
+        eta=out["eta"], step_length=out["L"], trailing_normal_velocity=out["v"], lifts=lifts,
+        angle=float(angle), stance_rate=float(stance_rate),
+        walker_name=walker.description.name,
+    )

@@ -1,0 +1,730 @@
+"""Hybrid simulation of described walkers with several continuous phases and impacts.
+
+For a :class:`~heelstrike.models.builder.BuiltWalker` one step is a sequence of continuous
+phases of :class:`~heelstrike.dynamics.single_support.SingleSupport` (the stance foot rolling)
+separated by inert impacts resolved with :mod:`heelstrike.core`:
+
+Walkers with lockable joints (knees; McGeer 1990 style, e.g. ``kneed.toml``)
+    1. *knee swing*: the stance knee is locked, the swing knee free. The swing knee first flexes
+       (``swing_knee > 0``), then straightens; when it reaches its lock angle from flexion the
+       **knee strike** is an inert impact with ``A = [A_R; lock rows]`` (the stance foot stays
+       rolling, both knees locked), via :func:`heelstrike.core.impact.impact`;
+    2. *locked swing*: both knees locked (the walker is a compass gait) until heel strike.
+Walkers without lockable joints (``compass.toml``, ``torso.toml``)
+    only the locked-swing phase.
+
+Heel strike is looked for only once the stance leg has passed the vertical (stance angle
+``> 0``) **and** the swing foot is ahead of the stance foot (its contact point at smaller ``x``)
+**and** above the ground; it is then the swing foot's clearance falling through zero. This
+excludes the mid-stance scuffing root of the clearance (the classical compass-gait convention:
+scuffing of the swing foot near mid-stance is ignored; during the knee-swing phase ground
+penetration of the swing foot is ignored too). For the compass gait this is the same event as
+:meth:`heelstrike.models.CompassGait.heel_strike_function` (``2 q3 + q4`` rising through 0).
+
+The **heel strike** is resolved with :func:`heelstrike.core.complementarity.resolve_impact`:
+bilateral rows ``[A_L; lock rows]`` (the leading foot lands without slip, the knees stay
+locked) and the trailing foot ``A_R`` as a unilateral candidate contact. Whether the trailing
+foot lifts is *decided* by the complementarity conditions; if it does not, the walk ends with
+:attr:`~heelstrike.dynamics.hybrid.WalkStatus.TRAILING_FOOT_STAYS`. Otherwise the legs are
+relabelled (:meth:`~heelstrike.models.base.PlanarWalker.swap_legs`) and the new swing knee is
+unlocked.
+
+Every impact (knee strikes too) is reported with ``T``, ``T_c``, ``T_a`` (Font & Kövecses 2008,
+eq. 10) in :attr:`PhasedWalkResult.events`; :attr:`PhasedWalkResult.impacts` holds one
+:class:`~heelstrike.dynamics.hybrid.ImpactRecord` per heel strike (step-level bookkeeping, as
+:func:`heelstrike.dynamics.hybrid.simulate`), so :mod:`heelstrike.analysis.limit_cycle` works
+unchanged with ``simulator=simulate_phased``.
+
+Poincare section
+----------------
+:class:`PhasedWalker` (a :class:`BuiltWalker` with section hooks) uses the state just after heel
+strike (legs relabelled): lockable joints at their lock angles with zero rate, stance foot
+rolling with its contact point at ``x = 0``, and the ``hip`` coordinate eliminated by the
+relation that the trailing (now "left") foot touches the ground (clearance 0). The section
+coordinates are the remaining joint angles and all unlocked rates; for ``compass.toml`` these
+are exactly :class:`~heelstrike.models.CompassGait`'s ``(q3, q3_dot, q4_dot)``.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.integrate import solve_ivp
+
+from heelstrike.core.complementarity import CandidateContact, resolve_impact
+from heelstrike.core.impact import impact
+from heelstrike.dynamics.events import Event, to_scipy
+from heelstrike.dynamics.hybrid import ImpactRecord, PushOff, WalkResult, WalkStatus
+from heelstrike.dynamics.single_support import SingleSupport, TorqueLaw
+from heelstrike.models.builder import BuiltWalker, load_walker
+from heelstrike.models.description import WalkerDescription
+
+FloatArray = NDArray[np.float64]
+
+__all__ = [
+    "PhasedImpact",
+    "PhasedWalkResult",
+    "PhasedWalker",
+    "TorsoPD",
+    "load_phased_walker",
+    "simulate_phased",
+    "stance_and_swing_locks",
+]
+
+ImpactKind = Literal["knee_strike", "heel_strike"]
+
+_MESSAGES = {
+    "completed": "all requested steps were taken",
+    "fell_forward": "the stance leg fell forward to the ground",
+    "fell_backward": "the walker stopped and fell backward",
+    "trailing_foot_stays": (
+        "at heel strike the complementarity conditions keep the trailing foot on the ground "
+        "(it does not lift): double support would begin, which this gait model does not allow"
+    ),
+    "lost_contact": "the ground's normal force on the stance foot became negative",
+    "slipped": "the stance foot needs more friction than the given coefficient",
+    "no_heel_strike": "no heel strike (or knee strike) within the time bound of a step",
+    "integration_failed": "the integrator failed",
+}
+
+
+# -- walker with a Poincare section ------------------------------------------------------------
+class PhasedWalker(BuiltWalker):
+    """A :class:`BuiltWalker` with a generic post-heel-strike Poincare section.
+
+    See the module docstring for the section. Construct with :func:`load_phased_walker` or
+    :meth:`from_built`.
+
+    Parameters
+    ----------
+    description : WalkerDescription
+    use_cache : bool
+    **params : float
+        Parameter values (scalars: the section is not batched).
+    """
+
+    def __init__(
+        self, description: WalkerDescription, *, use_cache: bool = True, **params: ArrayLike
+    ) -> None:
+        super().__init__(description, use_cache=use_cache, **params)
+        names = self.coordinate_names
+        self.eliminated: int = names.index("hip") if "hip" in names else 3
+        lock = set(self.lockable_joints)
+        self._section_q = tuple(
+            i for i in range(2, len(names)) if i not in lock and i != self.eliminated
+        )
+        self._section_v = tuple(i for i in range(2, len(names)) if i not in lock)
+
+    @classmethod
+    def from_built(cls, walker: BuiltWalker) -> PhasedWalker:
+        """The same walker (description and parameter values) with section hooks."""
+        if isinstance(walker, PhasedWalker):
+            return walker
+        return cls(walker.description, **walker.params)
+
+    def replace(self, **params: ArrayLike) -> PhasedWalker:
+        """A copy with some parameter values changed (no re-derivation)."""
+        merged: dict[str, Any] = dict(self.params)
+        merged.update(params)
+        return PhasedWalker(self.description, **merged)
+
+    @property
+    def section_names(self) -> tuple[str, ...]:
+        """Names of the section coordinates: angles (rad) then rates (rad/s)."""
+        n = self.coordinate_names
+        return tuple(n[i] for i in self._section_q) + tuple(f"{n[i]}_dot" for i in self._section_v)
+
+    def touchdown_configuration(self, q: ArrayLike) -> FloatArray:
+        """``q`` with the eliminated (hip) coordinate solved for zero swing-foot clearance.
+
+        Newton's method from the symmetric guess ``hip = -2 q[2]`` (exact for straight
+        symmetric legs), so the root found is the swing foot ahead, not the mid-stance one.
+
+        Parameters
+        ----------
+        q : array_like, shape (n,)
+
+        Returns
+        -------
+        ndarray, shape (n,)
+        """
+        q_ = np.array(q, dtype=float)
+        j = self.eliminated
+        q_[j] = -2.0 * q_[2]
+        for _ in range(50):
+            f = float(self.foot_clearance(q_, "left"))
+            h = 1e-7
+            qp, qm = q_.copy(), q_.copy()
+            qp[j] += h
+            qm[j] -= h
+            fp, fm = self.foot_clearance(qp, "left"), self.foot_clearance(qm, "left")
+            df = (float(fp) - float(fm)) / (2 * h)
+            if df == 0.0:
+                break
+            step = f / df
+            q_[j] -= step
+            if abs(step) < 1e-15:
+                break
+        return q_
+
+    def section_to_state(self, z: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Post-heel-strike ``(q, q_dot)``, each shape (n,), from section coordinates ``z``."""
+        z_ = np.asarray(z, dtype=float)
+        nq, nv = len(self._section_q), len(self._section_v)
+        if z_.shape != (nq + nv,):
+            raise ValueError(f"z must have shape ({nq + nv},): {self.section_names}")
+        n = self.n_coordinates
+        R = float(np.asarray(self.foot_radii[0]))
+        q = np.zeros(n)
+        q[1] = R
+        for j, a in zip(self.lockable_joints, self.lock_angles, strict=True):
+            q[j] = float(a)
+        q[list(self._section_q)] = z_[:nq]
+        q = self.touchdown_configuration(q)
+        qd = np.zeros(n)
+        qd[list(self._section_v)] = z_[nq:]
+        qd[0] = -R * qd[2]
+        return q, qd
+
+    def state_to_section(self, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
+        """Section coordinates of a post-heel-strike state, shape (d,)."""
+        q_, qd = np.asarray(q, dtype=float), np.asarray(q_dot, dtype=float)
+        return np.concatenate(
+            (q_[..., list(self._section_q)], qd[..., list(self._section_v)]), axis=-1
+        )
+
+
+def load_phased_walker(
+    name_or_path: str | os.PathLike[str], **params: ArrayLike
+) -> PhasedWalker:
+    """:func:`~heelstrike.models.builder.load_walker` returning a :class:`PhasedWalker`."""
+    return PhasedWalker.from_built(load_walker(name_or_path, **params))  # type: ignore[arg-type]
+
+
+def stance_and_swing_locks(walker: BuiltWalker) -> tuple[tuple[int, ...], tuple[int, ...]]:
+    """Split the lockable joints into stance-leg and swing-leg ones.
+
+    Along the kinematic chain from the stance foot's link to the swing foot's link, a joint is
+    on the stance side if its link's mirror comes later in the chain (e.g. the stance knee's
+    ``stance_thigh`` before ``swing_thigh``), else on the swing side. Lockable joints off that
+    chain count as swing-side.
+
+    Returns
+    -------
+    stance, swing : tuple of int
+        Coordinate indices.
+    """
+    desc = walker.description
+    links = {lk.name: lk for lk in desc.links}
+    chain: list[str] = []
+    name: str | None = desc.feet[1].link
+    while name is not None:
+        chain.append(name)
+        name = links[name].parent
+    chain.reverse()
+    index = {lk.name: 3 + k for k, lk in enumerate(desc.links[1:])}
+    stance: list[int] = []
+    swing: list[int] = []
+    for j in walker.lockable_joints:
+        lk = next(lk for lk in desc.links[1:] if index[lk.name] == j)
+        if (
+            lk.name in chain
+            and lk.mirror in chain
+            and chain.index(lk.mirror) > chain.index(lk.name)
+        ):
+            stance.append(j)
+        else:
+            swing.append(j)
+    return tuple(stance), tuple(swing)
+
+
+# -- torque law for the torso walker ------------------------------------------------------------
+@dataclass(frozen=True, kw_only=True)
+class TorsoPD:
+    """Hold a torso up by a PD torque across its joint (reaction on the stance leg).
+
+    .. math:: u_{torso} = -k_p (\\theta_{torso} - \\theta_{ref}) - k_d \\dot\\theta_{torso},
+              \\qquad \\theta_{torso} = q_2 + q_{torso},
+
+    with ``theta_torso`` the torso's absolute angle from the ground normal (rad, positive leaning
+    towards ``-x``, the walking direction). Other actuated joints (the hip) get zero torque.
+
+    Parameters
+    ----------
+    walker : BuiltWalker
+        Must have an actuated joint named ``torso`` (its coordinate is relative to the stance
+        leg, whose absolute angle is ``q[2]``).
+    angle : float
+        ``theta_ref`` (rad); a forward lean (> 0) feeds energy in through the stance leg.
+    kp : float
+        Stiffness (N m / rad).
+    kd : float
+        Damping (N m s / rad).
+    """
+
+    walker: BuiltWalker
+    angle: float = 0.0
+    kp: float = 300.0
+    kd: float = 30.0
+
+    def __call__(self, t: float, q: FloatArray, q_dot: FloatArray) -> FloatArray:
+        j = self.walker.joint_index("torso")
+        col = self.walker.actuated_joints.index(j)
+        q_, qd = np.asarray(q, dtype=float), np.asarray(q_dot, dtype=float)
+        theta = q_[..., 2] + q_[..., j]
+        omega = qd[..., 2] + qd[..., j]
+        u = np.zeros((*q_.shape[:-1], len(self.walker.actuated_joints)))
+        u[..., col] = -self.kp * (theta - self.angle) - self.kd * omega
+        return u
+
+
+# -- results -----------------------------------------------------------------------------------
+@dataclass(frozen=True, kw_only=True)
+class PhasedImpact:
+    """One impact (knee strike or heel strike) of a phased simulation.
+
+    Attributes
+    ----------
+    kind : {"knee_strike", "heel_strike"}
+    step : int
+        Step index (0-based).
+    time : float
+        Time of impact (s).
+    q : ndarray, shape (n,)
+        Configuration (pre-swap labels).
+    q_dot_minus, q_dot_plus : ndarray, shape (n,)
+        Velocities before and after the impact.
+    rows : ndarray, shape (k, n)
+        Final active constraint rows ``A`` (``[A_R; locks]`` for a knee strike,
+        ``[A_L; locks]`` (+ trailing foot rows if it stays) for a heel strike).
+    kinetic_energy, kinetic_energy_constrained, kinetic_energy_admissible : float
+        ``T``, ``T_c``, ``T_a`` just before impact (J), eq. (10); ``T_c`` is lost.
+    energy_lost : float
+        ``T- - T+`` (J).
+    impulse : ndarray, shape (k,)
+        Constraint impulses of ``rows`` (N s, N m s).
+    lock_rows : ndarray, shape (k_l, n)
+        Jacobian of the knee locks engaged through the impact.
+    lock_velocity_post : ndarray, shape (k_l,)
+        ``A_lock q_dot+`` (rad/s), zero for an inert lock.
+    trailing_normal_velocity : float
+        Heel strike: normal velocity of the trailing foot's contact point after impact (m/s);
+        knee strike: that of the stance foot (0: it stays rolling).
+    trailing_mode : str
+        Heel strike: the complementarity decision for the trailing foot (``"separate"``: it
+        lifts). Knee strike: ``"stick"`` (the stance foot is bilateral).
+    """
+
+    kind: ImpactKind
+    step: int
+    time: float
+    q: FloatArray
+    q_dot_minus: FloatArray
+    q_dot_plus: FloatArray
+    rows: FloatArray
+    kinetic_energy: float
+    kinetic_energy_constrained: float
+    kinetic_energy_admissible: float
+    energy_lost: float
+    impulse: FloatArray
+    lock_rows: FloatArray
+    lock_velocity_post: FloatArray
+    trailing_normal_velocity: float
+    trailing_mode: str
+
+
+@dataclass(frozen=True, kw_only=True)
+class PhasedWalkResult(WalkResult):
+    """:class:`~heelstrike.dynamics.hybrid.WalkResult` plus every impact and phase label.
+
+    Attributes
+    ----------
+    events : tuple of PhasedImpact
+        Every impact in order (knee strikes and heel strikes).
+    phase : ndarray of str, shape (N,)
+        Phase of every sample (``"knee_swing"``, ``"locked_swing"``).
+    mechanical_energy : ndarray, shape (N,)
+        ``T + V`` (J) of every sample.
+    """
+
+    events: tuple[PhasedImpact, ...] = ()
+    phase: NDArray[np.str_] = field(default_factory=lambda: np.array([], dtype=str))
+    mechanical_energy: FloatArray = field(default_factory=lambda: np.array([]))
+
+    def step_losses(self, step: int) -> FloatArray:
+        """``T_c`` (J) of every impact of one step, in order."""
+        return np.asarray([e.kinetic_energy_constrained for e in self.events if e.step == step])
+
+
+# -- integration -------------------------------------------------------------------------------
+@dataclass(frozen=True, kw_only=True)
+class _Shifted:
+    law: TorqueLaw | Callable[[float, FloatArray, FloatArray], FloatArray]
+    t0: float
+
+    def __call__(self, t: float, q: FloatArray, q_dot: FloatArray) -> FloatArray:
+        return np.asarray(self.law(t - self.t0, q, q_dot))
+
+
+@dataclass(frozen=True, kw_only=True)
+class _Seg:
+    t: FloatArray
+    q: FloatArray
+    qd: FloatArray
+    w: FloatArray
+    event: str | None
+    failed: bool
+
+
+def _run_phase(
+    sup: SingleSupport,
+    q: FloatArray,
+    qd: FloatArray,
+    work: float,
+    t0: float,
+    t_end: float,
+    events: Sequence[Event],
+    rtol: float,
+    atol: float,
+    max_step: float,
+) -> _Seg:
+    q_ref = q.copy()
+    x0 = np.concatenate((sup.pack(q, qd), [work]))
+    m = len(sup.free_coordinates)
+    if t_end <= t0:
+        return _Seg(t=np.array([t0]), q=q[None], qd=qd[None], w=np.array([work]), event=None,
+                    failed=False)
+    sol: Any = solve_ivp(
+        sup.rhs, (t0, t_end), x0, method="DOP853", rtol=rtol, atol=atol, max_step=max_step,
+        events=to_scipy(events), args=(q_ref,),
+    )
+    ts, xs = sol.t, sol.y.T
+    hit: str | None = None
+    if sol.status == 1:
+        for ev, t_ev, x_ev in zip(events, sol.t_events, sol.y_events, strict=True):
+            if len(t_ev) and ev.terminal:
+                hit = ev.name
+                ts = np.append(ts[:-1], t_ev[0])
+                xs = np.vstack((xs[:-1], x_ev[0]))
+                break
+    qs, qds = sup.unpack(xs[:, : 2 * m], q_ref)
+    return _Seg(t=ts, q=qs, qd=qds, w=xs[:, -1], event=hit, failed=sol.status < 0)
+
+
+def simulate_phased(
+    walker: BuiltWalker,
+    q0: ArrayLike,
+    q_dot0: ArrayLike,
+    *,
+    slope: float = 0.0,
+    steps: int = 1,
+    torque: TorqueLaw | Callable[[float, FloatArray, FloatArray], FloatArray] | None = None,
+    push_off: PushOff | None = None,
+    friction: float | None = None,
+    max_step_duration: float = 5.0,
+    rtol: float = 1e-10,
+    atol: float = 1e-10,
+    max_step: float = np.inf,
+    knee_flex_threshold: float = 1e-6,
+) -> PhasedWalkResult:
+    """Simulate a described walker through knee strikes and heel strikes.
+
+    Parameters
+    ----------
+    walker : BuiltWalker
+        The walker (a plain :class:`BuiltWalker` or a :class:`PhasedWalker`).
+    q0, q_dot0 : array_like, shape (n,)
+        Initial state just after a heel strike: stance foot on the ground and rolling,
+        lockable joints at their lock angles (the swing knee is released at once).
+    slope : float
+        Ground slope (rad), downhill towards ``-x``.
+    steps : int
+        Number of heel strikes to simulate.
+    torque : TorqueLaw, optional
+        Actuator law ``(t since step start, q, q_dot) -> u`` (N m), shape ``(n_u,)``.
+    push_off : PushOff, optional
+        Impulsive actuation applied just before each heel strike (e.g.
+        :class:`heelstrike.dynamics.actuation.PushOff`).
+    friction : float, optional
+        Coulomb coefficient; a stance foot needing more ends the walk (``slipped``).
+    max_step_duration : float
+        Time bound of one step (s).
+    rtol, atol, max_step : float
+        Integrator (DOP853) settings.
+    knee_flex_threshold : float
+        The swing knee must flex past this angle (rad) before its strike is looked for.
+
+    Returns
+    -------
+    PhasedWalkResult
+    """
+    if steps < 1:
+        raise ValueError("steps must be >= 1")
+    n = walker.n_coordinates
+    q = np.array(q0, dtype=float)
+    qd = np.array(q_dot0, dtype=float)
+    if q.shape != (n,) or qd.shape != (n,):
+        raise ValueError(f"q0 and q_dot0 must have shape ({n},)")
+    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
+        raise ValueError("initial state must be finite")
+    R = float(np.asarray(walker.foot_radii[0]))
+    if abs(q[1] - R) > 1e-9 or np.max(np.abs(walker.contact_jacobian(q, "right") @ qd)) > 1e-9:
+        raise ValueError(
+            "initial state must have the stance foot on the ground (y = R) and rolling without "
+            "slip (A_R q_dot = 0)"
+        )
+    stance_locks, swing_locks = stance_and_swing_locks(walker)
+    all_locks = stance_locks + swing_locks
+    for j, a in zip(walker.lockable_joints, walker.lock_angles, strict=True):
+        if abs(q[j] - float(a)) > 1e-9 or abs(qd[j]) > 1e-9:
+            raise ValueError(
+                f"initial state must have {walker.coordinate_names[j]} locked at {float(a)} rad "
+                "with zero rate (the state just after a heel strike)"
+            )
+    A_lock = walker.lock_jacobian(all_locks) if all_locks else np.zeros((0, n))
+
+    t_s: list[FloatArray] = []
+    q_s: list[FloatArray] = []
+    qd_s: list[FloatArray] = []
+    w_s: list[FloatArray] = []
+    leg_s: list[NDArray[np.int_]] = []
+    step_s: list[NDArray[np.int_]] = []
+    phase_s: list[NDArray[np.str_]] = []
+    records: list[ImpactRecord] = []
+    events_out: list[PhasedImpact] = []
+    t, work, stance = 0.0, 0.0, 0
+    status = "completed"
+
+    def lock_angle(j: int) -> float:
+        return float(walker.lock_angles[walker.lockable_joints.index(j)])
+
+    for k in range(steps):
+        t_step, work_start = t, work
+        V_start = float(walker.potential_energy(q, slope))
+        contact_start = float(walker.contact_point(q, "right")[0])
+        law = None if torque is None else _Shifted(law=torque, t0=t_step)
+        t_limit = t_step + max_step_duration
+
+        def make(locked: tuple[int, ...], _law: Any = law) -> SingleSupport:
+            return SingleSupport(walker=walker, slope=slope, torque=_law, locked=locked)
+
+        def common(sup: SingleSupport, q_ref: FloatArray) -> list[Event]:
+            m = len(sup.free_coordinates)
+
+            def normal(tt: float, x: FloatArray) -> float:
+                return float(sup.ground_reaction(tt, *sup.unpack(x[: 2 * m], q_ref))[1])
+
+            evs = [
+                Event(name="lost_contact", function=normal, direction=-1),
+                Event(name="fell_forward", function=lambda tt, x: x[0] - 0.5 * np.pi, direction=1),
+                Event(
+                    name="fell_backward",
+                    function=lambda tt, x: float(x[m]) if x[0] < 0.0 else (1.0 + float(x[0])),
+                    direction=-1,
+                ),
+            ]
+            if friction is not None:
+                mu = float(friction)
+
+                def slip(tt: float, x: FloatArray) -> float:
+                    lam = sup.ground_reaction(tt, *sup.unpack(x[: 2 * m], q_ref))
+                    return float(mu * lam[1] - abs(lam[0]))
+
+                evs.append(Event(name="slipped", function=slip, direction=-1))
+            return evs
+
+        ended: str | None = None
+
+        def record(seg: _Seg, label: str, _k: int = k, _leg: int = stance) -> None:
+            t_s.append(seg.t)
+            q_s.append(seg.q)
+            qd_s.append(seg.qd)
+            w_s.append(seg.w)
+            leg_s.append(np.full(len(seg.t), _leg))
+            step_s.append(np.full(len(seg.t), _k))
+            phase_s.append(np.full(len(seg.t), label))
+
+        # -- knee swing: stance knee locked, swing knee free until knee strike -----------------
+        if swing_locks:
+            sup = make(stance_locks)
+            idx = [sup.free_coordinates.index(j) for j in swing_locks]
+            m = len(sup.free_coordinates)
+
+            def flex(tt: float, x: FloatArray, _i: list[int] = idx) -> float:
+                return float(min(x[i] - lock_angle(swing_locks[c]) for c, i in enumerate(_i)))
+
+            stages = [
+                ("knee_flexed", Event(name="knee_flexed",
+                                      function=lambda tt, x: flex(tt, x) - knee_flex_threshold,
+                                      direction=1)),
+                ("knee_strike", Event(name="knee_strike", function=flex, direction=-1)),
+            ]
+            for want, ev in stages:
+                seg = _run_phase(sup, q, qd, work, t, t_limit, [ev, *common(sup, q)], rtol, atol,
+                                 max_step)
+                record(seg, "knee_swing")
+                t, q, qd = float(seg.t[-1]), seg.q[-1].copy(), seg.qd[-1].copy()
+                work = float(seg.w[-1])
+                if seg.failed:
+                    ended = "integration_failed"
+                elif seg.event is None:
+                    ended = "no_heel_strike"
+                elif seg.event != want:
+                    ended = seg.event
+                if ended:
+                    break
+            del m
+            if ended is None:
+                # knee strike: inert impact, stance foot rolling, both knees locked
+                for j in swing_locks:
+                    q[j] = lock_angle(j)  # remove the event-location round-off
+                A_R = walker.contact_jacobian(q, "right")
+                A = np.vstack((A_R, A_lock))
+                M = walker.mass_matrix(q)
+                res = impact(M, A, qd)
+                qd_plus = np.asarray(res.velocity_post)
+                events_out.append(
+                    PhasedImpact(
+                        kind="knee_strike", step=k, time=t, q=q.copy(), q_dot_minus=qd.copy(),
+                        q_dot_plus=qd_plus.copy(), rows=A,
+                        kinetic_energy=float(res.kinetic_energy),
+                        kinetic_energy_constrained=float(res.kinetic_energy_constrained),
+                        kinetic_energy_admissible=float(res.kinetic_energy_admissible),
+                        energy_lost=float(res.energy_lost),
+                        impulse=np.asarray(res.constraint_impulse, dtype=float),
+                        lock_rows=A_lock.copy(), lock_velocity_post=A_lock @ qd_plus,
+                        trailing_normal_velocity=float((A_R @ qd_plus)[1]),
+                        trailing_mode="stick",
+                    )
+                )
+                qd = qd_plus
+
+        # -- locked swing until heel strike (guarded against mid-stance scuffing) -------------
+        if ended is None:
+            sup = make(all_locks)
+            m = len(sup.free_coordinates)
+
+            def armed(
+                tt: float, x: FloatArray, _q: FloatArray, _s: SingleSupport = sup, _m: int = m
+            ) -> float:
+                qq, _ = _s.unpack(x[: 2 * _m], _q)
+                xr, xl = walker.contact_point(qq, "right")[0], walker.contact_point(qq, "left")[0]
+                ahead = float(xr - xl)
+                return float(min(x[0], ahead, float(walker.foot_clearance(qq, "left"))))
+
+            def strike(
+                tt: float, x: FloatArray, _q: FloatArray, _s: SingleSupport = sup, _m: int = m
+            ) -> float:
+                qq, _ = _s.unpack(x[: 2 * _m], _q)
+                return float(-walker.foot_clearance(qq, "left"))
+
+            for want in ("armed", "heel_strike"):
+                q_ref = q.copy()
+                x_now = np.concatenate((sup.pack(q, qd), [work]))
+                if want == "armed" and armed(t, x_now, q_ref) > 0.0:
+                    continue
+                fn = armed if want == "armed" else strike
+
+                def ev_fn(
+                    tt: float, x: FloatArray, _f: Any = fn, _r: FloatArray = q_ref
+                ) -> float:
+                    return float(_f(tt, x, _r))
+
+                ev = Event(name=want, function=ev_fn, direction=1)
+                seg = _run_phase(sup, q, qd, work, t, t_limit, [ev, *common(sup, q_ref)], rtol,
+                                 atol, max_step)
+                record(seg, "locked_swing")
+                t, q, qd = float(seg.t[-1]), seg.q[-1].copy(), seg.qd[-1].copy()
+                work = float(seg.w[-1])
+                if seg.failed:
+                    ended = "integration_failed"
+                elif seg.event is None:
+                    ended = "no_heel_strike"
+                elif seg.event != want:
+                    ended = seg.event
+                if ended:
+                    break
+        if ended is not None:
+            status = ended
+            break
+
+        # -- heel strike: leading foot lands, trailing foot decided by complementarity ---------
+        push_work = 0.0
+        if push_off is not None:
+            qd_p, pw = push_off(walker, q, qd)
+            qd, push_work = np.asarray(qd_p, dtype=float), float(pw)
+            work += push_work
+        M = walker.mass_matrix(q)
+        A_L = walker.contact_jacobian(q, "left")
+        A_R = walker.contact_jacobian(q, "right")
+        bil = np.vstack((A_L, A_lock))
+        mc = resolve_impact(M, qd, bil, [CandidateContact.from_jacobian(A_R, name="trailing")])
+        res = mc.impact
+        qd_plus = np.asarray(res.velocity_post)
+        v_trail = float(mc.normal_velocity[0])
+        events_out.append(
+            PhasedImpact(
+                kind="heel_strike", step=k, time=t, q=q.copy(), q_dot_minus=qd.copy(),
+                q_dot_plus=qd_plus.copy(), rows=mc.active_rows,
+                kinetic_energy=float(res.kinetic_energy),
+                kinetic_energy_constrained=float(res.kinetic_energy_constrained),
+                kinetic_energy_admissible=float(res.kinetic_energy_admissible),
+                energy_lost=float(res.energy_lost),
+                impulse=np.asarray(res.constraint_impulse, dtype=float),
+                lock_rows=A_lock.copy(), lock_velocity_post=A_lock @ qd_plus,
+                trailing_normal_velocity=v_trail, trailing_mode=mc.modes[0],
+            )
+        )
+        records.append(
+            ImpactRecord(
+                step=k, time=t, q=q.copy(), q_dot_minus=qd.copy(), q_dot_plus=qd_plus.copy(),
+                impact_angle=float(q[2]),
+                kinetic_energy=float(res.kinetic_energy),
+                kinetic_energy_constrained=float(res.kinetic_energy_constrained),
+                kinetic_energy_admissible=float(res.kinetic_energy_admissible),
+                energy_lost=float(res.energy_lost),
+                impulse=np.asarray(mc.bilateral_impulse[:2], dtype=float),
+                step_length=contact_start - float(walker.contact_point(q, "left")[0]),
+                trailing_normal_velocity=v_trail,
+                potential_energy_released=V_start - float(walker.potential_energy(q, slope)),
+                actuator_work=work - work_start,
+                push_off_work=push_work,
+                step_duration=t - t_step,
+            )
+        )
+        if mc.modes[0] != "separate" or not v_trail > 1e-12:
+            status = "trailing_foot_stays"
+            qd = qd_plus
+            break
+        q, qd = walker.swap_legs(q, qd_plus)
+        for j in all_locks:  # exact lock angles after relabelling (round-off of the swap)
+            q[j] = lock_angle(j)
+            qd[j] = 0.0
+        stance = 1 - stance
+
+    t_all = np.concatenate(t_s)
+    q_all = np.concatenate(q_s)
+    qd_all = np.concatenate(qd_s)
+    st = WalkStatus(status)
+    return PhasedWalkResult(
+        status=st,
+        message=_MESSAGES[status],
+        t=t_all,
+        q=q_all,
+        q_dot=qd_all,
+        stance_leg=np.concatenate(leg_s),
+        step=np.concatenate(step_s),
+        actuator_work=np.concatenate(w_s),
+        impacts=tuple(records),
+        final_q=np.asarray(q),
+        final_q_dot=np.asarray(qd),
+        slope=float(slope),
+        events=tuple(events_out),
+        phase=np.concatenate(phase_s),
+        mechanical_energy=np.asarray(walker.mechanical_energy(q_all, qd_all, slope)),
+    )

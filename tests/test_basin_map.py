@@ -8,10 +8,11 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from heelstrike.analysis.basin import OUTCOMES, basin_of_attraction, write_basin
+from heelstrike.analysis.basin import OUTCOMES, basin_of_attraction
 from heelstrike.analysis.gait_map import gait_map, newton_gait
 from heelstrike.cli import main
 from heelstrike.dynamics.hybrid import simulate
+from heelstrike.gait_plots import write_basin
 from heelstrike.models.compass import CompassGait
 
 SLOPE3 = np.deg2rad(3.0)

@@ -539,8 +539,9 @@ def _add_basin(sub: Any) -> None:
 
 
 def _run_basin(args: argparse.Namespace) -> int:
-    from heelstrike.analysis.basin import basin_of_attraction, write_basin
+    from heelstrike.analysis.basin import basin_of_attraction
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
+    from heelstrike.gait_plots import write_basin
 
     walker = _walker_from_args(args)
     a0, a1, _ = args.q3_range
@@ -609,8 +610,9 @@ def _add_map(sub: Any) -> None:
 def _run_map(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from heelstrike.analysis.gait_map import gait_map, write_gait_map
+    from heelstrike.analysis.gait_map import gait_map
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
+    from heelstrike.gait_plots import write_gait_map
 
     r0, r1, nr = args.radius
     s0, s1, ns = args.slope
@@ -702,6 +704,170 @@ def _run_impact_map(args: argparse.Namespace) -> int:
     for path in paths:
         print(path)
     return 0
+
+
+# -- powered walking on level ground (issue 4) -------------------------------------------------
+_ACTUATIONS = ("pushoff", "hip-energy", "hip-pd")
+
+
+def _add_actuation_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("actuation")
+    g.add_argument("--gain", type=float, default=10.0,
+                   help="energy-tracking gain k of hip-energy (default 10)")
+    g.add_argument("--kp", type=float, default=5.0, help="hip-pd stiffness (N m/rad)")
+    g.add_argument("--kd", type=float, default=1.0, help="hip-pd damping (N m s/rad)")
+    g.add_argument("--max-torque", type=float, default=20.0,
+                   help="hip torque limit (N m, default 20)")
+
+
+def _family_from_args(args: argparse.Namespace) -> Any:
+    from heelstrike.analysis.powered import actuation_family
+
+    if not args.max_torque > 0:
+        raise CliError("--max-torque must be > 0 (N m)")
+    return actuation_family(args.actuation, gain=args.gain, kp=args.kp, kd=args.kd,
+                            max_torque=args.max_torque)
+
+
+@_command
+def _add_powered(sub: Any) -> None:
+    p = sub.add_parser(
+        "powered",
+        help="periodic powered gait on level ground and its energy books",
+        description="Find the level-ground periodic gait of a powered compass gait with a "
+        "target speed or step length: push-off impulse (pushoff), energy-tracking hip torque "
+        "(hip-energy) or swing-leg PD (hip-pd). Prints the energy books per step: on a "
+        "periodic gait the actuator work equals the collision loss T_c (paper eqs. 14-15).",
+    )
+    _add_walker_options(p)
+    tgt = p.add_mutually_exclusive_group()
+    tgt.add_argument("--speed", type=float, default=None, help="target mean speed (m/s)")
+    tgt.add_argument("--step-length", type=float, default=None, help="target step length (m)")
+    p.add_argument("--actuation", choices=_ACTUATIONS, default="pushoff",
+                   help="actuation model (default pushoff)")
+    _add_actuation_options(p)
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=_run_powered)
+
+
+def _run_powered(args: argparse.Namespace) -> int:
+    from heelstrike.analysis.powered import PoweredGaitNotFoundError, find_powered_gait
+
+    walker = _walker_from_args(args)
+    if args.speed is None and args.step_length is None:
+        args.speed = 0.5
+    target, value = (
+        ("speed", args.speed) if args.speed is not None else ("step_length", args.step_length)
+    )
+    if not (math.isfinite(value) and value > 0):
+        raise CliError(f"--{target.replace('_', '-')} must be > 0, got {value:g}")
+    family = _family_from_args(args)
+    try:
+        gait = find_powered_gait(walker, actuation=family, **{target: value})
+    except PoweredGaitNotFoundError as exc:
+        raise CliError(
+            f"no {args.actuation} gait found with {target.replace('_', ' ')} {value:g} "
+            f"at R = {args.radius:g} m: {exc}"
+        ) from exc
+    d = gait.to_dict()
+    if args.json:
+        _print_json(d)
+        return 0
+    fp = ", ".join(f"{k} = {v:.6f}" for k, v in d["fixed_point"].items())
+    mult = ", ".join(f"{abs(m):.4f}" for m in gait.multipliers)
+    print(f"powered gait ({args.actuation}), R = {args.radius:g} m, level ground")
+    print(f"  {gait.parameter_name:15s} {gait.parameter:10.5f} {gait.parameter_unit}")
+    print(f"  fixed point (just after impact): {fp}")
+    print(f"  period          {gait.period:10.5f} s")
+    print(f"  step length     {gait.step_length:10.5f} m")
+    print(f"  speed           {gait.speed:10.5f} m/s")
+    print(f"  |multipliers|   {mult}")
+    print(f"  stable          {'yes' if gait.stable else 'no'}")
+    print("  energy books per step")
+    print(f"    actuator work   {gait.actuator_work:12.6f} J "
+          f"(push-off {gait.push_off_work:.6f} J, hip {gait.hip_work:.6f} J)")
+    print(f"    collision loss  {gait.collision_loss:12.6f} J (T_c)")
+    print(f"    change of T + V {gait.energy_change:12.3e} J")
+    print(f"    imbalance       {gait.energy_balance_error:12.3e} J")
+    print(f"  cost of transport {gait.cost_of_transport:10.6f}")
+    print(f"  eta             {gait.eta:10.6f} J/m")
+    if gait.trailing_foot_grazes:
+        print("  note: R = l (McGeer's wheel): the trailing foot's lift velocity is exactly 0; "
+              "both contacts are the same point, so the step was accepted")
+    return 0
+
+
+@_command
+def _add_study(sub: Any) -> None:
+    p = sub.add_parser(
+        "study",
+        help="design studies (cost: cost of transport over foot radius x step length)",
+        description="Design studies of powered walkers on level ground.",
+    )
+    ssub = p.add_subparsers(dest="study", required=True, parser_class=_Parser)
+    c = ssub.add_parser(
+        "cost",
+        help="cost of transport over foot radius x step length (or speed)",
+        description="Periodic level-ground gaits over foot radius x step length (or speed) "
+        "for each actuation model; writes cost_study.nc and figures, including the paper's "
+        "impact-only eta against the actuator work per metre of the real gaits.",
+        conflict_handler="resolve",
+    )
+    _add_walker_options(c)  # its --radius is replaced by the range below
+    c.add_argument("--radius", dest="radii", type=parse_range, default=(0.0, 0.9, 4),
+                   help="foot radii START:STOP:COUNT (m), default 0:0.9:4")
+    tgt = c.add_mutually_exclusive_group()
+    tgt.add_argument("--step-length", dest="lengths", type=parse_range, default=None,
+                     help="step lengths START:STOP:COUNT (m), default 0.3:0.6:4")
+    tgt.add_argument("--speed", dest="speeds", type=parse_range, default=None,
+                     help="speeds START:STOP:COUNT (m/s)")
+    c.add_argument("--actuation", action="append", choices=_ACTUATIONS, default=None,
+                   help="actuation model, repeatable (default pushoff)")
+    _add_actuation_options(c)
+    c.add_argument("--out", default="cost_study", help="output directory")
+    c.set_defaults(func=_run_study, radius=0.0)
+
+
+def _grid(r: tuple[float, float, int | None], default_count: int) -> list[float]:
+    import numpy as np
+
+    start, stop, count = r
+    return [float(v) for v in np.linspace(start, stop, count or default_count)]
+
+
+def _run_study(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from heelstrike.analysis.cost_study import cost_study, save_study
+    from heelstrike.plots_powered import write_cost_figures
+
+    walker = _walker_from_args(args)  # validates the other walker parameters (radius unused)
+    radii = _grid(args.radii, 4)
+    if min(radii) < 0 or max(radii) > args.leg_length:
+        raise CliError(f"--radius must lie in [0, {args.leg_length:g}] m")
+    if args.speeds is not None:
+        target, values = "speed", _grid(args.speeds, 4)
+    else:
+        target, values = "step_length", _grid(args.lengths or (0.3, 0.6, 4), 4)
+    if min(values) <= 0:
+        raise CliError(f"--{target.replace('_', '-')} values must be > 0")
+    acts = args.actuation or ["pushoff"]
+    if not args.max_torque > 0:
+        raise CliError("--max-torque must be > 0 (N m)")
+    options = {"gain": args.gain, "kp": args.kp, "kd": args.kd, "max_torque": args.max_torque}
+    ds = cost_study(radii, values, target=target, actuations=acts, walker=walker,
+                    actuation_options=options, progress=True)
+    out = Path(args.out)
+    try:
+        nc = save_study(ds, out / "cost_study.nc")
+        paths = [nc, *write_cost_figures(ds, out)]
+    except OSError as exc:
+        raise CliError(f"cannot write to {args.out!r}: {exc.strerror or exc}") from exc
+    for path in paths:
+        print(path)
+    found = int(ds["cost_of_transport"].notnull().sum())
+    print(f"{found} of {ds['cost_of_transport'].size} gaits found", file=sys.stderr)
+    return 0 if found else 1
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import shutil
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
@@ -16,6 +17,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
+from heelstrike.analysis.basin import OUTCOMES, Basin
+from heelstrike.analysis.gait_map import GaitMap
 from heelstrike.analysis.limit_cycle import (
     BifurcationDiagram,
     Continuation,
@@ -26,7 +29,16 @@ from heelstrike.analysis.limit_cycle import (
 from heelstrike.dynamics.hybrid import WalkResult
 from heelstrike.models.compass import CompassGait
 
-__all__ = ["animate_walk", "bifurcation_figure", "resample_walk", "write_bifurcation"]
+__all__ = [
+    "animate_walk",
+    "basin_figure",
+    "bifurcation_figure",
+    "gait_map_figure",
+    "resample_walk",
+    "write_basin",
+    "write_bifurcation",
+    "write_gait_map",
+]
 
 LEG_COLOURS = ("tab:blue", "tab:red")
 
@@ -225,3 +237,128 @@ def write_bifurcation(
         }
     ).to_csv(bcsv, index=False)
     return [*paths, csv, bcsv]
+
+
+# -- basin of attraction and stable-gait map ----------------------------------------------------
+_COLOURS = (
+    "#1a9850",  # converged
+    "#91cf60",  # keeps walking
+    "#d73027",  # fell forward
+    "#4575b4",  # fell backward
+    "#fdae61",  # trailing foot stays
+    "#984ea3",  # lost contact
+    "#bdbdbd",  # no heel strike
+    "#000000",  # integration failed
+)
+
+
+def basin_figure(basin: Basin) -> Any:
+    """Image of the basin: outcome per initial state, the fixed point marked.
+
+    Returns a :class:`matplotlib.figure.Figure` (Agg canvas attached).
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Patch
+
+    ds = basin.dataset
+    q3, q3d = ds["q3"].values, ds["q3_dot"].values
+    fig = Figure(figsize=(7.5, 5.5), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    cmap = ListedColormap(list(_COLOURS))
+    norm = BoundaryNorm(np.arange(len(OUTCOMES) + 1) - 0.5, cmap.N)
+    dx = (q3[-1] - q3[0]) / max(len(q3) - 1, 1) / 2
+    dy = (q3d[-1] - q3d[0]) / max(len(q3d) - 1, 1) / 2
+    ax.imshow(
+        ds["outcome"].values.T, origin="lower", cmap=cmap, norm=norm, aspect="auto",
+        interpolation="nearest",
+        extent=(q3[0] - dx, q3[-1] + dx, q3d[0] - dy, q3d[-1] + dy),
+    )
+    z = basin.fixed_point
+    ax.plot(z[0], z[1], marker="*", ms=14, mfc="white", mec="black", ls="none",
+            label="fixed point")
+    fr = basin.fractions()
+    handles = [
+        Patch(color=c, label=f"{name.replace('_', ' ')} ({100 * fr[name]:.1f} %)")
+        for c, name in zip(_COLOURS, OUTCOMES, strict=True)
+        if fr[name] > 0
+    ]
+    handles.append(ax.get_lines()[0])  # type: ignore[arg-type]
+    ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.9)
+    ax.set_xlabel(r"post-impact stance angle $q_3$ (rad)")
+    ax.set_ylabel(r"post-impact stance velocity $\dot q_3$ (rad/s)")
+    ax.set_title(
+        f"basin of attraction, R = {ds.attrs['foot_radius']:g} m, slope = "
+        f"{np.degrees(ds.attrs['slope']):g} deg, $\\dot q_4$ = {ds.attrs['q4_dot']:.4f} rad/s\n"
+        f"{100 * basin.converging_fraction:.2f} % of the grid converges within "
+        f"{ds.attrs['max_steps']} steps",
+        fontsize=10,
+    )
+    return fig
+
+
+def write_basin(basin: Basin, out_dir: str | Path, stem: str = "basin") -> tuple[Path, Path]:
+    """Write the figure (PNG) and the dataset (netCDF) into ``out_dir``; returns the paths."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    png = out / f"{stem}.png"
+    nc = out / f"{stem}.nc"
+    basin_figure(basin).savefig(png, dpi=130)
+    basin.dataset.to_netcdf(nc)
+    return png, nc
+
+
+def gait_map_figure(gmap: GaitMap) -> Any:
+    """Spectral radius over (slope, radius), the stable region outlined, period doubling marked.
+
+    Returns a :class:`matplotlib.figure.Figure` (Agg canvas attached).
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.colors import TwoSlopeNorm
+    from matplotlib.figure import Figure
+
+    ds = gmap.dataset
+    R = ds["foot_radius"].values
+    S = np.degrees(ds["slope"].values)
+    rho = ds["spectral_radius"].values
+    fig = Figure(figsize=(7.5, 5.2), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    ax.set_facecolor("#d9d9d9")  # no period-one gait found
+    finite = rho[np.isfinite(rho)]
+    vmax = max(2.0, float(finite.max()) if finite.size else 2.0)
+    norm = TwoSlopeNorm(vmin=0.0, vcenter=1.0, vmax=vmax)
+    mesh: Any
+    if S.size > 1 and R.size > 1:
+        mesh = ax.pcolormesh(S, R, rho, cmap="RdYlGn_r", norm=norm, shading="nearest")
+        if np.nanmin(rho) < 1.0 < np.nanmax(rho):
+            ax.contour(S, R, np.where(np.isfinite(rho), rho, 10.0), levels=[1.0],
+                       colors="black", linewidths=1.2)
+    else:
+        mesh = ax.scatter(np.broadcast_to(S, rho.shape), np.broadcast_to(R[:, None], rho.shape),
+                          c=rho, cmap="RdYlGn_r", norm=norm, s=60)
+    fig.colorbar(mesh, ax=ax, label="spectral radius of the step map (stable < 1)")
+    pd = np.degrees(ds["period_doubling_slope"].values)
+    ok = np.isfinite(pd)
+    if np.any(ok):
+        ax.plot(pd[ok], R[ok], "o--", color="navy", mfc="white", label="period doubling")
+        ax.legend(loc="upper left", fontsize=9)
+    ax.set_xlabel("slope (deg)")
+    ax.set_ylabel("foot radius R (m)")
+    ax.set_title("passive period-one gaits of the circular-feet compass gait\n"
+                 "(black line: spectral radius 1; grey: no gait found)", fontsize=10)
+    return fig
+
+
+def write_gait_map(gmap: GaitMap, out_dir: str | Path, stem: str = "gait_map") -> tuple[Path, Path]:
+    """Write the figure (PNG) and the dataset (netCDF) into ``out_dir``; returns the paths."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    png, nc = out / f"{stem}.png", out / f"{stem}.nc"
+    gait_map_figure(gmap).savefig(png, dpi=130)
+    ds = gmap.dataset.copy()
+    ds["stable"] = ds["stable"].astype(np.int8)
+    ds.to_netcdf(nc)
+    return png, nc

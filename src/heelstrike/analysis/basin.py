@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -32,7 +31,7 @@ from heelstrike.models.compass import CompassGait
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["OUTCOMES", "Basin", "basin_figure", "basin_of_attraction", "write_basin"]
+__all__ = ["OUTCOMES", "Basin", "basin_of_attraction"]
 
 #: Outcome codes of the basin (``flag_values`` / ``flag_meanings`` of the dataset).
 OUTCOMES: tuple[str, ...] = (
@@ -220,73 +219,3 @@ def basin_of_attraction(
     frac = float(np.mean(outcome == 0))
     ds.attrs["converging_fraction"] = frac
     return Basin(dataset=ds, fixed_point=zstar, converging_fraction=frac, elapsed=elapsed)
-
-
-_COLOURS = (
-    "#1a9850",  # converged
-    "#91cf60",  # keeps walking
-    "#d73027",  # fell forward
-    "#4575b4",  # fell backward
-    "#fdae61",  # trailing foot stays
-    "#984ea3",  # lost contact
-    "#bdbdbd",  # no heel strike
-    "#000000",  # integration failed
-)
-
-
-def basin_figure(basin: Basin) -> Any:
-    """Image of the basin: outcome per initial state, the fixed point marked.
-
-    Returns a :class:`matplotlib.figure.Figure` (Agg canvas attached).
-    """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.colors import BoundaryNorm, ListedColormap
-    from matplotlib.figure import Figure
-    from matplotlib.patches import Patch
-
-    ds = basin.dataset
-    q3, q3d = ds["q3"].values, ds["q3_dot"].values
-    fig = Figure(figsize=(7.5, 5.5), layout="constrained")
-    FigureCanvasAgg(fig)
-    ax = fig.add_subplot()
-    cmap = ListedColormap(list(_COLOURS))
-    norm = BoundaryNorm(np.arange(len(OUTCOMES) + 1) - 0.5, cmap.N)
-    dx = (q3[-1] - q3[0]) / max(len(q3) - 1, 1) / 2
-    dy = (q3d[-1] - q3d[0]) / max(len(q3d) - 1, 1) / 2
-    ax.imshow(
-        ds["outcome"].values.T, origin="lower", cmap=cmap, norm=norm, aspect="auto",
-        interpolation="nearest",
-        extent=(q3[0] - dx, q3[-1] + dx, q3d[0] - dy, q3d[-1] + dy),
-    )
-    z = basin.fixed_point
-    ax.plot(z[0], z[1], marker="*", ms=14, mfc="white", mec="black", ls="none",
-            label="fixed point")
-    fr = basin.fractions()
-    handles = [
-        Patch(color=c, label=f"{name.replace('_', ' ')} ({100 * fr[name]:.1f} %)")
-        for c, name in zip(_COLOURS, OUTCOMES, strict=True)
-        if fr[name] > 0
-    ]
-    handles.append(ax.get_lines()[0])  # type: ignore[arg-type]
-    ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.9)
-    ax.set_xlabel(r"post-impact stance angle $q_3$ (rad)")
-    ax.set_ylabel(r"post-impact stance velocity $\dot q_3$ (rad/s)")
-    ax.set_title(
-        f"basin of attraction, R = {ds.attrs['foot_radius']:g} m, slope = "
-        f"{np.degrees(ds.attrs['slope']):g} deg, $\\dot q_4$ = {ds.attrs['q4_dot']:.4f} rad/s\n"
-        f"{100 * basin.converging_fraction:.2f} % of the grid converges within "
-        f"{ds.attrs['max_steps']} steps",
-        fontsize=10,
-    )
-    return fig
-
-
-def write_basin(basin: Basin, out_dir: str | Path, stem: str = "basin") -> tuple[Path, Path]:
-    """Write the figure (PNG) and the dataset (netCDF) into ``out_dir``; returns the paths."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    png = out / f"{stem}.png"
-    nc = out / f"{stem}.nc"
-    basin_figure(basin).savefig(png, dpi=130)
-    basin.dataset.to_netcdf(nc)
-    return png, nc

@@ -28,7 +28,7 @@ from heelstrike.models.compass import CompassGait
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["GaitMap", "NewtonGait", "gait_map", "gait_map_figure", "newton_gait", "write_gait_map"]
+__all__ = ["GaitMap", "NewtonGait", "gait_map", "newton_gait"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -410,57 +410,3 @@ def gait_map(
         | {"anchor_slope": float(S[anchor_index]), "rtol": rtol, "atol": atol}
     )
     return GaitMap(dataset=ds)
-
-
-def gait_map_figure(gmap: GaitMap) -> Any:
-    """Spectral radius over (slope, radius), the stable region outlined, period doubling marked.
-
-    Returns a :class:`matplotlib.figure.Figure` (Agg canvas attached).
-    """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.colors import TwoSlopeNorm
-    from matplotlib.figure import Figure
-
-    ds = gmap.dataset
-    R = ds["foot_radius"].values
-    S = np.degrees(ds["slope"].values)
-    rho = ds["spectral_radius"].values
-    fig = Figure(figsize=(7.5, 5.2), layout="constrained")
-    FigureCanvasAgg(fig)
-    ax = fig.add_subplot()
-    ax.set_facecolor("#d9d9d9")  # no period-one gait found
-    finite = rho[np.isfinite(rho)]
-    vmax = max(2.0, float(finite.max()) if finite.size else 2.0)
-    norm = TwoSlopeNorm(vmin=0.0, vcenter=1.0, vmax=vmax)
-    mesh: Any
-    if S.size > 1 and R.size > 1:
-        mesh = ax.pcolormesh(S, R, rho, cmap="RdYlGn_r", norm=norm, shading="nearest")
-        if np.nanmin(rho) < 1.0 < np.nanmax(rho):
-            ax.contour(S, R, np.where(np.isfinite(rho), rho, 10.0), levels=[1.0],
-                       colors="black", linewidths=1.2)
-    else:
-        mesh = ax.scatter(np.broadcast_to(S, rho.shape), np.broadcast_to(R[:, None], rho.shape),
-                          c=rho, cmap="RdYlGn_r", norm=norm, s=60)
-    fig.colorbar(mesh, ax=ax, label="spectral radius of the step map (stable < 1)")
-    pd = np.degrees(ds["period_doubling_slope"].values)
-    ok = np.isfinite(pd)
-    if np.any(ok):
-        ax.plot(pd[ok], R[ok], "o--", color="navy", mfc="white", label="period doubling")
-        ax.legend(loc="upper left", fontsize=9)
-    ax.set_xlabel("slope (deg)")
-    ax.set_ylabel("foot radius R (m)")
-    ax.set_title("passive period-one gaits of the circular-feet compass gait\n"
-                 "(black line: spectral radius 1; grey: no gait found)", fontsize=10)
-    return fig
-
-
-def write_gait_map(gmap: GaitMap, out_dir: str | Path, stem: str = "gait_map") -> tuple[Path, Path]:
-    """Write the figure (PNG) and the dataset (netCDF) into ``out_dir``; returns the paths."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    png, nc = out / f"{stem}.png", out / f"{stem}.nc"
-    gait_map_figure(gmap).savefig(png, dpi=130)
-    ds = gmap.dataset.copy()
-    ds["stable"] = ds["stable"].astype(np.int8)
-    ds.to_netcdf(nc)
-    return png, nc

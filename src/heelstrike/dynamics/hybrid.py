@@ -153,7 +153,9 @@ class WalkResult:
     step : ndarray of int, shape (N,)
         Step index of every sample.
     actuator_work : ndarray, shape (N,)
-        Cumulative actuator work (J) from the start (push-offs added at impacts).
+        Cumulative actuator work (J) from the start. An impulsive push-off happens at an impact,
+        between samples: it appears from the next step's first sample on, so the last sample
+        of a walk does not include its final push-off (the :class:`ImpactRecord` does).
     impacts : tuple of ImpactRecord
         Every heel strike, in order.
     final_q, final_q_dot : ndarray, shape (n,)

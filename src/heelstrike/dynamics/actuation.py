@@ -1,0 +1,327 @@
+"""Actuation of powered walkers: a push-off impulse and hip torque laws.
+
+Small frozen dataclasses that :func:`heelstrike.dynamics.hybrid.simulate` accepts directly:
+
+- :class:`PushOff` has the ``PushOff`` signature of :mod:`heelstrike.dynamics.hybrid`
+  ``(walker, q, q_dot) -> (q_dot_after, work)`` and is applied just before heel strike
+  (pre-emptive push-off, Kuo 2002);
+- :class:`EnergyTracking`, :class:`SwingLegPD` and :class:`CustomTorque` have the
+  :class:`~heelstrike.dynamics.single_support.TorqueLaw` signature ``(t, q, q_dot) -> u`` with
+  ``u`` of shape ``(..., n_u)`` (N m) and act at the hip (``B = e4`` of the compass gait, i.e.
+  a torque on the swing leg with its reaction on the stance leg). Torque laws add with ``+``.
+
+The actuator work of a torque law is integrated along the motion by the simulation as an extra
+state (``dW/dt = (B u) . q_dot``); the push-off work is the kinetic-energy change it causes.
+On a periodic level gait the energy theorem of Font & Kövecses (2008), eq. (14), gives
+``W_act = -W_col``, and eq. (15) ``|W_col| = T_c``.
+
+All torque laws saturate: ``|u| <= max_torque``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from heelstrike.core.impact import kinetic_energy
+from heelstrike.models.base import PlanarWalker
+
+FloatArray = NDArray[np.float64]
+
+__all__ = [
+    "CustomTorque",
+    "EnergyTracking",
+    "HipTorque",
+    "PushOff",
+    "SwingLegPD",
+    "TorqueSum",
+    "mechanical_energy",
+    "push_off_velocity_change",
+]
+
+
+def mechanical_energy(
+    walker: PlanarWalker, q: ArrayLike, q_dot: ArrayLike, slope: float = 0.0
+) -> FloatArray:
+    """Mechanical energy ``E = T + V`` (J), shape (...).
+
+    ``T = 1/2 q_dot^T M(q) q_dot`` (eq. 1) and ``V`` the walker's gravitational potential in the
+    ground frame (zero at its origin); on level ground (``slope = 0``) ``V`` does not depend on
+    the position along the ground, so ``E`` is comparable from step to step.
+    """
+    q_ = np.asarray(q, dtype=float)
+    qd = np.asarray(q_dot, dtype=float)
+    if q_.shape == (4,) and qd.shape == (4,) and slope == 0.0 and _scalar_compass(walker):
+        return np.asarray(_compass_energy(walker, q_, qd))
+    T = kinetic_energy(walker.mass_matrix(q_), qd)
+    return np.asarray(T + walker.potential_energy(q_, slope))
+
+
+def _scalar_compass(walker: PlanarWalker) -> bool:
+    from heelstrike.models.compass import CompassGait
+
+    return isinstance(walker, CompassGait) and all(
+        np.ndim(getattr(walker, k)) == 0
+        for k in ("hip_mass", "leg_mass", "leg_length", "leg_com_from_hip", "foot_radius",
+                  "leg_inertia", "gravity")
+    )
+
+
+def _compass_energy(walker: Any, q: FloatArray, qd: FloatArray) -> float:
+    """``T + V`` of a scalar-parameter compass gait on level ground in plain floats (fast path
+    of :func:`mechanical_energy` for torque laws evaluated inside the integrator; equal to the
+    generic ``1/2 q_dot^T M q_dot + V``, which the tests check)."""
+    mH, m, I, g = walker.hip_mass, walker.leg_mass, walker.leg_inertia, walker.gravity
+    b = walker.leg_com_from_hip
+    s = walker.leg_length - walker.foot_radius
+    y0, q3, q4 = float(q[1]), float(q[2]), float(q[3])
+    vx, vy, w3, w4 = (float(v) for v in qd)
+    w34 = w3 + w4
+    c3, s3, c34, s34 = math.cos(q3), math.sin(q3), math.cos(q3 + q4), math.sin(q3 + q4)
+    # e(t) = (-sin t, cos t), de/dt = (-cos t, -sin t) t_dot
+    hx, hy = vx - s * c3 * w3, vy - s * s3 * w3
+    rx, ry = vx - (s - b) * c3 * w3, vy - (s - b) * s3 * w3
+    lx, ly = hx + b * c34 * w34, hy + b * s34 * w34
+    T = 0.5 * mH * (hx * hx + hy * hy) + 0.5 * m * (rx * rx + ry * ry + lx * lx + ly * ly)
+    T += 0.5 * I * (w3 * w3 + w34 * w34)
+    yH = y0 + s * c3
+    V = g * (mH * yH + m * (yH - b * c3) + m * (yH - b * c34))
+    return float(T + V)
+
+
+def _leg_direction(theta: FloatArray) -> FloatArray:
+    """``e(theta) = (-sin theta, cos theta)``: unit vector up a leg, shape (..., 2)."""
+    return np.stack((-np.sin(theta), np.cos(theta)), axis=-1)
+
+
+def push_off_velocity_change(
+    walker: PlanarWalker, q: ArrayLike, impulse: ArrayLike
+) -> tuple[FloatArray, FloatArray]:
+    """Velocity jump caused by a push-off impulse at the trailing ("right") foot.
+
+    The ground pushes the trailing foot's contact point with the impulse ``p e(q3)`` (N s),
+    directed along the trailing leg from the foot towards the hip. Its generalized impulse is
+    ``f = A_R(q)^T p e(q3)`` (eq. 2 with the trailing foot's contact Jacobian ``A_R``) and,
+    since no constraint is active during the push-off (the leading foot has not landed and the
+    trailing foot is free to leave the ground), the impulse-momentum equations are
+    ``M(q) dq_dot = f``.
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+        The walker, stance (trailing) foot labelled "right".
+    q : array_like, shape (..., n)
+        Configuration at push-off (that of heel strike).
+    impulse : array_like, shape (...)
+        Magnitude ``p`` (N s); positive pushes the walker away from the ground.
+
+    Returns
+    -------
+    dq_dot : ndarray, shape (..., n)
+        Velocity jump ``M^-1 f``.
+    f : ndarray, shape (..., n)
+        Generalized impulse ``A_R^T p e(q3)``.
+    """
+    q_ = np.asarray(q, dtype=float)
+    p = np.asarray(impulse, dtype=float)
+    A = walker.contact_jacobian(q_, "right")
+    vec = p[..., None] * _leg_direction(q_[..., 2])
+    f = np.einsum("...ji,...j->...i", A, vec)
+    M = walker.mass_matrix(q_)
+    shape = np.broadcast_shapes(M.shape[:-1], f.shape)
+    Mb = np.broadcast_to(M, (*shape, shape[-1]))
+    dq = np.linalg.solve(Mb, np.broadcast_to(f, shape)[..., None])
+    return np.asarray(dq[..., 0]), np.asarray(f)
+
+
+@dataclass(frozen=True, kw_only=True)
+class PushOff:
+    """Pre-emptive push-off impulse at the trailing foot just before heel strike (Kuo 2002).
+
+    Callable with the ``PushOff`` signature of :mod:`heelstrike.dynamics.hybrid`; see
+    :func:`push_off_velocity_change` for the impulse algebra.
+
+    Parameters
+    ----------
+    impulse : float
+        Impulse magnitude ``p`` (N s), along the trailing leg from foot to hip; ``>= 0``.
+    """
+
+    impulse: float
+
+    def __post_init__(self) -> None:
+        p = float(self.impulse)
+        if not np.isfinite(p) or p < 0:
+            raise ValueError(f"push-off impulse must be finite and >= 0 (N s), got {p}")
+        object.__setattr__(self, "impulse", p)
+
+    def __call__(
+        self, walker: PlanarWalker, q: FloatArray, q_dot: FloatArray
+    ) -> tuple[FloatArray, float]:
+        """Return ``(q_dot_after, work)``: velocities after the push-off and its work (J).
+
+        The work is the kinetic-energy change ``T(q_dot+) - T(q_dot-)`` (the configuration does
+        not change during the impulse, so neither does ``V``).
+        """
+        q_ = np.asarray(q, dtype=float)
+        qd = np.asarray(q_dot, dtype=float)
+        dq, _ = push_off_velocity_change(walker, q_, self.impulse)
+        after = qd + dq
+        M = walker.mass_matrix(q_)
+        work = float(kinetic_energy(M, after) - kinetic_energy(M, qd))
+        return after, work
+
+
+class HipTorque:
+    """Base of the hip torque laws: saturation helper and ``+`` composition."""
+
+    max_torque: float
+
+    def __call__(self, t: float, q: FloatArray, q_dot: FloatArray) -> FloatArray:
+        raise NotImplementedError
+
+    def _saturate(self, u: FloatArray) -> FloatArray:
+        m = float(self.max_torque)
+        return np.asarray(np.clip(u, -m, m))
+
+    def __add__(self, other: HipTorque) -> TorqueSum:
+        return TorqueSum(laws=(self, other))
+
+
+def _check_limit(value: float) -> float:
+    v = float(value)
+    if np.isnan(v) or v <= 0:
+        raise ValueError(f"max_torque must be > 0 (N m), got {value}")
+    return v
+
+
+@dataclass(frozen=True, kw_only=True)
+class TorqueSum(HipTorque):
+    """Sum of hip torque laws, saturated again at ``max_torque`` (N m)."""
+
+    laws: tuple[Callable[[float, FloatArray, FloatArray], FloatArray], ...]
+    max_torque: float = np.inf
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "max_torque", _check_limit(self.max_torque))
+
+    def __call__(self, t: float, q: FloatArray, q_dot: FloatArray) -> FloatArray:
+        u = sum(np.asarray(law(t, q, q_dot), dtype=float) for law in self.laws)
+        return self._saturate(np.asarray(u, dtype=float))
+
+
+@dataclass(frozen=True, kw_only=True)
+class EnergyTracking(HipTorque):
+    """Hip torque restoring a target mechanical energy (Goswami, Espiau & Keramane 1997).
+
+    .. math:: u = \\operatorname{sat}_{u_{max}}\\big(-k\\,(E - E_{ref})\\,\\dot q_4\\big),
+              \\qquad E = T + V,
+
+    with ``T`` the kinetic energy (eq. 1) and ``V`` the potential energy on level ground
+    (ground-frame origin at zero height). The hip power is ``u q4_dot`` (``B = e4``), so in
+    single support ``dE/dt = -k (E - E_ref) q4_dot^2`` (before saturation): the energy moves
+    monotonically towards ``E_ref``. Saturation keeps the sign of ``u``, hence the monotonicity.
+
+    Parameters
+    ----------
+    energy : float
+        Target mechanical energy ``E_ref`` (J).
+    gain : float
+        ``k`` (N m s / (J rad)), > 0.
+    max_torque : float
+        Torque limit (N m), > 0.
+    slope : float
+        Slope (rad) in ``V`` (0: level ground, the case this law is meant for).
+    walker : PlanarWalker
+        Supplies ``M`` and ``V``.
+    """
+
+    walker: PlanarWalker
+    energy: float
+    gain: float = 5.0
+    max_torque: float = 20.0
+    slope: float = 0.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "max_torque", _check_limit(self.max_torque))
+        if not float(self.gain) > 0:
+            raise ValueError(f"gain must be > 0, got {self.gain}")
+
+    def __call__(self, t: float, q: FloatArray, q_dot: FloatArray) -> FloatArray:
+        qd = np.asarray(q_dot, dtype=float)
+        E = mechanical_energy(self.walker, q, qd, self.slope)
+        u = -self.gain * (E - self.energy) * qd[..., 3]
+        return self._saturate(np.asarray(u)[..., None])
+
+
+@dataclass(frozen=True, kw_only=True)
+class SwingLegPD(HipTorque):
+    """PD control of the inter-leg angle ``q4`` towards a swing target.
+
+    .. math:: u = \\operatorname{sat}_{u_{max}}\\big(k_p\\,(q_4^{ref}(t) - q_4)
+              - k_d\\,\\dot q_4\\big), \\qquad q_4^{ref}(t) = -2 A\\, s(t),
+
+    ``A`` (rad) is the amplitude: the swing leg is driven towards a symmetric stance with
+    half-angle ``A`` ahead of the stance leg (at heel strike ``q4 = -2 q3``). ``s(t)`` is a
+    dimensionless profile of the time since the step's start (default 1: a set point).
+
+    Parameters
+    ----------
+    amplitude : float
+        ``A`` (rad).
+    kp : float
+        Stiffness (N m / rad), >= 0.
+    kd : float
+        Damping (N m s / rad), >= 0.
+    max_torque : float
+        Torque limit (N m), > 0.
+    profile : callable ``t -> float`` or None
+        ``s(t)``; None for a constant 1.
+    """
+
+    amplitude: float
+    kp: float = 5.0
+    kd: float = 1.0
+    max_torque: float = 20.0
+    profile: Callable[[float], float] | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "max_torque", _check_limit(self.max_torque))
+        if self.kp < 0 or self.kd < 0:
+            raise ValueError("kp and kd must be >= 0")
+
+    def reference(self, t: float) -> float:
+        """``q4_ref(t)`` (rad)."""
+        s = 1.0 if self.profile is None else float(self.profile(t))
+        return -2.0 * float(self.amplitude) * s
+
+    def __call__(self, t: float, q: FloatArray, q_dot: FloatArray) -> FloatArray:
+        q_ = np.asarray(q, dtype=float)
+        qd = np.asarray(q_dot, dtype=float)
+        u = self.kp * (self.reference(t) - q_[..., 3]) - self.kd * qd[..., 3]
+        return self._saturate(np.asarray(u)[..., None])
+
+
+@dataclass(frozen=True, kw_only=True)
+class CustomTorque(HipTorque):
+    """A user function ``(t, q, q_dot) -> u`` (N m), saturated at ``max_torque``.
+
+    ``u`` may be a scalar or have shape ``(..., n_u)``; a scalar is returned as shape ``(1,)``.
+    """
+
+    function: Callable[[float, FloatArray, FloatArray], ArrayLike]
+    max_torque: float = np.inf
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "max_torque", _check_limit(self.max_torque))
+
+    def __call__(self, t: float, q: FloatArray, q_dot: FloatArray) -> FloatArray:
+        u = np.asarray(self.function(t, q, q_dot), dtype=float)
+        if u.ndim == 0:
+            u = u[None]
+        return self._saturate(u)

@@ -1,0 +1,91 @@
+"""Figures of the powered-walking cost study (:mod:`heelstrike.analysis.cost_study`).
+
+Drawing only, from the study's :class:`xarray.Dataset`; matplotlib object API, Agg canvas.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+from matplotlib import colormaps
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+__all__ = ["cost_figure", "paper_comparison_figure", "write_cost_figures"]
+
+
+def _new_figure(width: float, height: float) -> Figure:
+    fig = Figure(figsize=(width, height), layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _target(ds: xr.Dataset) -> str:
+    return str(ds.attrs.get("target", "step_length"))
+
+
+def cost_figure(ds: xr.Dataset, variable: str = "cost_of_transport") -> Figure:
+    """``variable`` against the target (step length or speed), one line per foot radius,
+    one panel per actuation model."""
+    tgt = _target(ds)
+    acts = [str(a) for a in ds["actuation"].values]
+    fig = _new_figure(4.2 * len(acts), 3.6)
+    axes = fig.subplots(1, len(acts), squeeze=False)[0]
+    radii = ds["radius"].values
+    cmap = colormaps["viridis"]
+    unit = ds[variable].attrs.get("units", "")
+    for ax, act in zip(axes, acts, strict=True):
+        for k, r in enumerate(radii):
+            y = ds[variable].sel(actuation=act).isel(radius=k).values
+            colour = cmap(0.85 * k / max(len(radii) - 1, 1))
+            ax.plot(ds[tgt].values, y, "o-", ms=3, color=colour, label=f"R = {r:g} m")
+        ax.set_title(act)
+        ax.set_xlabel(f"{tgt.replace('_', ' ')} ({ds[tgt].attrs.get('units', '')})")
+        ax.set_ylabel(f"{variable.replace('_', ' ')} ({unit})")
+        ax.grid(alpha=0.3)
+    axes[-1].legend(fontsize=7, loc="best")
+    return fig
+
+
+def paper_comparison_figure(ds: xr.Dataset) -> Figure:
+    """Paper's impact-only ``eta`` (imposed velocities) vs the actuator work per metre that the
+    real periodic gait needs, against the foot radius; one panel per step length."""
+    tgt = _target(ds)
+    if tgt != "step_length" or "eta_paper" not in ds:
+        raise ValueError("the comparison needs a study over step length")
+    L = ds[tgt].values
+    fig = _new_figure(3.4 * len(L), 3.4)
+    axes = fig.subplots(1, len(L), squeeze=False, sharey=True)[0]
+    R = ds["radius"].values
+    for j, (ax, length) in enumerate(zip(axes, L, strict=True)):
+        ax.plot(R, ds["eta_paper"].isel({tgt: j}).values, "k--",
+                label="paper: impact only, q3_dot = 1 rad/s")
+        for act in ds["actuation"].values:
+            sel = ds.sel(actuation=act).isel({tgt: j})
+            ax.plot(R, sel["work_per_metre"].values, "o-", ms=3, label=f"{act}: W_act / L")
+        ax.set_title(f"L = {length:g} m")
+        ax.set_xlabel("foot radius R (m)")
+        ax.set_yscale("log")
+        ax.grid(alpha=0.3, which="both")
+    axes[0].set_ylabel("energy per metre (J/m)")
+    axes[0].legend(fontsize=7, loc="lower left")
+    return fig
+
+
+def write_cost_figures(ds: xr.Dataset, out: str | Path) -> list[Path]:
+    """Write the study's figures (PNG) into ``out``; return their paths."""
+    d = Path(out)
+    d.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for var in ("cost_of_transport", "eta", "actuator_work"):
+        if np.any(np.isfinite(ds[var].values)):
+            p = d / f"{var}.png"
+            cost_figure(ds, var).savefig(p, dpi=120)
+            paths.append(p)
+    if _target(ds) == "step_length":
+        p = d / "paper_vs_gait.png"
+        paper_comparison_figure(ds).savefig(p, dpi=120)
+        paths.append(p)
+    return paths

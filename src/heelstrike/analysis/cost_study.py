@@ -241,6 +241,12 @@ def cost_study(
         hip_mass=float(base.hip_mass), leg_mass=float(base.leg_mass),
         leg_length=float(base.leg_length), leg_com_from_hip=float(base.leg_com_from_hip),
         leg_inertia=float(base.leg_inertia), gravity=float(base.gravity), target=target,
+        branch_note=(
+            "Several periodic gaits can meet one target; each entry is the gait reached by "
+            "continuation in foot radius from its neighbour, keeping the cheaper one found, "
+            "not a search of every branch. Near R = l the cheap push-off branch's largest "
+            "multiplier tends to 1 and continuation may land on a costlier branch."
+        ),
     )
     return ds
 

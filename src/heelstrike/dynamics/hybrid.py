@@ -272,14 +272,17 @@ def heel_strike(
 
 
 @dataclass(frozen=True, kw_only=True)
-class _Segment:
+class Segment:
+    """One integrated stretch of single support: samples ``t`` (N,), states ``x`` (N, 2m + 1),
+    the terminal event that ended it (None: time bound reached) and whether the solver failed."""
+
     t: FloatArray
     x: FloatArray  # (N, 2m + 1)
     event: str | None
     failed: bool
 
 
-def _integrate(
+def integrate_segment(
     support: SingleSupport,
     q_ref: FloatArray,
     x0: FloatArray,
@@ -289,9 +292,13 @@ def _integrate(
     rtol: float,
     atol: float,
     max_step: float,
-) -> _Segment:
+) -> Segment:
+    """Integrate ``support.rhs`` from ``t0`` until a terminal event or ``t_end`` (DOP853).
+
+    The last sample is placed exactly at the terminal event's state.
+    """
     if t_end <= t0:
-        return _Segment(t=np.array([t0]), x=x0[None, :], event=None, failed=False)
+        return Segment(t=np.array([t0]), x=x0[None, :], event=None, failed=False)
     sol: Any = solve_ivp(
         support.rhs,
         (t0, t_end),
@@ -312,7 +319,7 @@ def _integrate(
                 ts = np.append(ts[:-1], t_ev[0])
                 xs = np.vstack((xs[:-1], x_ev[0]))
                 break
-    return _Segment(t=ts, x=xs, event=hit, failed=sol.status < 0)
+    return Segment(t=ts, x=xs, event=hit, failed=sol.status < 0)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -482,7 +489,9 @@ def simulate(
                 step_ids.append(np.array([k]))
                 break
         for events in phases:
-            seg = _integrate(step_support, q_ref, x, t, t_limit, events, rtol, atol, max_step)
+            seg = integrate_segment(
+                step_support, q_ref, x, t, t_limit, events, rtol, atol, max_step
+            )
             ts.append(seg.t)
             xs.append(seg.x)
             qrefs.append(np.broadcast_to(q_ref, (len(seg.t), n)))

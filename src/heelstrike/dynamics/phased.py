@@ -54,12 +54,17 @@ from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.integrate import solve_ivp
 
 from heelstrike.core.complementarity import CandidateContact, resolve_impact
 from heelstrike.core.impact import impact
-from heelstrike.dynamics.events import Event, to_scipy
-from heelstrike.dynamics.hybrid import ImpactRecord, PushOff, WalkResult, WalkStatus
+from heelstrike.dynamics.events import Event
+from heelstrike.dynamics.hybrid import (
+    ImpactRecord,
+    PushOff,
+    WalkResult,
+    WalkStatus,
+    integrate_segment,
+)
 from heelstrike.dynamics.single_support import SingleSupport, TorqueLaw
 from heelstrike.models.builder import BuiltWalker, load_walker
 from heelstrike.models.description import WalkerDescription
@@ -396,24 +401,9 @@ def _run_phase(
     q_ref = q.copy()
     x0 = np.concatenate((sup.pack(q, qd), [work]))
     m = len(sup.free_coordinates)
-    if t_end <= t0:
-        return _Seg(t=np.array([t0]), q=q[None], qd=qd[None], w=np.array([work]), event=None,
-                    failed=False)
-    sol: Any = solve_ivp(
-        sup.rhs, (t0, t_end), x0, method="DOP853", rtol=rtol, atol=atol, max_step=max_step,
-        events=to_scipy(events), args=(q_ref,),
-    )
-    ts, xs = sol.t, sol.y.T
-    hit: str | None = None
-    if sol.status == 1:
-        for ev, t_ev, x_ev in zip(events, sol.t_events, sol.y_events, strict=True):
-            if len(t_ev) and ev.terminal:
-                hit = ev.name
-                ts = np.append(ts[:-1], t_ev[0])
-                xs = np.vstack((xs[:-1], x_ev[0]))
-                break
-    qs, qds = sup.unpack(xs[:, : 2 * m], q_ref)
-    return _Seg(t=ts, q=qs, qd=qds, w=xs[:, -1], event=hit, failed=sol.status < 0)
+    seg = integrate_segment(sup, q_ref, x0, t0, t_end, list(events), rtol, atol, max_step)
+    qs, qds = sup.unpack(seg.x[:, : 2 * m], q_ref)
+    return _Seg(t=seg.t, q=qs, qd=qds, w=seg.x[:, -1], event=seg.event, failed=seg.failed)
 
 
 def simulate_phased(

@@ -213,12 +213,15 @@ def test_distributed_cluster_equals_local(tmp_path: Path) -> None:
     with distributed.LocalCluster(
         n_workers=2, threads_per_worker=1, processes=False, protocol="tcp://",
         dashboard_address=None,
-    ) as cluster, distributed.Client(cluster) as client:
-        by_client = sweep(heel_strike_energies, GRID, chunks=CHUNKS, progress=False,
-                          scheduler=client)
+    ) as cluster:
+        # By address first, as a user on another machine would: the sweep's own client is the
+        # only one connected (this process's event loop is shared with the in-process cluster).
         by_address = sweep(heel_strike_energies, GRID, chunks=CHUNKS, progress=False,
                            scheduler=cluster.scheduler_address, store=tmp_path / "d.zarr")
-        workers = client.run(lambda: threading.get_ident())
+        with distributed.Client(cluster) as client:
+            by_client = sweep(heel_strike_energies, GRID, chunks=CHUNKS, progress=False,
+                              scheduler=client)
+            workers = client.run(lambda: threading.get_ident())
     assert len(workers) == 2
     xr.testing.assert_identical(local, by_client)
     xr.testing.assert_identical(local, by_address.load())

@@ -441,11 +441,16 @@ def _run_distributed(
     on_result: Callable[[tuple[int, ...], dict[str, NDArray[Any]]], None],
     token: str,
 ) -> None:
+    import uuid
+
     from distributed import as_completed
 
+    # Keys are unique per run: a previous run's keys may still be being forgotten by the
+    # scheduler (released or cancelled), and reusing them could leave a future that never ends.
+    run_id = uuid.uuid4().hex
     futures = {}
     for index in pending:
-        key = f"heelstrike-sweep-{token}-" + "-".join(map(str, index))
+        key = f"heelstrike-sweep-{token}-{run_id}-" + "-".join(map(str, index))
         shape = tuple(s.stop - s.start for s in plan.chunk_slices(index))
         fut = client.submit(_run_chunk, func, plan.chunk_kwargs(index), shape, index,
                             key=key, pure=False)
@@ -455,7 +460,9 @@ def _run_distributed(
             on_result(futures[fut.key][1], result)
             fut.release()
     finally:
-        client.cancel([f for f, _ in futures.values()])
+        unfinished = [f for f, _ in futures.values() if not f.done()]
+        if unfinished:  # interrupted: do not leave work running on the cluster
+            client.cancel(unfinished)
 
 
 def _resolve_client(scheduler: Any) -> tuple[Any, bool] | None:

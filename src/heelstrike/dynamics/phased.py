@@ -386,6 +386,17 @@ class _Seg:
     failed: bool
 
 
+def _segment_outcome(seg: _Seg, want: str) -> str | None:
+    """Status that ends the walk after a segment, or None if it ended with the wanted event."""
+    if seg.failed:
+        return "integration_failed"
+    if seg.event is None:
+        return "no_heel_strike"
+    if seg.event != want:
+        return seg.event
+    return None
+
+
 def _run_phase(
     sup: SingleSupport,
     q: FloatArray,
@@ -560,12 +571,7 @@ def simulate_phased(
                 record(seg, "knee_swing")
                 t, q, qd = float(seg.t[-1]), seg.q[-1].copy(), seg.qd[-1].copy()
                 work = float(seg.w[-1])
-                if seg.failed:
-                    ended = "integration_failed"
-                elif seg.event is None:
-                    ended = "no_heel_strike"
-                elif seg.event != want:
-                    ended = seg.event
+                ended = _segment_outcome(seg, want)
                 if ended:
                     break
             del m
@@ -631,12 +637,7 @@ def simulate_phased(
                 record(seg, "locked_swing")
                 t, q, qd = float(seg.t[-1]), seg.q[-1].copy(), seg.qd[-1].copy()
                 work = float(seg.w[-1])
-                if seg.failed:
-                    ended = "integration_failed"
-                elif seg.event is None:
-                    ended = "no_heel_strike"
-                elif seg.event != want:
-                    ended = seg.event
+                ended = _segment_outcome(seg, want)
                 if ended:
                     break
         if ended is not None:

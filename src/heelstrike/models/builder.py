@@ -10,8 +10,13 @@ Disk cache
 ----------
 Generated modules live in ``$HEELSTRIKE_CACHE_DIR`` (default ``$XDG_CACHE_HOME/heelstrike`` or
 ``~/.cache/heelstrike``) under ``models/<sha256>.py``, keyed by the description's structure
-(everything except parameter values), the package version and :data:`CODEGEN_VERSION`. A cache
-hit needs neither sympy nor any derivation.
+(everything except parameter values), the package version, :data:`CODEGEN_VERSION` and a hash
+of the generator's own source. A cache hit needs neither sympy nor any derivation.
+
+The cache holds data, not trusted code (:mod:`heelstrike.models._generated`): a cached module
+is used only if it and its folder belong to the current user and nobody else can write them,
+and only after its syntax tree has been checked against what the generator emits; it then runs
+with no builtins. An entry failing either check is rebuilt, with a :class:`CacheWarning`.
 
 Knee locks
 ----------
@@ -28,7 +33,7 @@ from __future__ import annotations
 import hashlib
 import importlib.resources
 import os
-import tempfile
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from importlib.metadata import PackageNotFoundError, version
@@ -39,6 +44,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from heelstrike.models._generated import (
+    CacheWarning,
+    UnsafeGeneratedCode,
+    cache_dir,
+    generator_fingerprint,
+    load_source,
+    read_cached,
+    write_cached,
+)
 from heelstrike.models.base import Foot, PlanarWalker
 from heelstrike.models.description import (
     ModelDescriptionError,
@@ -52,6 +66,7 @@ FloatArray = NDArray[np.float64]
 __all__ = [
     "CODEGEN_VERSION",
     "BuiltWalker",
+    "CacheWarning",
     "GeneratedModel",
     "build",
     "cache_dir",
@@ -60,7 +75,33 @@ __all__ = [
 ]
 
 #: Bumped whenever the generated code changes meaning; part of the cache key.
-CODEGEN_VERSION = "1"
+CODEGEN_VERSION = "2"
+
+#: Functions a generated walker module may define.
+GENERATED_FUNCTIONS = frozenset(
+    {
+        "mass_matrix",
+        "bias_forces",
+        "potential_energy",
+        "points",
+        "swap_coordinates",
+        "swap_jacobian",
+        *(
+            f"{kind}_{foot}"
+            for kind in ("contact_jacobian", "contact_jacobian_rate", "foot_centre")
+            for foot in ("stance", "swing")
+        ),
+    }
+)
+
+
+def _lead(q: Any, *args: Any) -> tuple[int, ...]:
+    """Broadcast leading shape of a state batch ``q`` (..., n) and parameter arrays."""
+    return np.broadcast_shapes(np.shape(q)[:-1], *(np.shape(a) for a in args))
+
+
+#: What generated walker modules may use by name (see :data:`HELPER_NAMES` of the generator).
+_HELPERS: Mapping[str, Any] = MappingProxyType({"numpy": np, "zeros": np.zeros, "_lead": _lead})
 
 _MEMORY: dict[str, GeneratedModel] = {}
 
@@ -70,15 +111,6 @@ def _package_version() -> str:
         return version("heelstrike")
     except PackageNotFoundError:  # pragma: no cover
         return "0.0.0"
-
-
-def cache_dir() -> Path:
-    """Directory of the generated-code cache (see the module docstring)."""
-    env = os.environ.get("HEELSTRIKE_CACHE_DIR")
-    if env:
-        return Path(env)
-    xdg = os.environ.get("XDG_CACHE_HOME")
-    return (Path(xdg) if xdg else Path.home() / ".cache") / "heelstrike"
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -113,14 +145,20 @@ class GeneratedModel:
 
 
 def _key(desc: WalkerDescription) -> str:
-    text = f"{CODEGEN_VERSION}\n{_package_version()}\n{desc.structure_key()}"
+    text = "\n".join(
+        (
+            CODEGEN_VERSION,
+            _package_version(),
+            generator_fingerprint("_codegen", "description"),
+            desc.structure_key(),
+        )
+    )
     return hashlib.sha256(text.encode()).hexdigest()
 
 
 def _compile(source: str, path: Path | str) -> dict[str, Any]:
-    ns: dict[str, Any] = {"__name__": f"heelstrike_generated_{Path(path).stem[:12]}"}
-    exec(compile(source, str(path), "exec"), ns)
-    return ns
+    """Verify generated source and run it with no builtins (see the module docstring)."""
+    return load_source(source, str(path), helpers=_HELPERS, functions=GENERATED_FUNCTIONS)
 
 
 def build(desc: WalkerDescription, *, use_cache: bool = True) -> GeneratedModel:
@@ -141,38 +179,52 @@ def build(desc: WalkerDescription, *, use_cache: bool = True) -> GeneratedModel:
     if use_cache and key in _MEMORY:
         return _MEMORY[key]
     path = cache_dir() / "models" / f"{key}.py"
-    if use_cache and path.is_file():
-        source = path.read_text(encoding="utf-8")
+    cached = read_cached(path) if use_cache else None
+    if cached is not None:
         try:
-            ns = _compile(source, path)
+            ns = _compile(cached, path)
+            _check_generated(ns, desc)
+        except (UnsafeGeneratedCode, ModelDescriptionError) as exc:
+            warnings.warn(
+                f"heelstrike: cached model code {path} failed verification ({exc}); "
+                "rebuilding it",
+                CacheWarning,
+                stacklevel=2,
+            )
+        else:
             model = GeneratedModel(
-                key=key, source=source, namespace=MappingProxyType(ns), path=path, from_cache=True
+                key=key, source=cached, namespace=MappingProxyType(ns), path=path, from_cache=True
             )
             _MEMORY[key] = model
             return model
-        except Exception:  # corrupt cache file: regenerate below
-            pass
     from heelstrike.models._codegen import generate_source  # sympy only on a miss
 
     source = generate_source(desc, key)
     ns = _compile(source, path)
-    written: Path | None = None
-    if use_cache:
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
-            with os.fdopen(fd, "w", encoding="utf-8") as fh:
-                fh.write(source)
-            os.replace(tmp, path)  # atomic: concurrent builders never see partial files
-            written = path
-        except OSError:  # read-only home etc.: still usable, just not cached
-            written = None
+    _check_generated(ns, desc)
+    written = write_cached(path, source) if use_cache else None
     model = GeneratedModel(
         key=key, source=source, namespace=MappingProxyType(ns), path=written, from_cache=False
     )
     if use_cache:
         _MEMORY[key] = model
     return model
+
+
+def _check_generated(ns: Mapping[str, Any], desc: WalkerDescription) -> None:
+    """The sizes a generated module declares must be those of the description."""
+    expected = {
+        "N": 2 + len(desc.links),
+        "N_PARAMS": len(desc.param_names),
+        "N_POINTS": len(desc.point_names),
+    }
+    for name, value in expected.items():
+        if ns.get(name) != value:
+            raise ModelDescriptionError(f"generated module declares {name}={ns.get(name)!r}")
+    required = GENERATED_FUNCTIONS - {"swap_coordinates", "swap_jacobian"}
+    missing = sorted(required - set(ns))
+    if missing:
+        raise ModelDescriptionError(f"generated module lacks {missing}")
 
 
 def _arr(x: ArrayLike, n: int, name: str) -> FloatArray:
@@ -232,7 +284,7 @@ class BuiltWalker(PlanarWalker):
             self._eval(links[j - 2].joint.lock_angle)  # type: ignore[union-attr]
             for j in self.lockable_joints
         )
-        self.point_names: tuple[str, ...] = tuple(self.model.namespace["POINT_NAMES"])
+        self.point_names: tuple[str, ...] = description.point_names
         if "swap_coordinates" in self.model.namespace and all(
             np.ndim(v) == 0 for v in values.values()
         ):

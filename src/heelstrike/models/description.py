@@ -27,6 +27,7 @@ TOML format
 ::
 
     name = "compass"
+    constraints = ["0 <= R", "R <= l", "b <= l"]  # optional, checked whenever values change
     [params]                # numeric defaults; every name may be overridden when loading
     l = 1.0
     R = 0.0
@@ -55,14 +56,21 @@ TOML format
     link = "stance_leg"
     at = "l"
     mass = "mH"
+
+Walker files are data: nothing in them is ever executed or pasted into code. Parameter names
+must be ASCII identifiers (not keywords, not reserved); expressions are bounded in length,
+depth and exponent size (see :func:`check_parameter_name` and the ``MAX_*`` constants).
 """
 
 from __future__ import annotations
 
 import ast
 import json
+import keyword
 import math
 import operator
+import os
+import stat
 import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, field
@@ -79,6 +87,8 @@ __all__ = [
     "ModelDescriptionError",
     "PointMassSpec",
     "WalkerDescription",
+    "check_parameter_name",
+    "constraint_holds",
     "evaluate_expression",
     "parse_description",
     "read_description",
@@ -103,22 +113,103 @@ _BINOPS: dict[type, Callable[[Any, Any], Any]] = {
 }
 _FUNCS = ("sqrt", "sin", "cos")
 
+#: Longest expression string accepted (characters).
+MAX_EXPRESSION_LENGTH = 400
+#: Deepest expression tree accepted (nested operations).
+MAX_EXPRESSION_DEPTH = 24
+#: Largest absolute exponent accepted in ``a ** k`` (``k`` must be a number).
+MAX_EXPONENT = 16.0
+#: Largest absolute integer literal accepted (beyond it floats lose integers anyway).
+MAX_INTEGER_LITERAL = 2**53
+#: Most links a walker may have (derivation time grows steeply with the tree).
+MAX_LINKS = 16
+#: Largest walker file read (bytes).
+MAX_DESCRIPTION_BYTES = 1 << 20
 
-def _check_ast(node: ast.AST, names: Mapping[str, Any] | None, path: str) -> None:
-    """Raise unless ``node`` uses only numbers, known names, + - * / **, sqrt/sin/cos."""
+#: Names a parameter may not take: the expression functions, ``pi``, the simulation's ground
+#: ``slope`` and keyword arguments of the loading functions.
+RESERVED_PARAMETER_NAMES = frozenset(
+    {"pi", *_FUNCS, "slope", "use_cache", "description", "name_or_path"}
+)
+_COMPARE_OPS = (ast.Lt, ast.LtE, ast.Gt, ast.GtE)
+
+
+def check_parameter_name(name: object, path: str) -> str:
+    """Return ``name`` if it may name a parameter, else raise :class:`ModelDescriptionError`.
+
+    A parameter name is an ASCII Python identifier that is not a keyword (``None``, ``class``),
+    does not start with an underscore and is not reserved (:data:`RESERVED_PARAMETER_NAMES`).
+    Non-ASCII names are refused because Python folds them (NFKC): the fullwidth ``ｌ`` would be
+    the same identifier as ``l``.
+    """
+    if (
+        not isinstance(name, str)
+        or not name.isascii()
+        or not name.isidentifier()
+        or keyword.iskeyword(name)
+        or name.startswith("_")
+        or name in RESERVED_PARAMETER_NAMES
+    ):
+        raise ModelDescriptionError(
+            f"{path}: invalid parameter name {name!r} (ASCII letters, digits and '_', not "
+            f"starting with '_' or a digit, not a Python keyword nor one of "
+            f"{sorted(RESERVED_PARAMETER_NAMES)})"
+        )
+    return name
+
+
+def _number(node: ast.AST) -> float | None:
+    """The value of a numeric literal, optionally signed; None for anything else."""
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub | ast.UAdd):
+        v = _number(node.operand)
+        return None if v is None else (-v if isinstance(node.op, ast.USub) else v)
+    if (
+        isinstance(node, ast.Constant)
+        and not isinstance(node.value, bool)
+        and isinstance(node.value, int | float)
+    ):
+        return float(node.value)
+    return None
+
+
+def _check_ast(
+    node: ast.AST, names: Mapping[str, Any] | None, path: str, depth: int = 0
+) -> None:
+    """Raise unless ``node`` uses only numbers, known names, + - * / **, sqrt/sin/cos.
+
+    The tree is bounded: at most :data:`MAX_EXPRESSION_DEPTH` deep, exponents are numeric
+    literals of magnitude at most :data:`MAX_EXPONENT`, integer literals at most
+    :data:`MAX_INTEGER_LITERAL` (so ``9**9**9`` and huge literals are refused, not evaluated).
+    """
+    if depth > MAX_EXPRESSION_DEPTH:
+        raise ModelDescriptionError(
+            f"{path}: expression nested deeper than {MAX_EXPRESSION_DEPTH} levels"
+        )
+    sub = depth + 1
     if isinstance(node, ast.Expression):
-        _check_ast(node.body, names, path)
+        _check_ast(node.body, names, path, sub)
     elif isinstance(node, ast.Constant):
         if isinstance(node.value, bool) or not isinstance(node.value, int | float):
             raise ModelDescriptionError(f"{path}: only numeric constants are allowed")
+        if isinstance(node.value, int) and abs(node.value) > MAX_INTEGER_LITERAL:
+            raise ModelDescriptionError(f"{path}: integer literal too large")
+        if not math.isfinite(float(node.value)):
+            raise ModelDescriptionError(f"{path}: constants must be finite")
     elif isinstance(node, ast.Name):
         if node.id != "pi" and names is not None and node.id not in names:
             raise ModelDescriptionError(f"{path}: unknown parameter {node.id!r}")
     elif isinstance(node, ast.BinOp) and type(node.op) in _BINOPS:
-        _check_ast(node.left, names, path)
-        _check_ast(node.right, names, path)
+        if isinstance(node.op, ast.Pow):
+            k = _number(node.right)
+            if k is None or abs(k) > MAX_EXPONENT:
+                raise ModelDescriptionError(
+                    f"{path}: exponents must be numbers of magnitude <= {MAX_EXPONENT:g} "
+                    "(use sqrt for square roots)"
+                )
+        _check_ast(node.left, names, path, sub)
+        _check_ast(node.right, names, path, sub)
     elif isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub | ast.UAdd):
-        _check_ast(node.operand, names, path)
+        _check_ast(node.operand, names, path, sub)
     elif (
         isinstance(node, ast.Call)
         and isinstance(node.func, ast.Name)
@@ -126,7 +217,7 @@ def _check_ast(node: ast.AST, names: Mapping[str, Any] | None, path: str) -> Non
         and len(node.args) == 1
         and not node.keywords
     ):
-        _check_ast(node.args[0], names, path)
+        _check_ast(node.args[0], names, path, sub)
     else:
         raise ModelDescriptionError(
             f"{path}: unsupported expression syntax ({type(node).__name__})"
@@ -134,11 +225,60 @@ def _check_ast(node: ast.AST, names: Mapping[str, Any] | None, path: str) -> Non
 
 
 def _parse_expr(text: str, path: str) -> ast.Expression:
+    if len(text) > MAX_EXPRESSION_LENGTH:
+        raise ModelDescriptionError(
+            f"{path}: expression longer than {MAX_EXPRESSION_LENGTH} characters"
+        )
     try:
         tree = ast.parse(text, mode="eval")
-    except SyntaxError as exc:
+    except (SyntaxError, RecursionError, MemoryError, ValueError) as exc:
         raise ModelDescriptionError(f"{path}: invalid expression {text!r}") from exc
     return tree
+
+
+def _parse_constraint(text: object, names: Mapping[str, Any], path: str) -> str:
+    """Validate a constraint such as ``"R <= l"`` or ``"0 <= b < l"``; return it."""
+    if not isinstance(text, str):
+        raise ModelDescriptionError(f"{path}: must be a string such as 'R <= l'")
+    if len(text) > MAX_EXPRESSION_LENGTH:
+        raise ModelDescriptionError(
+            f"{path}: constraint longer than {MAX_EXPRESSION_LENGTH} characters"
+        )
+    try:
+        tree = ast.parse(text, mode="eval")
+    except (SyntaxError, RecursionError, MemoryError, ValueError) as exc:
+        raise ModelDescriptionError(f"{path}: invalid constraint {text!r}") from exc
+    body = tree.body
+    if not isinstance(body, ast.Compare) or not all(
+        isinstance(op, _COMPARE_OPS) for op in body.ops
+    ):
+        raise ModelDescriptionError(
+            f"{path}: a constraint compares expressions with <, <=, > or >= (e.g. 'R <= l')"
+        )
+    for operand in (body.left, *body.comparators):
+        _check_ast(operand, names, path, 1)
+    return text
+
+
+def constraint_holds(text: str, values: Mapping[str, Any]) -> bool:
+    """True where the (validated) constraint ``text`` holds for all entries of ``values``."""
+    body = ast.parse(text, mode="eval").body
+    assert isinstance(body, ast.Compare)
+    sides = [
+        np.asarray(evaluate_expression(ast.unparse(node), values), dtype=float)
+        for node in (body.left, *body.comparators)
+    ]
+    ok = np.asarray(True)
+    for op, a, b in zip(body.ops, sides[:-1], sides[1:], strict=True):
+        if isinstance(op, ast.Lt):
+            ok = ok & (a < b)
+        elif isinstance(op, ast.LtE):
+            ok = ok & (a <= b)
+        elif isinstance(op, ast.Gt):
+            ok = ok & (a > b)
+        else:
+            ok = ok & (a >= b)
+    return bool(np.all(ok))
 
 
 def evaluate_expression(
@@ -323,6 +463,10 @@ class WalkerDescription:
         ``(stance, swing)``.
     point_masses : tuple of PointMassSpec
         Extra point masses.
+    constraints : tuple of str
+        Conditions on the parameter values that the model needs to make physical sense, e.g.
+        ``"R <= l"`` (comparisons ``< <= > >=`` of expressions, chains allowed); checked by
+        :meth:`check_values` whenever values are set.
     source : str
         Where the description came from (file path or ``"<dict>"``); not part of the model.
     """
@@ -332,6 +476,7 @@ class WalkerDescription:
     links: tuple[LinkSpec, ...]
     feet: tuple[FootSpec, FootSpec]
     point_masses: tuple[PointMassSpec, ...] = ()
+    constraints: tuple[str, ...] = ()
     source: str = field(default="<dict>", compare=False)
 
     @property
@@ -362,10 +507,27 @@ class WalkerDescription:
         joints = tuple(lk.joint.name for lk in self.links[1:] if lk.joint is not None)
         return ("x", "y", self.root.name, *joints)
 
+    @property
+    def point_names(self) -> tuple[str, ...]:
+        """Names of the points the generated ``points`` function returns, in its order.
+
+        Each link's ``.proximal``, ``.distal``, ``.com`` (tree order), the point masses, then
+        ``stance_foot.centre``, ``stance_foot.contact``, ``swing_foot.centre``,
+        ``swing_foot.contact``.
+        """
+        names: list[str] = []
+        for lk in self.links:
+            names += [f"{lk.name}.proximal", f"{lk.name}.distal", f"{lk.name}.com"]
+        names += [pm.name for pm in self.point_masses]
+        for ft in self.feet:
+            names += [f"{ft.name}_foot.centre", f"{ft.name}_foot.contact"]
+        return tuple(names)
+
     def structure_key(self) -> str:
         """Canonical JSON of everything the derivation depends on (not parameter values)."""
         d = asdict(self)
         d.pop("source")
+        d.pop("constraints")
         d["params"] = [k for k, _ in self.params]
         return json.dumps(d, sort_keys=True, default=str)
 
@@ -416,6 +578,20 @@ class WalkerDescription:
                 raise ModelDescriptionError(f"{p}.mass: must be > 0")
             ev(pm.at, f"{p}.at")
             ev(pm.offset, f"{p}.offset")
+        for i, text in enumerate(self.constraints):
+            if not constraint_holds(text, values):
+                tree = ast.parse(text, mode="eval")
+                names = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
+                used = sorted(names & set(values))
+                shown = ", ".join(f"{k}={_show(values[k])}" for k in used)
+                raise ModelDescriptionError(
+                    f"constraints[{i}]: {text!r} is violated ({shown})"
+                )
+
+
+def _show(v: Any) -> str:
+    a = np.asarray(v, dtype=float)
+    return f"{float(a):g}" if a.ndim == 0 else f"array of shape {a.shape}"
 
 
 # -- parsing ------------------------------------------------------------------------------------
@@ -440,7 +616,16 @@ _FOOT_KEYS = {"name", "link", "radius", "centre", "centre_offset"}
 _FOOT_REQUIRED = ("link", "radius")
 _PM_KEYS = {"name", "link", "at", "offset", "mass"}
 _PM_REQUIRED = ("link", "at", "mass")
-_TOP_KEYS = {"name", "params", "link", "foot", "point_mass", "description", "reference"}
+_TOP_KEYS = {
+    "name",
+    "params",
+    "link",
+    "foot",
+    "point_mass",
+    "constraints",
+    "description",
+    "reference",
+}
 _NUMERIC = {
     "length",
     "mass",
@@ -524,13 +709,12 @@ def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> Wal
         if k not in _TOP_KEYS:
             raise ModelDescriptionError(f"{k}: unknown key (allowed: {sorted(_TOP_KEYS)})")
     name = top.get("name", Path(source).stem if source != "<dict>" else "walker")
-    if not isinstance(name, str):
-        raise ModelDescriptionError("name: must be a string")
+    if not isinstance(name, str) or not name.isprintable() or not 0 < len(name) <= 100:
+        raise ModelDescriptionError("name: must be a printable string of 1 to 100 characters")
     raw_params = _table(top.get("params", {}), "params")
     params: dict[str, float] = {}
     for k, v in raw_params.items():
-        if not k.isidentifier() or k in ("pi", "use_cache", *_FUNCS):
-            raise ModelDescriptionError(f"params.{k}: invalid parameter name")
+        check_parameter_name(k, f"params.{k}")
         if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
             raise ModelDescriptionError(f"params.{k}: must be a finite number")
         params[k] = float(v)
@@ -539,6 +723,10 @@ def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> Wal
     raw_links = top.get("link")
     if not isinstance(raw_links, list) or not raw_links:
         raise ModelDescriptionError("link: at least one [[link]] table is required")
+    if len(raw_links) > MAX_LINKS:
+        raise ModelDescriptionError(
+            f"link: at most {MAX_LINKS} links are supported, found {len(raw_links)}"
+        )
     links: list[LinkSpec] = []
     for i, raw in enumerate(raw_links):
         p = f"link[{i}]"
@@ -695,14 +883,30 @@ def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> Wal
             )
         )
 
+    raw_constraints = top.get("constraints", [])
+    if not isinstance(raw_constraints, list):
+        raise ModelDescriptionError("constraints: must be an array of strings such as 'R <= l'")
+    constraints = tuple(
+        _parse_constraint(c, params, f"constraints[{i}]") for i, c in enumerate(raw_constraints)
+    )
+
     desc = WalkerDescription(
         name=name,
         params=tuple(sorted(params.items())),
         links=tuple(links[i] for i in order),
         feet=(feet_by_role["stance"], feet_by_role["swing"]),
         point_masses=tuple(pms),
+        constraints=constraints,
         source=source,
     )
+    seen_points: set[str] = set()
+    for point_name in desc.point_names:
+        if point_name in seen_points:
+            raise ModelDescriptionError(
+                f"point_mass: name {point_name!r} is used twice (point masses must not share "
+                "a name with each other or with a link's '.proximal', '.distal', '.com')"
+            )
+        seen_points.add(point_name)
     try:
         desc.check_values(desc.default_params)
     except ModelDescriptionError as exc:
@@ -724,8 +928,18 @@ def read_description(path: str | Path) -> WalkerDescription:
         On TOML syntax errors or a malformed description (message names the field).
     """
     p = Path(path)
+    with open(p, "rb") as fh:
+        if not stat.S_ISREG(os.fstat(fh.fileno()).st_mode):
+            raise ModelDescriptionError(f"{p}: not a regular file")
+        raw = fh.read(MAX_DESCRIPTION_BYTES + 1)
+    if len(raw) > MAX_DESCRIPTION_BYTES:
+        raise ModelDescriptionError(
+            f"{p.name}: larger than {MAX_DESCRIPTION_BYTES} bytes: not a walker description"
+        )
     try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except tomllib.TOMLDecodeError as exc:
+        data = tomllib.loads(raw.decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        raise ModelDescriptionError(f"{p.name}: not UTF-8 text") from exc
+    except (tomllib.TOMLDecodeError, RecursionError) as exc:
         raise ModelDescriptionError(f"{p.name}: invalid TOML: {exc}") from exc
     return parse_description(data, source=str(p))

@@ -25,17 +25,14 @@ the rows). Times are medians of repeated runs in one process; see ``benchmarks/R
 
 from __future__ import annotations
 
-import argparse
-import json
-import platform
 import statistics
 import sys
 import time
 from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
 import numpy as np
+from _common import machine, run_main
 
 from heelstrike.core.fast import impact_2x4
 from heelstrike.core.impact import impact
@@ -226,24 +223,6 @@ def run(quick: bool = False) -> dict[str, Any]:
     }
 
 
-def machine() -> str:
-    cpu = platform.processor() or platform.machine()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    import os
-
-    import numba
-
-    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    return (f"{cpu}, {os.cpu_count()} logical cores, 1-min load average at start {load:.1f}; "
-            f"Python {platform.python_version()}, numpy {np.__version__}, "
-            f"numba {numba.__version__}")
-
 
 def format_table(result: dict[str, Any]) -> str:
     lines = [
@@ -262,15 +241,7 @@ def format_table(result: dict[str, Any]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="small sizes (smoke test)")
-    parser.add_argument("--json", type=Path, help="write the result rows to this file")
-    args = parser.parse_args(argv)
-    result = run(quick=args.quick)
-    print(format_table(result))
-    if args.json:
-        args.json.write_text(json.dumps(result, indent=2))
-    return 0
+    return run_main(__doc__, run, format_table, argv, quick_help="small sizes (smoke test)")
 
 
 if __name__ == "__main__":

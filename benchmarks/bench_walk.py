@@ -30,11 +30,7 @@ Run ``python benchmarks/bench_walk.py`` (``--quick`` for a smoke run, ``--json P
 
 from __future__ import annotations
 
-import argparse
-import json
 import math
-import os
-import platform
 import statistics
 import subprocess
 import sys
@@ -45,6 +41,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from _common import machine, run_main
 from scipy.integrate import solve_ivp
 
 from heelstrike.analysis.basin import basin_of_attraction
@@ -233,22 +230,6 @@ def drake_pre_impact(sim: Any, z: np.ndarray, steps: int) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------------------------------
-def machine() -> str:
-    import numba
-
-    cpu = platform.processor() or platform.machine()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    return (f"{cpu}, {os.cpu_count()} logical cores, 1-min load average at start {load:.1f}; "
-            f"Python {platform.python_version()}, numpy {np.__version__}, "
-            f"numba {numba.__version__}")
-
 
 def run(quick: bool = False) -> dict[str, Any]:
     rows: list[dict[str, Any]] = []
@@ -425,15 +406,7 @@ def format_table(result: dict[str, Any]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="small sizes (smoke test)")
-    parser.add_argument("--json", type=Path, help="write the result rows to this file")
-    args = parser.parse_args(argv)
-    result = run(quick=args.quick)
-    print(format_table(result))
-    if args.json:
-        args.json.write_text(json.dumps(result, indent=2))
-    return 0
+    return run_main(__doc__, run, format_table, argv, quick_help="small sizes (smoke test)")
 
 
 if __name__ == "__main__":

@@ -27,6 +27,7 @@ def basin():
     )
 
 
+@pytest.mark.slow
 def test_basin_dataset_and_classification(basin, tmp_path):
     ds = basin.dataset
     assert ds["outcome"].shape == (31, 29)
@@ -44,6 +45,7 @@ def test_basin_dataset_and_classification(basin, tmp_path):
     np.testing.assert_array_equal(back["outcome"].values, ds["outcome"].values)
 
 
+@pytest.mark.slow
 def test_basin_outcomes_agree_with_reference_simulation(basin):
     """A sample of grid points: the scipy reference reaches the same fate."""
     ds = basin.dataset
@@ -70,6 +72,7 @@ def test_basin_outcomes_agree_with_reference_simulation(basin):
             assert res.n_steps == steps
 
 
+@pytest.mark.slow
 def test_gait_map_period_doubling_of_point_feet_near_4_4_deg():
     slopes = np.deg2rad([3.0, 4.0, 5.0])
     gm = gait_map(CompassGait(), [0.0, 0.3], slopes)

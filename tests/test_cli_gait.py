@@ -17,6 +17,7 @@ GAIT_KEYS = {
 }
 
 
+@pytest.mark.slow
 def test_gait_json_contract_matches_library(capsys):
     assert main(["gait", "--radius", "0.3", "--slope", "3deg", "--json"]) == 0
     out = capsys.readouterr().out.strip().splitlines()
@@ -34,6 +35,7 @@ def test_gait_json_contract_matches_library(capsys):
     assert d["speed"] == pytest.approx(d["step_length"] / d["period"])
 
 
+@pytest.mark.slow
 def test_gait_without_solution_fails_cleanly(capsys):
     assert main(["gait", "--slope", "30deg", "--json"]) != 0
     captured = capsys.readouterr()

@@ -53,7 +53,7 @@ def _assert_close(
     for name in ("kinetic_energy", "kinetic_energy_constrained", "kinetic_energy_admissible",
                  "energy_lost"):
         got, want = getattr(fast, name), getattr(ref, name)
-        assert got.shape == want.shape
+        assert np.shape(got) == np.shape(want)  # one impact: the reference gives floats
         assert np.all(np.abs(got - want) <= tol * T + 1e-300), name
     assert fast.velocity_post.shape == ref.velocity_post.shape
     err_v = np.max(np.abs(fast.velocity_post - ref.velocity_post), axis=-1)
@@ -75,6 +75,7 @@ walkers = st.fixed_dictionaries(
 )
 
 
+@pytest.mark.slow
 @settings(max_examples=200, deadline=None)
 @given(
     p=walkers,
@@ -113,6 +114,7 @@ def test_heel_strike_fast_equals_reference(
         _assert_close(fast, ref, np.asarray(scale), mass, factor)
 
 
+@pytest.mark.slow
 @settings(max_examples=30, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), e=st.floats(0.0, 1.0))
 def test_heel_strike_fast_batched_random(seed: int, e: float) -> None:
@@ -138,6 +140,7 @@ def test_heel_strike_fast_batched_random(seed: int, e: float) -> None:
     _assert_close(fast, ref, scale, np.asarray(walker.total_mass) * np.maximum(l, 1.0), factor)
 
 
+@pytest.mark.slow
 @settings(max_examples=100, deadline=None)
 @given(
     q3=st.floats(-1.0, 1.0),
@@ -224,6 +227,7 @@ def _problems(draw: st.DrawFn) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return M, A, qd
 
 
+@pytest.mark.slow
 @settings(max_examples=100, deadline=None)
 @given(prob=_problems(), e=st.one_of(st.just(0.0), st.floats(0.0, 1.0)))
 def test_impact_2x4_equals_reference(

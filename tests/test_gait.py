@@ -266,7 +266,11 @@ def test_ground_reaction_along_walk_matches_centre_of_mass_acceleration():
 # --------------------------------------------------------------------------------------------
 # Passive limit cycles and their energy books
 # --------------------------------------------------------------------------------------------
-@pytest.mark.parametrize(("radius", "slope_deg"), [(0.0, 3.0), (0.3, 3.0), (0.5, 1.5)])
+@pytest.mark.parametrize(
+    ("radius", "slope_deg"),
+    [(0.0, 3.0), pytest.param(0.3, 3.0, marks=pytest.mark.slow),
+     pytest.param(0.5, 1.5, marks=pytest.mark.slow)],
+)
 def test_passive_limit_cycle_energy_books_balance(radius, slope_deg):
     walker = CompassGait(foot_radius=radius)
     slope = np.deg2rad(slope_deg)

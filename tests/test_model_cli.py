@@ -17,6 +17,7 @@ def _run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]
     return rc, out, err
 
 
+@pytest.mark.slow
 def test_gait_model_kneed_json_keys(capsys: pytest.CaptureFixture[str]) -> None:
     rc, out, _ = _run(capsys, "gait", "--model", "kneed", "--slope", "0.0504rad",
                       "--guess=-0.265,1.218,-1.096", "--json")

@@ -343,6 +343,7 @@ def _rename_parameters(data: dict[str, Any], renames: dict[str, str]) -> dict[st
     skip = {"name", "parent", "mirror", "link", "direction"}
     out = dict(data)
     out["params"] = {renames.get(k, k): v for k, v in data["params"].items()}
+    out["constraints"] = [fix(c) for c in data.get("constraints", [])]
     for section in ("link", "foot", "point_mass"):
         out[section] = [
             {k: (v if k in skip else fix(v)) for k, v in t.items()} for t in data[section]

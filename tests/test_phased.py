@@ -98,6 +98,7 @@ def test_energy_conserved_in_every_phase_compass_and_torso(torso: PhasedWalker) 
         assert np.ptp(walk.mechanical_energy[a : b + 1]) > 1e-4
 
 
+@pytest.mark.slow  # kneed gait: sympy + numba build on a cold cache (~90 s)
 def test_knee_strike_is_an_inert_lock(kneed: PhasedWalker, kneed_gait: ModelGait) -> None:
     knee = [e for e in kneed_gait.impacts if e.kind == "knee_strike"]
     assert len(knee) == 1
@@ -116,6 +117,7 @@ def test_knee_strike_is_an_inert_lock(kneed: PhasedWalker, kneed_gait: ModelGait
     np.testing.assert_allclose(ev.q_dot_plus, ref.velocity_post, atol=1e-12)
 
 
+@pytest.mark.slow  # kneed gait: sympy + numba build on a cold cache (~90 s)
 def test_complementarity_agrees_with_single_contact(kneed_gait: ModelGait,
                                                     kneed: PhasedWalker) -> None:
     hs = next(e for e in kneed_gait.impacts if e.kind == "heel_strike")
@@ -137,6 +139,7 @@ def test_complementarity_agrees_with_single_contact(kneed_gait: ModelGait,
     assert (w.contact_jacobian(q, "right") @ single.velocity_post)[1] < 0
 
 
+@pytest.mark.slow
 def test_builder_compass_gait_equals_compass_gait() -> None:
     ref = find_limit_cycle(CompassGait(), slope=COMPASS_SLOPE,
                            guess=[-0.27, 1.09, -0.70])
@@ -149,6 +152,7 @@ def test_builder_compass_gait_equals_compass_gait() -> None:
     assert abs(g.energy_residual) < 1e-8
 
 
+@pytest.mark.slow  # kneed gait: sympy + numba build on a cold cache (~90 s)
 def test_kneed_passive_gait_energy_book(kneed_gait: ModelGait) -> None:
     g = kneed_gait
     assert g.cycle.residual < 1e-10
@@ -163,6 +167,7 @@ def test_kneed_passive_gait_energy_book(kneed_gait: ModelGait) -> None:
     assert g.cycle.step_length > 0.3
 
 
+@pytest.mark.slow
 def test_torso_powered_level_gait_energy_book(torso_gait: ModelGait) -> None:
     g = torso_gait
     assert g.cycle.slope == 0.0

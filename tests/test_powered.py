@@ -132,7 +132,7 @@ def pd_gait():
     return find_powered_gait(CompassGait(foot_radius=0.3), actuation="hip-pd", step_length=0.4)
 
 
-@pytest.mark.parametrize("name", ["pushoff_gait", "pd_gait"])
+@pytest.mark.parametrize("name", ["pushoff_gait", pytest.param("pd_gait", marks=pytest.mark.slow)])
 def test_periodic_gait_energy_books(name, request):
     g = request.getfixturevalue(name)
     # eq. (14)-(15): W_act = -W_col = T_c on a periodic level gait
@@ -148,6 +148,7 @@ def test_periodic_gait_energy_books(name, request):
     assert g.stable == bool(mods[0] < 1)
 
 
+@pytest.mark.slow
 def test_gaits_meet_their_targets_and_are_fixed_points(pushoff_gait, pd_gait):
     assert pushoff_gait.speed == pytest.approx(0.5, abs=1e-8)
     assert pd_gait.step_length == pytest.approx(0.4, abs=1e-8)
@@ -181,6 +182,7 @@ def test_multi_step_books_from_perturbed_state_with_hip_law(pushoff_gait):
     assert np.all(np.diff(res.impact_array("step_length")) != 0)
 
 
+@pytest.mark.slow
 def test_near_wheel_loses_almost_nothing(pushoff_gait):
     g = find_powered_gait(CompassGait(foot_radius=0.98), actuation="pushoff", step_length=0.4)
     assert g.collision_loss < 1e-3 * find_powered_gait(
@@ -200,11 +202,13 @@ def test_wheel_grazing_is_handled_and_flagged():
     assert g.actuator_work == pytest.approx(g.collision_loss, rel=1e-5)
 
 
+@pytest.mark.slow
 def test_unreachable_target_raises():
     with pytest.raises(PoweredGaitNotFoundError):
         find_powered_gait(CompassGait(foot_radius=0.3), speed=4.0, max_evaluations=80)
 
 
+@pytest.mark.slow
 def test_powered_json_contract(capsys, pushoff_gait):
     assert main(["powered", "--radius", "0.3", "--speed", "0.5", "--actuation", "pushoff",
                  "--json"]) == 0

@@ -4,8 +4,14 @@ Conventions shared by every command:
 
 - angles accept a ``deg`` or ``rad`` suffix (``20deg``, ``0.3rad``); bare numbers are radians;
 - lengths are metres, masses kilograms, times seconds;
-- ``--json`` prints exactly one JSON object on stdout;
-- bad input exits with status 2 and a one-line ``heelstrike: error: ...`` message on stderr.
+- ``--json`` prints exactly one JSON object on stdout, or nothing: a non-finite result is an
+  error;
+- with ``--model``, a compass-gait option sets the model's parameter of the same name (``--radius``
+  sets ``R``) or is refused; no option is silently ignored;
+- outputs, frame rates and memory are checked before computing;
+- every failure (bad input, unwritable output, out of memory, an unexpected error) exits with
+  status 2 and a one-line ``heelstrike: error: ...`` message on stderr; ``HEELSTRIKE_DEBUG=1``
+  adds the traceback.
 """
 
 from __future__ import annotations
@@ -13,9 +19,13 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 from collections.abc import Callable, Sequence
 from typing import Any, NoReturn
+
+from heelstrike import cli_robot
+from heelstrike._optional import MissingExtraError
 
 __all__ = ["main", "parse_angle", "parse_range"]
 
@@ -77,25 +87,56 @@ def _positive_int(text: str) -> int:
     return v
 
 
+class _Explicit(argparse.Action):
+    """Store the value and record the option's ``dest`` in ``namespace.explicit``: options given
+    on the command line are told from defaults, so that none is silently ignored."""
+
+    def __call__(
+        self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+        values: Any, option_string: str | None = None,
+    ) -> None:
+        setattr(namespace, self.dest, values)
+        namespace.explicit = {*vars(namespace).get("explicit", ()), self.dest}
+
+
+def _explicit(args: argparse.Namespace) -> set[str]:
+    """``dest`` names of the :class:`_Explicit` options given on the command line."""
+    return set(vars(args).get("explicit", ()))
+
+
+#: Compass-gait options (``dest``) and the description parameter each one sets with ``--model``
+#: (the names of the shipped compass and torso walkers).
+_COMPASS_PARAMS = {"radius": "R", "hip_mass": "mH", "leg_mass": "m", "leg_length": "l",
+                   "com_from_hip": "b", "leg_inertia": "I", "gravity": "g"}
+
+
 def _add_walker_options(p: argparse.ArgumentParser) -> None:
     """Options for every parameter of the paper's compass gait (SI units)."""
-    g = p.add_argument_group("walker parameters (paper defaults)")
-    g.add_argument("--radius", type=float, default=0.0, help="foot radius R (m), 0 <= R <= l")
-    g.add_argument("--hip-mass", type=float, default=10.0, help="hip mass mH (kg)")
-    g.add_argument("--leg-mass", type=float, default=5.0, help="mass of each leg m (kg)")
-    g.add_argument("--leg-length", type=float, default=1.0, help="leg length l (m)")
-    g.add_argument(
-        "--com-from-hip", type=float, default=0.5, help="hip to leg centre of mass b (m)"
+    g = p.add_argument_group(
+        "walker parameters (paper defaults; with --model they set the model's R, mH, m, l, b, "
+        "I, g)"
     )
-    g.add_argument(
-        "--leg-inertia", type=float, default=0.0, help="leg inertia about its COM (kg m^2)"
-    )
-    g.add_argument("--gravity", type=float, default=9.81, help="gravity g (m/s^2)")
+    g.add_argument("--radius", type=float, default=0.0, action=_Explicit,
+                   help="foot radius R (m), 0 <= R <= l")
+    g.add_argument("--hip-mass", type=float, default=10.0, action=_Explicit,
+                   help="hip mass mH (kg)")
+    g.add_argument("--leg-mass", type=float, default=5.0, action=_Explicit,
+                   help="mass of each leg m (kg)")
+    g.add_argument("--leg-length", type=float, default=1.0, action=_Explicit,
+                   help="leg length l (m)")
+    g.add_argument("--com-from-hip", type=float, default=0.5, action=_Explicit,
+                   help="hip to leg centre of mass b (m)")
+    g.add_argument("--leg-inertia", type=float, default=0.0, action=_Explicit,
+                   help="leg inertia about its COM (kg m^2)")
+    g.add_argument("--gravity", type=float, default=9.81, action=_Explicit,
+                   help="gravity g (m/s^2)")
 
 
 def _walker_from_args(args: argparse.Namespace) -> Any:
     from heelstrike.models.compass import CompassGait
 
+    if vars(args).get("param"):
+        raise CliError("--param needs --model (the compass gait takes --radius, --hip-mass, ...)")
     return CompassGait(
         hip_mass=args.hip_mass,
         leg_mass=args.leg_mass,
@@ -129,10 +170,26 @@ def _model_from_args(args: argparse.Namespace) -> Any:
             params[name.strip()] = float(value)
         except ValueError:
             raise CliError(f"invalid --param {item!r}: use NAME=VALUE, e.g. R=0.2") from None
+    model = str(args.model)
+    if os.path.exists(model) and not os.path.isfile(model):
+        raise CliError(f"--model {model!r} is not a regular file")
     try:
-        return load_phased_walker(args.model, **params)
+        walker = load_phased_walker(model)
     except OSError as exc:
-        raise CliError(f"cannot read model {args.model!r}: {exc.strerror or exc}") from exc
+        raise CliError(f"cannot read model {model!r}: {exc.strerror or exc}") from exc
+    known = walker.params
+    for dest in sorted(_explicit(args) & set(_COMPASS_PARAMS)):
+        name, option = _COMPASS_PARAMS[dest], "--" + dest.replace("_", "-")
+        if name not in known:
+            raise CliError(
+                f"{option} sets the compass parameter {name!r}, which model "
+                f"{walker.description.name!r} does not have (its parameters: "
+                f"{', '.join(sorted(known))}); use --param NAME=VALUE"
+            )
+        if name in params:
+            raise CliError(f"{option} and --param {name}=... both set {name!r}: give it once")
+        params[name] = float(getattr(args, dest))
+    return walker.replace(**params) if params else walker
 
 
 def _parse_floats(text: str, option: str, n: int | None = None) -> list[float]:
@@ -140,14 +197,62 @@ def _parse_floats(text: str, option: str, n: int | None = None) -> list[float]:
         vals = [float(v) for v in text.split(",")]
     except ValueError:
         raise CliError(f"invalid {option} {text!r}: use comma-separated numbers") from None
+    if not all(math.isfinite(v) for v in vals):
+        raise CliError(f"invalid {option} {text!r}: the numbers must be finite")
     if n is not None and len(vals) != n:
         raise CliError(f"invalid {option} {text!r}: expected {n} comma-separated numbers")
     return vals
 
 
+def _nonfinite(obj: Any, path: str = "") -> list[str]:
+    """Paths of the non-finite numbers in a JSON-ready object (``T_c``, ``qdot_plus[1]``)."""
+    if isinstance(obj, float):
+        return [] if math.isfinite(obj) else [path or "value"]
+    if isinstance(obj, dict):
+        return [p for k, v in obj.items() for p in _nonfinite(v, f"{path}.{k}" if path else k)]
+    if isinstance(obj, list | tuple):
+        return [p for i, v in enumerate(obj) for p in _nonfinite(v, f"{path}[{i}]")]
+    return []
+
+
+def _require_finite(obj: Any) -> None:
+    """Refuse a result holding inf or NaN (overflow or a degenerate input)."""
+    bad = _nonfinite(obj)
+    if bad:
+        shown = ", ".join(bad[:4]) + (f" and {len(bad) - 4} more" if len(bad) > 4 else "")
+        raise CliError(f"the result is not finite ({shown}): the input overflows or is "
+                       "degenerate; use smaller velocities or other parameters")
+
+
 def _print_json(obj: Any) -> None:
-    json.dump(obj, sys.stdout, allow_nan=False)
-    sys.stdout.write("\n")
+    """Print one whole JSON object on stdout, or nothing (the text is built before writing).
+
+    A ``units`` map for the object's keys is added (:func:`heelstrike._units.json_units`).
+    """
+    from heelstrike._units import json_units
+
+    _require_finite(obj)
+    if isinstance(obj, dict) and "units" not in obj:
+        obj = {**obj, "units": json_units(obj)}
+    text = json.dumps(obj, allow_nan=False) + "\n"
+    sys.stdout.write(text)
+    sys.stdout.flush()
+
+
+def _writable_dir(path: str | os.PathLike[str], option: str = "--out") -> Any:
+    """Create the directory ``path`` if needed and check that a file can be written in it,
+    before any computing; returns it as a :class:`~pathlib.Path`."""
+    import tempfile
+    from pathlib import Path
+
+    out = Path(path)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=out):
+            pass
+    except OSError as exc:
+        raise CliError(f"cannot write to {option} {str(path)!r}: {exc.strerror or exc}") from None
+    return out
 
 
 # ---------------------------------------------------------------------------------------------
@@ -204,27 +309,54 @@ def _add_impact(sub: Any) -> None:
     p.add_argument("--angle", type=parse_angle, default=None,
                    help="impact angle q3, 0 < q3 < 90deg, e.g. 20deg (required unless --state)")
     p.add_argument("--state", default=None, metavar="Q1,...,QN",
-                   help="with --model: full pre-impact configuration (m, rad) instead of --angle")
+                   help="with --model: full pre-impact configuration (m, rad) instead of --angle; "
+                   "with --robot/--urdf/--mjcf: a STATE.json file {\"q\": [...], \"v\": [...]}")
     p.add_argument("--velocity", default=None, metavar="QD1,...,QDN",
                    help="with --model and --state: pre-impact velocities (m/s, rad/s); default: "
                    "stance rate --q3dot, foot rolling, joints at rest")
-    p.add_argument("--q3dot", type=float, default=1.0,
+    p.add_argument("--q3dot", type=float, default=1.0, action=_Explicit,
                    help="pre-impact stance-leg rate q3_dot (rad/s, default 1)")
-    p.add_argument("--q4dot", type=float, default=0.0,
-                   help="pre-impact inter-leg rate q4_dot (rad/s, default 0)")
-    p.add_argument("--restitution", type=float, default=0.0,
-                   help="restitution e of the constrained velocity, 0 <= e <= 1 (default 0)")
+    p.add_argument("--q4dot", type=float, default=0.0, action=_Explicit,
+                   help="pre-impact inter-leg rate q4_dot (rad/s, default 0; with --model the "
+                   "rate of its 'hip' joint)")
+    p.add_argument("--restitution", type=float, default=0.0, action=_Explicit,
+                   help="restitution e of the constrained velocity, 0 <= e <= 1 (default 0; "
+                   "compass gait, and robots' striking contacts (normal rows))")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    cli_robot.add_robot_impact_options(p)  # issue 10: --robot/--urdf/--mjcf, --strike, --keep
     p.set_defaults(func=_run_impact)
 
 
+def _check_rates(args: argparse.Namespace) -> None:
+    for option, value in (("--q3dot", args.q3dot), ("--q4dot", args.q4dot)):
+        if not math.isfinite(value):
+            raise CliError(f"{option} must be finite, got {value:g}")
+
+
 def _run_impact_model(args: argparse.Namespace) -> int:
+    from heelstrike.analysis.heel_strike import check_heel_strike_state
     from heelstrike.analysis.model_gaits import model_heel_strike, symmetric_heel_strike_state
 
+    given = _explicit(args)
+    if args.state is not None and args.angle is not None:
+        raise CliError("give --angle (symmetric heel strike) or --state, not both")
+    if args.velocity is not None and given & {"q3dot", "q4dot"}:
+        raise CliError("--velocity sets every pre-impact rate: drop --q3dot/--q4dot")
+    if "restitution" in given and args.restitution != 0.0:
+        raise CliError("--restitution applies to the compass gait only (without --model); "
+                       "a described walker's heel strike is inert (e = 0)")
+    _check_rates(args)
     walker = _model_from_args(args)
     n = walker.n_coordinates
+    if "q4dot" in given and "hip" not in walker.coordinate_names:
+        raise CliError(f"--q4dot is the rate of the 'hip' joint, which model "
+                       f"{walker.description.name!r} does not have; use --velocity")
     if args.state is not None:
         q = _parse_floats(args.state, "--state", n)
+        try:
+            check_heel_strike_state(walker, q)
+        except ValueError as exc:
+            raise CliError(f"--state: {exc}") from None
         if args.velocity is not None:
             qd = _parse_floats(args.velocity, "--velocity", n)
         else:
@@ -241,10 +373,13 @@ def _run_impact_model(args: argparse.Namespace) -> int:
         q, qd = list(q_), list(qd_)
         if args.velocity is not None:
             qd = _parse_floats(args.velocity, "--velocity", n)
+    if args.velocity is None and "q4dot" in given:
+        qd[walker.coordinate_names.index("hip")] = args.q4dot
     s = model_heel_strike(walker, q, qd)
     d = s.to_dict()
     d["model"] = walker.description.name
     d["coordinates"] = list(walker.coordinate_names)
+    _require_finite(d)
     if args.json:
         _print_json(d)
         return 0
@@ -259,8 +394,28 @@ def _run_impact_model(args: argparse.Namespace) -> int:
 def _run_impact(args: argparse.Namespace) -> int:
     from heelstrike.analysis.heel_strike import heel_strike_study
 
+    given = _explicit(args)
+    if cli_robot.robot_requested(args):
+        ignored = [f"--{d.replace('_', '-')}" for d in sorted(given & {*_COMPASS_PARAMS,
+                                                                      "q3dot", "q4dot"})]
+        ignored += [o for o, v in (("--model", args.model), ("--param", args.param),
+                                   ("--angle", args.angle), ("--velocity", args.velocity)) if v]
+        if ignored:
+            raise CliError(f"a robot (--robot/--urdf/--mjcf) does not take {', '.join(ignored)}; "
+                           "it takes --state STATE.json, --strike, --keep, --friction and "
+                           "--restitution")
+        return cli_robot.run_robot_impact(args)
+    unused = [o for o, v in (("--strike", args.strike), ("--keep", args.keep)) if v]
+    unused += ["--friction"] if math.isfinite(args.friction) else []
+    if unused:
+        raise CliError(f"{', '.join(unused)}: only for a robot (--robot/--urdf/--mjcf)")
     if args.model is not None:
         return _run_impact_model(args)
+    for option, value in (("--state", args.state), ("--velocity", args.velocity)):
+        if value is not None:
+            raise CliError(f"{option} needs --model (e.g. --model compass) or a robot; the "
+                           "compass gait takes --angle, --q3dot and --q4dot")
+    _check_rates(args)
     if args.angle is None:
         raise CliError("--angle is required (e.g. --angle 20deg)")
     if not 0.0 < args.angle < math.pi / 2:
@@ -288,6 +443,7 @@ def _run_impact(args: argparse.Namespace) -> int:
         "restitution": float(s.restitution),
         "degenerate_wheel": bool(s.degenerate_wheel),
     }
+    _require_finite(d)
     if args.json:
         _print_json(d)
         return 0
@@ -347,6 +503,9 @@ def _add_gait(sub: Any) -> None:
                    help="post-impact Q3,Q3DOT,Q4DOT to start Newton from (rad, rad/s); "
                    "write --guess=-0.27,1.09,-0.72 when Q3 is negative (with --model: the "
                    "walker's section coordinates)")
+    p.add_argument("--backend", choices=("compiled", "scipy"), default="compiled",
+                   help="step simulator: compiled numba kernels (default; generated from "
+                   "the walker file with --model) or the scipy reference")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=_run_gait)
 
@@ -360,7 +519,7 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     if args.guess is not None:
         guess = _parse_floats(args.guess, "--guess", len(walker.section_names))
     try:
-        gait = find_model_gait(walker, slope=args.slope, guess=guess)
+        gait = find_model_gait(walker, slope=args.slope, guess=guess, backend=args.backend)
     except GaitNotFoundError as exc:
         raise CliError(f"no gait found at slope {math.degrees(args.slope):g} deg: {exc}") from exc
     d = gait.to_dict()
@@ -385,23 +544,63 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     return 0
 
 
-def _run_gait(args: argparse.Namespace) -> int:
-    from heelstrike.analysis.limit_cycle import GaitNotFoundError, find_limit_cycle
+def _gait_summary(c: Any) -> dict[str, Any]:
+    """One entry of ``gaits`` in ``gait --json``."""
+    return {
+        "q": [float(v) for v in c.q],
+        "q_dot": [float(v) for v in c.q_dot],
+        "fixed_point": {k: float(v) for k, v in zip(c.section_names, c.fixed_point, strict=True)},
+        "period": float(c.period),
+        "step_length": float(c.step_length),
+        "speed": float(c.speed),
+        "impact_angle": float(c.impact_angle),
+        "multipliers": [float(abs(m)) for m in c.multipliers],
+        "stable": bool(c.stable),
+        "collision_loss": float(c.collision_loss),
+    }
 
+
+def _run_gait(args: argparse.Namespace) -> int:
+    from heelstrike.analysis.limit_cycle import (
+        GaitNotFoundError,
+        find_limit_cycle,
+        find_limit_cycles,
+    )
+
+    if not args.slope > 0:
+        raise CliError(
+            f"no gait found at slope {math.degrees(args.slope):g} deg: a passive walker needs "
+            "a downhill slope > 0 (the energy lost at heel strike must come from gravity); "
+            "e.g. --slope 3deg, or see 'heelstrike powered' for level ground"
+        )
     if args.model is not None:
         return _run_gait_model(args)
     walker = _walker_from_args(args)
+    guess = _parse_guess(args.guess)
     try:
-        cycle = find_limit_cycle(
-            walker, slope=args.slope, guess=_parse_guess(args.guess),
-            progress=not args.json and sys.stderr.isatty(),
-        )
+        if guess is None:
+            gaits = find_limit_cycles(
+                walker, slope=args.slope, method=args.backend, progress=True
+            )
+        else:
+            gaits = (find_limit_cycle(walker, slope=args.slope, guess=guess,
+                                      method=args.backend),)
     except GaitNotFoundError as exc:
         raise CliError(f"no gait found at slope {math.degrees(args.slope):g} deg: {exc}") from exc
+    cycle = gaits[0]
     d = cycle.to_dict()
+    d["gaits"] = [_gait_summary(c) for c in gaits]
     if args.json:
         _print_json(d)
         return 0
+    if len(gaits) > 1:
+        print(f"{len(gaits)} period-one gaits found (the first, "
+              f"{'the most attracting stable one' if cycle.stable else 'the least unstable'}, "
+              "is shown in detail):")
+        for i, c in enumerate(gaits):
+            print(f"  [{i}] step length {c.step_length:.5f} m, period {c.period:.5f} s, "
+                  f"|multipliers| {', '.join(f'{abs(m):.4f}' for m in c.multipliers)}, "
+                  f"{'stable' if c.stable else 'unstable'}")
     fp = ", ".join(f"{k} = {v:.6f}" for k, v in d["fixed_point"].items())
     mult = ", ".join(f"{abs(m):.4f}" for m in cycle.multipliers)
     print(f"passive gait, R = {args.radius:g} m, slope = {math.degrees(args.slope):g} deg")
@@ -425,27 +624,98 @@ def _add_walk(sub: Any) -> None:
         "walk",
         help="simulate steps and animate the walker",
         description="Simulate the passive walker from its limit cycle (or --guess) and write "
-        "an animation (.gif, or .mp4 where ffmpeg exists).",
+        "an animation (.gif, or .mp4 where ffmpeg exists). With --out DIR, also write figures "
+        "and their CSV data into DIR: a stick-figure strobe of one step, the phase portrait, "
+        "joint angles and ground reaction over a step, and the energy over the walk. With "
+        "--model: the animation, phase portrait, energy and impacts (the strobe and step "
+        "figures are drawn for the compass gait only).",
     )
     _add_walker_options(p)
+    _add_model_options(p)
+    p.add_argument("--backend", choices=("compiled", "scipy"), default=None,
+                   help="step simulator with --model: compiled (default; generated from the "
+                   "walker file) or the scipy reference; the compass gait without --model "
+                   "walks on the scipy reference")
     p.add_argument("--slope", type=parse_angle, default=parse_angle("3deg"),
                    help="slope angle (default 3deg)")
     p.add_argument("--steps", type=_positive_int, default=6, help="number of steps (default 6)")
     p.add_argument("--guess", default=None,
-                   help="start from this post-impact Q3,Q3DOT,Q4DOT instead of the limit cycle")
+                   help="start from this post-impact Q3,Q3DOT,Q4DOT instead of the limit cycle "
+                   "(with --model: the walker's section coordinates)")
     p.add_argument("--fps", type=float, default=30.0, help="frames per second (default 30)")
-    p.add_argument("--out", default="walk.gif", help="output file, .gif or .mp4")
+    p.add_argument("--out", default="walk.gif",
+                   help="output file (.gif or .mp4), or a directory for walk.gif plus the "
+                   "figures (PNG) and their data (CSV)")
     p.set_defaults(func=_run_walk)
 
 
+def _walk_model(args: argparse.Namespace, out: Any, to_dir: bool) -> int:
+    """``walk --model``: the walk from the gait (or --guess), animation and figures."""
+    from heelstrike.analysis.limit_cycle import GaitNotFoundError
+    from heelstrike.analysis.model_gaits import find_model_gait
+    from heelstrike.dynamics.phased import simulate_phased
+    from heelstrike.gait_plots import (
+        COMPASS_ONLY_WALK_FIGURES,
+        animate_model_walk,
+        write_model_walk_figures,
+    )
+
+    walker = _model_from_args(args)
+    backend = args.backend or "compiled"
+    if args.guess is not None:
+        z = _parse_floats(args.guess, "--guess", len(walker.section_names))
+    else:
+        try:
+            z = list(find_model_gait(walker, slope=args.slope, backend=backend)
+                     .cycle.fixed_point)
+        except GaitNotFoundError as exc:
+            raise CliError(f"no gait found to start from: {exc}") from exc
+    q, qd = walker.section_to_state(z)
+    if backend == "compiled":
+        from heelstrike.dynamics.compiled_phased import simulate_phased_compiled as simulate
+    else:
+        simulate = simulate_phased
+    walk = simulate(walker, q, qd, slope=args.slope, steps=args.steps, rtol=1e-9, atol=1e-9,
+                    max_step=0.5 / args.fps)
+    path = animate_model_walk(walker, walk, out / "walk.gif" if to_dir else out, fps=args.fps)
+    print(f"{walk.n_steps} steps, status: {walk.status.value} ({walk.message})")
+    print(path)
+    if to_dir:
+        for p in write_model_walk_figures(walker, walk, out):
+            print(p)
+        print(f"heelstrike: the {' and '.join(COMPASS_ONLY_WALK_FIGURES)} figures are drawn for "
+              "the compass gait only (without --model); not written", file=sys.stderr)
+    return 0 if walk.ok else 1
+
+
 def _run_walk(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
     from heelstrike.analysis.limit_cycle import GaitNotFoundError, PoincareMap, find_limit_cycle
-    from heelstrike.gait_plots import animate_walk
+    from heelstrike.gait_plots import animate_walk, write_walk_figures
 
+    if args.model is None and args.backend == "compiled":
+        raise CliError("the compass walk (without --model) runs on the scipy reference; for "
+                       "the compiled backend use --model compass")
+    walker = None if args.model is not None else _walker_from_args(args)
+    if not (math.isfinite(args.fps) and 0 < args.fps <= 240):
+        raise CliError(f"--fps must satisfy 0 < fps <= 240 (frames per second), got {args.fps:g}")
+    out = Path(args.out)
+    to_dir = out.is_dir() or out.suffix == ""  # a directory: walk.gif, figures and CSVs
+    if not to_dir and out.suffix.lower() not in (".gif", ".mp4"):
+        raise CliError(f"--out must be a .gif or .mp4 file or a directory, got {args.out!r}")
+    if to_dir and out.exists() and not out.is_dir():
+        raise CliError(f"--out {args.out!r} exists and is not a directory")
+    if not to_dir and out.suffix.lower() == ".mp4":
+        import shutil
 
-    walker = _walker_from_args(args)
-    if not str(args.out).lower().endswith((".gif", ".mp4")):
-        raise CliError(f"--out must end in .gif or .mp4, got {args.out!r}")
+        if shutil.which("ffmpeg") is None:
+            raise CliError("writing .mp4 needs ffmpeg on the PATH; use a .gif file instead")
+    if not to_dir and out.is_dir():
+        raise CliError(f"--out {args.out!r} is a directory")
+    _writable_dir(out if to_dir else out.parent)
+    if walker is None:
+        return _walk_model(args, out, to_dir)
     z = _parse_guess(args.guess)
     if z is None:
         try:
@@ -454,9 +724,12 @@ def _run_walk(args: argparse.Namespace) -> int:
             raise CliError(f"no gait found to start from: {exc}") from exc
     walk = PoincareMap(walker=walker, slope=args.slope, rtol=1e-9, atol=1e-9,
                        max_step=0.5 / args.fps).walk(z, args.steps)
-    path = animate_walk(walker, walk, args.out, fps=args.fps)
+    path = animate_walk(walker, walk, out / "walk.gif" if to_dir else out, fps=args.fps)
     print(f"{walk.n_steps} steps, status: {walk.status.value} ({walk.message})")
     print(path)
+    if to_dir:
+        for p in write_walk_figures(walker, walk, out):
+            print(p)
     return 0 if walk.ok else 1
 
 
@@ -469,6 +742,10 @@ def _add_bifurcation(sub: Any) -> None:
         "force, as Goswami et al. 1998) with the period-one branch and its period doublings.",
     )
     _add_walker_options(p)
+    _add_model_options(p)
+    p.add_argument("--backend", choices=("compiled", "scipy"), default="compiled",
+                   help="step simulator with --model: compiled (default) or the scipy "
+                   "reference (the compass diagram's pipeline is fixed)")
     p.add_argument("--slope-range", default="0.5deg:6deg",
                    type=lambda t: parse_range(t, parse_angle),
                    help="START:STOP[:COUNT] slopes, e.g. 0.5deg:6deg:56 (default count 45)")
@@ -483,10 +760,28 @@ def _run_bifurcation(args: argparse.Namespace) -> int:
 
     from heelstrike.gait_plots import write_bifurcation
 
-    walker = _walker_from_args(args)
+    if args.model is None and args.backend != "compiled":
+        raise CliError("--backend scipy is not supported by the compass bifurcation diagram "
+                       "yet (its pipeline is fixed); use --model compass --backend scipy")
+    walker = _walker_from_args(args) if args.model is None else _model_from_args(args)
     start, stop, count = args.slope_range
     if not 0 < start < stop:
         raise CliError("--slope-range needs 0 < START < STOP")
+    _writable_dir(args.out)
+    if args.model is not None:
+        from heelstrike.analysis.limit_cycle import GaitNotFoundError
+        from heelstrike.gait_plots import write_model_bifurcation
+
+        try:
+            paths = write_model_bifurcation(
+                walker, start, stop, count or 45, Path(args.out), transient=args.transient,
+                record=args.record, backend=args.backend,
+            )
+        except GaitNotFoundError as exc:
+            raise CliError(f"no gait found at slope {math.degrees(start):g} deg: {exc}") from exc
+        for path in paths:
+            print(path)
+        return 0
     paths = write_bifurcation(
         walker, start, stop, count or 45, Path(args.out), transient=args.transient,
         record=args.record, progress=True,
@@ -494,6 +789,54 @@ def _run_bifurcation(args: argparse.Namespace) -> int:
     for path in paths:
         print(path)
     return 0
+
+
+# -- resumable runs (issue 11, item 15) ---------------------------------------------------------
+def _add_store_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--store", metavar="DIR", default=None,
+                   help="keep every finished chunk in this Zarr directory as it is computed; "
+                   "after an interruption (Ctrl-C) the same command resumes from it")
+
+
+def _run_with_store(store: str | None, compute: Callable[[], Any]) -> Any:
+    """Run ``compute()``; with a store, report its progress on stderr and map store errors."""
+    if store is None:
+        return compute()
+    import logging
+
+    from heelstrike.analysis.sweep import (
+        SweepError,
+        SweepStoreLockedError,
+        SweepStoreMismatchError,
+    )
+
+    logger = logging.getLogger("heelstrike.analysis.sweep")
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("heelstrike: %(message)s"))
+    level = logger.level
+    logger.addHandler(handler)
+    logger.setLevel(logging.INFO)
+    try:
+        return compute()
+    except SweepStoreMismatchError as exc:
+        raise CliError(
+            f"--store {store!r} holds results of a different computation (differs in: "
+            f"{', '.join(exc.differs)}); remove it or choose another directory"
+        ) from exc
+    except SweepStoreLockedError as exc:
+        raise CliError(
+            f"--store {store!r} is in use by another heelstrike run; wait for it to finish or "
+            "choose another directory"
+        ) from exc
+    except SweepError as exc:
+        raise CliError(str(exc)) from exc
+    except KeyboardInterrupt:
+        print(f"heelstrike: finished chunks are kept in {store!r}; run the same command "
+              "again to resume", file=sys.stderr)
+        raise
+    finally:
+        logger.removeHandler(handler)
+        logger.setLevel(level)
 
 
 # -- basin of attraction and stable-gait map (issue 6) ------------------------------------------
@@ -517,25 +860,92 @@ def _add_basin(sub: Any) -> None:
         help="basin of attraction of the passive gait",
         description="Basin of attraction (Schwab & Wisse 2001) of the passive period-one gait on "
         "the post-impact (q3, q3_dot) slice through the fixed point (q4_dot at its fixed-point "
-        "value), computed with the compiled ensemble. Writes basin.png and basin.nc.",
+        "value), computed with the compiled ensemble. With --model: the slice of the walker's "
+        "post-heel-strike section spanned by the stance angle and its rate, the other section "
+        "coordinates held at the fixed point. Writes basin.png and basin.nc.",
     )
     _add_walker_options(p)
+    _add_model_options(p)
+    p.add_argument("--backend", choices=("compiled", "scipy"), default="compiled",
+                   help="step simulator: the compiled ensemble (default) or, with --model, "
+                   "the scipy reference (slow)")
     p.add_argument("--slope", type=parse_angle, default=parse_angle("3deg"),
                    help="slope angle (default 3deg)")
-    p.add_argument("--grid", type=_parse_grid, default=(400, 400),
-                   help="N_Q3xN_Q3DOT grid points (default 400x400)")
+    p.add_argument("--grid", type=_parse_grid, default=None,
+                   help="N_Q3xN_Q3DOT grid points (default 400x400; 100x100 with --model)")
     p.add_argument("--q3-range", type=lambda t: parse_range(t, parse_angle),
-                   default=(-0.5, -0.05, None), help="Q3MIN:Q3MAX post-impact stance angles "
-                   "(default -0.5:-0.05 rad); write --q3-range=-0.5:-0.05")
-    p.add_argument("--q3dot-range", type=parse_range, default=(0.3, 2.3, None),
-                   help="MIN:MAX post-impact stance velocities in rad/s (default 0.3:2.3)")
+                   default=None, help="Q3MIN:Q3MAX post-impact stance angles (default "
+                   "-0.5:-0.05 rad; with --model the stance angle, default -0.25:+0.2 rad about "
+                   "the fixed point); write --q3-range=-0.5:-0.05")
+    p.add_argument("--q3dot-range", type=parse_range, default=None,
+                   help="MIN:MAX post-impact stance velocities in rad/s (default 0.3:2.3; with "
+                   "--model -0.9:+1.1 about the fixed point)")
     p.add_argument("--steps", type=_positive_int, default=60,
                    help="largest number of steps per initial state (default 60)")
     p.add_argument("--tol", type=float, default=1e-3,
                    help="convergence radius around the fixed point (default 1e-3)")
     p.add_argument("--out", default="basin", help="output directory (default ./basin)")
+    _add_store_option(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=_run_basin)
+
+
+def _run_basin_model(args: argparse.Namespace) -> int:
+    from heelstrike.analysis import basin as basin_module
+    from heelstrike.analysis.limit_cycle import GaitNotFoundError
+    from heelstrike.gait_plots import write_basin
+
+    walker = _model_from_args(args)
+    grid = args.grid or (100, 100)
+    ranges = None
+    if args.q3_range is not None or args.q3dot_range is not None:
+        if args.q3_range is None or args.q3dot_range is None:
+            raise CliError("with --model give both --q3-range and --q3dot-range, or neither "
+                           "(default: a window about the fixed point)")
+        ranges = (args.q3_range[:2], args.q3dot_range[:2])
+        if not (ranges[0][0] < ranges[0][1] and ranges[1][0] < ranges[1][1]):
+            raise CliError("--q3-range and --q3dot-range need MIN < MAX")
+    if not args.tol > 0:
+        raise CliError("--tol must be > 0")
+    _writable_dir(args.out)
+    try:
+        basin = _run_with_store(args.store, lambda: basin_module.model_basin_of_attraction(
+            walker, args.slope, grid=grid, ranges=ranges, steps=args.steps, tol=args.tol,
+            backend=args.backend, progress=not args.json and sys.stderr.isatty(),
+            store=args.store,
+        ))
+    except GaitNotFoundError as exc:
+        raise CliError(f"no gait found at slope {math.degrees(args.slope):g} deg: {exc}") from exc
+    png, nc = write_basin(basin, args.out)
+    names = walker.section_names
+    ia, ib = basin.axes
+    if args.json:
+        _print_json({
+            "model": walker.description.name,
+            "converging_fraction": basin.converging_fraction,
+            "fractions": basin.fractions(),
+            "fixed_point": dict(zip(names, map(float, basin.fixed_point), strict=True)),
+            "grid": list(grid),
+            "steps": args.steps,
+            "slope": args.slope,
+            "elapsed": basin.elapsed,
+            "figure": str(png),
+            "data": str(nc),
+        })
+        return 0
+    fp = ", ".join(f"{k} = {v:.6f}" for k, v in zip(names, basin.fixed_point, strict=True))
+    print(f"basin of attraction of '{walker.description.name}', slope = "
+          f"{math.degrees(args.slope):g} deg, grid {grid[0]}x{grid[1]} over ({names[ia]}, "
+          f"{names[ib]}), up to {args.steps} steps")
+    print(f"  {'fixed point':20s} {fp}")
+    print(f"  {'converging':20s} {100 * basin.converging_fraction:.3f} % of the grid")
+    for name, frac in basin.fractions().items():
+        if frac > 0 and name != "converged":
+            print(f"  {name.replace('_', ' '):20s} {100 * frac:.3f} %")
+    print(f"  {'ensemble time':20s} {basin.elapsed:.1f} s ({basin.walker_steps} walker-steps)")
+    print(png)
+    print(nc)
+    return 0
 
 
 def _run_basin(args: argparse.Namespace) -> int:
@@ -543,18 +953,25 @@ def _run_basin(args: argparse.Namespace) -> int:
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
     from heelstrike.gait_plots import write_basin
 
+    if args.model is not None:
+        return _run_basin_model(args)
+    if args.backend != "compiled":
+        raise CliError("the compass basin runs on the compiled ensemble only; for the scipy "
+                       "reference use --model compass --backend scipy")
     walker = _walker_from_args(args)
-    a0, a1, _ = args.q3_range
-    b0, b1, _ = args.q3dot_range
+    a0, a1, _ = args.q3_range or (-0.5, -0.05, None)
+    b0, b1, _ = args.q3dot_range or (0.3, 2.3, None)
+    args.grid = args.grid or (400, 400)
     if not (a0 < a1 and b0 < b1):
         raise CliError("--q3-range and --q3dot-range need MIN < MAX")
     if not args.tol > 0:
         raise CliError("--tol must be > 0")
+    _writable_dir(args.out)
     try:
-        basin = basin_of_attraction(
+        basin = _run_with_store(args.store, lambda: basin_of_attraction(
             walker, args.slope, grid=args.grid, ranges=((a0, a1), (b0, b1)), steps=args.steps,
-            tol=args.tol, progress=not args.json and sys.stderr.isatty(),
-        )
+            tol=args.tol, progress=not args.json and sys.stderr.isatty(), store=args.store,
+        ))
     except GaitNotFoundError as exc:
         raise CliError(f"no gait found at slope {math.degrees(args.slope):g} deg: {exc}") from exc
     png, nc = write_basin(basin, args.out)
@@ -597,24 +1014,106 @@ def _add_map(sub: Any) -> None:
         conflict_handler="resolve",  # --radius below replaces the walker option by a range
     )
     _add_walker_options(p)
-    p.add_argument("--radius", type=parse_range, default=(0.0, 0.6, 7),
-                   help="START:STOP[:COUNT] foot radii in m (default 0:0.6:7)")
+    _add_model_options(p)
+    p.add_argument("--backend", choices=("compiled", "scipy"), default="compiled",
+                   help="step simulator: compiled (default) or, with --model, the scipy "
+                   "reference")
+    p.add_argument("--radius", type=parse_range, default=None,
+                   help="START:STOP[:COUNT] foot radii in m (default 0:0.6:7; with --model "
+                   "the walker's parameter R)")
+    p.add_argument("--x", type=_sweep, default=None, metavar="NAME:START:STOP:COUNT",
+                   help="with --model: the swept walker parameter instead of --radius, e.g. "
+                   "R:0:0.2:5 (SI units)")
     p.add_argument("--slope", type=lambda t: parse_range(t, parse_angle),
                    default=(math.radians(1.0), math.radians(6.0), 21),
                    help="START:STOP[:COUNT] slopes, e.g. 1deg:6deg:21 (default)")
     p.add_argument("--out", default="gait_map", help="output directory (default ./gait_map)")
+    _add_store_option(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=_run_map)
 
 
+def _run_map_model(args: argparse.Namespace) -> int:
+    import warnings
+
+    import numpy as np
+
+    from heelstrike.analysis.gait_map import model_gait_map
+    from heelstrike.gait_plots import write_gait_map
+
+    walker = _model_from_args(args)
+    if args.store is not None:
+        raise CliError("--store is not supported with --model yet (the map is not chunked)")
+    if args.x is not None and args.radius is not None:
+        raise CliError("give --x NAME:START:STOP:COUNT or --radius, not both")
+    if args.x is not None:
+        name, x0, x1, nx = args.x
+    elif "R" in walker.params:
+        name, (x0, x1, nx) = "R", args.radius or (0.0, 0.6, 7)
+    else:
+        raise CliError(f"model {walker.description.name!r} has no parameter 'R': give the swept "
+                       f"parameter with --x NAME:START:STOP:COUNT (its parameters: "
+                       f"{', '.join(sorted(walker.params))})")
+    if name not in walker.params:
+        raise CliError(f"unknown parameter {name!r} of model {walker.description.name!r} (its "
+                       f"parameters: {', '.join(sorted(walker.params))})")
+    s0, s1, ns = args.slope
+    if not 0 < s0 < s1:
+        raise CliError("--slope needs 0 < START < STOP")
+    values = np.linspace(x0, x1, nx or 7)
+    slopes = np.linspace(s0, s1, ns or 21)
+    _writable_dir(args.out)
+    gmap = model_gait_map(walker, name, values, slopes, backend=args.backend,
+                          progress=not args.json and sys.stderr.isatty())
+    with warnings.catch_warnings():  # all-NaN rows (values without a gait) are expected
+        warnings.simplefilter("ignore", RuntimeWarning)
+        png, nc = write_gait_map(gmap, args.out)
+    ds = gmap.dataset
+    pd = [None if not np.isfinite(v) else float(v) for v in gmap.period_doubling_slope]
+    stable = ds["stable"].values
+    found = ds["gait_found"].values
+    if args.json:
+        _print_json({
+            "model": walker.description.name,
+            "parameter_name": name,
+            "slope": slopes.tolist(),
+            "stable_fraction": float(np.mean(stable)),
+            "period_doubling_slope": pd,
+            "gait_found_fraction": float(np.mean(found)),
+            "gait_found": found.tolist(),
+            "figure": str(png),
+            "data": str(nc),
+        })
+        return 0
+    print(f"stable passive gaits of '{walker.description.name}': {int(stable.sum())} of "
+          f"{stable.size} ({name}, slope) points; no gait found at {int((~found).sum())} (NaN "
+          "in the data, blank in the figure)")
+    for v, p, row, frow in zip(values, pd, stable, found, strict=True):
+        pd_text = "none in range" if p is None else f"{math.degrees(p):.3f} deg"
+        print(f"  {name} = {v:8.4g}: stable at {int(row.sum()):3d}/{row.size} slopes, "
+              f"no gait at {int((~frow).sum()):3d}, period doubling {pd_text}")
+    print(png)
+    print(nc)
+    return 0
+
+
 def _run_map(args: argparse.Namespace) -> int:
+    import warnings
+
     import numpy as np
 
     from heelstrike.analysis.gait_map import gait_map
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
     from heelstrike.gait_plots import write_gait_map
 
-    r0, r1, nr = args.radius
+    if args.model is not None:
+        return _run_map_model(args)
+    if args.x is not None:
+        raise CliError("--x needs --model (the compass gait's map sweeps --radius)")
+    if args.backend != "compiled":
+        raise CliError("the compass map runs on the compiled step map only; for the scipy "
+                       "reference use --model compass --backend scipy")
+    r0, r1, nr = args.radius or (0.0, 0.6, 7)
     s0, s1, ns = args.slope
     if not 0 <= r0 <= r1 <= args.leg_length:
         raise CliError("--radius needs 0 <= START <= STOP <= leg length")
@@ -623,30 +1122,38 @@ def _run_map(args: argparse.Namespace) -> int:
     radii = np.linspace(r0, r1, nr or 7)
     slopes = np.linspace(s0, s1, ns or 21)
     base = _walker_from_args(argparse.Namespace(**{**vars(args), "radius": float(radii[0])}))
+    _writable_dir(args.out)
     try:
-        gmap = gait_map(base, radii, slopes, progress=not args.json and sys.stderr.isatty())
+        gmap = _run_with_store(args.store, lambda: gait_map(
+            base, radii, slopes, progress=not args.json and sys.stderr.isatty(),
+            store=args.store))
     except GaitNotFoundError as exc:
         raise CliError(f"no starting gait found: {exc}") from exc
-    png, nc = write_gait_map(gmap, args.out)
+    with warnings.catch_warnings():  # all-NaN rows (radii without a gait) are expected
+        warnings.simplefilter("ignore", RuntimeWarning)
+        png, nc = write_gait_map(gmap, args.out)
     ds = gmap.dataset
     pd = [None if not np.isfinite(v) else float(v) for v in gmap.period_doubling_slope]
     stable = ds["stable"].values
+    found = ds["gait_found"].values
     if args.json:
         _print_json({
             "foot_radius": radii.tolist(),
             "slope": slopes.tolist(),
             "stable_fraction": float(np.mean(stable)),
             "period_doubling_slope": pd,
-            "gait_found_fraction": float(np.mean(np.isfinite(ds["spectral_radius"].values))),
+            "gait_found_fraction": float(np.mean(found)),
+            "gait_found": found.tolist(),
             "figure": str(png),
             "data": str(nc),
         })
         return 0
-    print(f"stable passive gaits: {int(stable.sum())} of {stable.size} (R, slope) points")
-    for R, v, row in zip(radii, pd, stable, strict=True):
+    print(f"stable passive gaits: {int(stable.sum())} of {stable.size} (R, slope) points; "
+          f"no gait found at {int((~found).sum())} (NaN in the data, blank in the figure)")
+    for R, v, row, frow in zip(radii, pd, stable, found, strict=True):
         pd_text = "none in range" if v is None else f"{math.degrees(v):.3f} deg"
         print(f"  R = {R:6.3f} m: stable at {int(row.sum()):3d}/{row.size} slopes, "
-              f"period doubling {pd_text}")
+              f"no gait at {int((~frow).sum()):3d}, period doubling {pd_text}")
     print(png)
     print(nc)
     return 0
@@ -689,18 +1196,54 @@ def _add_impact_map(sub: Any) -> None:
 def _run_impact_map(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from heelstrike.analysis.model_gaits import impact_map
+    from heelstrike.analysis.model_gaits import ANGLE, impact_map
+    from heelstrike.models.description import parameter_units
     from heelstrike.plots_models import write_impact_map
 
     if args.model is None:
         raise CliError("--model is required (a .toml file or compass, kneed, torso)")
+    if not math.isfinite(args.q3dot):
+        raise CliError(f"--q3dot must be finite, got {args.q3dot:g}")
     walker = _model_from_args(args)
     axes = [(n, np.linspace(a, b, c)) for n, a, b, c in (args.x, args.y)]
+    if axes[0][0] == axes[1][0]:
+        raise CliError(f"--x and --y must sweep different quantities, both are {axes[0][0]!r}")
+    swept_angle = any(name == ANGLE for name, _ in axes)
+    for option, (name, values) in zip(("--x", "--y"), axes, strict=True):
+        if name == ANGLE:
+            if not np.all((values > 0) & (values < math.pi / 2)):
+                raise CliError(f"{option}: the impact angle must satisfy 0 < angle < 90deg")
+            continue
+        if name not in walker.params:
+            raise CliError(f"{option}: {name!r} is not a parameter of model "
+                           f"{walker.description.name!r} (its parameters: "
+                           f"{', '.join(sorted(walker.params))}; or {ANGLE!r})")
+        for v in values:
+            try:
+                walker.replace(**{name: float(v)})
+            except ValueError as exc:
+                raise CliError(f"{option}: {name} = {v:g} is not a valid "
+                               f"{walker.description.name!r} walker: {exc}") from None
+    if not swept_angle and not 0.0 < args.angle < math.pi / 2:
+        raise CliError(f"--angle must satisfy 0 < angle < 90deg, got "
+                       f"{math.degrees(args.angle):g} deg")
+    out = _writable_dir(args.out)
     m = impact_map(walker, axes[0], axes[1], angle=args.angle, stance_rate=args.q3dot)
-    try:
-        paths = write_impact_map(m, args.out)
-    except OSError as exc:
-        raise CliError(f"cannot write to {args.out!r}: {exc.strerror or exc}") from exc
+    bad = ~np.isfinite(m.T_c) | ~np.isfinite(m.T_a) | ~np.isfinite(m.eta)
+    if np.any(bad):
+        i, j = (int(k[0]) for k in np.nonzero(bad))
+        point = {m.x_name: float(m.x[j]), m.y_name: float(m.y[i])}
+        reason = "overflow or no symmetric heel strike"
+        try:
+            walker.replace(**{k: v for k, v in point.items() if k != ANGLE})
+        except ValueError as exc:
+            reason = _one_line(exc)
+        raise CliError(
+            f"{int(bad.sum())} of {bad.size} grid points have no valid heel strike, e.g. "
+            f"{', '.join(f'{k} = {v:g}' for k, v in point.items())}: {reason}; "
+            "narrow --x/--y"
+        )
+    paths = write_impact_map(m, out, units=parameter_units(walker.description))
     for path in paths:
         print(path)
     return 0
@@ -711,22 +1254,36 @@ _ACTUATIONS = ("pushoff", "hip-energy", "hip-pd")
 
 
 def _add_actuation_options(p: argparse.ArgumentParser) -> None:
-    g = p.add_argument_group("actuation")
-    g.add_argument("--gain", type=float, default=10.0,
-                   help="energy-tracking gain k of hip-energy (default 10)")
-    g.add_argument("--kp", type=float, default=5.0, help="hip-pd stiffness (N m/rad)")
-    g.add_argument("--kd", type=float, default=1.0, help="hip-pd damping (N m s/rad)")
-    g.add_argument("--max-torque", type=float, default=20.0,
-                   help="hip torque limit (N m, default 20)")
+    # defaults (None) come from heelstrike.dynamics.actuation.DEFAULT_*, which explain them
+    g = p.add_argument_group("actuation (defaults: heelstrike.dynamics.actuation)")
+    g.add_argument("--gain", type=float, default=None,
+                   help="energy-tracking gain k of hip-energy (s/rad, default 3)")
+    g.add_argument("--kp", type=float, default=None,
+                   help="hip-pd stiffness (N m/rad, default 50)")
+    g.add_argument("--kd", type=float, default=None,
+                   help="hip-pd damping (N m s/rad, default 5)")
+    g.add_argument("--max-torque", type=float, default=None,
+                   help="hip torque limit (N m, default 50)")
+
+
+def _actuation_options(args: argparse.Namespace) -> dict[str, float]:
+    """The actuation options given on the command line (the library supplies the rest)."""
+    opts = {k: float(getattr(args, k)) for k in ("gain", "kp", "kd", "max_torque")
+            if getattr(args, k) is not None}
+    if "max_torque" in opts and not opts["max_torque"] > 0:
+        raise CliError("--max-torque must be > 0 (N m)")
+    if "gain" in opts and not opts["gain"] > 0:
+        raise CliError("--gain must be > 0 (s/rad)")
+    for k in ("kp", "kd"):
+        if k in opts and not opts[k] >= 0:
+            raise CliError(f"--{k} must be >= 0")
+    return opts
 
 
 def _family_from_args(args: argparse.Namespace) -> Any:
     from heelstrike.analysis.powered import actuation_family
 
-    if not args.max_torque > 0:
-        raise CliError("--max-torque must be > 0 (N m)")
-    return actuation_family(args.actuation, gain=args.gain, kp=args.kp, kd=args.kd,
-                            max_torque=args.max_torque)
+    return actuation_family(args.actuation, **_actuation_options(args))
 
 
 @_command
@@ -737,23 +1294,50 @@ def _add_powered(sub: Any) -> None:
         description="Find the level-ground periodic gait of a powered compass gait with a "
         "target speed or step length: push-off impulse (pushoff), energy-tracking hip torque "
         "(hip-energy) or swing-leg PD (hip-pd). Prints the energy books per step: on a "
-        "periodic gait the actuator work equals the collision loss T_c (paper eqs. 14-15).",
+        "periodic gait the actuator work equals the collision loss T_c (paper eqs. 14-15). "
+        "With --model: push-off (the impulse is found) plus the posture law the walker file "
+        "declares ([control.torso], e.g. --model torso).",
     )
     _add_walker_options(p)
+    _add_model_options(p)
+    p.add_argument("--backend", choices=("compiled", "scipy"), default=None,
+                   help="step simulator with --model: compiled (default; generated from the "
+                   "walker file) or the scipy reference; the compass gait without --model "
+                   "runs on the scipy reference")
     tgt = p.add_mutually_exclusive_group()
     tgt.add_argument("--speed", type=float, default=None, help="target mean speed (m/s)")
     tgt.add_argument("--step-length", type=float, default=None, help="target step length (m)")
     p.add_argument("--actuation", choices=_ACTUATIONS, default="pushoff",
                    help="actuation model (default pushoff)")
     _add_actuation_options(p)
+    p.add_argument("--out", default=None, metavar="DIR",
+                   help="also write the period's energy books: DIR/powered_energy.png and "
+                   "its data DIR/powered_energy.csv")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=_run_powered)
 
 
 def _run_powered(args: argparse.Namespace) -> int:
-    from heelstrike.analysis.powered import PoweredGaitNotFoundError, find_powered_gait
+    from heelstrike.analysis.powered import (
+        DEFAULT_TIME_LIMIT,
+        PoweredGaitNotFoundError,
+        find_model_powered_gait,
+        find_powered_gait,
+    )
 
-    walker = _walker_from_args(args)
+    if args.model is None and args.backend == "compiled":
+        raise CliError("the compass powered search (without --model) runs on the scipy "
+                       "reference; for the compiled backend use --model compass")
+    if args.model is not None:
+        if args.actuation != "pushoff":
+            raise CliError(f"--actuation {args.actuation} is not supported with --model (only "
+                           "pushoff, with the posture law the walker file declares)")
+        given = [f"--{k.replace('_', '-')}" for k in ("gain", "kp", "kd", "max_torque")
+                 if getattr(args, k) is not None]
+        if given:
+            raise CliError(f"{', '.join(given)} set(s) the compass hip laws, not used with "
+                           "--model (the posture law's gains are declared in the walker file)")
+    walker = _walker_from_args(args) if args.model is None else _model_from_args(args)
     if args.speed is None and args.step_length is None:
         args.speed = 0.5
     target, value = (
@@ -761,21 +1345,44 @@ def _run_powered(args: argparse.Namespace) -> int:
     )
     if not (math.isfinite(value) and value > 0):
         raise CliError(f"--{target.replace('_', '-')} must be > 0, got {value:g}")
-    family = _family_from_args(args)
+    radius = float(walker.foot_radii[0]) if args.model is not None else args.radius
+    out = None if args.out is None else _writable_dir(args.out)
     try:
-        gait = find_powered_gait(walker, actuation=family, **{target: value})
+        if args.model is None:
+            gait = find_powered_gait(walker, actuation=_family_from_args(args), progress=True,
+                                     time_limit=DEFAULT_TIME_LIMIT, **{target: value})
+        else:
+            gait = find_model_powered_gait(walker, backend=args.backend or "compiled",
+                                           progress=True, time_limit=DEFAULT_TIME_LIMIT,
+                                           **{target: value})
     except PoweredGaitNotFoundError as exc:
         raise CliError(
             f"no {args.actuation} gait found with {target.replace('_', ' ')} {value:g} "
-            f"at R = {args.radius:g} m: {exc}"
+            f"at R = {radius:g} m: {exc}"
         ) from exc
     d = gait.to_dict()
+    if out is not None:
+        from heelstrike.analysis.powered import energy_book_tables
+        from heelstrike.gait_plots import energy_figure
+
+        energy, impacts = energy_book_tables(walker, gait)
+        name = gait.model or "compass gait"
+        fig = energy_figure(energy, impacts, title=(
+            f"{name}, powered gait at {gait.speed:.3g} m/s: {gait.torque_joint} torque "
+            f"{gait.torque_work:+.4f} J over the step,\npush-off {gait.push_off_work:+.4f} J "
+            f"(jump at heel strike), heel strike -T_c = {-gait.collision_loss:.4f} J"))
+        png, csv = out / "powered_energy.png", out / "powered_energy.csv"
+        fig.savefig(png)
+        energy.to_csv(csv, index=False)
+        print(f"{png}\n{csv}", file=sys.stderr if args.json else sys.stdout)
     if args.json:
         _print_json(d)
         return 0
     fp = ", ".join(f"{k} = {v:.6f}" for k, v in d["fixed_point"].items())
     mult = ", ".join(f"{abs(m):.4f}" for m in gait.multipliers)
-    print(f"powered gait ({args.actuation}), R = {args.radius:g} m, level ground")
+    label = args.actuation if gait.model is None else \
+        f"{args.actuation}, model {gait.model}, {args.backend or 'compiled'} backend"
+    print(f"powered gait ({label}), R = {radius:g} m, level ground")
     print(f"  {gait.parameter_name:15s} {gait.parameter:10.5f} {gait.parameter_unit}")
     print(f"  fixed point (just after impact): {fp}")
     print(f"  period          {gait.period:10.5f} s")
@@ -784,8 +1391,8 @@ def _run_powered(args: argparse.Namespace) -> int:
     print(f"  |multipliers|   {mult}")
     print(f"  stable          {'yes' if gait.stable else 'no'}")
     print("  energy books per step")
-    print(f"    actuator work   {gait.actuator_work:12.6f} J "
-          f"(push-off {gait.push_off_work:.6f} J, hip {gait.hip_work:.6f} J)")
+    print(f"    actuator work   {gait.actuator_work:12.6f} J (push-off "
+          f"{gait.push_off_work:.6f} J, {gait.torque_joint} {gait.torque_work:.6f} J)")
     print(f"    collision loss  {gait.collision_loss:12.6f} J (T_c)")
     print(f"    change of T + V {gait.energy_change:12.3e} J")
     print(f"    imbalance       {gait.energy_balance_error:12.3e} J")
@@ -814,6 +1421,10 @@ def _add_study(sub: Any) -> None:
         conflict_handler="resolve",
     )
     _add_walker_options(c)  # its --radius is replaced by the range below
+    _add_model_options(c)
+    c.add_argument("--backend", choices=("compiled", "scipy"), default=None,
+                   help="the cost study runs the compass gait on the scipy reference; "
+                   "--model and --backend compiled are not supported yet (refused)")
     c.add_argument("--radius", dest="radii", type=parse_range, default=(0.0, 0.9, 4),
                    help="foot radii START:STOP:COUNT (m), default 0:0.9:4")
     tgt = c.add_mutually_exclusive_group()
@@ -825,6 +1436,7 @@ def _add_study(sub: Any) -> None:
                    help="actuation model, repeatable (default pushoff)")
     _add_actuation_options(c)
     c.add_argument("--out", default="cost_study", help="output directory")
+    _add_store_option(c)
     c.set_defaults(func=_run_study, radius=0.0)
 
 
@@ -841,6 +1453,13 @@ def _run_study(args: argparse.Namespace) -> int:
     from heelstrike.analysis.cost_study import cost_study, save_study
     from heelstrike.plots_powered import write_cost_figures
 
+    if args.model is not None or args.param:
+        raise CliError("study cost does not take --model/--param yet (it sweeps the compass "
+                       "gait's foot radius); for a described walker run `heelstrike powered "
+                       "--model NAME` per point")
+    if args.backend == "compiled":
+        raise CliError("study cost runs on the scipy reference (the compass gait); --backend "
+                       "compiled is not supported there yet")
     walker = _walker_from_args(args)  # validates the other walker parameters (radius unused)
     radii = _grid(args.radii, 4)
     if min(radii) < 0 or max(radii) > args.leg_length:
@@ -852,11 +1471,11 @@ def _run_study(args: argparse.Namespace) -> int:
     if min(values) <= 0:
         raise CliError(f"--{target.replace('_', '-')} values must be > 0")
     acts = args.actuation or ["pushoff"]
-    if not args.max_torque > 0:
-        raise CliError("--max-torque must be > 0 (N m)")
-    options = {"gain": args.gain, "kp": args.kp, "kd": args.kd, "max_torque": args.max_torque}
-    ds = cost_study(radii, values, target=target, actuations=acts, walker=walker,
-                    actuation_options=options, progress=True)
+    options = _actuation_options(args)
+    _writable_dir(args.out)
+    ds = _run_with_store(args.store, lambda: cost_study(
+        radii, values, target=target, actuations=acts, walker=walker,
+        actuation_options=options, progress=True, store=args.store))
     out = Path(args.out)
     try:
         nc = save_study(ds, out / "cost_study.nc")
@@ -865,9 +1484,26 @@ def _run_study(args: argparse.Namespace) -> int:
         raise CliError(f"cannot write to {args.out!r}: {exc.strerror or exc}") from exc
     for path in paths:
         print(path)
+    fresh = int((ds["branch"] == 1).sum())
+    print(f"gaits: the cheapest found at each point, by continuation from neighbours or by "
+          f"fresh searches from several seeds ({fresh} point(s) came from a fresh search; "
+          f"up to {int(ds['gaits_found'].max())} distinct gaits met at one point)")
     found = int(ds["cost_of_transport"].notnull().sum())
     print(f"{found} of {ds['cost_of_transport'].size} gaits found", file=sys.stderr)
     return 0 if found else 1
+
+
+_command(cli_robot.add_robot_command)  # issue 10: heelstrike robot list|info
+
+
+def _version() -> str:
+    """The installed distribution's version (:mod:`importlib.metadata`)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("heelstrike")
+    except PackageNotFoundError:  # pragma: no cover - running from a source tree
+        return "unknown (not installed)"
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -876,27 +1512,61 @@ def build_parser() -> argparse.ArgumentParser:
         prog="heelstrike",
         description="Impulsive dynamics and energetics of walking machines.",
     )
+    parser.add_argument("--version", action="version", version=f"heelstrike {_version()}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     for add in _COMMANDS:
         add(sub)
     return parser
 
 
+def _one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    return text or type(exc).__name__
+
+
+def _fail(message: str) -> int:
+    """Print the one-line error (after the traceback when ``HEELSTRIKE_DEBUG=1``); status 2."""
+    if os.environ.get("HEELSTRIKE_DEBUG") == "1":
+        import traceback
+
+        traceback.print_exc()
+    print(f"heelstrike: error: {message}", file=sys.stderr)
+    return 2
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``heelstrike`` command; returns the exit status."""
+    """Entry point of the ``heelstrike`` command; returns the exit status.
+
+    Every failure ends in one line ``heelstrike: error: ...`` on stderr and exit status 2;
+    set ``HEELSTRIKE_DEBUG=1`` to see the traceback of unexpected errors.
+    """
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
         status = int(args.func(args))
     except CliError as exc:
-        print(f"heelstrike: error: {exc}", file=sys.stderr)
-        return 2
+        return _fail(_one_line(exc))
     except (ValueError, ArithmeticError) as exc:
-        print(f"heelstrike: error: {exc}", file=sys.stderr)
-        return 2
+        return _fail(_one_line(exc))
+    except MemoryError as exc:
+        detail = _one_line(exc) if str(exc) else "the computation needs more memory than is free"
+        return _fail(f"out of memory: {detail}")
     except KeyboardInterrupt:
         print("heelstrike: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the reader of stdout went away (e.g. `| head`): nothing to say
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 2
+    except OSError as exc:
+        where = f" {exc.filename!r}" if exc.filename else ""
+        return _fail(f"{exc.strerror or _one_line(exc)}{where}")
+    except MissingExtraError as exc:  # e.g. a sweep store without heelstrike[scale]
+        return _fail(_one_line(exc))
+    except Exception as exc:  # the last resort: one line, never a traceback
+        hint = "" if os.environ.get("HEELSTRIKE_DEBUG") == "1" else \
+            " (set HEELSTRIKE_DEBUG=1 for the traceback)"
+        return _fail(f"unexpected {type(exc).__name__}: {_one_line(exc)}{hint}")
     return status
 
 

@@ -1,4 +1,4 @@
-"""Figures and animations of gaits: walking animation, bifurcation diagram.
+"""Figures and animations of gaits: walking animation, bifurcation diagram, the walk seen.
 
 Drawing only: the data come from :mod:`heelstrike.dynamics` and :mod:`heelstrike.analysis`.
 Uses matplotlib's object API with the Agg canvas (no global pyplot state).
@@ -17,6 +17,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
+from heelstrike._optional import write_netcdf
 from heelstrike.analysis.basin import OUTCOMES, Basin
 from heelstrike.analysis.gait_map import GaitMap
 from heelstrike.analysis.limit_cycle import (
@@ -30,14 +31,30 @@ from heelstrike.dynamics.hybrid import WalkResult
 from heelstrike.models.compass import CompassGait
 
 __all__ = [
+    "COMPASS_ONLY_WALK_FIGURES",
+    "animate_model_walk",
     "animate_walk",
     "basin_figure",
     "bifurcation_figure",
+    "energy_figure",
     "gait_map_figure",
+    "model_diagram",
+    "model_phase_portrait_table",
+    "phase_portrait_figure",
+    "phase_portrait_table",
     "resample_walk",
+    "step_figure",
+    "step_table",
+    "strobe_figure",
+    "strobe_table",
+    "walk_energy_table",
+    "walk_impact_table",
     "write_basin",
     "write_bifurcation",
     "write_gait_map",
+    "write_model_bifurcation",
+    "write_model_walk_figures",
+    "write_walk_figures",
 ]
 
 LEG_COLOURS = ("tab:blue", "tab:red")
@@ -197,8 +214,6 @@ def write_bifurcation(
     per recorded step: slope, impact angle, period) and ``period_one_branch.csv`` (the continued
     period-one gait with its spectral radius and stability).
     """
-    import pandas as pd
-
     slopes = np.linspace(slope_start, slope_stop, count)
     first = find_limit_cycle(walker, slope=float(slopes[0]), progress=progress)
     diagram = bifurcation_diagram(
@@ -209,11 +224,50 @@ def write_bifurcation(
         walker, "slope", np.linspace(slope_start, slope_stop, continuation_points),
         guess=first.fixed_point, progress=progress, rtol=1e-10, atol=1e-10,
     )
-    out_dir.mkdir(parents=True, exist_ok=True)
-    fig = bifurcation_figure(
-        diagram, branch,
-        title=f"compass gait, R = {float(walker.foot_radius):g} m: bifurcation diagram",
+    return _write_bifurcation_files(
+        diagram, branch, out_dir,
+        f"compass gait, R = {float(walker.foot_radius):g} m: bifurcation diagram",
     )
+
+
+def write_model_bifurcation(
+    walker: Any,
+    slope_start: float,
+    slope_stop: float,
+    count: int,
+    out_dir: Path,
+    *,
+    transient: int = 50,
+    record: int = 16,
+    continuation_points: int = 12,
+    backend: str = "compiled",
+) -> list[Path]:
+    """:func:`write_bifurcation` for a described walker (a ``BuiltWalker``; same files).
+
+    Computed by :func:`heelstrike.analysis.gait_map.model_bifurcation` with ``backend``.
+    """
+    from heelstrike.analysis.gait_map import model_bifurcation
+
+    slopes = np.linspace(slope_start, slope_stop, count)
+    diagram, branch = model_bifurcation(
+        walker, slopes, transient=transient, record=record,
+        continuation_points=continuation_points, backend=backend,
+    )
+    return _write_bifurcation_files(
+        diagram, branch, out_dir, f"{walker.description.name}: bifurcation diagram"
+    )
+
+
+def _write_bifurcation_files(
+    diagram: BifurcationDiagram, branch: Continuation, out_dir: Path, title: str
+) -> list[Path]:
+    """Write ``bifurcation.png/.pdf/.csv`` and ``period_one_branch.csv``; returns the paths."""
+    import pandas as pd
+
+    slopes = diagram.slopes
+    record = diagram.impact_angles.shape[1]
+    out_dir.mkdir(parents=True, exist_ok=True)
+    fig = bifurcation_figure(diagram, branch, title=title)
     paths = [out_dir / "bifurcation.png", out_dir / "bifurcation.pdf"]
     for p in paths:
         fig.savefig(p)
@@ -263,7 +317,8 @@ def basin_figure(basin: Basin) -> Any:
     from matplotlib.patches import Patch
 
     ds = basin.dataset
-    q3, q3d = ds["q3"].values, ds["q3_dot"].values
+    xname, yname = ds["outcome"].dims
+    q3, q3d = ds[xname].values, ds[yname].values
     fig = Figure(figsize=(7.5, 5.5), layout="constrained")
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
@@ -277,8 +332,8 @@ def basin_figure(basin: Basin) -> Any:
         extent=(q3[0] - dx, q3[-1] + dx, q3d[0] - dy, q3d[-1] + dy),
     )
     z = basin.fixed_point
-    ax.plot(z[0], z[1], marker="*", ms=14, mfc="white", mec="black", ls="none",
-            label="fixed point")
+    ax.plot(z[basin.axes[0]], z[basin.axes[1]], marker="*", ms=14, mfc="white", mec="black",
+            ls="none", label="fixed point")
     fr = basin.fractions()
     handles = [
         Patch(color=c, label=f"{name.replace('_', ' ')} ({100 * fr[name]:.1f} %)")
@@ -287,12 +342,19 @@ def basin_figure(basin: Basin) -> Any:
     ]
     handles.append(ax.get_lines()[0])  # type: ignore[arg-type]
     ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.9)
-    ax.set_xlabel(r"post-impact stance angle $q_3$ (rad)")
-    ax.set_ylabel(r"post-impact stance velocity $\dot q_3$ (rad/s)")
+    for name, set_label in ((xname, ax.set_xlabel), (yname, ax.set_ylabel)):
+        a = ds[name].attrs
+        set_label(a.get("label", f"{a.get('long_name', name)} ({a.get('units', '')})"))
+    if "model" in ds.attrs:  # a described walker: name it and the coordinates held fixed
+        head = (f"basin of attraction of '{ds.attrs['model']}', slope = "
+                f"{np.degrees(ds.attrs['slope']):g} deg\nheld at the fixed point: "
+                f"{ds.attrs['held']}")
+    else:
+        head = (f"basin of attraction, R = {ds.attrs['foot_radius']:g} m, slope = "
+                f"{np.degrees(ds.attrs['slope']):g} deg, $\\dot q_4$ = "
+                f"{ds.attrs['q4_dot']:.4f} rad/s")
     ax.set_title(
-        f"basin of attraction, R = {ds.attrs['foot_radius']:g} m, slope = "
-        f"{np.degrees(ds.attrs['slope']):g} deg, $\\dot q_4$ = {ds.attrs['q4_dot']:.4f} rad/s\n"
-        f"{100 * basin.converging_fraction:.2f} % of the grid converges within "
+        f"{head}\n{100 * basin.converging_fraction:.2f} % of the grid converges within "
         f"{ds.attrs['max_steps']} steps",
         fontsize=10,
     )
@@ -306,7 +368,7 @@ def write_basin(basin: Basin, out_dir: str | Path, stem: str = "basin") -> tuple
     png = out / f"{stem}.png"
     nc = out / f"{stem}.nc"
     basin_figure(basin).savefig(png, dpi=130)
-    basin.dataset.to_netcdf(nc)
+    write_netcdf(basin.dataset, nc)
     return png, nc
 
 
@@ -320,7 +382,8 @@ def gait_map_figure(gmap: GaitMap) -> Any:
     from matplotlib.figure import Figure
 
     ds = gmap.dataset
-    R = ds["foot_radius"].values
+    pname = ds["spectral_radius"].dims[0]  # foot_radius, or a described walker's parameter
+    R = ds[pname].values
     S = np.degrees(ds["slope"].values)
     rho = ds["spectral_radius"].values
     fig = Figure(figsize=(7.5, 5.2), layout="constrained")
@@ -346,8 +409,10 @@ def gait_map_figure(gmap: GaitMap) -> Any:
         ax.plot(pd[ok], R[ok], "o--", color="navy", mfc="white", label="period doubling")
         ax.legend(loc="upper left", fontsize=9)
     ax.set_xlabel("slope (deg)")
-    ax.set_ylabel("foot radius R (m)")
-    ax.set_title("passive period-one gaits of the circular-feet compass gait\n"
+    ax.set_ylabel(ds[pname].attrs.get("label", "foot radius R (m)"))
+    who = (f"'{ds.attrs['model']}'" if "model" in ds.attrs
+           else "the circular-feet compass gait")
+    ax.set_title(f"passive period-one gaits of {who}\n"
                  "(black line: spectral radius 1; grey: no gait found)", fontsize=10)
     return fig
 
@@ -360,5 +425,716 @@ def write_gait_map(gmap: GaitMap, out_dir: str | Path, stem: str = "gait_map") -
     gait_map_figure(gmap).savefig(png, dpi=130)
     ds = gmap.dataset.copy()
     ds["stable"] = ds["stable"].astype(np.int8)
-    ds.to_netcdf(nc)
+    write_netcdf(ds, nc)
     return png, nc
+
+
+# -- the walk, seen: strobe, phase portrait, step kinematics and ground reaction, energy --------
+# Data functions turn a simulated walk into tables (pandas DataFrames, SI units, one column per
+# quantity with its unit in the name); figure functions draw such tables and return a Figure.
+
+
+def _pandas() -> Any:
+    import pandas as pd
+
+    return pd
+
+
+def _check_walk(walk: WalkResult, step: int | None = None) -> None:
+    if walk.t.size == 0:
+        raise ValueError("the walk has no samples")
+    if step is not None and not np.any(walk.step == step):
+        raise ValueError(f"the walk has no samples in step {step} (steps 0..{walk.step.max()})")
+
+
+def walk_energy_table(walker: CompassGait, walk: WalkResult) -> Any:
+    """Kinetic, potential and total mechanical energy at every sample of a walk.
+
+    Parameters
+    ----------
+    walker : CompassGait
+        The walker the walk was simulated with.
+    walk : WalkResult
+        A passive walk (:func:`heelstrike.dynamics.simulate`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per sample, columns ``t_s`` (s), ``step``, ``kinetic_J``, ``potential_J``,
+        ``total_J`` (J). The potential energy is the walker's
+        :meth:`~heelstrike.models.CompassGait.potential_energy` on the walk's slope. At a heel
+        strike two rows share the impact time: the last sample of a step (just before the
+        impact) and the first of the next (just after it, legs relabelled).
+    """
+    _check_walk(walk)
+    T = np.asarray(walker.kinetic_energy(walk.q, walk.q_dot), dtype=float)
+    U = np.asarray(walker.potential_energy(walk.q, walk.slope), dtype=float)
+    return _pandas().DataFrame(
+        {"t_s": walk.t, "step": walk.step, "kinetic_J": T, "potential_J": U, "total_J": T + U}
+    )
+
+
+def walk_impact_table(walker: CompassGait, walk: WalkResult) -> Any:
+    """Mechanical energy just before and just after every heel strike of a walk.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per impact: ``step`` (the step it ends), ``time_s`` (s), ``impact_angle_rad``,
+        ``total_before_J`` and ``total_after_J`` (J, from the walk's samples on either side of
+        the impact; after the last impact from the walk's final state), ``drop_J`` (their
+        difference) and ``T_c_J``, the constrained kinetic energy of the impact (paper eq. 10),
+        which an inert impact destroys: ``drop_J`` equals it.
+    """
+    _check_walk(walk)
+    E = np.asarray(
+        walker.kinetic_energy(walk.q, walk.q_dot) + walker.potential_energy(walk.q, walk.slope),
+        dtype=float,
+    )
+    rows = []
+    for r in walk.impacts:
+        before = E[np.nonzero(walk.step == r.step)[0][-1]]
+        nxt = np.nonzero(walk.step == r.step + 1)[0]
+        if nxt.size:
+            after = float(E[nxt[0]])
+        else:
+            after = float(
+                walker.kinetic_energy(walk.final_q, walk.final_q_dot)
+                + walker.potential_energy(walk.final_q, walk.slope)
+            )
+        rows.append(
+            {
+                "step": r.step,
+                "time_s": r.time,
+                "impact_angle_rad": r.impact_angle,
+                "total_before_J": float(before),
+                "total_after_J": after,
+                "drop_J": float(before) - after,
+                "T_c_J": r.kinetic_energy_constrained,
+            }
+        )
+    cols = ["step", "time_s", "impact_angle_rad", "total_before_J", "total_after_J", "drop_J",
+            "T_c_J"]
+    return _pandas().DataFrame(rows, columns=cols)
+
+
+def step_table(walker: CompassGait, walk: WalkResult, step: int = 0) -> Any:
+    """Joint angles, rates and the stance foot's ground reaction over one step of a walk.
+
+    Parameters
+    ----------
+    walker : CompassGait
+    walk : WalkResult
+        A passive walk.
+    step : int
+        Which step (0-based).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per sample of the step: ``t_s`` (time since the step began, s), ``q3_rad``
+        (stance leg from the vertical), ``q4_rad`` (hip angle, swing relative to stance),
+        ``swing_rad`` (swing leg from the vertical, ``q3 + q4``), ``q3_dot_rad_s``,
+        ``q4_dot_rad_s`` (rad/s), ``tangential_N`` and ``normal_N`` (force of the ground on the
+        stance foot along and normal to the slope, N) and ``required_friction`` (``|tangential|
+        / normal``, the smallest Coulomb coefficient that prevents slipping) from
+        :func:`heelstrike.dynamics.hybrid.ground_reaction`.
+    """
+    from heelstrike.dynamics.hybrid import ground_reaction
+
+    _check_walk(walk, step)
+    sel = walk.step == step
+    gr = ground_reaction(walker, walk)
+    q, qd = walk.q[sel], walk.q_dot[sel]
+    t = walk.t[sel]
+    return _pandas().DataFrame(
+        {
+            "t_s": t - t[0],
+            "q3_rad": q[:, 2],
+            "q4_rad": q[:, 3],
+            "swing_rad": q[:, 2] + q[:, 3],
+            "q3_dot_rad_s": qd[:, 2],
+            "q4_dot_rad_s": qd[:, 3],
+            "tangential_N": gr.tangential[sel],
+            "normal_N": gr.normal[sel],
+            "required_friction": gr.required_friction[sel],
+        }
+    )
+
+
+def phase_portrait_table(walk: WalkResult) -> Any:
+    """Leg angles and angular rates at every sample of a walk (the phase portrait's data).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``t_s`` (s), ``step``, ``q3_rad``, ``q3_dot_rad_s`` (stance leg) and
+        ``swing_rad``, ``swing_dot_rad_s`` (swing leg's absolute angle ``q3 + q4`` and its rate).
+    """
+    _check_walk(walk)
+    q, qd = walk.q, walk.q_dot
+    return _pandas().DataFrame(
+        {
+            "t_s": walk.t,
+            "step": walk.step,
+            "q3_rad": q[:, 2],
+            "q3_dot_rad_s": qd[:, 2],
+            "swing_rad": q[:, 2] + q[:, 3],
+            "swing_dot_rad_s": qd[:, 2] + qd[:, 3],
+        }
+    )
+
+
+def strobe_table(walker: CompassGait, walk: WalkResult, step: int = 0, frames: int = 7) -> Any:
+    """Positions of the walker at ``frames`` evenly spaced instants of one step.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per frame, world frame (x along the horizontal, y up; m): ``t_s`` (time since
+        the step began, s), ``hip_x_m``, ``hip_y_m``, ``stance_foot_x_m``, ``stance_foot_y_m``,
+        ``swing_foot_x_m``, ``swing_foot_y_m`` (centres of the foot arcs), ``stance_rad`` and
+        ``swing_rad`` (leg angles from the slope's normal) and ``stance_leg`` (which physical
+        leg stands: 0 or 1). The last frame is the instant of heel strike.
+    """
+    if frames < 2:
+        raise ValueError(f"frames must be >= 2, got {frames}")
+    _check_walk(walk, step)
+    ids = np.nonzero(walk.step == step)[0]
+    t = walk.t[ids]
+    want = np.linspace(t[0], t[-1], frames)
+    pick = ids[np.clip(np.searchsorted(t, want), 0, ids.size - 1)]
+    q = walk.q[pick]
+    pos = walker.positions(q)
+    hip = _to_world(pos.hip, walk.slope)
+    st = _to_world(pos.right_foot_centre, walk.slope)
+    sw = _to_world(pos.left_foot_centre, walk.slope)
+    return _pandas().DataFrame(
+        {
+            "t_s": walk.t[pick] - t[0],
+            "hip_x_m": hip[:, 0], "hip_y_m": hip[:, 1],
+            "stance_foot_x_m": st[:, 0], "stance_foot_y_m": st[:, 1],
+            "swing_foot_x_m": sw[:, 0], "swing_foot_y_m": sw[:, 1],
+            "stance_rad": q[:, 2], "swing_rad": q[:, 2] + q[:, 3],
+            "stance_leg": walk.stance_leg[pick],
+        }
+    )
+
+
+def _new_figure(width: float, height: float) -> Figure:
+    fig = Figure(figsize=(width, height), dpi=110, layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def strobe_figure(
+    strobe: Any, *, foot_radius: float, slope: float = 0.0, title: str = ""
+) -> Figure:
+    """Stick-figure strobe of one step: the walker at every row of :func:`strobe_table`.
+
+    Parameters
+    ----------
+    strobe : pandas.DataFrame
+        From :func:`strobe_table`.
+    foot_radius : float
+        Foot arc radius ``R`` (m), to draw the feet.
+    slope : float
+        Ground slope (rad), to draw the ground.
+    title : str
+        Figure title (a default names the step).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig = _new_figure(8.0, 3.6)
+    ax = fig.add_subplot()
+    ax.set_aspect("equal")
+    n = len(strobe)
+    alphas = np.linspace(0.25, 1.0, n)
+    for i, row in enumerate(strobe.itertuples(index=False)):
+        stance = int(row.stance_leg)
+        hip = np.array([row.hip_x_m, row.hip_y_m])
+        for centre, ang, leg in (
+            ((row.stance_foot_x_m, row.stance_foot_y_m), row.stance_rad, stance),
+            ((row.swing_foot_x_m, row.swing_foot_y_m), row.swing_rad, 1 - stance),
+        ):
+            c = np.asarray(centre, dtype=float)
+            ax.plot([hip[0], c[0]], [hip[1], c[1]], color=LEG_COLOURS[leg], lw=2,
+                    alpha=float(alphas[i]), solid_capstyle="round")
+            arc = _foot_arc(np.zeros(2), float(ang) + slope, foot_radius) + c
+            ax.plot(arc[:, 0], arc[:, 1], color=LEG_COLOURS[leg], lw=1.5, alpha=float(alphas[i]))
+        ax.plot(hip[0], hip[1], "o", color="k", ms=6, alpha=float(alphas[i]))
+    ax.plot(strobe["hip_x_m"], strobe["hip_y_m"], ":", color="0.4", lw=1, label="hip path")
+    xs = np.concatenate([strobe[k].to_numpy() for k in ("hip_x_m", "swing_foot_x_m",
+                                                          "stance_foot_x_m")])
+    x0, x1 = float(xs.min()) - foot_radius - 0.1, float(xs.max()) + foot_radius + 0.1
+    ground = _to_world(np.array([[x0 / np.cos(slope), 0.0], [x1 / np.cos(slope), 0.0]]), slope)
+    ax.plot(ground[:, 0], ground[:, 1], color="0.3", lw=2, label="ground")
+    ax.set_xlim(x0, x1)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.legend(loc="upper right", fontsize=8)
+    dt = float(strobe["t_s"].iloc[-1])
+    ax.set_title(title or f"one step, {n} frames over {dt:.3f} s (darkest: heel strike); "
+                 f"blue and red: the two legs", fontsize=10)
+    return fig
+
+
+def phase_portrait_figure(
+    portrait: Any, *, title: str = "", labels: tuple[str, str] | None = None
+) -> Figure:
+    """Phase portrait of a walk: ``q3`` against ``q3_dot`` (and the swing leg's), per step.
+
+    Parameters
+    ----------
+    portrait : pandas.DataFrame
+        From :func:`phase_portrait_table`.
+    title : str
+        Figure title.
+    labels : (str, str), optional
+        Legend labels of the stance and swing curves (default: the compass gait's).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Solid: the stance leg ``(q3, q3_dot)``; dashed: the swing leg's absolute angle and
+        rate; grey dotted lines join the states just before and just after each heel strike
+        (the impact and the leg relabelling). On a limit cycle every step traces the same loop.
+    """
+    fig = _new_figure(6.4, 5.0)
+    ax = fig.add_subplot()
+    steps = np.unique(portrait["step"].to_numpy())
+    stance_label, swing_label = labels or (
+        "stance leg ($q_3$, $\\dot q_3$)", "swing leg ($q_3 + q_4$, $\\dot q_3 + \\dot q_4$)")
+    for k in steps:
+        d = portrait[portrait["step"] == k]
+        first = k == steps[0]
+        ax.plot(d["q3_rad"], d["q3_dot_rad_s"], "-", color="tab:blue", lw=1.5,
+                label=stance_label if first else None)
+        ax.plot(d["swing_rad"], d["swing_dot_rad_s"], "--", color="tab:red", lw=1.5,
+                label=swing_label if first else None)
+        nxt = portrait[portrait["step"] == k + 1]
+        if len(nxt):
+            a, b = d.iloc[-1], nxt.iloc[0]
+            ax.plot([a["q3_rad"], b["q3_rad"]], [a["q3_dot_rad_s"], b["q3_dot_rad_s"]], ":",
+                    color="0.5", lw=1, label="heel strike" if first else None)
+            ax.plot([a["swing_rad"], b["swing_rad"]],
+                    [a["swing_dot_rad_s"], b["swing_dot_rad_s"]], ":", color="0.5", lw=1)
+    d0 = portrait[portrait["step"] == steps[0]].iloc[0]
+    ax.plot(d0["q3_rad"], d0["q3_dot_rad_s"], "*", ms=12, mfc="white", mec="k", ls="none",
+            label="start (post-impact)")
+    ax.axhline(0.0, color="0.8", lw=0.8)
+    ax.axvline(0.0, color="0.8", lw=0.8)
+    ax.set_xlabel("leg angle from the slope's normal (rad)")
+    ax.set_ylabel("leg angular velocity (rad/s)")
+    ax.legend(loc="best", fontsize=8)
+    ax.set_title(title or f"phase portrait, {steps.size} steps", fontsize=10)
+    return fig
+
+
+def step_figure(step: Any, *, title: str = "") -> Figure:
+    """Joint angles and the ground reaction over one step (three panels).
+
+    Parameters
+    ----------
+    step : pandas.DataFrame
+        From :func:`step_table`.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Top: ``q3``, ``q4`` and the swing leg's angle (deg); middle: normal and tangential
+        ground force on the stance foot (N); bottom: the friction coefficient the step needs.
+    """
+    fig = _new_figure(7.0, 7.0)
+    ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True)
+    t = step["t_s"]
+    ax1.plot(t, np.rad2deg(step["q3_rad"]), color="tab:blue", label="stance leg $q_3$")
+    ax1.plot(t, np.rad2deg(step["swing_rad"]), color="tab:red", ls="--",
+             label="swing leg $q_3 + q_4$")
+    ax1.plot(t, np.rad2deg(step["q4_rad"]), color="tab:green", label="hip angle $q_4$")
+    ax1.set_ylabel("angle (deg)")
+    ax1.legend(loc="best", fontsize=8)
+    ax2.plot(t, step["normal_N"], color="k", label="normal")
+    ax2.plot(t, step["tangential_N"], color="tab:purple", ls="--", label="tangential")
+    ax2.axhline(0.0, color="0.8", lw=0.8)
+    ax2.set_ylabel("ground force on stance foot (N)")
+    ax2.legend(loc="best", fontsize=8)
+    ax3.plot(t, step["required_friction"], color="tab:orange")
+    ax3.set_ylabel("required friction |F_t|/F_n (-)")
+    ax3.set_xlabel("time since the step began (s)")
+    for ax in (ax1, ax2, ax3):
+        ax.grid(alpha=0.3)
+    ax1.set_title(title or "one step: joint angles and ground reaction", fontsize=10)
+    return fig
+
+
+def energy_figure(energy: Any, impacts: Any, *, title: str = "") -> Figure:
+    """Kinetic, potential and total energy over a walk, the heel-strike drops marked.
+
+    Parameters
+    ----------
+    energy : pandas.DataFrame
+        From :func:`walk_energy_table`.
+    impacts : pandas.DataFrame
+        From :func:`walk_impact_table`.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Potential and total energy are drawn relative to the initial potential energy ``U(0)``.
+        Between impacts the total is constant; at each heel strike (dashed lines) it drops by
+        the impact's ``T_c``.
+    """
+    fig = _new_figure(7.5, 4.6)
+    ax = fig.add_subplot()
+    U0 = float(energy["potential_J"].iloc[0])
+    t = energy["t_s"]
+    ax.plot(t, energy["kinetic_J"], color="tab:red", label="kinetic $T$")
+    ax.plot(t, energy["potential_J"] - U0, color="tab:blue", label="potential $U - U(0)$")
+    ax.plot(t, energy["total_J"] - U0, color="k", lw=2, label="total $T + U - U(0)$")
+    for i, r in enumerate(impacts.itertuples(index=False)):
+        ax.axvline(r.time_s, color="0.5", ls="--", lw=0.8,
+                   label="heel strike" if i == 0 else None)
+        ax.annotate(
+            "", xy=(r.time_s, r.total_after_J - U0), xytext=(r.time_s, r.total_before_J - U0),
+            arrowprops={"arrowstyle": "->", "color": "tab:orange", "lw": 1.5},
+        )
+        ax.text(r.time_s, r.total_before_J - U0, f" $T_c$ = {r.T_c_J:.3g} J", fontsize=7,
+                va="bottom", ha="left", color="tab:orange")
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("energy (J)")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    ax.set_title(title or "energy over the walk: constant between impacts, "
+                 "dropping by $T_c$ at heel strike", fontsize=10)
+    return fig
+
+
+def write_walk_figures(walker: CompassGait, walk: WalkResult, out_dir: str | Path) -> list[Path]:
+    """Write the walk's figures (PNG) and their data (CSV) into ``out_dir``.
+
+    Files: ``strobe.png/.csv`` (stick figures over the first step), ``phase_portrait.png/.csv``,
+    ``step.png/.csv`` (joint angles and ground reaction over the first step),
+    ``energy.png/.csv`` (energy over the walk) and ``impacts.csv`` (the energy drops at heel
+    strikes). See :func:`strobe_table`, :func:`phase_portrait_table`, :func:`step_table`,
+    :func:`walk_energy_table` and :func:`walk_impact_table` for the columns.
+
+    Returns
+    -------
+    list of Path
+        The written files.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    R = float(walker.foot_radius)
+    what = f"R = {R:g} m, slope = {np.rad2deg(walk.slope):.2f} deg"
+    strobe = strobe_table(walker, walk, 0)
+    portrait = phase_portrait_table(walk)
+    step = step_table(walker, walk, 0)
+    energy = walk_energy_table(walker, walk)
+    impacts = walk_impact_table(walker, walk)
+    figures = {
+        "strobe": (strobe_figure(strobe, foot_radius=R, slope=walk.slope,
+                                 title=f"compass gait, {what}: one step, strobed"), strobe),
+        "phase_portrait": (phase_portrait_figure(
+            portrait, title=f"compass gait, {what}: phase portrait"), portrait),
+        "step": (step_figure(step, title=f"compass gait, {what}: one step"), step),
+        "energy": (energy_figure(energy, impacts, title=f"compass gait, {what}: energy"),
+                   energy),
+    }
+    paths: list[Path] = []
+    for stem, (fig, table) in figures.items():
+        png, csv = out / f"{stem}.png", out / f"{stem}.csv"
+        fig.savefig(png)
+        table.to_csv(csv, index=False)
+        paths += [png, csv]
+    impacts_csv = out / "impacts.csv"
+    impacts.to_csv(impacts_csv, index=False)
+    paths.append(impacts_csv)
+    return paths
+
+
+def model_diagram(
+    walker: CompassGait | None = None, *, q3: float = 0.32, q4: float = -0.72
+) -> Figure:
+    """Fig. 1-style diagram of the circular-feet compass gait with its coordinates labelled.
+
+    Draws the walker at ``q3`` (right leg from the vertical, counter-clockwise positive, rad)
+    and ``q4`` (left leg relative to the right, rad), the right foot on the ground, and labels
+    the generalized coordinates ``q1 .. q4`` (``(q1, q2)``: the right foot's arc centre
+    ``P_R``), the lengths ``l``, ``a``, ``b``, ``R`` and the masses ``mH`` and ``m``.
+
+    Parameters
+    ----------
+    walker : CompassGait, optional
+        Scalar-parameter walker (default: the paper's, with ``R = 0.3 m``).
+    q3, q4 : float
+        Configuration drawn (rad).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.patches import Arc, Circle
+
+    w = walker if walker is not None else CompassGait(foot_radius=0.3)
+    l, b, R = float(w.leg_length), float(w.leg_com_from_hip), float(w.foot_radius)
+    a = l - b
+    q = np.array([0.9, R, q3, q4])
+    pos = w.positions(q)
+    H, PR, PL = pos.hip, pos.right_foot_centre, pos.left_foot_centre
+    th_r, th_l = q3, q3 + q4
+    up_r = np.array([-np.sin(th_r), np.cos(th_r)])  # foot centre towards hip
+    up_l = np.array([-np.sin(th_l), np.cos(th_l)])
+    tip_r, tip_l = PR - R * up_r, PL - R * up_l  # the legs' ends (feet's lowest points on axis)
+
+    fig = _new_figure(7.5, 6.2)
+    ax = fig.add_subplot()
+    ax.set_aspect("equal")
+    ax.axhline(0.0, color="0.3", lw=2)
+    ax.fill_between([-0.25, 2.1], -0.08, 0.0, color="0.85")
+    # legs and feet
+    for P, tip, th, colour, name in ((PR, tip_r, th_r, LEG_COLOURS[0], "R"),
+                                     (PL, tip_l, th_l, LEG_COLOURS[1], "L")):
+        ax.plot([H[0], tip[0]], [H[1], tip[1]], color=colour, lw=3, solid_capstyle="round")
+        arc = _foot_arc(P, th, R)
+        ax.plot(arc[:, 0], arc[:, 1], color=colour, lw=2.5)
+        ax.plot(*P, "o", ms=4, color=colour)
+        ax.annotate(f"$P_{name}$", (P[0], P[1]), xytext=(8, -2), textcoords="offset points",
+                    fontsize=11, color=colour)
+    # masses
+    ax.add_patch(Circle(tuple(H), 0.045, color="k", zorder=5))
+    ax.annotate("$m_H$", (H[0], H[1]), xytext=(10, 8), textcoords="offset points", fontsize=12)
+    for com, colour in ((pos.right_leg_com, LEG_COLOURS[0]), (pos.left_leg_com, LEG_COLOURS[1])):
+        ax.add_patch(Circle(tuple(com), 0.03, color=colour, zorder=5))
+        ax.annotate("$m$", (com[0], com[1]), xytext=(-18, 0), textcoords="offset points",
+                    fontsize=12, color=colour)
+
+    def dim(p0: NDArray[np.float64], p1: NDArray[np.float64], label: str,
+            offset: NDArray[np.float64], colour: str = "0.2") -> None:
+        o0, o1 = p0 + offset, p1 + offset
+        ax.annotate("", xy=tuple(o1), xytext=tuple(o0),
+                    arrowprops={"arrowstyle": "<->", "color": colour, "lw": 1})
+        for p, o in ((p0, o0), (p1, o1)):
+            ax.plot([p[0], o[0]], [p[1], o[1]], color=colour, lw=0.5, ls=":")
+        mid = 0.5 * (o0 + o1)
+        ax.annotate(label, tuple(mid), xytext=tuple(8 * offset / np.linalg.norm(offset)),
+                    textcoords="offset points", fontsize=12, color=colour,
+                    ha="center", va="center")
+
+    # lengths along the left leg: l = hip to foot end, b = hip to COM, a = COM to foot end
+    n_l = np.array([np.cos(th_l), np.sin(th_l)])  # normal to the left leg, pointing away
+    dim(H, tip_l, "$l$", -0.28 * n_l)
+    dim(H, pos.left_leg_com, "$b$", -0.14 * n_l)
+    dim(pos.left_leg_com, tip_l, "$a$", -0.14 * n_l)
+    # foot radius on the left foot
+    rim = PL + R * np.array([np.sin(th_l + 0.9), -np.cos(th_l + 0.9)])
+    ax.annotate("", xy=tuple(rim), xytext=tuple(PL),
+                arrowprops={"arrowstyle": "->", "color": "k", "lw": 1})
+    ax.annotate("$R$", tuple(0.5 * (PL + rim)), xytext=(6, -10), textcoords="offset points",
+                fontsize=12)
+    # q1, q2: position of P_R from the origin O
+    O = np.array([0.0, 0.0])
+    ax.plot(*O, "ko", ms=4)
+    ax.annotate("$O$", (0.0, 0.0), xytext=(-12, -14), textcoords="offset points", fontsize=11)
+    ax.annotate("", xy=(1.45, 0.0), xytext=(0.0, 0.0),
+                arrowprops={"arrowstyle": "->", "color": "0.4", "lw": 1})
+    ax.annotate("$x$", (1.45, 0.0), xytext=(2, -14), textcoords="offset points", fontsize=10)
+    ax.annotate("", xy=(0.0, 1.3), xytext=(0.0, 0.0),
+                arrowprops={"arrowstyle": "->", "color": "0.4", "lw": 1})
+    ax.annotate("$y$", (0.0, 1.3), xytext=(-12, -4), textcoords="offset points", fontsize=10)
+    ax.annotate("", xy=(PR[0], -0.16), xytext=(0.0, -0.16),
+                arrowprops={"arrowstyle": "<->", "color": "tab:green", "lw": 1})
+    ax.annotate("$q_1$", (0.5 * PR[0], -0.16), xytext=(0, -12), textcoords="offset points",
+                fontsize=12, color="tab:green", ha="center")
+    ax.plot([PR[0], PR[0]], [PR[1], -0.18], color="tab:green", lw=0.5, ls=":")
+    ax.annotate("", xy=(PR[0] + 0.12, PR[1]), xytext=(PR[0] + 0.12, 0.0),
+                arrowprops={"arrowstyle": "<->", "color": "tab:green", "lw": 1})
+    ax.annotate("$q_2$", (PR[0] + 0.12, 0.5 * PR[1]), xytext=(10, 0),
+                textcoords="offset points", fontsize=12, color="tab:green", va="center")
+    # q3: right leg from the vertical at P_R
+    ax.plot([PR[0], PR[0]], [PR[1], PR[1] + 0.55], color="tab:green", lw=0.8, ls="--")
+    ax.add_patch(Arc(tuple(PR), 0.44, 0.44, theta1=90.0, theta2=90.0 + np.rad2deg(th_r),
+                     color="tab:green", lw=1.2))
+    mid3 = PR + 0.22 * np.array([-np.sin(0.5 * th_r), np.cos(0.5 * th_r)])
+    ax.annotate("$q_3$", tuple(mid3), xytext=(2, 6), textcoords="offset points", fontsize=12,
+                color="tab:green", ha="center", va="bottom")
+    # q4: left leg relative to the right leg, at the hip
+    d_r = np.rad2deg(np.arctan2(-up_r[1], -up_r[0]))  # downward along the right leg
+    d_l = np.rad2deg(np.arctan2(-up_l[1], -up_l[0]))
+    ax.add_patch(Arc(tuple(H), 0.3, 0.3, theta1=min(d_r, d_l), theta2=max(d_r, d_l),
+                     color="tab:green", lw=1.2))
+    mid4 = np.deg2rad(0.5 * (d_r + d_l))
+    ax.annotate("$q_4$", tuple(H + 0.15 * np.array([np.cos(mid4), np.sin(mid4)])),
+                xytext=(0, -4), textcoords="offset points",
+                fontsize=12, color="tab:green", ha="center", va="top")
+    ax.set_xlim(-0.3, 2.1)
+    ax.set_ylim(-0.35, 1.35)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_title(
+        "compass gait with circular feet (paper Fig. 1): $q = (q_1, q_2, q_3, q_4)$,\n"
+        f"$l$ = {l:g} m, $a$ = {a:g} m, $b$ = {b:g} m, $R$ = {R:g} m, "
+        f"$m_H$ = {float(w.hip_mass):g} kg, $m$ = {float(w.leg_mass):g} kg",
+        fontsize=10,
+    )
+    return fig
+
+
+# -- walks of described walkers (TOML models) ----------------------------------------------------
+def model_phase_portrait_table(walker: Any, walk: WalkResult) -> Any:
+    """:func:`phase_portrait_table` of a described walker's walk.
+
+    ``q3_rad``, ``q3_dot_rad_s``: the stance (root) link's angle ``q[2]`` and rate;
+    ``swing_rad``, ``swing_dot_rad_s``: the absolute angle and rate of the link hanging from the
+    hip joint (the swing thigh or leg). Angles are linear in ``q``, so rates are the same map of
+    ``q_dot``.
+
+    Parameters
+    ----------
+    walker : BuiltWalker
+        With a joint named ``hip``.
+    walk : WalkResult
+        Its walk (``simulate_phased`` or ``simulate_phased_compiled``).
+    """
+    _check_walk(walk)
+    swing = walker.description.links[walker.joint_index("hip") - 2].name
+    return _pandas().DataFrame(
+        {
+            "t_s": walk.t,
+            "step": walk.step,
+            "q3_rad": walk.q[:, 2],
+            "q3_dot_rad_s": walk.q_dot[:, 2],
+            "swing_rad": walker.link_angles(walk.q)[swing],
+            "swing_dot_rad_s": walker.link_angles(walk.q_dot)[swing],
+        }
+    )
+
+
+def animate_model_walk(walker: Any, walk: WalkResult, path: str | Path, *,
+                       fps: float = 30.0) -> Path:
+    """Animate a described walker's walk to a GIF (or MP4 where ffmpeg exists).
+
+    Draws the ground, every link as a segment (stance-side links blue, the others red, by the
+    walker's current labelling), both feet's arcs and the point masses.
+
+    Parameters
+    ----------
+    walker : BuiltWalker
+    walk : WalkResult
+    path : path
+        Output file, ``.gif`` or ``.mp4``.
+    fps : float
+        Frames per second.
+
+    Returns
+    -------
+    Path
+        The written file.
+    """
+    out = Path(path)
+    suffix = out.suffix.lower()
+    if suffix not in (".gif", ".mp4"):
+        raise ValueError(f"animation file must end in .gif or .mp4, got {out.name!r}")
+    if suffix == ".mp4" and shutil.which("ffmpeg") is None:
+        raise ValueError("writing .mp4 needs ffmpeg on the PATH; use a .gif file instead")
+    times, idx = resample_walk(walk, fps)
+    desc = walker.description
+    pos = walker.positions(walk.q)
+    R = [float(np.asarray(r)) for r in walker.foot_radii]
+    slope = walk.slope
+    masses = [f"{pm.name}" for pm in desc.point_masses if f"{pm.name}" in pos]
+    every = np.concatenate([_to_world(v, slope) for v in pos.values()])
+    xmin, xmax = float(every[:, 0].min()) - 0.3, float(every[:, 0].max()) + 0.3
+    fig = Figure(figsize=(7, 3.6), dpi=90)
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    ax.set_aspect("equal")
+    ax.set_xlim(xmin, xmax)
+    ends = np.array([[xmin / np.cos(slope), 0.0], [xmax / np.cos(slope), 0.0]])
+    y_ground = _to_world(ends, slope)
+    ax.set_ylim(float(y_ground[:, 1].min()) - 0.1, float(every[:, 1].max()) + 0.2)
+    ax.plot(y_ground[:, 0], y_ground[:, 1], color="0.3", lw=2)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_title(f"{desc.name}, slope = {np.rad2deg(slope):.2f} deg")
+    stance_side = {lk.name for lk in desc.links if lk.name.startswith("stance")}
+    links = [ax.plot([], [], lw=3, solid_capstyle="round",
+                     color=LEG_COLOURS[0] if lk.name in stance_side else LEG_COLOURS[1])[0]
+             for lk in desc.links]
+    feet = [ax.plot([], [], lw=2, color=c)[0] for c in LEG_COLOURS]
+    (dots,) = ax.plot([], [], "o", color="k", ms=8)
+    label = ax.text(0.02, 0.92, "", transform=ax.transAxes)
+    arc = np.linspace(-0.8, 0.8, 25) - 0.5 * np.pi  # about straight down in the slope frame
+
+    def draw(frame: int) -> list[Artist]:
+        i = int(idx[frame])
+        for line, (a, b) in zip(links, walker.segments, strict=True):
+            seg = _to_world(np.vstack((pos[a][i], pos[b][i])), slope)
+            line.set_data(seg[:, 0], seg[:, 1])
+        for k, (foot, r) in enumerate(zip(("stance_foot", "swing_foot"), R, strict=True)):
+            c = pos[f"{foot}.centre"][i]
+            pts = _to_world(np.column_stack((c[0] + r * np.cos(arc), c[1] + r * np.sin(arc))),
+                            slope)
+            feet[k].set_data(pts[:, 0], pts[:, 1])
+        if masses:
+            m = _to_world(np.vstack([pos[n][i] for n in masses]), slope)
+            dots.set_data(m[:, 0], m[:, 1])
+        label.set_text(f"step {int(walk.step[i]) + 1}   t = {walk.t[i]:.2f} s")
+        return [*links, *feet, dots, label]
+
+    anim = FuncAnimation(fig, draw, frames=len(times), interval=1000.0 / fps, blit=False)
+    writer = PillowWriter(fps=round(fps)) if suffix == ".gif" else FFMpegWriter(fps=round(fps))
+    out.parent.mkdir(parents=True, exist_ok=True)
+    anim.save(str(out), writer=writer)
+    return out
+
+
+#: Walk figures drawn for the compass gait only (``write_walk_figures``), not for described
+#: walkers: the strobe and the step figure use the compass gait's two-link geometry.
+COMPASS_ONLY_WALK_FIGURES: tuple[str, ...] = ("strobe", "step")
+
+
+def write_model_walk_figures(walker: Any, walk: WalkResult, out_dir: str | Path) -> list[Path]:
+    """Write a described walker's walk figures (PNG) and data (CSV) into ``out_dir``.
+
+    Files: ``phase_portrait.png/.csv`` (:func:`model_phase_portrait_table`),
+    ``energy.png/.csv`` (:func:`walk_energy_table`: every impact, knee strikes included, drops
+    the total) and ``impacts.csv`` (:func:`walk_impact_table`, the heel strikes). The figures of
+    :data:`COMPASS_ONLY_WALK_FIGURES` are not drawn.
+
+    Returns
+    -------
+    list of Path
+        The written files.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    what = f"{walker.description.name}, slope = {np.rad2deg(walk.slope):.2f} deg"
+    portrait = model_phase_portrait_table(walker, walk)
+    energy = walk_energy_table(walker, walk)
+    impacts = walk_impact_table(walker, walk)
+    swing = walker.description.links[walker.joint_index("hip") - 2].name
+    figures = {
+        "phase_portrait": (phase_portrait_figure(
+            portrait, title=f"{what}: phase portrait",
+            labels=(f"stance ({walker.coordinate_names[2]})", f"swing ({swing}, absolute)")),
+            portrait),
+        "energy": (energy_figure(energy, impacts, title=f"{what}: energy"), energy),
+    }
+    paths: list[Path] = []
+    for stem, (fig, table) in figures.items():
+        png, csv = out / f"{stem}.png", out / f"{stem}.csv"
+        fig.savefig(png)
+        table.to_csv(csv, index=False)
+        paths += [png, csv]
+    impacts_csv = out / "impacts.csv"
+    impacts.to_csv(impacts_csv, index=False)
+    paths.append(impacts_csv)
+    return paths

@@ -1,28 +1,124 @@
 """Figures of the heel-strike study for any described walker (see
 :func:`heelstrike.analysis.model_gaits.impact_map`): ``T_c``, ``T_a`` and ``eta`` over two swept
-quantities, with the boundary of admissible impacts (trailing foot lifts) drawn dashed."""
+quantities.
+
+Only admissible impacts (the trailing foot lifts) are coloured; the other grid cells are grey,
+and the boundary between the two, drawn dashed, is taken from the same ``lifts`` decision that
+the CSV holds, so figure and data agree cell by cell. Drawn with matplotlib's object API (no
+pyplot state).
+"""
 
 from __future__ import annotations
 
 import csv
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.colors import ListedColormap
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+from numpy.typing import NDArray
 
 from heelstrike.analysis.model_gaits import ANGLE, ImpactMap
 
-__all__ = ["write_impact_map"]
+__all__ = ["LIFT_BOUNDARY_GID", "impact_map_figure", "write_impact_map"]
+
+#: ``gid`` of the dashed lift-boundary contour in :func:`impact_map_figure`.
+LIFT_BOUNDARY_GID = "lift_boundary"
+
+_NOT_LIFTING_COLOUR = "0.82"
 
 
-def _label(name: str) -> str:
-    return "impact angle (deg)" if name == ANGLE else name
+def _label(name: str, units: Mapping[str, str]) -> str:
+    if name == ANGLE:
+        return "impact angle (deg)"
+    return f"{name} ({units[name]})" if name in units else f"{name} (SI units)"
 
 
-def _axis(m: ImpactMap, name: str, values: np.ndarray) -> np.ndarray:
-    return np.degrees(values) if name == ANGLE else values
+def _axis(name: str, values: NDArray[np.float64]) -> NDArray[np.float64]:
+    return np.degrees(values) if name == ANGLE else np.asarray(values, dtype=float)
 
 
-def write_impact_map(m: ImpactMap, out_dir: str | Path) -> list[Path]:
+def impact_map_figure(m: ImpactMap, units: Mapping[str, str] | None = None) -> Figure:
+    """Three panels: ``T_c`` (J), ``T_a`` (J) and ``eta`` (J/m) over the two swept quantities.
+
+    Cells where the trailing foot does not lift (``m.lifts`` False: the impact is not
+    admissible) or the walker is invalid are masked grey; the lift boundary (gid
+    :data:`LIFT_BOUNDARY_GID`) is the 0.5 level of ``m.lifts``, so it runs between a lifting and
+    a non-lifting cell centre and never inside either region.
+
+    Parameters
+    ----------
+    m : ImpactMap
+    units : mapping of str to str, optional
+        Unit of each swept parameter (e.g. :func:`parameter_units`); the impact angle is in
+        degrees.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    u = dict(units or {})
+    fig = Figure(figsize=(14, 4.4), layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(1, 3)
+    xs, ys = _axis(m.x_name, m.x), _axis(m.y_name, m.y)
+    X, Y = np.meshgrid(xs, ys)
+    lifts = np.asarray(m.lifts, dtype=bool)
+    grey = ListedColormap([_NOT_LIFTING_COLOUR])
+    for ax, (title, Z) in zip(
+        axes, (("$T_c$ (J)", m.T_c), ("$T_a$ (J)", m.T_a), (r"$\eta$ (J/m)", m.eta)),
+        strict=True,
+    ):
+        shown = np.ma.masked_where(~lifts | ~np.isfinite(Z), Z)
+        if m.x.size > 1 and m.y.size > 1:
+            if not np.all(lifts):
+                ax.pcolormesh(X, Y, np.ma.masked_where(lifts, np.zeros(Z.shape)),
+                              shading="auto", cmap=grey)
+            if np.any(~np.ma.getmaskarray(shown)):
+                pc = ax.pcolormesh(X, Y, shown, shading="auto", cmap="viridis")
+                fig.colorbar(pc, ax=ax, label=title)
+            if np.any(lifts) and not np.all(lifts):
+                cs = ax.contour(X, Y, lifts.astype(float), levels=[0.5], colors="k",
+                                linestyles="--", linewidths=1.2)
+                cs.set_gid(LIFT_BOUNDARY_GID)
+            ax.set_xlabel(_label(m.x_name, u))
+            ax.set_ylabel(_label(m.y_name, u))
+        else:
+            one_x = m.x.size > 1
+            t = (xs if one_x else ys).ravel()
+            z, ok = np.asarray(Z, dtype=float).ravel(), lifts.ravel()
+            ax.plot(t[ok], z[ok], "o-", color="tab:blue")
+            if not np.all(ok):
+                ax.plot(t[~ok], z[~ok], "x", color="0.5")
+            ax.set_xlabel(_label(m.x_name if one_x else m.y_name, u))
+            ax.set_ylabel(title)
+        ax.set_title(title)
+    if m.x.size > 1 and m.y.size > 1:
+        handles = [Patch(color=_NOT_LIFTING_COLOUR, label="trailing foot does not lift"),
+                   Line2D([], [], color="k", ls="--", label="lift boundary")]
+    else:
+        handles = [Line2D([], [], color="tab:blue", marker="o", label="trailing foot lifts"),
+                   Line2D([], [], color="0.5", marker="x", ls="",
+                          label="trailing foot does not lift")]
+    fig.legend(handles=handles, loc="outside lower center", ncols=2, fontsize="small")
+    held = [] if ANGLE in (m.x_name, m.y_name) else [f"impact angle {np.degrees(m.angle):g} deg"]
+    for name, values in ((m.x_name, m.x), (m.y_name, m.y)):
+        if values.size == 1:
+            v = float(_axis(name, values)[0])
+            unit = "deg" if name == ANGLE else u.get(name, "(SI units)")
+            held.append(f"{'impact angle' if name == ANGLE else name} = {v:g} {unit}")
+    fig.suptitle(f"heel strike of '{m.walker_name}' at stance rate {m.stance_rate:g} rad/s"
+                 + "".join(f", {h}" for h in held))
+    return fig
+
+
+def write_impact_map(
+    m: ImpactMap, out_dir: str | Path, *, units: Mapping[str, str] | None = None
+) -> list[Path]:
     """Write ``impact_map.png`` (three panels) and ``impact_map.csv`` (one row per point).
 
     Parameters
@@ -30,17 +126,14 @@ def write_impact_map(m: ImpactMap, out_dir: str | Path) -> list[Path]:
     m : ImpactMap
     out_dir : str or Path
         Created if needed.
+    units : mapping of str to str, optional
+        Units of the swept parameters for the axis labels (see :func:`parameter_units`).
 
     Returns
     -------
     list of Path
         The files written.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     csv_path = out / "impact_map.csv"
@@ -54,25 +147,6 @@ def write_impact_map(m: ImpactMap, out_dir: str | Path) -> list[Path]:
                              repr(float(m.T_c[i, j])), repr(float(m.T_a[i, j])),
                              repr(float(m.eta[i, j])), repr(float(m.step_length[i, j])),
                              repr(float(m.trailing_normal_velocity[i, j])), int(m.lifts[i, j])])
-    X, Y = np.meshgrid(_axis(m, m.x_name, m.x), _axis(m, m.y_name, m.y))
-    fig, axes = plt.subplots(1, 3, figsize=(14, 4.2), constrained_layout=True)
-    for ax, (title, Z) in zip(
-        axes, (("$T_c$ (J)", m.T_c), ("$T_a$ (J)", m.T_a), (r"$\eta$ (J/m)", m.eta)),
-        strict=True,
-    ):
-        if m.x.size > 1 and m.y.size > 1:
-            pc = ax.pcolormesh(X, Y, np.ma.masked_invalid(Z), shading="auto", cmap="viridis")
-            fig.colorbar(pc, ax=ax)
-            v = m.trailing_normal_velocity
-            if np.any(np.isfinite(v)) and np.nanmin(v) < 0 < np.nanmax(v):
-                ax.contour(X, Y, v, levels=[0.0], colors="w", linestyles="--")
-        else:
-            ax.plot(X.ravel() if m.x.size > 1 else Y.ravel(), Z.ravel(), "o-")
-        ax.set_title(title)
-        ax.set_xlabel(_label(m.x_name))
-        ax.set_ylabel(_label(m.y_name))
-    fig.suptitle(f"heel strike of '{m.walker_name}' (dashed: trailing foot lift boundary)")
     png = out / "impact_map.png"
-    fig.savefig(png, dpi=120)
-    plt.close(fig)
+    impact_map_figure(m, units).savefig(png, dpi=120)
     return [png, csv_path]

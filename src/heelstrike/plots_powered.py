@@ -13,7 +13,7 @@ from matplotlib import colormaps
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-__all__ = ["cost_figure", "paper_comparison_figure", "write_cost_figures"]
+__all__ = ["BRANCH_CAPTION", "cost_figure", "paper_comparison_figure", "write_cost_figures"]
 
 
 def _new_figure(width: float, height: float) -> Figure:
@@ -41,12 +41,23 @@ def cost_figure(ds: xr.Dataset, variable: str = "cost_of_transport") -> Figure:
             y = ds[variable].sel(actuation=act).isel(radius=k).values
             colour = cmap(0.85 * k / max(len(radii) - 1, 1))
             ax.plot(ds[tgt].values, y, "o-", ms=3, color=colour, label=f"R = {r:g} m")
+            if "branch" in ds:
+                fresh = ds["branch"].sel(actuation=act).isel(radius=k).values == 1
+                ax.plot(ds[tgt].values[fresh], y[fresh], "s", ms=7, mfc="none", color=colour)
         ax.set_title(act)
         ax.set_xlabel(f"{tgt.replace('_', ' ')} ({ds[tgt].attrs.get('units', '')})")
         ax.set_ylabel(f"{variable.replace('_', ' ')} ({unit})")
         ax.grid(alpha=0.3)
     axes[-1].legend(fontsize=7, loc="best")
+    fig.suptitle(BRANCH_CAPTION, fontsize=7)
     return fig
+
+
+#: Figure caption of how the study chose its gaits (see ``cost_study.BRANCH_NOTE``).
+BRANCH_CAPTION = (
+    "each point: the cheapest periodic gait found\n(continuation from neighbours and fresh "
+    "searches;\nopen squares: found by a fresh search, not by continuation)"
+)
 
 
 def paper_comparison_figure(ds: xr.Dataset) -> Figure:
@@ -71,6 +82,7 @@ def paper_comparison_figure(ds: xr.Dataset) -> Figure:
         ax.grid(alpha=0.3, which="both")
     axes[0].set_ylabel("energy per metre (J/m)")
     axes[0].legend(fontsize=7, loc="lower left")
+    fig.suptitle(BRANCH_CAPTION, fontsize=7)
     return fig
 
 

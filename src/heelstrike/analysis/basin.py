@@ -13,25 +13,48 @@ its post-impact state comes within ``tol`` (Euclidean norm in section coordinate
 those steps (the walk is stopped there); it *keeps walking* if it completes every step without
 doing so (another attractor, or slow convergence); otherwise it failed, with the
 :class:`~heelstrike.dynamics.hybrid.WalkStatus` of the failure.
+
+**Described walkers** (TOML models): :func:`model_basin_of_attraction` draws the same
+classification on the slice of the walker's post-heel-strike section
+(:class:`~heelstrike.dynamics.phased.PhasedWalker`) spanned by the stance angle ``q[2]`` and its
+rate, the other section coordinates held at the fixed point, walked with
+:func:`~heelstrike.dynamics.compiled_phased.ensemble_walk_phased` (or the scipy reference).
 """
 
 from __future__ import annotations
 
+import functools
+import os
 import time
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from heelstrike.analysis.limit_cycle import find_limit_cycle
-from heelstrike.dynamics.compiled import STATUS_NAMES, ensemble_walk
+from heelstrike.dynamics.compiled import ensemble_walk
+from heelstrike.dynamics.hybrid import WalkStatus
 from heelstrike.models.compass import CompassGait
+
+if TYPE_CHECKING:
+    from heelstrike.dynamics.phased import PhasedWalker
+    from heelstrike.models.builder import BuiltWalker
+    from heelstrike.models.description import WalkerDescription
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["OUTCOMES", "Basin", "basin_of_attraction"]
+__all__ = [
+    "BYTES_PER_POINT",
+    "OUTCOMES",
+    "Basin",
+    "available_memory",
+    "basin_memory_estimate",
+    "basin_of_attraction",
+    "model_basin_of_attraction",
+    "model_slice_axes",
+]
 
 #: Outcome codes of the basin (``flag_values`` / ``flag_meanings`` of the dataset).
 OUTCOMES: tuple[str, ...] = (
@@ -47,6 +70,52 @@ OUTCOMES: tuple[str, ...] = (
 
 #: Default window of the slice: ``q3`` (rad) and ``q3_dot`` (rad/s) ranges.
 DEFAULT_RANGES: tuple[tuple[float, float], tuple[float, float]] = ((-0.5, -0.05), (0.3, 2.3))
+
+
+#: Memory (bytes) a basin needs per grid point, an upper estimate: the initial states, final
+#: states, statuses and step counts (about 120 B), the dataset, and the figure and netCDF file
+#: written from it.
+BYTES_PER_POINT = 256
+
+
+def basin_memory_estimate(grid: tuple[int, int]) -> int:
+    """Estimated peak memory (bytes) of a basin over ``grid`` points, figure and file included.
+
+    Parameters
+    ----------
+    grid : (int, int)
+        Number of ``q3`` and ``q3_dot`` values.
+    """
+    n3, nd = (int(v) for v in grid)
+    return n3 * nd * BYTES_PER_POINT
+
+
+def available_memory() -> int | None:
+    """Memory (bytes) available to a new computation without swapping, or None if unknown.
+
+    ``MemAvailable`` of ``/proc/meminfo`` on Linux, else the free physical pages.
+    """
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return int(os.sysconf("SC_AVPHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def _check_memory(grid: tuple[int, int]) -> None:
+    need, free = basin_memory_estimate(grid), available_memory()
+    if free is not None and need > free:
+        gib = 1024.0**3
+        raise MemoryError(
+            f"a {grid[0]}x{grid[1]} basin needs about {need / gib:.3g} GiB of memory and "
+            f"{free / gib:.3g} GiB are available: use a smaller grid"
+        )
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -65,12 +134,18 @@ class Basin:
         Fraction of the grid's initial states that converge to the gait.
     elapsed : float
         Wall time of the ensemble run (s).
+    axes : (int, int)
+        Indices in ``fixed_point`` of the slice's two coordinates (the dataset's two dims).
+    walker_steps : int
+        Heel strikes taken by all initial states together (the ensemble's work).
     """
 
     dataset: xr.Dataset
     fixed_point: FloatArray
     converging_fraction: float
     elapsed: float
+    axes: tuple[int, int] = (0, 1)
+    walker_steps: int = 0
 
     def fractions(self) -> dict[str, float]:
         """Fraction of the grid in every outcome."""
@@ -92,6 +167,7 @@ def basin_of_attraction(
     chunks: int = 16,
     parallel: bool | None = None,
     progress: bool = False,
+    store: str | os.PathLike[str] | None = None,
 ) -> Basin:
     """Basin of attraction of the passive period-one gait on the ``(q3, q3_dot)`` slice.
 
@@ -115,19 +191,30 @@ def basin_of_attraction(
     rtol, atol : float
         Integrator tolerances of the ensemble.
     chunks : int
-        Number of ensemble calls the grid is split into (for the progress bar).
+        Number of ensemble calls the grid is split into (blocks of whole ``q3`` rows, at most
+        one per row): the unit of the progress bar and of resuming.
     parallel : bool, optional
         See :func:`~heelstrike.dynamics.compiled.ensemble_walk`.
     progress : bool
         Show a progress bar.
+    store : path, optional
+        Zarr store of the ensemble run (:func:`~heelstrike.analysis.sweep.sweep`): every
+        finished block is kept, and an interrupted run with the same arguments resumes there.
 
     Returns
     -------
     Basin
+
+    Raises
+    ------
+    MemoryError
+        Before any computing, if :func:`basin_memory_estimate` exceeds
+        :func:`available_memory`; the message gives both.
     """
     n3, nd = (int(v) for v in grid)
     if n3 < 1 or nd < 1:
         raise ValueError(f"grid must be positive, got {grid}")
+    _check_memory((n3, nd))
     if steps < 1:
         raise ValueError("steps must be >= 1")
     (a0, a1), (b0, b1) = ranges
@@ -137,39 +224,27 @@ def basin_of_attraction(
         zstar = find_limit_cycle(walker, slope=slope, method="compiled").fixed_point
     else:
         zstar = np.asarray(fixed_point, dtype=float).reshape(3)
+    from heelstrike.analysis.sweep import sweep
+
     q3 = np.linspace(a0, a1, n3)
     q3d = np.linspace(b0, b1, nd)
-    A, B = np.meshgrid(q3, q3d, indexing="ij")
-    Z = np.column_stack((A.ravel(), B.ravel(), np.full(A.size, zstar[2])))
-    status = np.empty(A.size, dtype=np.int64)
-    taken = np.empty(A.size, dtype=np.int64)
-    zf = np.empty((A.size, 3))
-    parts = np.array_split(np.arange(A.size), max(1, min(int(chunks), A.size)))
-    bar: Any = None
-    if progress:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=A.size, desc="basin of attraction", unit="walker", leave=False)
+    rows = -(-n3 // max(1, min(int(chunks), n3)))  # q3 rows per ensemble call
+    func = functools.partial(
+        _basin_chunk, walker=walker, slope=float(slope), zstar=tuple(map(float, zstar)),
+        steps=int(steps), tol=float(tol), rtol=float(rtol), atol=float(atol), parallel=parallel,
+    )
     t0 = time.perf_counter()
-    for idx in parts:
-        res = ensemble_walk(
-            walker, Z[idx], slope, steps=steps, rtol=rtol, atol=atol, record=False,
-            stop_near=(zstar, tol), parallel=parallel,
-        )
-        status[idx], taken[idx], zf[idx] = res.status, res.steps, res.z
-        if bar is not None:
-            bar.update(len(idx))
+    res = sweep(
+        func, {"q3": q3, "q3_dot": q3d}, chunks={"q3": rows}, store=store, scheduler="sync",
+        progress=progress, units={"q3": "rad", "q3_dot": "rad s-1", "status": "1",
+                                  "steps": "1", "z": "1"},
+    )
+    status = np.asarray(res["status"].values).ravel()
+    taken = np.asarray(res["steps"].values).ravel()
+    zf = np.asarray(res["z"].values).reshape(-1, 3)
     elapsed = time.perf_counter() - t0
-    if bar is not None:
-        bar.close()
     dist = np.linalg.norm(zf - zstar, axis=1)
-    completed = status == STATUS_NAMES.index("completed")
-    outcome = np.empty(A.size, dtype=np.int8)
-    for code, name in enumerate(STATUS_NAMES):
-        if name in OUTCOMES:
-            outcome[status == code] = OUTCOMES.index(name)
-    outcome[completed] = OUTCOMES.index("keeps_walking")
-    outcome[completed & (dist < tol)] = OUTCOMES.index("converged")
+    outcome = _classify(status, dist, tol)
     shape = (n3, nd)
     dims = ("q3", "q3_dot")
     ds = xr.Dataset(
@@ -188,9 +263,11 @@ def basin_of_attraction(
             }),
         },
         coords={
-            "q3": ("q3", q3, {"units": "rad", "long_name": "post-impact stance angle q3"}),
+            "q3": ("q3", q3, {"units": "rad", "long_name": "post-impact stance angle q3",
+                              "label": r"post-impact stance angle $q_3$ (rad)"}),
             "q3_dot": ("q3_dot", q3d, {
                 "units": "rad s-1", "long_name": "post-impact stance angular velocity q3_dot",
+                "label": r"post-impact stance velocity $\dot q_3$ (rad/s)",
             }),
         },
         attrs={
@@ -218,4 +295,294 @@ def basin_of_attraction(
     )
     frac = float(np.mean(outcome == 0))
     ds.attrs["converging_fraction"] = frac
-    return Basin(dataset=ds, fixed_point=zstar, converging_fraction=frac, elapsed=elapsed)
+    return Basin(dataset=ds, fixed_point=zstar, converging_fraction=frac, elapsed=elapsed,
+                 walker_steps=int(taken.sum()))
+
+
+def _classify(status: NDArray[np.int64], dist: FloatArray, tol: float) -> NDArray[np.int8]:
+    """Outcome codes (:data:`OUTCOMES`) from walk status codes and final distances."""
+    completed = status == WalkStatus.COMPLETED.code
+    outcome = np.full(status.size, OUTCOMES.index("integration_failed"), dtype=np.int8)
+    for st in WalkStatus:
+        if st.value in OUTCOMES:
+            outcome[status == st.code] = OUTCOMES.index(st.value)
+    outcome[completed] = OUTCOMES.index("keeps_walking")
+    outcome[completed & (dist < tol)] = OUTCOMES.index("converged")
+    return outcome
+
+
+def _basin_chunk(
+    q3: FloatArray,
+    q3_dot: FloatArray,
+    *,
+    walker: CompassGait,
+    slope: float,
+    zstar: tuple[float, ...],
+    steps: int,
+    tol: float,
+    rtol: float,
+    atol: float,
+    parallel: bool | None,
+) -> dict[str, NDArray[np.generic]]:
+    """Sweep function: walk every ``(q3, q3_dot)`` point of the chunk (see the sweep contract).
+
+    Returns the ensemble's ``status`` and ``steps`` (int64) and final section point ``z``
+    (rad, rad/s), shapes ``(n_q3, n_q3_dot)`` and ``(n_q3, n_q3_dot, 3)``.
+    """
+    A, B = np.broadcast_arrays(np.asarray(q3, dtype=float), np.asarray(q3_dot, dtype=float))
+    z0 = np.column_stack((A.ravel(), B.ravel(), np.full(A.size, zstar[2])))
+    res = ensemble_walk(
+        walker, z0, slope, steps=steps, rtol=rtol, atol=atol, record=False,
+        stop_near=(np.asarray(zstar), tol), parallel=parallel,
+    )
+    return {
+        "status": np.asarray(res.status, dtype=np.int64).reshape(A.shape),
+        "steps": np.asarray(res.steps, dtype=np.int64).reshape(A.shape),
+        "z": np.asarray(res.z, dtype=float).reshape(*A.shape, 3),
+    }
+
+
+# -- described walkers (TOML models) -------------------------------------------------------------
+def model_slice_axes(walker: BuiltWalker) -> tuple[int, int]:
+    """Section indices of a described walker's basin slice: the stance angle and its rate.
+
+    The first section coordinate is the stance (root) link's angle ``q[2]`` and the first rate
+    is its rate ``q_dot[2]`` (:class:`~heelstrike.dynamics.phased.PhasedWalker`'s section).
+    """
+    from heelstrike.dynamics.phased import PhasedWalker
+
+    w = PhasedWalker.from_built(walker)
+    return 0, len(w.section_names) - len(w._section_v)
+
+
+def model_basin_of_attraction(
+    walker: BuiltWalker,
+    slope: float,
+    grid: tuple[int, int] = (100, 100),
+    ranges: tuple[tuple[float, float], tuple[float, float]] | None = None,
+    steps: int = 60,
+    *,
+    tol: float = 1e-3,
+    fixed_point: ArrayLike | None = None,
+    backend: str = "compiled",
+    rtol: float = 1e-8,
+    atol: float = 1e-9,
+    chunks: int = 16,
+    parallel: bool | None = None,
+    progress: bool = False,
+    store: str | os.PathLike[str] | None = None,
+) -> Basin:
+    """Basin of attraction of a described walker's passive gait on a 2-D section slice.
+
+    The slice passes through the gait's fixed point ``z*`` (post-heel-strike section,
+    :attr:`~heelstrike.dynamics.phased.PhasedWalker.section_names`) and is spanned by the
+    stance angle ``q[2]`` (rad) and its rate (rad/s) (:func:`model_slice_axes`); every other
+    section coordinate is held at its fixed-point value. Initial states are classified as in
+    :func:`basin_of_attraction`.
+
+    Parameters
+    ----------
+    walker : BuiltWalker
+        Any described walker with scalar parameters.
+    slope : float
+        Slope (rad).
+    grid : (int, int)
+        Number of stance angles and stance rates.
+    ranges : ((float, float), (float, float)), optional
+        Stance angle (rad) and rate (rad/s) windows, inclusive; default: ``[-0.25, +0.2]`` rad
+        and ``[-0.9, +1.1]`` rad/s about the fixed point.
+    steps : int
+        Largest number of steps walked from every initial state.
+    tol : float
+        Convergence radius around the fixed point (section norm, rad and rad/s mixed).
+    fixed_point : array_like, shape (d,), optional
+        The gait's section point; found with
+        :func:`~heelstrike.analysis.model_gaits.find_model_gait` if omitted.
+    backend : {"compiled", "scipy"}
+        :func:`~heelstrike.dynamics.compiled_phased.ensemble_walk_phased` (default) or a loop
+        of the scipy reference :func:`~heelstrike.dynamics.phased.simulate_phased`.
+    rtol, atol : float
+        Integrator tolerances.
+    chunks, parallel, progress, store
+        As :func:`basin_of_attraction`.
+
+    Returns
+    -------
+    Basin
+        Dataset dims are the two section names (e.g. ``stance_shank``, ``stance_shank_dot``).
+
+    Raises
+    ------
+    MemoryError, ValueError, GaitNotFoundError
+    """
+    from heelstrike.analysis.model_gaits import find_model_gait
+    from heelstrike.analysis.sweep import sweep
+    from heelstrike.dynamics.phased import PhasedWalker
+
+    if backend not in ("compiled", "scipy"):
+        raise ValueError(f"backend must be 'compiled' or 'scipy', got {backend!r}")
+    w = PhasedWalker.from_built(walker)
+    n1, n2 = (int(v) for v in grid)
+    if n1 < 1 or n2 < 1:
+        raise ValueError(f"grid must be positive, got {grid}")
+    _check_memory((n1, n2))
+    if steps < 1:
+        raise ValueError("steps must be >= 1")
+    names = w.section_names
+    d = len(names)
+    if fixed_point is None:
+        zstar = np.asarray(find_model_gait(w, slope=slope, backend=backend).cycle.fixed_point)
+    else:
+        zstar = np.asarray(fixed_point, dtype=float).reshape(d)
+    ia, ib = model_slice_axes(w)
+    if ranges is None:
+        ranges = ((zstar[ia] - 0.25, zstar[ia] + 0.2), (zstar[ib] - 0.9, zstar[ib] + 1.1))
+    (a0, a1), (b0, b1) = ranges
+    if not (a0 < a1 and b0 < b1):
+        raise ValueError(f"ranges must be increasing (min < max), got {ranges}")
+    xa = np.linspace(a0, a1, n1)
+    xb = np.linspace(b0, b1, n2)
+    xn, yn = names[ia], names[ib]
+    rows = -(-n1 // max(1, min(int(chunks), n1)))
+    func = functools.partial(
+        _model_basin_chunk, description=w.description, params=dict(w.params),
+        slope=float(slope), zstar=tuple(map(float, zstar)), axes=(ia, ib), steps=int(steps),
+        tol=float(tol), rtol=float(rtol), atol=float(atol), backend=backend, parallel=parallel,
+    )
+    t0 = time.perf_counter()
+    res = sweep(
+        func, {"a": xa, "b": xb}, chunks={"a": rows}, store=store, scheduler="sync",
+        progress=progress, units={"a": "rad", "b": "rad s-1", "status": "1", "steps": "1",
+                                  "z": "1"},
+    )
+    status = np.asarray(res["status"].values).ravel()
+    taken = np.asarray(res["steps"].values).ravel()
+    zf = np.asarray(res["z"].values).reshape(-1, d)
+    elapsed = time.perf_counter() - t0
+    dist = np.linalg.norm(zf - zstar, axis=1)
+    outcome = _classify(status, dist, tol)
+    shape = (n1, n2)
+    dims = (xn, yn)
+    held = [i for i in range(d) if i not in (ia, ib)]
+    unit = ["rad" if i < ib else "rad/s" for i in range(d)]
+    attrs: dict[str, Any] = {
+        "title": f"basin of attraction of the passive gait of {w.description.name!r}",
+        "model": w.description.name,
+        "section": f"post-heel-strike ({', '.join(names)}); slice ({xn}, {yn}) through the "
+        "fixed point, the others held at their fixed-point values",
+        "held": ", ".join(f"{names[i]} = {zstar[i]:.4f} {unit[i]}" for i in held),
+        "slope": float(slope),
+        "slope_units": "rad",
+        "backend": backend,
+        "max_steps": int(steps),
+        "tol": float(tol),
+        "rtol": float(rtol),
+        "atol": float(atol),
+    }
+    for i, name in enumerate(names):
+        attrs[f"fixed_point_{name}"] = float(zstar[i])
+    for name, value in w.params.items():
+        attrs[f"param_{name}"] = float(np.asarray(value))
+    ds = xr.Dataset(
+        {
+            "outcome": (dims, outcome.reshape(shape), {
+                "long_name": "fate of the initial state",
+                "flag_values": np.arange(len(OUTCOMES), dtype=np.int8),
+                "flag_meanings": " ".join(OUTCOMES),
+            }),
+            "steps": (dims, taken.reshape(shape).astype(np.int32), {
+                "long_name": "heel strikes taken (a converged walk stops on arrival)",
+                "units": "1",
+            }),
+            "distance": (dims, dist.reshape(shape), {
+                "long_name": "final distance to the fixed point in section coordinates",
+            }),
+        },
+        coords={
+            xn: (xn, xa, {"units": "rad", "long_name": f"post-heel-strike stance angle {xn}",
+                          "label": f"post-impact stance angle {xn} (rad)"}),
+            yn: (yn, xb, {"units": "rad s-1",
+                          "long_name": f"post-heel-strike stance angular velocity {yn}",
+                          "label": f"post-impact stance velocity {yn} (rad/s)"}),
+        },
+        attrs=attrs,
+    )
+    frac = float(np.mean(outcome == 0))
+    ds.attrs["converging_fraction"] = frac
+    return Basin(dataset=ds, fixed_point=zstar, converging_fraction=frac, elapsed=elapsed,
+                 axes=(ia, ib), walker_steps=int(taken.sum()))
+
+
+def _model_basin_chunk(
+    a: FloatArray,
+    b: FloatArray,
+    *,
+    description: WalkerDescription,
+    params: dict[str, Any],
+    slope: float,
+    zstar: tuple[float, ...],
+    axes: tuple[int, int],
+    steps: int,
+    tol: float,
+    rtol: float,
+    atol: float,
+    backend: str,
+    parallel: bool | None,
+) -> dict[str, NDArray[np.generic]]:
+    """Sweep function of :func:`model_basin_of_attraction` over the slice coordinates.
+
+    Returns ``status`` and ``steps`` (int64, shape ``(n_a, n_b)``) and the final section point
+    ``z`` (shape ``(n_a, n_b, d)``).
+    """
+    from heelstrike.dynamics.phased import PhasedWalker
+
+    w = PhasedWalker(description, **params)
+    A, B = np.broadcast_arrays(np.asarray(a, dtype=float), np.asarray(b, dtype=float))
+    d = len(zstar)
+    Z = np.tile(np.asarray(zstar), (A.size, 1))
+    Z[:, axes[0]] = A.ravel()
+    Z[:, axes[1]] = B.ravel()
+    if backend == "compiled":
+        from heelstrike.dynamics.compiled_phased import ensemble_walk_phased
+
+        res = ensemble_walk_phased(
+            w, Z, slope=slope, steps=steps, rtol=rtol, atol=atol,
+            stop_near=(np.asarray(zstar), tol), parallel=parallel,
+        )
+        status, taken, zf = res.status, res.steps, res.z
+    else:
+        status, taken, zf = _walk_points_scipy(w, Z, slope, steps, np.asarray(zstar), tol,
+                                               rtol, atol)
+    return {
+        "status": np.asarray(status, dtype=np.int64).reshape(A.shape),
+        "steps": np.asarray(taken, dtype=np.int64).reshape(A.shape),
+        "z": np.asarray(zf, dtype=float).reshape(*A.shape, d),
+    }
+
+
+def _walk_points_scipy(
+    walker: PhasedWalker, Z: FloatArray, slope: float, steps: int, zstar: FloatArray,
+    tol: float, rtol: float, atol: float,
+) -> tuple[NDArray[np.int64], NDArray[np.int64], FloatArray]:
+    """The ensemble with the scipy reference, one step at a time (stops on arrival)."""
+    from heelstrike.dynamics.phased import simulate_phased
+
+    n = Z.shape[0]
+    status = np.zeros(n, dtype=np.int64)
+    taken = np.zeros(n, dtype=np.int64)
+    zf = np.zeros_like(Z)
+    for i in range(n):
+        q, qd = walker.section_to_state(Z[i])
+        k = 0
+        code = WalkStatus.COMPLETED.code
+        while k < steps:
+            r = simulate_phased(walker, q, qd, slope=slope, steps=1, rtol=rtol, atol=atol)
+            k += r.n_steps
+            q, qd = r.final_q, r.final_q_dot
+            if not r.ok:
+                code = r.status.code
+                break
+            if float(np.linalg.norm(walker.state_to_section(q, qd) - zstar)) < tol:
+                break
+        status[i], taken[i], zf[i] = code, k, walker.state_to_section(q, qd)
+    return status, taken, zf

@@ -6,9 +6,11 @@ and its energy books stored: actuator work and collision loss per step (equal on
 gait, eq. 14-15 of Font & Kövecses 2008), ``eta = T_c / L`` (eq. 16) and the cost of transport
 ``W_act / (m g L)``. Gaits are continued along the grid (Newton starts from the neighbouring
 gaits), so the grid should be ordered and reasonably fine. Several gaits can share a target
-(e.g. push-off gaits with a long, cheap and a short, costly stance at the same speed); where
-both neighbours lead to different gaits the cheaper one is kept, but the study does not search
-for every branch.
+(e.g. push-off gaits with a long, cheap and a short, costly stance at the same speed), and
+continuation can follow a costly branch (it did near McGeer's wheel, ``R = l``): at every grid
+point fresh searches from several seeds are run as well, and the cheapest gait found is kept
+(``branch`` says whether it came from continuation or a fresh search, ``gaits_found`` how many
+distinct gaits were met).
 
 The paper's own measure is evaluated alongside: ``eta`` of the heel strike alone with the
 *imposed* pre-impact velocities of the paper (``q3_dot = 1 rad/s``, ``q4_dot = 0``) at the
@@ -18,6 +20,8 @@ real gait's own pre-impact velocities this is exactly the gait's ``eta``.
 
 from __future__ import annotations
 
+import functools
+import os
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -27,6 +31,7 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq
 
+from heelstrike._optional import write_netcdf
 from heelstrike.analysis.heel_strike import heel_strike_study
 from heelstrike.analysis.powered import (
     ACTUATIONS,
@@ -40,6 +45,7 @@ from heelstrike.models.compass import CompassGait
 FloatArray = NDArray[np.float64]
 
 __all__ = [
+    "BRANCH_NOTE",
     "GAIT_VARIABLES",
     "cost_study",
     "impact_angle_for_step_length",
@@ -117,6 +123,7 @@ def cost_study(
     actuation_options: dict[str, float] | None = None,
     radius_step: float = 0.05,
     progress: bool = False,
+    store: str | os.PathLike[str] | None = None,
     **kwargs: Any,
 ) -> xr.Dataset:
     """Cost of transport and energy books over foot radius x step length (or speed).
@@ -139,6 +146,11 @@ def cost_study(
         Largest radius increment (m) of the continuation between grid radii.
     progress : bool
         Show a progress bar.
+    store : path, optional
+        Directory of resumable Zarr stores (:func:`~heelstrike.analysis.sweep.sweep`), one per
+        actuation and radius row (``<store>/<actuation>/radius_<i>.zarr``; a row continues from
+        the gaits of the previous one, so a row is the unit of resuming): finished rows are
+        kept, and an interrupted study with the same arguments resumes after them.
     **kwargs
         Passed to :func:`~heelstrike.analysis.powered.find_powered_gait`.
 
@@ -160,6 +172,8 @@ def cost_study(
     T = np.asarray(targets, dtype=float).ravel()
     shape = (len(actuations), R.size, T.size)
     data = {k: np.full(shape, np.nan) for k in GAIT_VARIABLES}
+    branch = np.full(shape, np.nan)
+    n_found = np.zeros(shape, dtype=np.int64)
     failure = np.full(shape, "", dtype=object)
     total = shape[0] * shape[1] * shape[2]
     bar: Any = None
@@ -168,47 +182,25 @@ def cost_study(
 
         bar = tqdm(total=total, desc="cost study")
     for a, act in enumerate(actuations):
-        family = actuation_family(act, **(actuation_options or {}))
-        found: dict[tuple[int, int], FloatArray] = {}
-        for i, r in enumerate(R):
-            w = base.replace(foot_radius=float(r))
-            for j, v in enumerate(T):
-                speed = float(v) if target == "speed" else None
-                length = float(v) if target == "step_length" else None
-                # Newton from each neighbour (previous radius, previous target); where gaits
-                # coexist keep the one needing the least work; seed search if none converges
-                gaits: list[PoweredGait] = []
-                for key in ((i - 1, j), (i, j - 1)):
-                    if key not in found:
-                        continue
-                    # radius steps larger than ``radius_step`` are bridged by intermediate
-                    # radii so that the continuation stays on one branch
-                    r_from = float(R[key[0]])
-                    n_sub = max(1, int(np.ceil(abs(float(r) - r_from) / radius_step - 1e-9)))
-                    x = found[key]
-                    try:
-                        for r_sub in np.linspace(r_from, float(r), n_sub + 1)[1:]:
-                            g_sub = find_powered_gait(
-                                base.replace(foot_radius=float(r_sub)), actuation=family,
-                                guess=x, speed=speed, step_length=length, fallback=False,
-                                **kwargs)
-                            x = np.append(g_sub.fixed_point, g_sub.parameter)
-                        gaits.append(g_sub)
-                    except (PoweredGaitNotFoundError, ValueError):
-                        pass
-                if not gaits:
-                    try:
-                        gaits.append(find_powered_gait(
-                            w, actuation=family, speed=speed, step_length=length, **kwargs))
-                    except (PoweredGaitNotFoundError, ValueError) as exc:
-                        failure[a, i, j] = str(exc)
-                if gaits:
-                    g = min(gaits, key=lambda x: x.actuator_work)
-                    for k, val in _row(g).items():
-                        data[k][a, i, j] = val
-                    found[(i, j)] = np.append(g.fixed_point, g.parameter)
-                if bar is not None:
-                    bar.update(1)
+        previous: tuple[tuple[float, ...], ...] = ((),) * T.size
+        for i in range(R.size):
+            func = functools.partial(
+                _study_row, actuation=act,
+                actuation_options=tuple(sorted((actuation_options or {}).items())),
+                walker=base, radii=tuple(map(float, R)), i=i, previous=previous, kind=target,
+                radius_step=float(radius_step), options=tuple(sorted(kwargs.items())),
+            )
+            row = _run_row(func, T, target,
+                           None if store is None else Path(store) / act / f"radius_{i:03d}.zarr")
+            for k in GAIT_VARIABLES:
+                data[k][a, i] = row[k]
+            failure[a, i] = [_decode(b) for b in row["failure"]]
+            branch[a, i] = row["branch"]
+            n_found[a, i] = row["gaits_found"]
+            previous = tuple(tuple(map(float, x[:n])) for x, n in
+                             zip(row["seed"], row["seed_size"], strict=True))
+            if bar is not None:
+                bar.update(T.size)
     if bar is not None:
         bar.close()
     dims = ("actuation", "radius", target)
@@ -224,6 +216,11 @@ def cost_study(
         coords=coords,
     )
     ds["failure"] = (dims, failure.astype(str))
+    ds["branch"] = (dims, branch, {
+        "units": "1", "long_name": "how the kept (cheapest) gait was found",
+        "flag_values": "0 1", "flag_meanings": "continuation fresh_search"})
+    ds["gaits_found"] = (dims, n_found, {
+        "units": "1", "long_name": "distinct periodic gaits found meeting the target"})
     if target == "step_length":
         eta_p = np.full((R.size, T.size), np.nan)
         tc_p = np.full((R.size, T.size), np.nan)
@@ -241,19 +238,169 @@ def cost_study(
         hip_mass=float(base.hip_mass), leg_mass=float(base.leg_mass),
         leg_length=float(base.leg_length), leg_com_from_hip=float(base.leg_com_from_hip),
         leg_inertia=float(base.leg_inertia), gravity=float(base.gravity), target=target,
-        branch_note=(
-            "Several periodic gaits can meet one target; each entry is the gait reached by "
-            "continuation in foot radius from its neighbour, keeping the cheaper one found, "
-            "not a search of every branch. Near R = l the cheap push-off branch's largest "
-            "multiplier tends to 1 and continuation may land on a costlier branch."
-        ),
+        branch_note=BRANCH_NOTE,
     )
     return ds
+
+
+#: How each entry of the study was chosen (also on stdout and in the figures).
+BRANCH_NOTE = (
+    "Several periodic gaits can meet one target; each entry is the cheapest (least actuator "
+    "work) of all gaits found there: continuation from the neighbouring grid points and fresh "
+    "searches from several seeds ('branch': 0 continuation, 1 fresh search; 'gaits_found')."
+)
+
+_SEED_WIDTH = 16  # longest continuation seed (fixed point and actuation parameter) stored
+_FAILURE_BYTES = 512  # failure messages are stored as UTF-8, NUL-padded, truncated
+
+
+def _decode(raw: NDArray[np.uint8]) -> str:
+    return bytes(np.asarray(raw, dtype=np.uint8)).rstrip(b"\0").decode("utf-8", errors="ignore")
+
+
+def _run_row(
+    func: Any, targets: FloatArray, kind: str, store: Path | None
+) -> dict[str, NDArray[Any]]:
+    """One radius row: directly, or as a one-chunk sweep kept in (and resumed from) ``store``."""
+    if store is None:
+        return {k: np.asarray(v) for k, v in func(target=targets).items()}
+    from heelstrike.analysis.sweep import sweep
+
+    ds = sweep(func, {"target": targets}, chunks=targets.size, store=store, scheduler="sync",
+               progress=False, units={"target": "m" if kind == "step_length" else "m s-1"}
+               | {k: "1" for k in (*GAIT_VARIABLES, "failure", "seed", "seed_size", "branch",
+                                   "gaits_found")})
+    return {str(k): np.asarray(ds[k].values) for k in ds.data_vars}
+
+
+def _study_row(
+    target: FloatArray,
+    *,
+    actuation: str,
+    actuation_options: tuple[tuple[str, float], ...],
+    walker: CompassGait,
+    radii: tuple[float, ...],
+    i: int,
+    previous: tuple[tuple[float, ...], ...],
+    kind: str,
+    radius_step: float,
+    options: tuple[tuple[str, Any], ...],
+) -> dict[str, NDArray[Any]]:
+    """Gaits of radius row ``i`` over every target (a sweep function of the ``target`` grid).
+
+    ``previous`` holds the continuation seeds of row ``i - 1`` per target (empty: none). Returns
+    the :data:`GAIT_VARIABLES`, the row's own seeds (``seed``, NaN-padded, and ``seed_size``)
+    and ``failure`` messages (UTF-8 bytes), each of shape ``(J, ...)``.
+    """
+    T = np.asarray(target, dtype=float).ravel()
+    R = np.asarray(radii, dtype=float)
+    r = float(R[i])
+    base = walker
+    kwargs = dict(options)
+    family = actuation_family(actuation, **dict(actuation_options))
+    found: dict[tuple[int, int], FloatArray] = {
+        (i - 1, j): np.asarray(x, dtype=float) for j, x in enumerate(previous) if len(x)
+    }
+    out = {k: np.full(T.size, np.nan) for k in GAIT_VARIABLES}
+    failure = np.zeros((T.size, _FAILURE_BYTES), dtype=np.uint8)
+    seed = np.full((T.size, _SEED_WIDTH), np.nan)
+    seed_size = np.zeros(T.size, dtype=np.int64)
+    branch = np.full(T.size, np.nan)
+    n_found = np.zeros(T.size, dtype=np.int64)
+    w = base.replace(foot_radius=r)
+    for j, v in enumerate(T):
+        speed = float(v) if kind == "speed" else None
+        length = float(v) if kind == "step_length" else None
+        # Newton from each neighbour (previous radius, previous target); where gaits
+        # coexist keep the one needing the least work; seed search if none converges
+        gaits: list[PoweredGait] = []
+        for key in ((i - 1, j), (i, j - 1)):
+            if key not in found:
+                continue
+            # radius steps larger than ``radius_step`` are bridged by intermediate
+            # radii so that the continuation stays on one branch
+            r_from = float(R[key[0]])
+            n_sub = max(1, int(np.ceil(abs(r - r_from) / radius_step - 1e-9)))
+            x = found[key]
+            try:
+                for r_sub in np.linspace(r_from, r, n_sub + 1)[1:]:
+                    g_sub = find_powered_gait(
+                        base.replace(foot_radius=float(r_sub)), actuation=family,
+                        guess=x, speed=speed, step_length=length, fallback=False,
+                        **kwargs)
+                    x = np.append(g_sub.fixed_point, g_sub.parameter)
+                gaits.append(g_sub)
+            except (PoweredGaitNotFoundError, ValueError):
+                pass
+        n_continued = len(gaits)
+        # fresh searches too (issue 11.8): continuation may sit on a costlier branch
+        fresh, exc_fresh = _fresh_gaits(w, family, speed, length, kwargs)
+        gaits += fresh
+        if not gaits and exc_fresh is not None:
+            msg = str(exc_fresh).encode()[:_FAILURE_BYTES]
+            failure[j, :len(msg)] = np.frombuffer(msg, dtype=np.uint8)
+        if gaits:
+            best = int(np.argmin([x.actuator_work for x in gaits]))
+            g = gaits[best]
+            branch[j] = 0.0 if best < n_continued else 1.0
+            n_found[j] = _count_distinct(gaits)
+            for k, val in _row(g).items():
+                out[k][j] = val
+            found[(i, j)] = np.append(g.fixed_point, g.parameter)
+            n = min(found[(i, j)].size, _SEED_WIDTH)
+            seed[j, :n], seed_size[j] = found[(i, j)][:n], n
+    rows: dict[str, NDArray[Any]] = dict(out)
+    return rows | {"failure": failure, "seed": seed, "seed_size": seed_size,
+                   "branch": branch, "gaits_found": n_found}
+
+
+#: Extra Newton starts ``(q3_dot, q4_dot)`` (rad/s) of the fresh search, with ``q3`` from the
+#: target step length and the family's smallest seed parameter. They reach the cheap push-off
+#: branch near McGeer's wheel that the attractor seeds of ``find_powered_gait`` miss.
+_FRESH_STARTS = ((0.6, -0.3), (0.9, -0.3))
+
+
+def _fresh_gaits(
+    w: CompassGait, family: Any, speed: float | None, length: float | None,
+    kwargs: dict[str, Any],
+) -> tuple[list[PoweredGait], Exception | None]:
+    """Gaits found without continuation: the seed search of ``find_powered_gait`` and Newton
+    from :data:`_FRESH_STARTS`. Returns the gaits and the seed search's failure (or None)."""
+    gaits: list[PoweredGait] = []
+    err: Exception | None = None
+    try:
+        gaits.append(find_powered_gait(w, actuation=family, speed=speed, step_length=length,
+                                       **kwargs))
+    except (PoweredGaitNotFoundError, ValueError) as exc:
+        err = exc
+    q3 = impact_angle_for_step_length(w, length) if length is not None else 0.2
+    if not np.isfinite(q3):
+        return gaits, err
+    p0 = float(min(family.seed(w)))
+    # near the wheel the map is flat and Newton stalls at ~1e-8 (integrator noise floor)
+    opts = {"max_iter": 12, "max_evaluations": 200, "tol": 1e-7} | kwargs
+    for w3, w4 in _FRESH_STARTS:
+        try:
+            gaits.append(find_powered_gait(
+                w, actuation=family, speed=speed, step_length=length,
+                guess=[-q3, w3, w4, p0], fallback=False, **opts))
+        except (PoweredGaitNotFoundError, ValueError):
+            pass
+    return gaits, err
+
+
+def _count_distinct(gaits: Sequence[PoweredGait], tol: float = 1e-6) -> int:
+    """Number of distinct gaits (fixed point and parameter differ by more than ``tol``)."""
+    keys: list[FloatArray] = []
+    for g in gaits:
+        x = np.append(g.fixed_point, g.parameter)
+        if all(float(np.linalg.norm(x - k)) > tol for k in keys):
+            keys.append(x)
+    return len(keys)
 
 
 def save_study(ds: xr.Dataset, path: str | Path) -> Path:
     """Write the study to netCDF (``path``) and return the path."""
     p = Path(path)
     p.parent.mkdir(parents=True, exist_ok=True)
-    ds.to_netcdf(p)
-    return p
+    return write_netcdf(ds, p)

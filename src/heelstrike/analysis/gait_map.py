@@ -14,21 +14,36 @@ radius per chunk).
 from __future__ import annotations
 
 import functools
+import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from heelstrike.analysis.limit_cycle import GaitNotFoundError, find_limit_cycle
 from heelstrike.dynamics.compiled import COMPLETED, ensemble_walk
 from heelstrike.models.compass import CompassGait
 
+if TYPE_CHECKING:
+    import xarray as xr
+
+    from heelstrike.analysis.limit_cycle import BifurcationDiagram, Continuation
+    from heelstrike.dynamics.phased import PhasedWalker
+    from heelstrike.models.builder import BuiltWalker
+
 FloatArray = NDArray[np.float64]
 
-__all__ = ["GaitMap", "NewtonGait", "gait_map", "newton_gait"]
+__all__ = [
+    "GaitMap",
+    "NewtonGait",
+    "gait_map",
+    "model_bifurcation",
+    "model_gait_map",
+    "newton_gait",
+    "newton_gaits",
+]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -76,6 +91,121 @@ def _map_many(
     return out, res
 
 
+def newton_gaits(
+    walker: CompassGait,
+    slope: float,
+    guesses: ArrayLike,
+    *,
+    tol: float = 1e-10,
+    max_iter: int = 20,
+    fd_step: float = 1e-6,
+    rtol: float = 1e-11,
+    atol: float = 1e-11,
+    deadline: float | None = None,
+) -> list[NewtonGait | str]:
+    """Newton's method for ``P(z) = z`` on the compiled map, from many guesses at once.
+
+    All unconverged iterates advance together: each iteration maps every iterate and its 6
+    central-difference neighbours in one ensemble call, and the damped line search (halving
+    until the walker takes a step) evaluates every pending trial point in one call per halving.
+
+    Parameters
+    ----------
+    walker : CompassGait
+        The walker (scalar parameters).
+    slope : float
+        Slope (rad).
+    guesses : array_like, shape (K, 3) or (3,)
+        Starting section points ``(q3, q3_dot, q4_dot)`` (rad, rad/s).
+    tol : float
+        Convergence bound on ``|P(z) - z|``.
+    max_iter : int
+        Newton iterations per guess.
+    fd_step : float
+        Relative central-difference step of the Jacobian.
+    rtol, atol : float
+        Integrator tolerances.
+    deadline : float, optional
+        ``time.monotonic()`` value after which unconverged guesses are given up.
+
+    Returns
+    -------
+    list of NewtonGait or str
+        Per guess, the converged gait or the reason it failed.
+    """
+    Z = np.atleast_2d(np.asarray(guesses, dtype=float)).reshape(-1, 3).copy()
+    K = Z.shape[0]
+    out: list[NewtonGait | str] = [f"Newton did not converge in {max_iter} iterations"] * K
+    eye = np.eye(3)
+    active = np.arange(K)
+    for it in range(max_iter + 1):
+        if active.size == 0:
+            break
+        if deadline is not None and time.monotonic() > deadline:
+            for k in active:
+                out[k] = "time limit reached"
+            break
+        z = Z[active]  # (A, 3)
+        dzs = fd_step * np.maximum(1.0, np.abs(z))  # (A, 3)
+        zc, offset = z[:, None, :], eye * dzs[:, None, :]
+        pts = np.concatenate((zc, zc + offset, zc - offset), axis=1)  # (A, 7, 3)
+        mapped, res = _map_many(walker, pts.reshape(-1, 3), slope, rtol, atol)
+        mapped = mapped.reshape(-1, 7, 3)
+        Pz = mapped[:, 0]
+        jac = np.swapaxes((mapped[:, 1:4] - mapped[:, 4:7]) / (2.0 * dzs[:, :, None]), 1, 2)
+        F = Pz - z
+        residual = np.linalg.norm(F, axis=1)
+        keep = np.ones(active.size, dtype=bool)
+        for a, k in enumerate(active):
+            if not np.all(np.isfinite(Pz[a])):
+                out[k] = f"the walker fails to take a step from {np.round(z[a], 6)}"
+                keep[a] = False
+            elif residual[a] < tol:
+                keep[a] = False
+                if not np.all(np.isfinite(jac[a])):
+                    out[k] = "a step failed while estimating the Jacobian"
+                    continue
+                mult = np.linalg.eigvals(jac[a]).astype(complex)
+                mult = mult[np.argsort(-np.abs(mult), kind="stable")]
+                row = 7 * a
+                out[k] = NewtonGait(
+                    z=z[a].copy(),
+                    multipliers=mult,
+                    period=float(res.step_time[row, 0]),
+                    step_length=float(res.step_length[row, 0]),
+                    collision_loss=float(res.collision_loss[row, 0]),
+                    impact_angle=float(res.impact_angle[row, 0]),
+                    residual=float(residual[a]),
+                )
+            elif it == max_iter or not np.all(np.isfinite(jac[a])):
+                out[k] = (
+                    "a step failed while estimating the Jacobian"
+                    if not np.all(np.isfinite(jac[a]))
+                    else f"Newton did not converge in {max_iter} iterations"
+                )
+                keep[a] = False
+        step = np.zeros_like(z)
+        for a, k in enumerate(active):
+            if keep[a]:
+                try:
+                    step[a] = np.linalg.solve(jac[a] - eye, -F[a])
+                except np.linalg.LinAlgError:
+                    out[k] = "singular Newton system"
+                    keep[a] = False
+        # damped step, all pending iterates per halving: keep the walkers taking steps
+        lam = np.ones(active.size)
+        pending = keep.copy()
+        while np.any(pending) and np.min(lam[pending]) > 1e-3:
+            idx = np.flatnonzero(pending)
+            trial, _ = _map_many(walker, z[idx] + lam[idx, None] * step[idx], slope, rtol, atol)
+            fine = np.all(np.isfinite(trial), axis=1)
+            pending[idx[fine]] = False
+            lam[idx[~fine]] *= 0.5
+        Z[active[keep]] = z[keep] + lam[keep, None] * step[keep]
+        active = active[keep]
+    return out
+
+
 def newton_gait(
     walker: CompassGait,
     slope: float,
@@ -87,59 +217,27 @@ def newton_gait(
     rtol: float = 1e-11,
     atol: float = 1e-11,
 ) -> NewtonGait:
-    """Newton's method for ``P(z) = z`` on the compiled map, from ``guess``.
-
-    Every iteration maps ``z`` and its 6 central-difference neighbours in one ensemble call.
+    """Newton's method for ``P(z) = z`` on the compiled map, from ``guess`` (one start of
+    :func:`newton_gaits`).
 
     Raises
     ------
     GaitNotFoundError
         If a step fails or Newton does not converge.
     """
-    z = np.asarray(guess, dtype=float).reshape(3).copy()
-    eye = np.eye(3)
-
-    def evaluate(z: FloatArray) -> tuple[FloatArray, FloatArray, Any]:
-        dz = fd_step * np.maximum(1.0, np.abs(z))
-        Z = np.vstack((z, z + eye * dz, z - eye * dz))
-        out, res = _map_many(walker, Z, slope, rtol, atol)
-        jac = (out[1:4] - out[4:7]).T / (2.0 * dz)
-        return out[0], jac, res
-
-    for it in range(max_iter + 1):
-        Pz, jac, res = evaluate(z)
-        if not np.all(np.isfinite(Pz)):
-            raise GaitNotFoundError(f"the walker fails to take a step from {np.round(z, 6)}")
-        F = Pz - z
-        residual = float(np.linalg.norm(F))
-        if residual < tol:
-            if not np.all(np.isfinite(jac)):
-                raise GaitNotFoundError("a step failed while estimating the Jacobian")
-            mult = np.linalg.eigvals(jac).astype(complex)
-            mult = mult[np.argsort(-np.abs(mult), kind="stable")]
-            return NewtonGait(
-                z=z,
-                multipliers=mult,
-                period=float(res.step_time[0, 0]),
-                step_length=float(res.step_length[0, 0]),
-                collision_loss=float(res.collision_loss[0, 0]),
-                impact_angle=float(res.impact_angle[0, 0]),
-                residual=residual,
-            )
-        if it == max_iter or not np.all(np.isfinite(jac)):
-            break
-        try:
-            dz = np.linalg.solve(jac - eye, -F)
-        except np.linalg.LinAlgError as exc:
-            raise GaitNotFoundError("singular Newton system") from exc
-        lam = 1.0
-        while lam > 1e-3:
-            trial, _ = _map_many(walker, (z + lam * dz)[None, :], slope, rtol, atol)
-            if np.all(np.isfinite(trial)):
-                break
-            lam *= 0.5
-        z = z + lam * dz
-    raise GaitNotFoundError(f"Newton did not converge in {max_iter} iterations")
+    (result,) = newton_gaits(
+        walker,
+        slope,
+        np.asarray(guess, dtype=float).reshape(1, 3),
+        tol=tol,
+        max_iter=max_iter,
+        fd_step=fd_step,
+        rtol=rtol,
+        atol=atol,
+    )
+    if isinstance(result, str):
+        raise GaitNotFoundError(result)
+    return result
 
 
 _OUTPUTS = ("spectral_radius", "period", "step_length", "collision_loss", "impact_angle")
@@ -276,7 +374,7 @@ class GaitMap:
         (s), ``step_length`` (m), ``speed`` (m/s), ``collision_loss`` (J), ``impact_angle``
         (rad), ``fixed_point`` (+ ``section`` dim), ``most_negative_real_multiplier``; over
         ``foot_radius``: ``period_doubling_slope`` (rad, NaN if none in range). NaN where no
-        period-one gait was found.
+        period-one gait was found, and ``gait_found`` (bool) False there.
     """
 
     dataset: xr.Dataset
@@ -287,31 +385,55 @@ class GaitMap:
         return np.asarray(self.dataset["period_doubling_slope"].values)
 
 
+def _direct(walker: CompassGait, slope: float, rtol: float, atol: float) -> FloatArray:
+    """The preferred gait of the automatic search at one radius, or NaNs if there is none."""
+    try:
+        return find_limit_cycle(walker, slope=slope, method="compiled", rtol=rtol,
+                                atol=atol).fixed_point
+    except GaitNotFoundError:
+        return np.full(3, np.nan)
+
+
 def _anchors(
     walker: CompassGait, radii: FloatArray, slope: float, guess: ArrayLike | None,
     rtol: float, atol: float,
 ) -> list[FloatArray]:
-    """Gaits at ``slope`` for every radius, by continuation in the radius (sorted order)."""
+    """Gaits at ``slope`` for every radius (NaNs where none is found), by continuation in the
+    radius in sorted order, from the point foot's preferred gait (or from ``guess`` at the
+    smallest radius). Where the continuation breaks, the automatic search is run at that radius
+    and the continuation restarts from what it finds; radii without a gait get NaNs and never
+    abort the map."""
     order = np.argsort(radii)
-    base = walker.replace(foot_radius=float(radii[order[0]]))
     if guess is None:
-        z = find_limit_cycle(base, slope=slope, method="compiled", rtol=rtol, atol=atol).fixed_point
+        R_prev = 0.0
+        z = _direct(walker.replace(foot_radius=0.0), slope, rtol, atol)
     else:
-        z = newton_gait(base, slope, guess, rtol=rtol, atol=atol).z
+        R_prev = float(radii[order[0]])
+        try:
+            z = newton_gait(walker.replace(foot_radius=R_prev), slope, guess,
+                            rtol=rtol, atol=atol).z
+        except GaitNotFoundError:
+            z = np.full(3, np.nan)
     out: list[FloatArray] = [np.full(3, np.nan)] * radii.size
-    R_prev = float(radii[order[0]])
     for k in order:
         R = float(radii[k])
-        # sub-steps of at most 0.05 m in the radius keep Newton in its basin
-        n_sub = max(1, int(np.ceil(abs(R - R_prev) / 0.05)))
-        try:
-            for Rs in np.linspace(R_prev, R, n_sub + 1)[1:]:
-                z = newton_gait(walker.replace(foot_radius=float(Rs)), slope, z,
-                                rtol=rtol, atol=atol).z
-        except GaitNotFoundError:
-            break
-        out[k] = z
-        R_prev = R
+        zk = np.full(3, np.nan)
+        if np.all(np.isfinite(z)):
+            # sub-steps of at most 0.05 m in the radius keep Newton in its basin
+            n_sub = max(1, int(np.ceil(abs(R - R_prev) / 0.05)))
+            try:
+                zc = z
+                for Rs in np.linspace(R_prev, R, n_sub + 1)[1:]:
+                    zc = newton_gait(walker.replace(foot_radius=float(Rs)), slope, zc,
+                                     rtol=rtol, atol=atol).z
+                zk = zc
+            except GaitNotFoundError:
+                pass
+        if not np.all(np.isfinite(zk)):
+            zk = _direct(walker.replace(foot_radius=R), slope, rtol, atol)
+        out[k] = zk
+        if np.all(np.isfinite(zk)):
+            z, R_prev = zk, R
     return out
 
 
@@ -405,8 +527,261 @@ def gait_map(
     ds["stable"] = (ds["spectral_radius"] < 1.0).assign_attrs(
         long_name="all Floquet multipliers inside the unit circle"
     )
+    ds["gait_found"] = ds["spectral_radius"].notnull().assign_attrs(
+        long_name="a period-one gait was found (else every output is NaN)"
+    )
     ds.attrs.update(
         {f"walker_{k}": v for k, v in _walker_kwargs(walker).items()}
         | {"anchor_slope": float(S[anchor_index]), "rtol": rtol, "atol": atol}
     )
     return GaitMap(dataset=ds)
+
+
+# -- described walkers (TOML models) -------------------------------------------------------------
+def model_gait_map(
+    walker: BuiltWalker,
+    parameter: str,
+    values: ArrayLike,
+    slopes: ArrayLike,
+    *,
+    backend: str = "compiled",
+    progress: bool = False,
+) -> GaitMap:
+    """Period-one gaits of a described walker over (one parameter, slope), by continuation.
+
+    For every parameter value (in the given order) the gait at the anchor slope (the grid slope
+    closest to 3 deg) is found with :func:`~heelstrike.analysis.model_gaits.find_model_gait`,
+    from the previous value's anchor gait (or the automatic search for the first one or after a
+    failure); the branch is then continued up and down the slopes, each Newton solve starting
+    from the neighbouring slope's fixed point.
+
+    Parameters
+    ----------
+    walker : BuiltWalker
+        Base walker (its other parameter values are kept).
+    parameter : str
+        Name of the swept description parameter (SI units).
+    values : array_like, shape (K,)
+        Its values.
+    slopes : array_like, shape (S,)
+        Increasing slopes (rad), > 0.
+    backend : {"compiled", "scipy"}
+        Step simulator of ``find_model_gait``.
+    progress : bool
+        One line per parameter value on stderr.
+
+    Returns
+    -------
+    GaitMap
+        Dataset over ``(parameter, slope)`` with the variables of :func:`gait_map` (the
+        ``fixed_point`` over the walker's ``section`` names; ``collision_loss`` the sum of
+        ``T_c`` over the step's impacts) and ``period_doubling_slope`` per value, linearly
+        interpolated between the grid slopes where the most negative real multiplier crosses
+        -1 (NaN if none in range).
+
+    Raises
+    ------
+    ValueError
+        Unknown parameter, or slopes not positive and increasing.
+    """
+    import sys
+
+    import xarray as xr
+
+    from heelstrike.analysis.model_gaits import find_model_gait
+    from heelstrike.dynamics.phased import PhasedWalker
+
+    w0 = PhasedWalker.from_built(walker)
+    if parameter not in w0.params:
+        raise ValueError(f"unknown parameter {parameter!r}; known: {sorted(w0.params)}")
+    P = np.asarray(values, dtype=float).ravel()
+    S = np.asarray(slopes, dtype=float).ravel()
+    if P.size < 1 or S.size < 1:
+        raise ValueError("values and slopes must not be empty")
+    if np.any(np.diff(S) <= 0) or S[0] <= 0:
+        raise ValueError("slopes must be positive and increasing")
+    d = len(w0.section_names)
+    shape = (P.size, S.size)
+    out = {k: np.full(shape, np.nan) for k in (
+        "spectral_radius", "period", "step_length", "collision_loss", "impact_angle",
+        "most_negative_real_multiplier")}
+    fixed = np.full((*shape, d), np.nan)
+    pd = np.full(P.size, np.nan)
+    anchor = int(np.argmin(np.abs(S - np.deg2rad(3.0))))
+    prev_anchor: FloatArray | None = None
+    for i, value in enumerate(P):
+        try:
+            w = w0.replace(**{parameter: float(value)})
+        except ValueError:  # the description's constraints exclude this value: no gait
+            prev_anchor = None
+            continue
+
+        def solve(
+            j: int, guess: FloatArray | None, w: PhasedWalker = w, i: int = i
+        ) -> FloatArray | None:
+            try:
+                g = find_model_gait(w, slope=float(S[j]), guess=guess, backend=backend)
+            except (GaitNotFoundError, ValueError):
+                return None
+            mult = np.asarray(g.cycle.multipliers)
+            real = mult[np.abs(mult.imag) < 1e-9].real
+            out["spectral_radius"][i, j] = float(np.max(np.abs(mult)))
+            out["period"][i, j] = g.cycle.period
+            out["step_length"][i, j] = g.cycle.step_length
+            out["collision_loss"][i, j] = g.collision_loss
+            out["impact_angle"][i, j] = g.cycle.impact_angle
+            out["most_negative_real_multiplier"][i, j] = (
+                float(real.min()) if real.size else np.nan)
+            fixed[i, j] = g.cycle.fixed_point
+            return np.asarray(g.cycle.fixed_point, dtype=float)
+
+        z = solve(anchor, prev_anchor)
+        if z is None and prev_anchor is not None:
+            z = solve(anchor, None)
+        prev_anchor = z
+        for direction in (1, -1):
+            guess = z
+            j = anchor + direction
+            while guess is not None and 0 <= j < S.size:
+                guess = solve(j, guess)
+                j += direction
+        m = out["most_negative_real_multiplier"][i]
+        for j in range(S.size - 1):
+            if m[j] > -1.0 >= m[j + 1]:
+                pd[i] = S[j] + (S[j + 1] - S[j]) * (m[j] + 1.0) / (m[j] - m[j + 1])
+                break
+        if progress:
+            print(f"heelstrike: {parameter} = {value:g}: gaits at "
+                  f"{int(np.isfinite(out['period'][i]).sum())}/{S.size} slopes",
+                  file=sys.stderr)
+    from heelstrike.models.description import parameter_units
+
+    unit = parameter_units(w0.description).get(parameter, "SI units")
+    dims = (parameter, "slope")
+    units = {"spectral_radius": "1", "period": "s", "step_length": "m", "collision_loss": "J",
+             "impact_angle": "rad", "most_negative_real_multiplier": "1"}
+    ds = xr.Dataset(
+        {k: (dims, v, {"units": units[k]}) for k, v in out.items()},
+        coords={
+            parameter: (parameter, P, {"long_name": f"walker parameter {parameter}",
+                                       "units": unit, "label": f"{parameter} ({unit})"}),
+            "slope": ("slope", S, {"units": "rad"}),
+            "section": ("section", list(w0.section_names)),
+        },
+    )
+    ds["fixed_point"] = ((*dims, "section"), fixed, {
+        "long_name": "post-heel-strike fixed point (section coordinates: rad, rad/s)"})
+    ds["period_doubling_slope"] = ((parameter,), pd, {
+        "units": "rad", "long_name": "slope where a multiplier crosses -1 (period doubling)"})
+    ds["speed"] = (ds["step_length"] / ds["period"]).assign_attrs(units="m s-1")
+    ds["stable"] = (ds["spectral_radius"] < 1.0).assign_attrs(
+        long_name="all Floquet multipliers inside the unit circle")
+    ds["gait_found"] = ds["spectral_radius"].notnull().assign_attrs(
+        long_name="a period-one gait was found (else every output is NaN)")
+    ds.attrs.update({"model": w0.description.name, "parameter": parameter, "backend": backend,
+                     "anchor_slope": float(S[anchor])}
+                    | {f"param_{k}": float(np.asarray(v)) for k, v in w0.params.items()
+                       if k != parameter})
+    return GaitMap(dataset=ds)
+
+
+def model_bifurcation(
+    walker: BuiltWalker,
+    slopes: ArrayLike,
+    *,
+    transient: int = 50,
+    record: int = 16,
+    continuation_points: int = 12,
+    backend: str = "compiled",
+    rtol: float = 1e-9,
+    atol: float = 1e-10,
+) -> tuple[BifurcationDiagram, Continuation]:
+    """Slope bifurcation diagram of a described walker and its period-one branch.
+
+    Brute force as :func:`~heelstrike.analysis.limit_cycle.bifurcation_diagram` (Goswami et al.
+    1998): from the gait at the first slope, each slope's walk starts from the previous slope's
+    last post-impact state, takes ``transient`` steps, and the next ``record`` impact angles
+    (stance angle ``q[2]`` at heel strike, rad) and step durations (s) are kept. The branch:
+    :func:`~heelstrike.analysis.model_gaits.find_model_gait` continued over
+    ``continuation_points`` slopes (each from the previous fixed point; it stops at the first
+    slope without a gait), with the slopes where a real multiplier crosses -1 (linear
+    interpolation).
+
+    Parameters
+    ----------
+    walker : BuiltWalker
+    slopes : array_like, shape (K,)
+        Increasing slopes (rad), > 0.
+    transient, record : int
+        Steps discarded and recorded per slope.
+    continuation_points : int
+        Slopes of the branch, evenly spaced over the same range.
+    backend : {"compiled", "scipy"}
+        Step simulator.
+    rtol, atol : float
+        Integrator tolerances of the brute-force walks.
+
+    Returns
+    -------
+    (BifurcationDiagram, Continuation)
+
+    Raises
+    ------
+    GaitNotFoundError
+        If there is no gait at the first slope.
+    """
+    from heelstrike.analysis.limit_cycle import (
+        BifurcationDiagram,
+        Continuation,
+        PoincareMap,
+    )
+    from heelstrike.analysis.model_gaits import find_model_gait
+    from heelstrike.dynamics.phased import PhasedWalker, simulate_phased
+
+    if backend == "compiled":
+        from heelstrike.dynamics.compiled_phased import simulate_phased_compiled as simulator
+    elif backend == "scipy":
+        simulator = simulate_phased
+    else:
+        raise ValueError(f"backend must be 'compiled' or 'scipy', got {backend!r}")
+    w = PhasedWalker.from_built(walker)
+    sl = np.asarray(slopes, dtype=float).ravel()
+    if sl.size < 1 or np.any(np.diff(sl) <= 0) or sl[0] <= 0:
+        raise ValueError("slopes must be positive and increasing")
+    first = find_model_gait(w, slope=float(sl[0]), backend=backend)
+    angles = np.full((sl.size, record), np.nan)
+    periods = np.full((sl.size, record), np.nan)
+    z = np.asarray(first.cycle.fixed_point, dtype=float)
+    for i, s in enumerate(sl):
+        pmap = PoincareMap(walker=w, slope=float(s), rtol=rtol, atol=atol, simulator=simulator)
+        res = pmap.walk(z, transient + record)
+        rec = res.impacts[transient:]
+        angles[i, : len(rec)] = [r.impact_angle for r in rec]
+        periods[i, : len(rec)] = [r.step_duration for r in rec]
+        if res.ok:
+            z = w.state_to_section(res.final_q, res.final_q_dot)
+    values: list[float] = []
+    cycles = []
+    stopped = None
+    guess = np.asarray(first.cycle.fixed_point, dtype=float)
+    for s in np.linspace(sl[0], sl[-1], max(int(continuation_points), 1)):
+        try:
+            g = find_model_gait(w, slope=float(s), guess=guess, backend=backend)
+        except GaitNotFoundError as exc:
+            stopped = f"no gait at slope {np.rad2deg(s):.4g} deg: {exc}"
+            break
+        values.append(float(s))
+        cycles.append(g.cycle)
+        guess = np.asarray(g.cycle.fixed_point, dtype=float)
+    mnr = []
+    for c in cycles:
+        m = np.asarray(c.multipliers)
+        real = m[np.abs(m.imag) < 1e-9].real
+        mnr.append(float(real.min()) if real.size else np.nan)
+    pd = [values[k] + (values[k + 1] - values[k]) * (mnr[k] + 1.0) / (mnr[k] - mnr[k + 1])
+          for k in range(len(mnr) - 1) if mnr[k] > -1.0 >= mnr[k + 1]]
+    return (
+        BifurcationDiagram(slopes=sl, impact_angles=angles, periods=periods),
+        Continuation(parameter="slope", values=np.asarray(values), cycles=tuple(cycles),
+                     period_doubling=np.asarray(pd, dtype=float), stopped=stopped),
+    )

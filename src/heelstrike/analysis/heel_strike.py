@@ -19,18 +19,92 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from heelstrike.core._scalars import python_scalars
 from heelstrike.core.impact import ImpactResult, impact
+from heelstrike.models.base import PlanarWalker
 from heelstrike.models.compass import CompassGait, heel_strike_state
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
-__all__ = ["LIFT_TOLERANCE", "HeelStrikeStudy", "heel_strike_study", "step_length"]
+__all__ = [
+    "CONTACT_TOLERANCE",
+    "LIFT_TOLERANCE",
+    "HeelStrikeStudy",
+    "NotAHeelStrikeError",
+    "check_heel_strike_state",
+    "heel_strike_study",
+    "step_length",
+    "trailing_foot_lifts",
+]
 
 #: Relative tolerance on the trailing foot's post-impact vertical velocity ``q2_dot+``: the foot
 #: lifts if ``q2_dot+ > LIFT_TOLERANCE * l (|q3_dot-| + |q4_dot-|)``. It absorbs round-off, so that
 #: McGeer's wheel (``R = l``, where ``q2_dot+ = 0`` exactly) is reported as not lifting.
 LIFT_TOLERANCE = 1e-9
+
+def trailing_foot_lifts(normal_velocity: ArrayLike, velocity_scale: ArrayLike) -> BoolArray:
+    """The one definition of an admissible heel strike: the trailing foot lifts.
+
+    Parameters
+    ----------
+    normal_velocity : array_like, shape (...)
+        Post-impact normal (upward) velocity of the trailing foot's contact point (m/s),
+        ``q2_dot+`` for the paper's walker.
+    velocity_scale : array_like, shape (...)
+        Size of the pre-impact velocities (m/s), e.g. ``l (|q3_dot-| + |q4_dot-|)``.
+
+    Returns
+    -------
+    ndarray of bool, shape (...)
+        ``normal_velocity > LIFT_TOLERANCE * velocity_scale``.
+    """
+    v = np.asarray(normal_velocity, dtype=float)
+    return np.asarray(v > LIFT_TOLERANCE * np.asarray(velocity_scale, dtype=float))
+
+
+#: Largest foot clearance accepted in a heel-strike state, relative to the leg length: at a heel
+#: strike both feet touch the ground (``|clearance| <= CONTACT_TOLERANCE * l``; 1 um for a
+#: 1 m leg, loose enough for a state copied with six decimals).
+CONTACT_TOLERANCE = 1e-6
+
+
+class NotAHeelStrikeError(ValueError):
+    """A configuration given as a heel strike does not have both feet on the ground."""
+
+
+def check_heel_strike_state(
+    walker: PlanarWalker, q: ArrayLike, *, rtol: float = CONTACT_TOLERANCE
+) -> None:
+    """Check that ``q`` is a heel-strike configuration: both feet touch the ground.
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+        Scalar-parameter walker.
+    q : array_like, shape (n,)
+        Pre-impact configuration (m, rad).
+    rtol : float
+        Accepted ``|clearance|`` of each foot relative to the leg length
+        (:attr:`~heelstrike.models.base.PlanarWalker.scale`).
+
+    Raises
+    ------
+    NotAHeelStrikeError
+        If a foot is above (or below) the ground by more than ``rtol * l``; the message gives
+        both clearances (m).
+    """
+    q_ = np.asarray(q, dtype=float)
+    if not np.all(np.isfinite(q_)):
+        raise NotAHeelStrikeError("the configuration must be finite")
+    tol = rtol * float(walker.scale.leg_length)
+    stance = float(walker.foot_clearance(q_, "right"))
+    swing = float(walker.foot_clearance(q_, "left"))
+    if abs(stance) > tol or abs(swing) > tol:
+        raise NotAHeelStrikeError(
+            f"not a heel strike: the stance foot is {stance:.6g} m and the swing foot "
+            f"{swing:.6g} m above the ground; both must touch it (|clearance| <= {tol:.3g} m)"
+        )
 
 
 def step_length(walker: CompassGait, impact_angle: ArrayLike) -> FloatArray:
@@ -103,28 +177,38 @@ class HeelStrikeStudy:
     degenerate_wheel : ndarray of bool, shape (...)
         ``R = l`` (McGeer's synthetic wheel): both feet are arcs of one circle about the hip,
         nothing is lost (``T_c = 0``) and the trailing foot neither lifts nor presses.
+        For one heel strike (shape ``()``) the fields of shape ``(...)`` are Python ``float``
+        and ``bool``.
     impact : ImpactResult
         The full result of :func:`heelstrike.core.impact.impact` (projectors, impulses).
     """
 
-    impact_angle: FloatArray
-    foot_radius: FloatArray
-    leg_length: FloatArray
+    impact_angle: FloatArray | float
+    foot_radius: FloatArray | float
+    leg_length: FloatArray | float
     restitution: float
     state: FloatArray
     velocity_pre: FloatArray
     velocity_post: FloatArray
     constraint_impulse: FloatArray
-    kinetic_energy: FloatArray
-    kinetic_energy_constrained: FloatArray
-    kinetic_energy_admissible: FloatArray
-    kinetic_energy_post: FloatArray
-    energy_lost: FloatArray
-    step_length: FloatArray
-    eta: FloatArray
-    trailing_foot_lifts: BoolArray
-    degenerate_wheel: BoolArray
+    kinetic_energy: FloatArray | float
+    kinetic_energy_constrained: FloatArray | float
+    kinetic_energy_admissible: FloatArray | float
+    kinetic_energy_post: FloatArray | float
+    energy_lost: FloatArray | float
+    step_length: FloatArray | float
+    eta: FloatArray | float
+    trailing_foot_lifts: BoolArray | bool
+    degenerate_wheel: BoolArray | bool
     impact: ImpactResult
+
+    def __post_init__(self) -> None:
+        # One heel strike (shape ()): the fields of shape (...) are Python floats and bools.
+        python_scalars(self, (
+            "impact_angle", "foot_radius", "leg_length", "kinetic_energy",
+            "kinetic_energy_constrained", "kinetic_energy_admissible", "kinetic_energy_post",
+            "energy_lost", "step_length", "eta", "trailing_foot_lifts", "degenerate_wheel",
+        ))
 
     @property
     def trailing_foot_velocity(self) -> FloatArray:
@@ -168,7 +252,7 @@ def heel_strike_study(
     M = walker.mass_matrix(q)
     A = walker.contact_jacobian(q, "left")
     res = impact(M, A, q_dot, restitution=restitution)
-    shape = res.kinetic_energy.shape
+    shape = np.shape(res.kinetic_energy)
 
     def bc(x: ArrayLike) -> FloatArray:
         return np.asarray(np.broadcast_to(np.asarray(x, dtype=float), shape))
@@ -181,7 +265,7 @@ def heel_strike_study(
     np.divide(res.energy_lost, L_S, out=eta, where=L_S > 0)
     qd_pre = np.broadcast_to(q_dot, (*shape, 4))
     scale = l * (np.abs(qd_pre[..., 2]) + np.abs(qd_pre[..., 3]))
-    lifts = res.velocity_post[..., 1] > LIFT_TOLERANCE * scale
+    lifts = trailing_foot_lifts(res.velocity_post[..., 1], scale)
     return HeelStrikeStudy(
         impact_angle=q3,
         foot_radius=R,
@@ -191,11 +275,11 @@ def heel_strike_study(
         velocity_pre=res.velocity_pre,
         velocity_post=res.velocity_post,
         constraint_impulse=res.constraint_impulse,
-        kinetic_energy=res.kinetic_energy,
-        kinetic_energy_constrained=res.kinetic_energy_constrained,
-        kinetic_energy_admissible=res.kinetic_energy_admissible,
-        kinetic_energy_post=res.kinetic_energy_post,
-        energy_lost=res.energy_lost,
+        kinetic_energy=np.asarray(res.kinetic_energy, dtype=float),
+        kinetic_energy_constrained=np.asarray(res.kinetic_energy_constrained, dtype=float),
+        kinetic_energy_admissible=np.asarray(res.kinetic_energy_admissible, dtype=float),
+        kinetic_energy_post=np.asarray(res.kinetic_energy_post, dtype=float),
+        energy_lost=np.asarray(res.energy_lost, dtype=float),
         step_length=L_S,
         eta=eta,
         trailing_foot_lifts=np.asarray(lifts, dtype=bool),

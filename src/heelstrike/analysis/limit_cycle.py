@@ -11,6 +11,8 @@ the gait is stable if all have modulus < 1. A real multiplier leaving the unit c
 
 from __future__ import annotations
 
+import sys
+import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
@@ -33,6 +35,7 @@ __all__ = [
     "bifurcation_diagram",
     "continue_limit_cycle",
     "find_limit_cycle",
+    "find_limit_cycles",
 ]
 
 
@@ -269,7 +272,251 @@ def _progress(items: Sequence[Any], enabled: bool, desc: str) -> Iterable[Any]:
         return items
     from tqdm.auto import tqdm
 
-    return tqdm(items, desc=desc, leave=False)
+    return tqdm(items, desc=desc, leave=False, delay=2.0, file=sys.stderr)
+
+
+#: Time bound (s) of the automatic search for gaits (seeding and Newton from every seed).
+SEARCH_TIME_LIMIT = 300.0
+#: Two fixed points closer than this (Euclidean norm in section coordinates) are the same gait.
+SAME_GAIT_TOL = 1e-6
+
+
+def _check_passive_slope(pmap: PoincareMap) -> None:
+    """A passive walker cannot walk periodically on level or uphill ground: nothing supplies the
+    energy lost at heel strike. Fail at once instead of searching."""
+    if pmap.torque is None and pmap.push_off is None and not pmap.slope > 0.0:
+        raise GaitNotFoundError(
+            f"a passive walker has no periodic gait on a slope of "
+            f"{np.degrees(pmap.slope):g} deg: the energy lost at every heel strike must come "
+            f"from gravity, so the slope must be > 0 (downhill, e.g. 3deg)"
+        )
+
+
+def _compiled_ok(pmap: PoincareMap) -> bool:
+    """Whether the batched compiled map can seed the search (passive scalar CompassGait)."""
+    from heelstrike.models.compass import CompassGait
+
+    w = pmap.walker
+    return (
+        isinstance(w, CompassGait)
+        and pmap.torque is None
+        and pmap.push_off is None
+        and pmap.simulator is None
+        and all(np.ndim(getattr(w, f)) == 0 for f in (
+            "hip_mass", "leg_mass", "leg_length", "leg_com_from_hip", "foot_radius",
+            "leg_inertia", "gravity"))
+    )
+
+
+def _seed_grid() -> FloatArray:
+    """Post-impact seeds ``(q3, q3_dot, q4_dot)`` (rad, rad/s) over step angles and rates,
+    shape (864, 3)."""
+    a = np.linspace(0.05, 0.6, 12)
+    w3 = np.linspace(0.3, 2.5, 9)
+    w4 = np.linspace(-1.8, 0.3, 8)
+    return np.stack(np.meshgrid(-a, w3, w4, indexing="ij"), axis=-1).reshape(-1, 3)
+
+
+def _add_distinct(found: list[FloatArray], z: FloatArray, tol: float = SAME_GAIT_TOL) -> bool:
+    if all(float(np.linalg.norm(z - f)) > tol for f in found):
+        found.append(np.asarray(z, dtype=float))
+        return True
+    return False
+
+
+def _compiled_seeds(
+    walker: Any, slope: float, rtol: float, atol: float, deadline: float, progress: bool,
+    n_seeds: int = 40,
+) -> list[FloatArray]:
+    """Distinct fixed points of the compiled map found from a grid of seeds.
+
+    The grid is mapped once in one batched call; the seeds that survive 80 steps give the
+    attracting gaits, the most nearly periodic seeds (smallest ``|P(z) - z|``) the others. Newton
+    (on the compiled map) is run from each; duplicates are dropped.
+    """
+    from heelstrike.analysis.gait_map import newton_gaits
+    from heelstrike.dynamics.compiled import COMPLETED, ensemble_walk
+
+    Z = _seed_grid()
+    r1 = ensemble_walk(walker, Z, slope, steps=1, rtol=1e-7, atol=1e-8, record=False)
+    ok = r1.status == COMPLETED
+    if not np.any(ok):
+        return []
+    res = np.linalg.norm(r1.z - Z, axis=1)
+    res[~ok] = np.inf
+    rk = ensemble_walk(walker, Z[ok], slope, steps=80, rtol=1e-7, atol=1e-8, record=False)
+    starts: list[FloatArray] = []
+    for z in rk.z[rk.status == COMPLETED]:
+        _add_distinct(starts, z, 1e-3)
+    for i in np.argsort(res)[:n_seeds]:
+        if np.isfinite(res[i]):
+            starts.append(Z[i])
+    found: list[FloatArray] = []
+    if not starts:
+        return found
+    results = newton_gaits(
+        walker, slope, np.asarray(starts), max_iter=15, rtol=rtol, atol=atol, deadline=deadline
+    )
+    for g in results:
+        if not isinstance(g, str):
+            _add_distinct(found, g.z)
+    return found
+
+
+def _radius_continuation_seeds(
+    walker: Any, slope: float, rtol: float, atol: float, deadline: float, progress: bool
+) -> list[FloatArray]:
+    """Gaits of a round-footed walker continued in the foot radius from the point foot's (steps
+    of at most 0.05 m), as :func:`heelstrike.analysis.gait_map.gait_map` does."""
+    from heelstrike.analysis.gait_map import newton_gait
+
+    R = float(walker.foot_radius)
+    if R <= 0.0:
+        return []
+    out: list[FloatArray] = []
+    base = _compiled_seeds(walker.replace(foot_radius=0.0), slope, rtol, atol, deadline, False)
+    n_sub = max(1, int(np.ceil(R / 0.05)))
+    for z in _progress(base, progress, "continuing gaits in the foot radius"):
+        try:
+            for Rs in np.linspace(0.0, R, n_sub + 1)[1:]:
+                if time.monotonic() > deadline:
+                    return out
+                z = newton_gait(walker.replace(foot_radius=float(Rs)), slope, z,
+                                rtol=rtol, atol=atol).z
+        except GaitNotFoundError:
+            continue
+        _add_distinct(out, z)
+    return out
+
+
+def _newton(
+    pmap: PoincareMap, z: FloatArray, tol: float, max_iter: int, fd_step: float
+) -> tuple[FloatArray, float, int]:
+    """Newton's method for ``P(z) = z``; returns ``(z*, residual, iterations)``."""
+    residual = np.inf
+    it = 0
+    while True:
+        it += 1
+        if it > max_iter:
+            raise GaitNotFoundError(
+                f"Newton did not converge in {max_iter} iterations (residual {residual:.2e})"
+            )
+        Pz = pmap(z)
+        if not np.all(np.isfinite(Pz)):
+            raise GaitNotFoundError(
+                f"the walker fails to take a step from the Newton iterate {np.round(z, 6)}"
+            )
+        F = Pz - z
+        residual = float(np.linalg.norm(F))
+        if residual < tol:
+            return z, residual, it
+        Jac = pmap.jacobian(z, fd_step)
+        if not np.all(np.isfinite(Jac)):
+            raise GaitNotFoundError("a step failed while estimating the Jacobian")
+        try:
+            dz = np.linalg.solve(Jac - np.eye(z.size), -F)
+        except np.linalg.LinAlgError as exc:
+            raise GaitNotFoundError("singular Newton system (a multiplier equals 1)") from exc
+        # damped step: keep the walker taking steps
+        lam = 1.0
+        while lam > 1e-3:
+            z_try = z + lam * dz
+            if np.all(np.isfinite(pmap(z_try))):
+                break
+            lam *= 0.5
+        z = z + lam * dz
+
+
+def _preference(c: LimitCycle) -> tuple[int, float]:
+    """Sort key: stable gaits first, most attracting (smallest spectral radius) first."""
+    return (0 if c.stable else 1, c.spectral_radius)
+
+
+def find_limit_cycles(
+    walker: PlanarWalker,
+    *,
+    slope: float = 0.0,
+    torque: TorqueLaw | None = None,
+    push_off: PushOff | None = None,
+    tol: float = 1e-10,
+    max_iter: int = 25,
+    fd_step: float = 1e-6,
+    rtol: float = 1e-11,
+    atol: float = 1e-11,
+    progress: bool = False,
+    method: str = "scipy",
+    simulator: Callable[..., WalkResult] | None = None,
+    time_limit: float = SEARCH_TIME_LIMIT,
+) -> tuple[LimitCycle, ...]:
+    """Find every period-one gait the automatic search reaches, best first.
+
+    For the passive :class:`~heelstrike.models.CompassGait` the seeds come from the batched
+    compiled map (:func:`~heelstrike.dynamics.compiled.ensemble_walk`): a grid of 864
+    post-impact states over step angle and rates is mapped once and walked 80 steps; the
+    survivors (attracting gaits) and the 40 most nearly periodic seeds start Newton on the
+    compiled map. If nothing is found for a round foot, the point foot's gaits are continued in
+    the radius. Other walkers use a coarse grid, map iteration and Newton from the most nearly
+    periodic seeds. Every distinct fixed point is then converged with ``method`` and
+    characterised.
+
+    Parameters
+    ----------
+    walker, slope, torque, push_off, tol, max_iter, fd_step, rtol, atol, method, simulator
+        As :func:`find_limit_cycle`.
+    progress : bool
+        Progress bar on stderr (shown after 2 s).
+    time_limit : float
+        Bound on the search (s); the gaits found by then are returned.
+
+    Returns
+    -------
+    tuple of LimitCycle
+        Distinct gaits, stable ones first, each group by increasing spectral radius (the most
+        attracting gait first). Empty only if none was found (then
+        :class:`GaitNotFoundError` is raised instead).
+
+    Raises
+    ------
+    GaitNotFoundError
+        A passive walker on a slope <= 0, no step possible, or no gait found.
+    """
+    pmap = PoincareMap(
+        walker=walker, slope=slope, torque=torque, push_off=push_off, rtol=rtol, atol=atol,
+        method=method, simulator=simulator,
+    )
+    _check_passive_slope(pmap)
+    deadline = time.monotonic() + float(time_limit)
+    if _compiled_ok(pmap):
+        starts = _compiled_seeds(walker, slope, rtol, atol, deadline, progress)
+        if not starts:
+            starts = _radius_continuation_seeds(walker, slope, rtol, atol, deadline, progress)
+        if not starts and time.monotonic() > deadline:
+            raise GaitNotFoundError(f"gave up after {time_limit:g} s (time limit of the search)")
+        if not starts:
+            raise GaitNotFoundError(
+                "no period-one gait found from 864 seeds over step angles 3-34 deg (compiled "
+                "map, 80 steps and Newton from the 40 most nearly periodic seeds)"
+                + (", nor by continuation in the foot radius from the point foot"
+                   if float(walker.foot_radius) > 0 else "")  # type: ignore[attr-defined]
+            )
+    else:
+        starts = [_automatic_guess(pmap, progress)]
+    cycles: list[LimitCycle] = []
+    zs: list[FloatArray] = []
+    last: Exception | None = None
+    for z0 in starts:
+        if time.monotonic() > deadline and cycles:
+            break
+        try:
+            z, residual, it = _newton(pmap, np.asarray(z0, dtype=float), tol, max_iter, fd_step)
+        except GaitNotFoundError as exc:
+            last = exc
+            continue
+        if _add_distinct(zs, z):
+            cycles.append(_characterise(pmap, z, residual, it, fd_step))
+    if not cycles:
+        raise GaitNotFoundError(str(last) if last else "no period-one gait found")
+    return tuple(sorted(cycles, key=_preference))
 
 
 def find_limit_cycle(
@@ -297,7 +544,9 @@ def find_limit_cycle(
     slope : float
         Ground slope (rad).
     guess : array_like, optional
-        Section coordinates to start from; automatic (grid search and map iteration) if None.
+        Section coordinates to start from. If None, every gait the automatic search of
+        :func:`find_limit_cycles` finds is computed and the preferred one returned: the stable
+        gait with the smallest spectral radius (the most attracting), else the least unstable.
     torque, push_off : optional
         Actuation laws.
     tol : float
@@ -309,7 +558,7 @@ def find_limit_cycle(
     rtol, atol : float
         Integrator tolerances.
     progress : bool
-        Show a progress bar during the automatic search.
+        Show a progress bar (stderr, after 2 s) during the automatic search.
     method : {"scipy", "compiled"}
         Poincare map used by Newton (see :class:`PoincareMap`); the returned cycle's ``walk``
         and energetics always come from the scipy reference.
@@ -324,45 +573,20 @@ def find_limit_cycle(
     Raises
     ------
     GaitNotFoundError
-        If no step can be taken, Newton diverges, or the iteration does not converge.
+        If no step can be taken, Newton diverges, or the iteration does not converge; at once
+        for a passive walker on a slope <= 0.
     """
+    kw: dict[str, Any] = dict(
+        slope=slope, torque=torque, push_off=push_off, tol=tol, max_iter=max_iter,
+        fd_step=fd_step, rtol=rtol, atol=atol, method=method, simulator=simulator,
+    )
+    if guess is None:
+        return find_limit_cycles(walker, progress=progress, **kw)[0]
     pmap = PoincareMap(
         walker=walker, slope=slope, torque=torque, push_off=push_off, rtol=rtol, atol=atol,
         method=method, simulator=simulator,
     )
-    z = _automatic_guess(pmap, progress) if guess is None else np.asarray(guess, dtype=float)
-    residual = np.inf
-    it = 0
-    while True:
-        it += 1
-        if it > max_iter:
-            raise GaitNotFoundError(
-                f"Newton did not converge in {max_iter} iterations (residual {residual:.2e})"
-            )
-        Pz = pmap(z)
-        if not np.all(np.isfinite(Pz)):
-            raise GaitNotFoundError(
-                f"the walker fails to take a step from the Newton iterate {np.round(z, 6)}"
-            )
-        F = Pz - z
-        residual = float(np.linalg.norm(F))
-        if residual < tol:
-            break
-        Jac = pmap.jacobian(z, fd_step)
-        if not np.all(np.isfinite(Jac)):
-            raise GaitNotFoundError("a step failed while estimating the Jacobian")
-        try:
-            dz = np.linalg.solve(Jac - np.eye(z.size), -F)
-        except np.linalg.LinAlgError as exc:
-            raise GaitNotFoundError("singular Newton system (a multiplier equals 1)") from exc
-        # damped step: keep the walker taking steps
-        lam = 1.0
-        while lam > 1e-3:
-            z_try = z + lam * dz
-            if np.all(np.isfinite(pmap(z_try))):
-                break
-            lam *= 0.5
-        z = z + lam * dz
+    z, residual, it = _newton(pmap, np.asarray(guess, dtype=float), tol, max_iter, fd_step)
     return _characterise(pmap, z, residual, it, fd_step)
 
 
@@ -395,7 +619,7 @@ def _characterise(
         actuator_work=rec.actuator_work,
         residual=residual,
         iterations=iterations,
-        slope=pmap.slope,
+        slope=float(pmap.slope),
         walk=walk,
     )
 
@@ -447,9 +671,11 @@ def continue_limit_cycle(
     Parameters
     ----------
     walker : PlanarWalker
-        Walker (a frozen dataclass: non-slope parameters are changed with ``replace``).
+        Walker with a Poincare section; other parameters than the slope are changed with its
+        ``replace(**params)``.
     parameter : str
-        ``"slope"`` or the name of a walker field (e.g. ``"foot_radius"``, ``"hip_mass"``).
+        ``"slope"`` or the name of a walker parameter (e.g. ``"foot_radius"``, ``"hip_mass"``
+        for :class:`~heelstrike.models.CompassGait`, ``"R"`` for a described walker).
     values : array_like, shape (K,)
         Parameter values, in order.
     slope : float
@@ -458,8 +684,21 @@ def continue_limit_cycle(
         Section coordinates near the first gait.
     **kwargs
         Passed to :func:`find_limit_cycle`.
+
+    Raises
+    ------
+    ValueError
+        The walker has no Poincare section or no parameter ``parameter``, or a value is
+        outside the walker's parameter constraints.
     """
     vals = np.asarray(values, dtype=float)
+    try:
+        _ = walker.section_names
+    except NotImplementedError as exc:
+        raise ValueError(
+            f"cannot continue a gait of {walker!r}: {exc} (for a described walker use "
+            "heelstrike.dynamics.phased.PhasedWalker.from_built(walker))"
+        ) from None
     cycles: list[LimitCycle] = []
     found: list[float] = []
     stopped = None
@@ -468,7 +707,10 @@ def continue_limit_cycle(
         if parameter == "slope":
             w, s = walker, float(v)
         else:
-            w, s = replace(walker, **{parameter: float(v)}), slope  # type: ignore[type-var]
+            try:
+                w, s = walker.replace(**{parameter: float(v)}), slope
+            except TypeError as exc:  # a dataclass walker without that field
+                raise ValueError(f"{parameter!r} is not a parameter of {walker!r}: {exc}") from None
         try:
             c = find_limit_cycle(w, slope=s, guess=z, **kwargs)
         except GaitNotFoundError as exc:

@@ -1,10 +1,11 @@
 """Gaits, energy books and heel-strike maps of described walkers (TOML models).
 
 - :func:`find_model_gait`: a period-one gait of a :class:`~heelstrike.models.builder.BuiltWalker`
-  through :func:`~heelstrike.analysis.limit_cycle.find_limit_cycle` with
-  :func:`~heelstrike.dynamics.phased.simulate_phased` (knee strikes and heel strikes), and its
-  energy book: per step, ``actuator work + potential energy released = sum of T_c`` over the
-  step's impacts (Font & Kövecses 2008, eqs. 14-15) on the periodic gait.
+  through :func:`~heelstrike.analysis.limit_cycle.find_limit_cycle` with the compiled
+  :func:`~heelstrike.dynamics.compiled_phased.simulate_phased_compiled` (default) or the scipy
+  reference :func:`~heelstrike.dynamics.phased.simulate_phased` (knee strikes and heel
+  strikes), and its energy book: per step, ``actuator work + potential energy released = sum
+  of T_c`` over the step's impacts (Font & Kövecses 2008, eqs. 14-15) on the periodic gait.
 - :func:`model_heel_strike`: the impact decomposition of a heel strike of any described walker.
 - :func:`impact_map`: ``T_c``, ``T_a`` and ``eta`` at heel strike over a grid of two swept
   description parameters (or a parameter and the impact angle): the paper's Figs. 2-3 for any
@@ -21,6 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from heelstrike.analysis.heel_strike import trailing_foot_lifts
 from heelstrike.analysis.limit_cycle import (
     GaitNotFoundError,
     LimitCycle,
@@ -139,6 +141,7 @@ def find_model_gait(
     max_iter: int = 20,
     rtol: float = 1e-11,
     atol: float = 1e-11,
+    backend: str = "compiled",
 ) -> ModelGait:
     """Find a period-one gait of a described walker and its energy book.
 
@@ -156,6 +159,12 @@ def find_model_gait(
         Actuation (see :func:`~heelstrike.dynamics.phased.simulate_phased`).
     tol, max_iter, rtol, atol
         Newton tolerance and iterations; integrator tolerances.
+    backend : {"compiled", "scipy"}
+        Step simulator: :func:`~heelstrike.dynamics.compiled_phased.simulate_phased_compiled`
+        (numba, generated from the walker's equations; passive or
+        :class:`~heelstrike.dynamics.phased.TorsoPD` torque, optionally
+        :class:`~heelstrike.dynamics.actuation.PushOff`) or the scipy reference
+        :func:`~heelstrike.dynamics.phased.simulate_phased` (any actuation).
 
     Returns
     -------
@@ -164,11 +173,24 @@ def find_model_gait(
     Raises
     ------
     GaitNotFoundError
+    ValueError
+        Unknown backend, or actuation the compiled backend does not support.
     """
     w = PhasedWalker.from_built(walker)
-    kw: dict[str, Any] = dict(
-        slope=slope, torque=torque, push_off=push_off, simulator=simulate_phased
-    )
+    simulator: Any
+    if backend == "scipy":
+        simulator = simulate_phased
+    elif backend == "compiled":
+        from heelstrike.dynamics.compiled_phased import (
+            check_compiled_actuation,
+            simulate_phased_compiled,
+        )
+
+        check_compiled_actuation(w, torque, push_off)
+        simulator = simulate_phased_compiled
+    else:
+        raise ValueError(f"backend must be 'compiled' or 'scipy', got {backend!r}")
+    kw: dict[str, Any] = dict(slope=slope, torque=torque, push_off=push_off, simulator=simulator)
     if guess is not None:
         starts = [np.asarray(guess, dtype=float)]
     else:
@@ -336,7 +358,13 @@ def model_heel_strike(walker: BuiltWalker, q: ArrayLike, q_dot: ArrayLike) -> Mo
         impulse=np.asarray(mc.impact.constraint_impulse),
         step_length=L,
         eta=T_c / L if L > 0 else float("nan"),
-        trailing_foot_lifts=mc.modes[0] == "separate" and float(mc.normal_velocity[0]) > 0,
+        trailing_foot_lifts=mc.modes[0] == "separate"
+        and bool(
+            trailing_foot_lifts(
+                float(mc.normal_velocity[0]),
+                float(walker.scale.leg_length) * float(np.sum(np.abs(qd[2:]))),
+            )
+        ),
         trailing_normal_velocity=float(mc.normal_velocity[0]),
     )
 

@@ -213,15 +213,15 @@ def figure3b_data(
     R = np.linspace(0.0, l, 101) if radii is None else np.asarray(radii, dtype=float)
     q3 = impact_angle_grid() if impact_angles is None else np.asarray(impact_angles, float)
     s = heel_strike_study(w.replace(foot_radius=R[:, None]), q3[None, :])
-    admissible = s.trailing_foot_lifts | s.degenerate_wheel
+    admissible = np.asarray(s.trailing_foot_lifts | s.degenerate_wheel)
     return Figure3bData(
         impact_angle=q3,
         foot_radius=R,
         eta=np.where(admissible, s.eta, np.nan),
-        eta_all=s.eta,
+        eta_all=np.asarray(s.eta),
         q2_dot_plus=s.trailing_foot_velocity,
         admissible=admissible,
-        degenerate_wheel=s.degenerate_wheel[:, 0],
+        degenerate_wheel=np.asarray(s.degenerate_wheel)[:, 0],
     )
 
 

@@ -17,8 +17,15 @@ A gait is found by Newton's method on the Poincare map (section just after heel 
 
 .. math:: P(z, a) - z = 0, \\qquad g(z, a) - g^* = 0.
 
-The Jacobian is estimated by central differences. If Newton cannot reach the target directly
-from the seed gait, the target is approached by natural-parameter continuation.
+The search has two stages (:func:`find_powered_gait`). It first works on the map integrated
+at :data:`SEARCH_TOLERANCE` (3-5x cheaper per step): seed gaits from a few map iterations at
+the family's seed parameters, Newton with forward-difference Jacobians kept up to date by
+Broyden's formula, and natural-parameter continuation in the target from the seed gait's own
+speed or step length (tangent predictor; a step that Newton does not solve quickly is halved,
+and where the halvings stall, at a fold of the family, the search stops and reports the range
+its gaits spanned). It then polishes the gait on the accurate map by chord iterations with the
+search's Jacobian (about one step per three digits) and measures the multipliers there by
+central differences.
 
 McGeer's wheel (``R = l``)
 --------------------------
@@ -33,14 +40,21 @@ same point); the legs are then relabelled by hand and the gait is flagged
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import sys
+import time
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from heelstrike.core.impact import kinetic_energy
 from heelstrike.dynamics.actuation import (
+    DEFAULT_ENERGY_GAIN,
+    DEFAULT_MAX_TORQUE,
+    DEFAULT_PD_KD,
+    DEFAULT_PD_KP,
     EnergyTracking,
     PushOff,
     SwingLegPD,
@@ -58,8 +72,13 @@ __all__ = [
     "ActuationFamily",
     "PoweredGait",
     "PoweredGaitNotFoundError",
+    "SearchLimitError",
     "actuation_family",
+    "declared_posture_law",
+    "energy_book_tables",
+    "find_model_powered_gait",
     "find_powered_gait",
+    "max_walking_speed",
     "powered_step",
 ]
 
@@ -73,6 +92,34 @@ GRAZING_TOLERANCE = 1e-9
 
 class PoweredGaitNotFoundError(RuntimeError):
     """No periodic powered gait was found for the requested target (the message says why)."""
+
+
+class SearchLimitError(PoweredGaitNotFoundError):
+    """The search hit its time limit or its budget of simulated steps."""
+
+
+#: Bound (s) on the wall-clock time of ``heelstrike powered`` (:func:`find_powered_gait`).
+DEFAULT_TIME_LIMIT = 45.0
+
+
+def max_walking_speed(walker: PlanarWalker) -> float:
+    """Upper bound (m/s) of the mean speed of a walker rolling on feet of radius ``R < l``.
+
+    At mid-stance the hip, at height ``l`` above the contact point, moves on a curve of radius
+    ``l^2 / (l - R)`` (a point at ``l - R`` from the centre of a rolling arc of radius ``R``);
+    keeping the stance foot on the ground needs a centripetal acceleration ``<= g``:
+    ``v <= l sqrt(g / (l - R))`` (Froude number ``v^2 / (g l) <= l / (l - R)``; ``sqrt(g l)``
+    for point feet). ``inf`` for McGeer's wheel (``R = l``) or a walker without ``leg_length``.
+    """
+    l = float(np.asarray(getattr(walker, "leg_length", np.nan)))
+    g = float(np.asarray(getattr(walker, "gravity", np.nan)))
+    try:
+        R = float(np.asarray(walker.foot_radii[0]))
+    except (AttributeError, IndexError, TypeError):
+        return float("inf")
+    if not (np.isfinite(l) and np.isfinite(g) and l > R):
+        return float("inf")
+    return float(l * np.sqrt(g / (l - R)))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -91,6 +138,9 @@ class ActuationFamily:
         Parameter values, tried in order, that may let the walker walk (to find a first gait).
     lower : float
         Smallest admissible parameter value (e.g. 0 for an impulse magnitude).
+    torque_joint : str
+        The joint the family's torque law acts across (``"hip"``; ``"torso"`` for a described
+        walker's posture law): labels the torque's work in the energy books.
     """
 
     name: str
@@ -99,6 +149,7 @@ class ActuationFamily:
     build: Callable[[PlanarWalker, float], tuple[TorqueLaw | None, PushOff | None]]
     seed: Callable[[PlanarWalker], tuple[float, ...]]
     lower: float = -np.inf
+    torque_joint: str = "hip"
 
 
 _SEED_SECTIONS = (
@@ -111,22 +162,24 @@ _SEED_SECTIONS = (
 
 
 def _scale(walker: PlanarWalker) -> tuple[float, float, float]:
-    """``(m_total, g, l)`` of a compass-like walker."""
-    m = float(np.asarray(walker.total_mass))
-    g = float(np.asarray(getattr(walker, "gravity", 9.81)))
-    l = float(np.asarray(getattr(walker, "leg_length", 1.0)))
-    return m, g, l
+    """``(m_total, g, l)`` of any walker: its :attr:`~heelstrike.models.base.PlanarWalker.scale`."""
+    s = walker.scale
+    return float(s.total_mass), float(s.gravity), float(s.leg_length)
 
 
 def actuation_family(
     name: str,
     *,
-    gain: float = 10.0,
-    kp: float = 5.0,
-    kd: float = 1.0,
-    max_torque: float = 20.0,
+    gain: float = DEFAULT_ENERGY_GAIN,
+    kp: float = DEFAULT_PD_KP,
+    kd: float = DEFAULT_PD_KD,
+    max_torque: float = DEFAULT_MAX_TORQUE,
 ) -> ActuationFamily:
     """One of the built-in actuation models.
+
+    The defaults of the gains are those of :mod:`heelstrike.dynamics.actuation` (their physical
+    reasons are given there); with them ``find_powered_gait(walker, actuation=name,
+    speed=0.5)`` succeeds for the paper's walker with ``R = 0`` and ``R = 0.3`` m.
 
     Parameters
     ----------
@@ -137,11 +190,21 @@ def actuation_family(
         ``E_ref`` (J, ``T + V`` with ``V`` zero at ground level). ``hip-pd``:
         :class:`~heelstrike.dynamics.actuation.SwingLegPD`, parameter the amplitude ``A`` (rad).
     gain : float
-        Energy-tracking gain (hip-energy).
+        Energy-tracking gain (hip-energy), s/rad.
     kp, kd : float
         PD gains (hip-pd), N m/rad and N m s/rad.
     max_torque : float
         Hip torque limit (N m) of the hip laws.
+
+    Notes
+    -----
+    Seeds (parameter values whose attractor or near-periodic motion starts the search):
+    push-off impulses of 0.03-0.08 ``m_total sqrt(g l)``; target energies a little above the
+    energy of the first seed section (0.1-1 % of ``m_total g l``: the law must inject a
+    collision loss of that order per step); PD amplitudes of 0.1-0.25 rad, the half inter-leg
+    angle at heel strike of slow to moderate steps (with the default stiffness the set point,
+    not gravity, places the swing foot). The search then continues in the target from
+    whichever seed gait it finds first.
     """
     if name == "pushoff":
         return ActuationFamily(
@@ -182,7 +245,7 @@ def actuation_family(
                 SwingLegPD(amplitude=float(a), kp=kp, kd=kd, max_torque=max_torque),
                 None,
             ),
-            seed=lambda w: (0.35, 0.3, 0.45, 0.25),
+            seed=lambda w: (0.15, 0.2, 0.1, 0.25),  # rad
         )
     raise ValueError(f"unknown actuation {name!r}: choose from {', '.join(ACTUATIONS)}")
 
@@ -232,16 +295,19 @@ def powered_step(
     rtol: float = 1e-10,
     atol: float = 1e-10,
     max_step_duration: float = 4.0,
+    simulator: Callable[..., WalkResult] | None = None,
 ) -> PoweredStep:
     """Simulate one step on level ground from the post-impact section point ``z``.
 
     Handles McGeer's wheel (module docstring): a ``trailing_foot_stays`` outcome with a zero
-    (to round-off) trailing-foot velocity is accepted only when ``R = l``.
+    (to round-off) trailing-foot velocity is accepted only when ``R = l``. ``simulator`` is a
+    step simulator with :func:`~heelstrike.dynamics.hybrid.simulate`'s signature (None: that
+    function), e.g. :func:`~heelstrike.dynamics.phased.simulate_phased` for described walkers.
     """
     z_ = np.asarray(z, dtype=float)
     q, qd = walker.section_to_state(z_)
     E0 = float(mechanical_energy(walker, q, qd))
-    walk = simulate(
+    walk = (simulate if simulator is None else simulator)(
         walker, q, qd, slope=0.0, steps=1, torque=torque, push_off=push_off,
         rtol=rtol, atol=atol, max_step_duration=max_step_duration,
     )
@@ -346,11 +412,18 @@ class PoweredGait:
     trailing_foot_lift_velocity: float
     trailing_foot_grazes: bool
     walk: WalkResult = field(repr=False)
+    torque_joint: str = "hip"
+    model: str | None = None
+
+    @property
+    def torque_work(self) -> float:
+        """Work of the torque law during single support (J), across :attr:`torque_joint`."""
+        return self.actuator_work - self.push_off_work
 
     @property
     def hip_work(self) -> float:
-        """Work of the hip torque during single support (J)."""
-        return self.actuator_work - self.push_off_work
+        """Work of the hip torque during single support (J); 0 if the torque acts elsewhere."""
+        return self.torque_work if self.torque_joint == "hip" else 0.0
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary (SI units)."""
@@ -366,6 +439,9 @@ class PoweredGait:
             "actuator_work": self.actuator_work,
             "push_off_work": self.push_off_work,
             "hip_work": self.hip_work,
+            "torque_joint": self.torque_joint,
+            "torque_work": self.torque_work,
+            "model": self.model,
             "collision_loss": self.collision_loss,
             "energy_change": self.energy_change,
             "energy_balance_error": self.energy_balance_error,
@@ -381,6 +457,46 @@ class PoweredGait:
         }
 
 
+#: Integrator tolerance (``rtol = atol``) of the search stage: the seed, Newton from the seed and
+#: the continuation to the target run on this cheaper map (a step costs 3-5x less than at
+#: ``1e-10``); its fixed points are within ~1e-7 of the accurate ones, which the final
+#: polishing at the requested tolerance then removes (see :func:`find_powered_gait`).
+SEARCH_TOLERANCE = 1e-7
+
+#: Residual at which the search stage hands over to the polishing stage: ~100x the coarse
+#: map's integration noise, so that Newton is not asked for digits the coarse map lacks (the
+#: polishing gains ~3 digits per accurate step, see :func:`_polish`).
+SEARCH_RESIDUAL = 1e-5
+
+#: Residual of the intermediate gaits of the search (the first gait, continuation points):
+#: they only start the next Newton solve, whose basin is far wider than this.
+PATH_RESIDUAL = 1e-4
+
+#: Newton iterations per continuation step: a step that needs more is halved instead (cheaper
+#: than damped iterations far from the solution).
+CONTINUATION_ITERATIONS = 6
+
+#: Smallest line-search step of a continuation step's Newton solve: a step that needs heavier
+#: damping is halved in the target instead.
+CONTINUATION_MIN_STEP = 0.125
+
+#: Largest residual ratio of an accepted Newton iteration in a continuation step: from a
+#: tangent prediction Newton converges fast; slow progress means a fold or a too long step.
+CONTINUATION_MIN_RATE = 0.5
+
+#: Relative resolution (of the target) at which a stalled continuation stops and reports where
+#: the family of gaits ends: near a fold (a largest or smallest speed the actuation reaches)
+#: every halving costs failed Newton solves, so the end is located to 0.5 % and not better.
+CONTINUATION_RESOLUTION = 5e-3
+
+#: Relative finite-difference step of the search-stage Jacobians: ``sqrt`` of the coarse map's
+#: noise, which balances truncation (``~h``) against noise (``~1e-7 / h``).
+SEARCH_FD_STEP = 3e-4
+
+#: Map iterations per seed candidate (see :func:`_seeds`).
+SEED_STEPS = 12
+
+
 @dataclass(frozen=True, kw_only=True)
 class _Problem:
     walker: PlanarWalker
@@ -390,15 +506,35 @@ class _Problem:
     atol: float
     budget: int = 2000
     _count: list[int] = field(default_factory=lambda: [0], repr=False)
+    deadline: float = float("inf")
+    time_limit: float = float("inf")
+    bar: Any = None
+    simulator: Callable[..., WalkResult] | None = None
+    seed_sections: tuple[tuple[float, ...], ...] = _SEED_SECTIONS
+
+    def at_tolerance(self, tol: float) -> _Problem:
+        """The same problem integrated at ``rtol = atol = tol``, sharing budget and clock."""
+        return _Problem(walker=self.walker, family=self.family, target=self.target,
+                        rtol=tol, atol=tol, budget=self.budget, _count=self._count,
+                        deadline=self.deadline, time_limit=self.time_limit, bar=self.bar,
+                        simulator=self.simulator, seed_sections=self.seed_sections)
 
     def step(self, x: FloatArray) -> PoweredStep:
         self._count[0] += 1
+        if self.bar is not None:
+            self.bar.update(1)
         if self._count[0] > self.budget:
-            raise PoweredGaitNotFoundError(
+            raise SearchLimitError(
                 f"gave up after {self.budget} simulated steps (evaluation budget)"
             )
+        if time.monotonic() > self.deadline:
+            raise SearchLimitError(
+                f"gave up after {self.time_limit:g} s (time limit; {self._count[0] - 1} "
+                "simulated steps)"
+            )
         torque, push = self.family.build(self.walker, float(x[-1]))
-        return powered_step(self.walker, x[:-1], torque, push, rtol=self.rtol, atol=self.atol)
+        return powered_step(self.walker, x[:-1], torque, push, rtol=self.rtol, atol=self.atol,
+                            simulator=self.simulator)
 
     def measure(self, st: PoweredStep) -> float:
         assert st.record is not None
@@ -413,79 +549,169 @@ class _Problem:
             return np.full(x.size, np.nan)
         return np.append(st.z_next - x[:-1], self.measure(st) - value)
 
-    def jacobian(self, x: FloatArray, value: float, h: float) -> FloatArray:
+    def jacobian(
+        self, x: FloatArray, value: float, h: float, F0: FloatArray | None = None
+    ) -> FloatArray:
+        """Finite-difference Jacobian of :meth:`residual`: central, or forward from ``F0``."""
         n = x.size
         J = np.empty((n, n))
         for i in range(n):
             dx = np.zeros(n)
             dx[i] = h * max(1.0, abs(x[i]))
-            J[:, i] = (self.residual(x + dx, value) - self.residual(x - dx, value)) / (2 * dx[i])
+            if F0 is None:
+                J[:, i] = (self.residual(x + dx, value) - self.residual(x - dx, value)) / (
+                    2 * dx[i])
+            else:
+                J[:, i] = (self.residual(x + dx, value) - F0) / dx[i]
         return J
 
 
 def _newton(
-    prob: _Problem, x0: FloatArray, value: float, tol: float, max_iter: int, h: float
-) -> tuple[FloatArray, float, int]:
+    prob: _Problem, x0: FloatArray, value: float, tol: float, max_iter: int, h: float,
+    *, forward: bool = False, accept: float | None = None, min_step: float = 1e-3,
+    min_rate: float = 1.0,
+) -> tuple[FloatArray, float, int, FloatArray]:
+    """Damped Newton on the augmented map; returns ``(x, residual, iterations, jacobian)``.
+
+    ``forward``: forward-difference Jacobians updated by Broyden's rank-one formula between
+    recomputations (about ``1 + n/k`` steps per iteration instead of ``2n + 1``; used by the
+    search stage). If the line search fails the Jacobian is recomputed once before giving up.
+    A stall with the residual below ``accept`` (default ``10 tol``, the integrator's noise
+    floor) returns the iterate.
+    ``min_step`` is the smallest line-search step (a fraction of the Newton step); an accepted
+    step must also reduce the residual at least ``1 / min_rate``-fold (else: stalled).
+    """
+    floor = 10.0 * tol if accept is None else accept
     x = x0.copy()
+    F = prob.residual(x, value)
+    if not np.all(np.isfinite(F)):
+        raise PoweredGaitNotFoundError("the walker fails to take a step from a Newton iterate")
+    res = float(np.linalg.norm(F))
+    J: FloatArray | None = None
+    fresh = False
     for it in range(1, max_iter + 1):
-        F = prob.residual(x, value)
-        if not np.all(np.isfinite(F)):
-            raise PoweredGaitNotFoundError("the walker fails to take a step from a Newton iterate")
-        res = float(np.linalg.norm(F))
         if res < tol:
-            return x, res, it
-        J = prob.jacobian(x, value, h)
-        if not np.all(np.isfinite(J)):
-            raise PoweredGaitNotFoundError("a step failed while estimating the Jacobian")
+            return x, res, it, (J if J is not None else np.full((x.size, x.size), np.nan))
+        if J is None:
+            J = prob.jacobian(x, value, h, F if forward else None)
+            fresh = True
+            if not np.all(np.isfinite(J)):
+                raise PoweredGaitNotFoundError("a step failed while estimating the Jacobian")
         try:
             dx = np.linalg.solve(J, -F)
         except np.linalg.LinAlgError as exc:
             raise PoweredGaitNotFoundError("singular Newton system") from exc
         lam = 1.0
-        while lam > 1e-3:
+        ok = False
+        while lam >= min_step:
             x_try = x + lam * dx
             x_try[-1] = max(x_try[-1], prob.family.lower)
             F_try = prob.residual(x_try, value)
             if np.all(np.isfinite(F_try)) and np.linalg.norm(F_try) < (1 - 0.25 * lam) * res:
+                ok = True
                 break
             lam *= 0.5
-        else:
-            if res < 10.0 * tol:  # at the integrator's noise floor: accept, report residual
-                return x, res, it
+        if not ok:
+            if forward and not fresh:
+                J = None  # a stale Broyden Jacobian: recompute and retry
+                continue
+            if res < floor:
+                return x, res, it, J
             raise PoweredGaitNotFoundError(f"Newton stalled (residual {res:.2e})")
-        x = x_try
+        if float(np.linalg.norm(F_try)) > min_rate * res and res >= floor:
+            raise PoweredGaitNotFoundError(
+                f"Newton converges too slowly (residual {res:.2e} -> "
+                f"{float(np.linalg.norm(F_try)):.2e})"
+            )
+        step = x_try - x
+        if forward:  # Broyden's update keeps J consistent with the step just taken
+            J = J + np.outer(F_try - F - J @ step, step) / float(step @ step)
+            fresh = False
+        else:
+            J = None
+        x, F, res = x_try, F_try, float(np.linalg.norm(F_try))
+    if res < tol:
+        return x, res, max_iter, (J if J is not None else np.full((x.size, x.size), np.nan))
     raise PoweredGaitNotFoundError(f"Newton did not converge in {max_iter} iterations")
 
 
-def _seed(prob: _Problem) -> FloatArray:
-    """A first gait (section point and parameter) by iterating the map at seed parameters.
+def _polish(
+    prob: _Problem, x0: FloatArray, value: float, tol: float, J0: FloatArray, max_iter: int,
+    h: float,
+) -> tuple[FloatArray, float, int]:
+    """Converge a search-stage gait on the accurate map (chord iterations, then Newton).
 
-    Stable gaits attract: the first candidate that converges is returned; otherwise the most
-    nearly periodic state met (Newton then handles unstable gaits).
+    The search-stage Jacobian ``J0`` is close to the accurate one, so the chord iteration
+    ``x <- x - J^-1 F(x)`` gains digits at one simulated step per iteration. If it contracts by
+    less than 5x per step, ``J`` is replaced once by a forward-difference Jacobian of the
+    accurate map (``n`` steps, relative step ``sqrt(rtol)``, which balances truncation and
+    integration noise); if that fails too, damped Newton with central differences takes over.
     """
-    coarse = _Problem(walker=prob.walker, family=prob.family, target=prob.target,
-                      rtol=1e-7, atol=1e-7, budget=prob.budget, _count=prob._count)
-    best: tuple[float, FloatArray] | None = None
+    x = x0.copy()
+    F = prob.residual(x, value)
+    if not np.all(np.isfinite(F)):
+        raise PoweredGaitNotFoundError("the walker fails to take a step from the search's gait")
+    res = float(np.linalg.norm(F))
+    J: FloatArray | None = J0 if np.all(np.isfinite(J0)) else None
+    refreshed = False
+    h_fwd = max(h, float(np.sqrt(prob.rtol)))
+    for it in range(1, max_iter + 1):
+        if res < tol:
+            return x, res, it
+        if J is None:
+            if refreshed:
+                break
+            J = prob.jacobian(x, value, h_fwd, F)
+            refreshed = True
+            if not np.all(np.isfinite(J)):
+                break
+        try:
+            x_try = x + np.linalg.solve(J, -F)
+        except np.linalg.LinAlgError:
+            J = None
+            continue
+        F_try = prob.residual(x_try, value)
+        res_try = float(np.linalg.norm(F_try)) if np.all(np.isfinite(F_try)) else np.inf
+        contracted = res_try <= 0.2 * res
+        if res_try < res:
+            x, F, res = x_try, F_try, res_try
+        if not contracted:
+            J = None
+    if res < tol:
+        return x, res, max_iter
+    x, res, it, _ = _newton(prob, x, value, tol, max_iter, h)
+    return x, res, it
+
+
+def _seeds(prob: _Problem) -> Iterator[FloatArray]:
+    """First gaits (section point and parameter) to start Newton from, best first.
+
+    For each seed parameter and seed section the map is iterated a few steps: a stable gait
+    attracts, and even an unstable one's neighbourhood is approached while transients decay.
+    A candidate is yielded once successive section points agree to ``1e-4`` (well inside
+    Newton's basin) or after :data:`SEED_STEPS` steps; the candidate is the most nearly
+    periodic section point met, also when the walker falls later (it then passed near an
+    unstable gait, which Newton finds); a walker that falls at its first step gives none.
+    Iterating longer
+    (the earlier 40 steps per candidate) bought little: the cost is in the steps, and Newton
+    converges from ~1e-2 as well as from ~1e-4.
+    """
     for a in prob.family.seed(prob.walker):
-        for z0 in _SEED_SECTIONS[:3]:
+        for z0 in prob.seed_sections[:3]:
             z = np.asarray(z0, dtype=float)
-            for _ in range(40):
-                st = coarse.step(np.append(z, a))
+            best: tuple[float, FloatArray] | None = None
+            for _ in range(SEED_STEPS):
+                st = prob.step(np.append(z, a))
                 if not st.ok:
                     break
                 err = float(np.linalg.norm(st.z_next - z))
                 z = st.z_next
                 if best is None or err < best[0]:
                     best = (err, np.append(z, a))
-                if err < 1e-6:
-                    return np.append(z, a)
-            if best is not None and best[0] < 1e-3:
-                return best[1]
-    if best is None:
-        raise PoweredGaitNotFoundError(
-            f"the walker cannot take a step with any seed {prob.family.name} actuation"
-        )
-    return best[1]
+                if err < 1e-4:
+                    break
+            if best is not None:
+                yield best[1]
 
 
 def find_powered_gait(
@@ -503,6 +729,10 @@ def find_powered_gait(
     max_continuation: int = 24,
     max_evaluations: int = 1500,
     fallback: bool = True,
+    time_limit: float | None = None,
+    progress: bool = False,
+    simulator: Callable[..., WalkResult] | None = None,
+    seed_sections: tuple[tuple[float, ...], ...] | None = None,
 ) -> PoweredGait:
     """Find a period-one level-ground gait with a given speed or step length.
 
@@ -523,17 +753,32 @@ def find_powered_gait(
     tol : float
         Tolerance on the augmented residual (section coordinates and target, SI units).
     max_iter : int
-        Newton iterations per continuation step.
+        Newton iterations of a solve (continuation steps use at most
+        :data:`CONTINUATION_ITERATIONS`).
     fd_step : float
-        Relative central-difference step of the Jacobians.
+        Relative central-difference step of the accurate map's Jacobians (multipliers, final
+        Newton); the search stage uses at least :data:`SEARCH_FD_STEP`.
     rtol, atol : float
-        Integrator tolerances.
+        Integrator tolerances of the final gait (the search runs at :data:`SEARCH_TOLERANCE`
+        when that is looser, see the module docstring).
     max_continuation : int
         Largest number of continuation steps from the seed gait to the target.
     max_evaluations : int
         Budget of simulated steps (bounds the run time when no gait exists).
     fallback : bool
         If Newton from ``guess`` fails, search from the seed gait (default) or give up.
+    time_limit : float or None
+        Bound on the wall-clock time (s); None (default): only ``max_evaluations`` bounds the
+        search, so that results do not depend on the machine's load (the CLI uses
+        :data:`DEFAULT_TIME_LIMIT`).
+    progress : bool
+        Count simulated steps in a progress bar on stderr (shown after 2 s).
+    simulator : callable, optional
+        Step simulator with :func:`~heelstrike.dynamics.hybrid.simulate`'s signature (None:
+        that function); :func:`find_model_powered_gait` passes the phased ones.
+    seed_sections : tuple of tuple of float, optional
+        Section points the seed search starts from (None: the compass gait's
+        ``(q3, q3_dot, q4_dot)`` seeds).
 
     Returns
     -------
@@ -542,7 +787,11 @@ def find_powered_gait(
     Raises
     ------
     PoweredGaitNotFoundError
-        If no gait reaching the target is found.
+        If no gait reaching the target is found; at once for a target outside the reachable
+        range (a speed at or above :func:`max_walking_speed`, a step length at or above the
+        geometric limit); after the continuation stalls at the end of the actuation's family of
+        gaits, with the range of speeds (or step lengths) its gaits spanned;
+        :class:`SearchLimitError` when the time limit or the budget is hit.
     ValueError
         For an invalid target.
     """
@@ -559,79 +808,183 @@ def find_powered_gait(
             raise PoweredGaitNotFoundError(
                 f"step length {value:g} m is not below the geometric limit {longest:.3g} m"
             )
+    if target == "speed":
+        vmax = max_walking_speed(walker)
+        if value >= vmax:
+            raise PoweredGaitNotFoundError(
+                f"speed {value:g} m/s is outside the reachable range 0 < speed < {vmax:.3g} m/s "
+                "of this walker: faster, the hip's centripetal acceleration at mid-stance would "
+                "exceed g and the stance foot would leave the ground (v <= l sqrt(g / (l - R)))"
+            )
     family = actuation if isinstance(actuation, ActuationFamily) else actuation_family(actuation)
+    limit = float("inf") if time_limit is None else float(time_limit)
+    bar: Any = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(desc=f"{family.name} gait search", unit=" steps", delay=2.0,
+                   file=sys.stderr, leave=False)
     prob = _Problem(walker=walker, family=family, target=target, rtol=rtol, atol=atol,
-                    budget=max_evaluations)
-    total_it = 0
+                    budget=max_evaluations, deadline=time.monotonic() + limit, time_limit=limit,
+                    bar=bar, simulator=simulator,
+                    seed_sections=_SEED_SECTIONS if seed_sections is None else seed_sections)
+    try:
+        return _find(prob, target, value, guess, tol, max_iter, fd_step, max_continuation,
+                     fallback)
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def _find(
+    prob: _Problem, target: Target, value: float, guess: ArrayLike | None, tol: float,
+    max_iter: int, fd_step: float, max_continuation: int, fallback: bool,
+) -> PoweredGait:
+    """The search of :func:`find_powered_gait`.
+
+    Two stages. The *search* runs on the map integrated at :data:`SEARCH_TOLERANCE`: Newton
+    from ``guess`` or, failing that, from a seed gait (:func:`_seeds`), then natural-parameter
+    continuation in the target value (tangent predictor from the last Jacobian, Broyden
+    updates). The *polish* converges the result on the accurate map (:func:`_polish`, mostly
+    one simulated step per iteration) and :func:`_characterise` measures it there.
+    """
+    search = prob if prob.rtol >= SEARCH_TOLERANCE else prob.at_tolerance(SEARCH_TOLERANCE)
+    s_tol = max(tol, SEARCH_RESIDUAL)
+    p_tol = max(tol, PATH_RESIDUAL)
+    s_h = max(fd_step, SEARCH_FD_STEP)
+    accept = 10.0 * s_tol
+
+    def finish(x: FloatArray, J: FloatArray, its: int) -> PoweredGait:
+        x, res, it = _polish(prob, x, value, tol, J, max_iter, fd_step)
+        return _characterise(prob, x, res, its + it, fd_step)
+
     if guess is not None:
         x0 = np.asarray(guess, dtype=float)
         try:
-            x, res, it = _newton(prob, x0, value, tol, max_iter, fd_step)
-            return _characterise(prob, x, res, it, fd_step)
+            x, _, it, J = _newton(search, x0, value, s_tol, max_iter, s_h, forward=True,
+                                  accept=accept)
+            return finish(x, J, it)
+        except SearchLimitError:
+            raise
         except PoweredGaitNotFoundError:
             if not fallback:
                 raise
-    x = _seed(prob)
-    st = prob.step(x)
-    if not st.ok:
-        raise PoweredGaitNotFoundError("the seed gait fails")
-    current = prob.measure(st)
-    # converge the seed onto its own target value first, then continue to the requested one
-    x, res, it = _newton(prob, x, current, tol, max_iter, fd_step)
-    total_it += it
+    # a first gait: Newton (at the seed's own target value) from each seed candidate in turn
+    first: tuple[FloatArray, float, int, FloatArray] | None = None
+    last_error: Exception | None = None
+    try:
+        for cand in _seeds(search):
+            st = search.step(cand)
+            if not st.ok:
+                continue
+            current = search.measure(st)
+            try:
+                x, _, it, J = _newton(search, cand, current, p_tol, max_iter, s_h,
+                                      forward=True, accept=10.0 * p_tol)
+            except SearchLimitError:
+                raise
+            except PoweredGaitNotFoundError as exc:
+                last_error = exc
+                continue
+            first = (x, current, it, J)
+            break
+    except SearchLimitError as exc:
+        raise SearchLimitError(
+            f"{exc} while still looking for a first {prob.family.name} gait to continue from "
+            f"(iterating the map from {len(prob.family.seed(prob.walker))} seed "
+            f"{prob.family.parameter_name} values); the target was never approached"
+        ) from exc
+    if first is None:
+        why = f" (last: {last_error})" if last_error is not None else ""
+        raise PoweredGaitNotFoundError(
+            f"the walker cannot walk periodically with any seed {prob.family.name} "
+            f"actuation{why}"
+        )
+    x, current, total_it, J = first
+    unit = "m/s" if target == "speed" else "m"
     frac, dfrac = 0.0, 1.0
     steps = 0
-    x_prev: FloatArray | None = None
-    frac_prev = 0.0
     while frac < 1.0:
         steps += 1
+        reached = current + frac * (value - current)
         if steps > max_continuation:
             raise PoweredGaitNotFoundError(
-                f"continuation from {target} {current:.4g} towards {value:.4g} took too many "
-                "steps (the target is probably outside the reachable range)"
+                f"continuation from {target} {current:.4g} towards {value:.4g} {unit} took too "
+                f"many steps (reached {reached:.4g} {unit}; the target is probably outside the "
+                "reachable range of this actuation)"
             )
         f_try = min(1.0, frac + dfrac)
         v_try = current + f_try * (value - current)
         x_pred = x.copy()
-        if x_prev is not None and frac > frac_prev:
-            x_pred = x + (x - x_prev) * (f_try - frac) / (frac - frac_prev)
+        if np.all(np.isfinite(J)):
+            # tangent predictor: F(x, v) = (P(z, a) - z, g(z, a) - v), so dx/dv = J^-1 e_last
+            try:
+                e = np.zeros(x.size)
+                e[-1] = 1.0
+                x_pred = x + np.linalg.solve(J, e) * (v_try - reached)
+            except np.linalg.LinAlgError:
+                x_pred = x.copy()
+            x_pred[-1] = max(x_pred[-1], prob.family.lower)
         try:
-            x_new, res, it = _newton(prob, x_pred, v_try, tol, max_iter, fd_step)
+            last = f_try >= 1.0
+            x_new, _, it, J_new = _newton(
+                search, x_pred, v_try, s_tol if last else p_tol,
+                min(max_iter, CONTINUATION_ITERATIONS), s_h,
+                forward=True, accept=accept if last else 10.0 * p_tol,
+                min_step=CONTINUATION_MIN_STEP, min_rate=CONTINUATION_MIN_RATE)
+        except SearchLimitError as exc:
+            raise SearchLimitError(
+                f"{exc}: continuation from {target} {current:.4g} towards {value:.4g} {unit} "
+                f"had reached {reached:.4g} {unit}"
+            ) from exc
         except PoweredGaitNotFoundError as exc:
-            dfrac *= 0.5
-            if dfrac < 1e-3:
+            dfrac = 0.5 * (f_try - frac)  # half the increment that failed
+            if dfrac * abs(value - current) < CONTINUATION_RESOLUTION * max(abs(value), 1e-3):
                 raise PoweredGaitNotFoundError(
-                    f"no gait with {target} {value:g} (continuation from {current:.4g} stopped "
-                    f"at {current + frac * (value - current):.4g}: {exc})"
+                    f"no gait with {target} {value:g} {unit}: the {prob.family.name} gaits "
+                    f"found span {min(current, reached):.4g} to {max(current, reached):.4g} "
+                    f"{unit} and end near {reached:.4g} {unit} (continuation from "
+                    f"{current:.4g} stopped there: {exc}); other gains may reach further"
                 ) from exc
             continue
         total_it += it
-        x_prev, frac_prev = x, frac
-        x, frac = x_new, f_try
+        x, frac, J = x_new, f_try, J_new
         dfrac = min(2.0 * dfrac, 1.0)
-    return _characterise(prob, x, res, total_it, fd_step)
+    return finish(x, J, total_it)
 
 
 def _characterise(
     prob: _Problem, x: FloatArray, residual: float, iterations: int, fd_step: float
 ) -> PoweredGait:
+    """The gait at ``x`` on the accurate map: books, and multipliers of ``DP``.
+
+    ``DP`` by forward differences from the gait's own step (``d`` more steps instead of the
+    ``2 d`` of central ones), with the relative step ``sqrt(rtol)`` that balances truncation
+    (``~h``) and integration noise (``~rtol / h``): multipliers to ~1e-5, which is as good as
+    central differences at ``h = 1e-6`` get with that noise (``rtol / h ~ 1e-4``).
+    """
     walker = prob.walker
     st = prob.step(x)
     rec = st.record
     assert rec is not None and st.ok
     z = x[:-1]
     d = z.size
+    h = max(fd_step, float(np.sqrt(prob.rtol)))
     DP = np.empty((d, d))
     for i in range(d):
         dz = np.zeros(d + 1)
-        dz[i] = fd_step * max(1.0, abs(z[i]))
-        plus, minus = prob.step(x + dz), prob.step(x - dz)
-        DP[:, i] = (plus.z_next - minus.z_next) / (2 * dz[i])
+        dz[i] = h * max(1.0, abs(z[i]))
+        DP[:, i] = (prob.step(x + dz).z_next - st.z_next) / dz[i]
     mult = np.linalg.eigvals(DP).astype(complex) if np.all(np.isfinite(DP)) else np.full(d, np.nan)
     mult = mult[np.argsort(-np.abs(mult), kind="stable")]
     m, g, _ = _scale(walker)
     L = rec.step_length
     dE = st.energy_end - st.energy_start
+    # every impact of the step (a described walker's knee strikes too), else the heel strike
+    events = getattr(st.walk, "events", None)
+    loss = (float(sum(e.kinetic_energy_constrained for e in events)) if events
+            else rec.energy_lost)
+    desc = getattr(walker, "description", None)
     return PoweredGait(
         actuation=prob.family.name,
         parameter_name=prob.family.parameter_name,
@@ -645,11 +998,11 @@ def _characterise(
         impact_angle=rec.impact_angle,
         actuator_work=rec.actuator_work,
         push_off_work=rec.push_off_work,
-        collision_loss=rec.energy_lost,
+        collision_loss=loss,
         energy_change=dE,
-        energy_balance_error=rec.actuator_work - rec.energy_lost - dE,
+        energy_balance_error=rec.actuator_work - loss - dE,
         cost_of_transport=rec.actuator_work / (m * g * L),
-        eta=rec.energy_lost / L,
+        eta=loss / L,
         multipliers=mult,
         stable=bool(np.all(np.abs(mult) < 1.0)),
         residual=residual,
@@ -657,4 +1010,200 @@ def _characterise(
         trailing_foot_lift_velocity=rec.trailing_normal_velocity,
         trailing_foot_grazes=st.trailing_foot_grazes,
         walk=st.walk,
+        torque_joint=prob.family.torque_joint,
+        model=None if desc is None else str(desc.name),
     )
+
+
+# -- described walkers (TOML models) ------------------------------------------------------------
+def declared_posture_law(walker: Any) -> Any:
+    """The posture law a described walker's file declares (``[control.<name>]``), or None.
+
+    Parameters
+    ----------
+    walker : BuiltWalker
+        A described walker; its parameter values evaluate the law's expressions.
+
+    Returns
+    -------
+    TorsoPD or None
+        :class:`~heelstrike.dynamics.phased.TorsoPD` with ``kp`` (N m/rad), ``kd``
+        (N m s/rad) and ``angle`` (rad) from the file.
+
+    Raises
+    ------
+    ValueError
+        If the file declares more than one law, or a law on a joint other than ``torso`` (the
+        only one :class:`~heelstrike.dynamics.phased.TorsoPD` and the compiled kernel drive).
+    """
+    from heelstrike.dynamics.phased import TorsoPD
+    from heelstrike.models.description import evaluate_expression
+
+    laws = walker.description.control
+    if not laws:
+        return None
+    if len(laws) > 1 or laws[0].joint != "torso":
+        raise ValueError(
+            f"model {walker.description.name!r} declares posture laws on "
+            f"{[law.joint for law in laws]}: only one law, on a joint named 'torso', is supported"
+        )
+    law = laws[0]
+    vals = walker.params
+
+    def ev(v: Any, key: str) -> float:
+        return float(np.asarray(evaluate_expression(v, vals, path=f"control.{law.name}.{key}")))
+
+    return TorsoPD(walker=walker, kp=ev(law.kp, "kp"), kd=ev(law.kd, "kd"),
+                   angle=ev(law.angle, "angle"))
+
+
+def _model_seed_sections(walker: Any) -> tuple[tuple[float, ...], ...]:
+    """The compass seeds ``(q3, q3_dot, q4_dot)`` on a described walker's section.
+
+    Further joints in the section (a torso) start upright: relative angle ``-q3`` and rate
+    ``-q3_dot`` (the layout of :func:`heelstrike.analysis.model_gaits.find_model_gait`'s grid).
+    """
+    d = len(walker.section_names)
+    n_ang = d - len(walker._section_v)
+    out = []
+    for a, w, h in _SEED_SECTIONS:
+        z = np.zeros(d)
+        z[0], z[n_ang], z[n_ang + 1] = a, w, h
+        if n_ang > 1:
+            z[1:n_ang] = -a
+            z[n_ang + 2 :] = -w
+        out.append(tuple(float(v) for v in z))
+    return tuple(out)
+
+
+def find_model_powered_gait(
+    walker: Any,
+    *,
+    actuation: str = "pushoff",
+    speed: float | None = None,
+    step_length: float | None = None,
+    backend: str = "compiled",
+    posture: bool = True,
+    **options: Any,
+) -> PoweredGait:
+    """Level-ground powered gait of a described walker: push-off plus its posture law.
+
+    The same two-stage search as :func:`find_powered_gait` (Newton on the walker's section
+    (:class:`~heelstrike.dynamics.phased.PhasedWalker`) augmented with the push-off impulse
+    ``p`` (N s), target speed or step length) on the phased step simulator. The posture law
+    the walker file declares (``[control.torso]``, :func:`declared_posture_law`) acts during
+    single support; its work and the push-off's are the actuator work. Over one period
+    (post-impact to post-impact) the energy theorem on level ground gives
+
+    .. math:: W_{push} + W_{posture} = \\sum T_c,
+
+    since ``T + V`` returns to its value (:attr:`PoweredGait.energy_balance_error` is the
+    integration error of that book).
+
+    Parameters
+    ----------
+    walker : BuiltWalker
+        Any described walker (scalar parameters).
+    actuation : {"pushoff"}
+        The hip laws of :func:`actuation_family` are written for the compass gait's
+        coordinates; described walkers take the push-off only.
+    speed, step_length : float, optional
+        Target (m/s or m); exactly one.
+    backend : {"compiled", "scipy"}
+        :func:`~heelstrike.dynamics.compiled_phased.simulate_phased_compiled` (numba, default)
+        or the scipy reference :func:`~heelstrike.dynamics.phased.simulate_phased`.
+    posture : bool
+        Apply the declared posture law (default); False: push-off only.
+    **options
+        Passed to :func:`find_powered_gait` (``tol``, ``rtol``, ``time_limit``, ``guess``...).
+
+    Returns
+    -------
+    PoweredGait
+        ``torque_joint`` names the posture law's joint (``"hip"`` without a law: zero work).
+
+    Raises
+    ------
+    ValueError
+        Unknown backend or an actuation other than ``"pushoff"``.
+    PoweredGaitNotFoundError
+    """
+    from heelstrike.dynamics.phased import PhasedWalker, simulate_phased
+
+    if actuation != "pushoff":
+        raise ValueError(
+            f"described walkers (--model) support --actuation pushoff only (with the posture "
+            f"law the walker file declares), not {actuation!r}: the hip laws are written for "
+            "the compass gait's coordinates"
+        )
+    w = PhasedWalker.from_built(walker)
+    law = declared_posture_law(w) if posture else None
+    simulator: Callable[..., WalkResult]
+    if backend == "scipy":
+        simulator = simulate_phased
+    elif backend == "compiled":
+        from heelstrike.dynamics.compiled_phased import (
+            check_compiled_actuation,
+            simulate_phased_compiled,
+        )
+
+        check_compiled_actuation(w, law, PushOff(impulse=0.0))
+        simulator = simulate_phased_compiled
+    else:
+        raise ValueError(f"backend must be 'compiled' or 'scipy', got {backend!r}")
+    base = actuation_family("pushoff")
+    family = ActuationFamily(
+        name="pushoff",
+        parameter_name=base.parameter_name,
+        parameter_unit=base.parameter_unit,
+        build=lambda _w, a: (law, PushOff(impulse=max(float(a), 0.0))),
+        seed=base.seed,
+        lower=base.lower,
+        torque_joint="hip" if law is None else "torso",
+    )
+    return find_powered_gait(w, actuation=family, speed=speed, step_length=step_length,
+                             simulator=simulator, seed_sections=_model_seed_sections(w),
+                             **options)
+
+
+def energy_book_tables(walker: PlanarWalker, gait: PoweredGait) -> tuple[Any, Any]:
+    """The energy of one period of a powered gait, for
+    :func:`heelstrike.gait_plots.energy_figure`.
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+        The walker the gait was found for.
+    gait : PoweredGait
+
+    Returns
+    -------
+    energy : pandas.DataFrame
+        ``t_s`` (s), ``step``, ``kinetic_J``, ``potential_J``, ``total_J`` (J) at every sample
+        of the period, then two rows at the heel-strike time: just after the push-off (the
+        total jumps by its work) and just after the heel strike (the total drops by ``T_c``,
+        back to its start value on the periodic gait). Between them the torque law's work
+        changes the total.
+    impacts : pandas.DataFrame
+        One row: ``step``, ``time_s``, ``impact_angle_rad``, ``total_before_J`` (after the
+        push-off), ``total_after_J``, ``drop_J`` and ``T_c_J`` (J).
+    """
+    import pandas as pd
+
+    walk = gait.walk
+    rec = walk.impacts[0]
+    q_all = np.vstack((walk.q, rec.q, walk.final_q))
+    qd_all = np.vstack((walk.q_dot, rec.q_dot_minus, walk.final_q_dot))
+    T = np.asarray([float(kinetic_energy(walker.mass_matrix(q), qd))
+                    for q, qd in zip(q_all, qd_all, strict=True)])
+    U = np.asarray([float(np.asarray(walker.potential_energy(q, 0.0))) for q in q_all])
+    t = np.concatenate((walk.t, [rec.time, rec.time]))
+    energy = pd.DataFrame({"t_s": t, "step": np.zeros(t.size, dtype=int), "kinetic_J": T,
+                           "potential_J": U, "total_J": T + U})
+    before, after = float(T[-2] + U[-2]), float(T[-1] + U[-1])
+    impacts = pd.DataFrame([{
+        "step": 0, "time_s": rec.time, "impact_angle_rad": rec.impact_angle,
+        "total_before_J": before, "total_after_J": after, "drop_J": before - after,
+        "T_c_J": gait.collision_loss,
+    }])
+    return energy, impacts

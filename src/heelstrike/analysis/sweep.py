@@ -4,7 +4,12 @@
 (walker parameters, initial states, slopes, ...), chunk by chunk, with Dask: local threads or
 processes, or a ``dask.distributed`` cluster. With a ``store`` every finished chunk is written to
 Zarr at once and recorded, so an interrupted sweep resumes where it stopped and never recomputes
-a finished chunk.
+a finished chunk. A store is safe to reuse: a running sweep locks it, it is resumed only by the
+same computation (grid, chunks, function identity including closures, defaults, plain-data
+globals and module sources, heelstrike version), and every finished chunk carries a checksum,
+so a deleted or overwritten chunk is computed again (see :func:`sweep`). Local threads work in
+the light install (a plain thread pool when Dask is absent); processes, clusters and stores
+need ``pip install 'heelstrike[scale]'``.
 
 The function contract
 ---------------------
@@ -28,14 +33,19 @@ Results are identical whatever the scheduler or chunking: each value depends onl
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import hashlib
 import itertools
 import json
+import logging
 import os
 import shutil
+import sys
+import sysconfig
 import types
 import uuid
+import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -45,11 +55,15 @@ import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
+from heelstrike._optional import available, require
+
 __all__ = [
     "KNOWN_UNITS",
     "SweepError",
     "SweepFunction",
+    "SweepStoreLockedError",
     "SweepStoreMismatchError",
+    "SweepStoreRepairWarning",
     "sweep",
     "sweep_progress",
 ]
@@ -101,10 +115,40 @@ class SweepError(RuntimeError):
 
 
 class SweepStoreMismatchError(SweepError):
-    """The store holds a sweep of a different grid, chunking or function."""
+    """The store holds a sweep of a different grid, chunking or function.
 
+    Attributes
+    ----------
+    differs : tuple of str
+        The parts of the sweep identity that differ, e.g. ``("function.closure",)``.
+    """
+
+    def __init__(self, message: str, differs: Sequence[str] = ()) -> None:
+        super().__init__(message)
+        self.differs = tuple(differs)
+
+
+class SweepStoreLockedError(SweepError):
+    """Another sweep is writing to the same store (its lock file is held)."""
+
+
+class SweepStoreRepairWarning(UserWarning):
+    """Finished chunks of a store failed checksum verification and are computed again."""
+
+
+_log = logging.getLogger(__name__)
 
 # -- identity ------------------------------------------------------------------------------------
+# The identity of a sweep function covers what it computes: the bytecode of the function and of
+# every Python function it reaches (through globals, closures, defaults, partials and the methods
+# of classes it uses) that is defined outside the standard library and site-packages (or in
+# heelstrike), the values of the closure cells, defaults and bound arguments, the values of the
+# referenced globals that are plain data, and the source text of every module reached; plus the
+# heelstrike version. Third-party code is identified by name only.
+_PLAIN_SCALARS = (bool, int, float, complex, str, bytes, type(None), np.generic)
+_MAX_DEPTH = 16
+
+
 def _code_digest(code: types.CodeType, h: Any) -> None:
     h.update(code.co_code)
     h.update(repr(code.co_names).encode())
@@ -117,20 +161,222 @@ def _code_digest(code: types.CodeType, h: Any) -> None:
             h.update(repr(const).encode())
 
 
-def _token(obj: Any) -> str:
-    """Deterministic (across processes) description of a bound argument."""
+def _code_names(code: types.CodeType) -> set[str]:
+    names = set(code.co_names)
+    for const in code.co_consts:
+        if isinstance(const, types.CodeType):
+            names |= _code_names(const)
+    return names
+
+
+def _array_token(obj: NDArray[Any]) -> str:
+    data = np.ascontiguousarray(obj)
+    return f"ndarray({obj.dtype},{obj.shape},{hashlib.sha256(data.tobytes()).hexdigest()})"
+
+
+def _plain_token(obj: Any, depth: int = 0) -> str | None:
+    """Token of plain data (numbers, strings, numeric arrays, containers of them), else None."""
+    if depth > _MAX_DEPTH:
+        return None
+    if isinstance(obj, np.generic):
+        return f"{type(obj).__name__}({obj!r})"
+    if isinstance(obj, _PLAIN_SCALARS):
+        return repr(obj)
     if isinstance(obj, np.ndarray):
-        return f"ndarray({obj.dtype},{obj.shape},{hashlib.sha256(obj.tobytes()).hexdigest()})"
-    if isinstance(obj, list | tuple):
-        return f"{type(obj).__name__}({','.join(_token(x) for x in obj)})"
+        return None if obj.dtype.hasobject else _array_token(obj)
+    if isinstance(obj, list | tuple | set | frozenset):
+        items = [_plain_token(x, depth + 1) for x in obj]
+        parts = [t for t in items if t is not None]
+        if len(parts) != len(items):
+            return None
+        if isinstance(obj, set | frozenset):
+            parts.sort()
+        return f"{type(obj).__name__}({','.join(parts)})"
     if isinstance(obj, dict):
-        return "dict(" + ",".join(f"{k!r}:{_token(v)}" for k, v in sorted(obj.items())) + ")"
-    if callable(obj) and hasattr(obj, "__qualname__"):
-        return _func_name(obj)
-    text = repr(obj)
-    if " at 0x" in text:  # repr with a memory address is not reproducible
-        return type(obj).__qualname__
-    return text
+        pairs = []
+        for k, v in obj.items():
+            tk, tv = _plain_token(k, depth + 1), _plain_token(v, depth + 1)
+            if tk is None or tv is None:
+                return None
+            pairs.append(f"{tk}:{tv}")
+        return "dict(" + ",".join(sorted(pairs)) + ")"
+    return None
+
+
+def _user_module(name: str | None) -> bool:
+    """Whether code of module ``name`` is followed (heelstrike and the user's own modules)."""
+    if not name:
+        return False
+    if name.split(".")[0] == "heelstrike":
+        return True
+    module = sys.modules.get(name)
+    path = getattr(module, "__file__", None)
+    if path is None:
+        return name == "__main__"
+    if name.split(".")[0] in sys.stdlib_module_names:
+        return False
+    real = os.path.realpath(path)
+    return not any(real.startswith(root) for root in _library_roots())
+
+
+@functools.lru_cache(maxsize=1)
+def _library_roots() -> tuple[str, ...]:
+    """Directories of the standard library and installed third-party packages."""
+    paths = sysconfig.get_paths()
+    keys = ("stdlib", "platstdlib", "purelib", "platlib")
+    return tuple(sorted({os.path.realpath(paths[k]) + os.sep for k in keys if k in paths}))
+
+
+#: module name -> (the module's spec when read, digest of its source file)
+_MODULE_DIGESTS: dict[str, tuple[Any, str]] = {}
+
+
+def _module_digest(name: str) -> str:
+    """SHA-256 of a module's source file, read once per import of the module.
+
+    The file is read the first time a sweep reaches the module and again only after the module
+    is re-imported (``importlib.reload``): the digest stands for the code that runs, and edits
+    of the file after import (which do not change that code) do not change it.
+    """
+    module = sys.modules.get(name)
+    spec = getattr(module, "__spec__", None)
+    cached = _MODULE_DIGESTS.get(name)
+    if cached is not None and cached[0] is spec:
+        return cached[1]
+    path = getattr(module, "__file__", None)
+    digest = "no source"
+    if path and str(path).endswith(".py"):
+        try:
+            with open(path, "rb") as f:
+                digest = hashlib.sha256(f.read()).hexdigest()
+        except OSError:
+            pass
+    _MODULE_DIGESTS[name] = (spec, digest)
+    return digest
+
+
+class _Identity:
+    """Collects the identity of a callable (see the comment above)."""
+
+    def __init__(self) -> None:
+        self.parts: dict[str, list[str]] = {
+            k: [] for k in ("code", "defaults", "closure", "globals", "bound")
+        }
+        self.modules: set[str] = set()
+        self.seen: set[int] = set()
+
+    def value(self, obj: Any, depth: int = 0) -> str:
+        """Deterministic token of a bound value; follows callables and classes."""
+        plain = _plain_token(obj)
+        if plain is not None:
+            return plain
+        if depth > _MAX_DEPTH:
+            return type(obj).__qualname__
+        if isinstance(obj, np.ndarray):  # object arrays
+            return "ndarray(" + ",".join(self.value(x, depth + 1) for x in obj.ravel()) + ")"
+        if isinstance(obj, list | tuple):
+            return f"{type(obj).__name__}({','.join(self.value(x, depth + 1) for x in obj)})"
+        if isinstance(obj, dict):
+            return "dict(" + ",".join(
+                sorted(f"{self.value(k, depth + 1)}:{self.value(v, depth + 1)}"
+                       for k, v in obj.items())
+            ) + ")"
+        if isinstance(obj, type):
+            self.klass(obj)
+            return f"class {obj.__module__}.{obj.__qualname__}"
+        if dataclasses.is_dataclass(obj):  # field by field (a repr may abbreviate arrays)
+            self.klass(type(obj))
+            fields = ",".join(f"{f.name}={self.value(getattr(obj, f.name), depth + 1)}"
+                              for f in dataclasses.fields(obj))
+            return f"{type(obj).__module__}.{type(obj).__qualname__}({fields})"
+        if isinstance(obj, types.ModuleType):
+            if _user_module(obj.__name__):
+                self.modules.add(obj.__name__)
+            return f"module {obj.__name__}"
+        if callable(obj) and (
+            isinstance(obj, functools.partial | types.FunctionType | types.MethodType)
+            or hasattr(obj, "py_func")
+        ):
+            self.callable(obj)
+            return _func_name(obj)
+        if not isinstance(obj, type) and _user_module(type(obj).__module__):
+            self.klass(type(obj))
+        text = repr(obj)
+        if " at 0x" in text:  # repr with a memory address is not reproducible
+            return type(obj).__qualname__
+        return text
+
+    def callable(self, func: Any) -> None:
+        while isinstance(func, functools.partial):
+            self.parts["bound"].append(self.value(func.args) + self.value(func.keywords))
+            func = func.func
+        if isinstance(func, types.MethodType):
+            self.parts["bound"].append(self.value(func.__self__))
+            func = func.__func__
+        py_func = getattr(func, "py_func", None)  # numba dispatchers
+        if isinstance(py_func, types.FunctionType):
+            func = py_func
+        if isinstance(func, types.FunctionType):
+            self.function(func)
+            return
+        call = getattr(type(func), "__call__", None)  # noqa: B004
+        if isinstance(call, types.FunctionType):  # a callable instance
+            self.parts["bound"].append(self.value(func))
+            self.function(call)
+        else:  # builtins, ufuncs, ...
+            self.parts["code"].append(_func_name(func))
+
+    def klass(self, cls: type) -> None:
+        if id(cls) in self.seen or not _user_module(cls.__module__):
+            return
+        self.seen.add(id(cls))
+        self.modules.add(cls.__module__)
+        for attr in vars(cls).values():
+            for f in (attr, getattr(attr, "__func__", None), getattr(attr, "fget", None)):
+                if isinstance(f, types.FunctionType):
+                    self.function(f)
+
+    def function(self, func: types.FunctionType) -> None:
+        if id(func) in self.seen:
+            return
+        self.seen.add(id(func))
+        if not _user_module(func.__module__):
+            self.parts["code"].append(_func_name(func))
+            return
+        self.modules.add(func.__module__)
+        h = hashlib.sha256()
+        _code_digest(func.__code__, h)
+        self.parts["code"].append(f"{_func_name(func)}:{h.hexdigest()}")
+        name = func.__qualname__
+        self.parts["defaults"].append(
+            f"{name}:{self.value(func.__defaults__)}:{self.value(func.__kwdefaults__)}"
+        )
+        for var, cell in zip(func.__code__.co_freevars, func.__closure__ or (), strict=True):
+            try:
+                content = cell.cell_contents
+            except ValueError:  # empty cell
+                content = "<empty>"
+            self.parts["closure"].append(f"{name}.{var}={self.value(content)}")
+        glb = func.__globals__
+        for var in sorted(_code_names(func.__code__)):
+            if var not in glb:
+                continue
+            obj = glb[var]
+            plain = _plain_token(obj)
+            if plain is not None:
+                self.parts["globals"].append(f"{func.__module__}.{var}={plain}")
+            elif isinstance(obj, type | types.ModuleType) or callable(obj):
+                self.value(obj)  # follows code; its name is in the bytecode already
+            # other objects (locks, caches, models): by name, i.e. through the bytecode only
+
+    def digest(self) -> dict[str, str]:
+        out = {
+            k: hashlib.sha256("\n".join(v).encode()).hexdigest() for k, v in self.parts.items()
+        }
+        out["modules"] = hashlib.sha256(
+            "\n".join(f"{m}:{_module_digest(m)}" for m in sorted(self.modules)).encode()
+        ).hexdigest()
+        return out
 
 
 def _func_name(func: Any) -> str:
@@ -142,18 +388,10 @@ def _func_name(func: Any) -> str:
 
 
 def _func_identity(func: Any) -> dict[str, str]:
-    h = hashlib.sha256()
-    inner = func
-    bound: list[str] = []
-    while isinstance(inner, functools.partial):
-        bound.append(_token(inner.args) + _token(inner.keywords))
-        inner = inner.func
-    code = getattr(inner, "__code__", None)
-    if code is None:
-        code = getattr(getattr(inner, "__call__", None), "__code__", None)  # noqa: B004
-    if isinstance(code, types.CodeType):
-        _code_digest(code, h)
-    return {"name": _func_name(func), "code_sha256": h.hexdigest(), "bound": "|".join(bound)}
+    """Name and digests (code, defaults, closure, globals, bound arguments, module sources)."""
+    ident = _Identity()
+    ident.callable(func)
+    return {"name": _func_name(func), **ident.digest()}
 
 
 # -- grid and chunks -----------------------------------------------------------------------------
@@ -309,6 +547,7 @@ class _Store:
         self.attrs = attrs
         self.arrays: dict[str, Any] | None = None
         self.done_array: Any = None
+        self.checksum_array: Any = None
         self.template: dict[str, tuple[np.dtype[Any], tuple[int, ...]]] | None = None
 
     def open_existing(self) -> NDArray[np.bool_] | None:
@@ -316,21 +555,50 @@ class _Store:
         import zarr
 
         root = zarr.open_group(str(self.path), mode="r+")
-        stored = json.loads(str(root.attrs[_IDENTITY_ATTR]))
-        mine = json.loads(self.attrs[_IDENTITY_ATTR])
+        stored = _flatten(json.loads(str(root.attrs[_IDENTITY_ATTR])))
+        mine = _flatten(json.loads(self.attrs[_IDENTITY_ATTR]))
         if stored != mine:
             diff = sorted(k for k in set(stored) | set(mine) if stored.get(k) != mine.get(k))
             raise SweepStoreMismatchError(
                 f"store {str(self.path)!r} holds a different sweep (differs in: "
-                f"{', '.join(diff)}); pass overwrite=True or use another store"
+                f"{', '.join(diff)}); its results are not what this sweep computes: pass "
+                "overwrite=True to compute them again, or use another store",
+                differs=diff,
             )
         if _STATE_GROUP not in root:
             return None
         self._bind(root)
-        return np.asarray(self.done_array[...], dtype=bool)
+        return self._verify(np.asarray(self.done_array[...], dtype=bool))
+
+    def _verify(self, done: NDArray[np.bool_]) -> NDArray[np.bool_]:
+        """Clear the finished chunks whose data do not match their recorded checksum."""
+        assert self.arrays is not None
+        sums = np.asarray(self.checksum_array[...], dtype=np.uint8)
+        bad = []
+        for index in zip(*np.nonzero(done), strict=True):
+            index = tuple(int(i) for i in index)
+            region = self.plan.chunk_slices(index)
+            try:
+                data = {n: np.asarray(a[region]) for n, a in self.arrays.items()}
+                ok = _chunk_digest(data) == bytes(sums[index])
+            except Exception:  # undecodable chunk file
+                ok = False
+            if not ok:
+                done[index] = False
+                bad.append(index)
+        if bad:
+            shown = ", ".join(map(str, bad[:5])) + (", ..." if len(bad) > 5 else "")
+            warnings.warn(
+                f"store {str(self.path)!r}: {len(bad)} finished chunk(s) failed checksum "
+                f"verification (data deleted or overwritten: {shown}); computing them again",
+                SweepStoreRepairWarning,
+                stacklevel=4,
+            )
+        return done
 
     def _bind(self, root: Any) -> None:
         self.done_array = root[f"{_STATE_GROUP}/done"]
+        self.checksum_array = root[f"{_STATE_GROUP}/checksum"]
         names = [n for n in root.array_keys() if n not in self.plan.names]
         self.arrays = {n: root[n] for n in names}
         self.template = {
@@ -366,14 +634,67 @@ class _Store:
         state = root.require_group(_STATE_GROUP)
         state.create_array("done", shape=plan.n_chunks, dtype="uint8", chunks=plan.n_chunks,
                            fill_value=0)
+        state.create_array("checksum", shape=(*plan.n_chunks, 32), dtype="uint8",
+                           chunks=(*plan.n_chunks, 32), fill_value=0)
         self._bind(root)
 
     def write(self, index: tuple[int, ...], result: Mapping[str, NDArray[Any]]) -> None:
         assert self.arrays is not None
         region = self.plan.chunk_slices(index)
+        stored = {}
         for name, arr in result.items():
             self.arrays[name][region] = arr
-        self.done_array[index] = 1  # after the data: a half-written chunk is recomputed
+            stored[name] = np.asarray(arr).astype(self.arrays[name].dtype, copy=False)
+        # the record after the data: a half-written chunk is recomputed
+        self.checksum_array[index] = np.frombuffer(_chunk_digest(stored), dtype=np.uint8)
+        self.done_array[index] = 1
+
+
+def _chunk_digest(data: Mapping[str, NDArray[Any]]) -> bytes:
+    """SHA-256 of a chunk's outputs (names, dtypes, shapes and bytes) as stored."""
+    h = hashlib.sha256()
+    for name in sorted(data):
+        arr = np.ascontiguousarray(data[name])
+        h.update(f"{name}|{arr.dtype.str}|{arr.shape}|".encode())
+        h.update(arr.tobytes())
+    return h.digest()
+
+
+def _lock_path(path: Path) -> Path:
+    """The lock file of a store: a sibling ``<store>.lock`` (it outlives a replaced store)."""
+    return path.with_name(path.name + ".lock")
+
+
+def _lock_store(path: Path, timeout: float | None) -> Any:
+    """Acquire the exclusive lock of store ``path`` (a :class:`filelock.FileLock`)."""
+    filelock = require("filelock", "a sweep store (store=...)")
+    lock_file = _lock_path(path)
+    try:
+        lock_file.parent.mkdir(parents=True, exist_ok=True)
+        with open(lock_file, "a"):  # fails here (not as a timeout) where we cannot write
+            pass
+        lock = filelock.FileLock(str(lock_file), timeout=-1 if timeout is None else timeout)
+        lock.acquire()
+    except filelock.Timeout:
+        raise SweepStoreLockedError(
+            f"store {str(path)!r} is in use by another sweep (lock file {str(lock_file)!r} is "
+            "held); wait for it to finish, or pass lock_timeout to wait for it"
+        ) from None
+    except OSError as exc:
+        raise SweepError(
+            f"cannot lock store {str(path)!r} ({str(lock_file)!r}): {exc.strerror or exc}"
+        ) from exc
+    return lock
+
+
+def _flatten(obj: Any, prefix: str = "") -> dict[str, Any]:
+    """``{"a": {"b": 1}}`` -> ``{"a.b": 1}``."""
+    if not isinstance(obj, dict):
+        return {prefix: obj}
+    out: dict[str, Any] = {}
+    for k, v in obj.items():
+        out.update(_flatten(v, f"{prefix}.{k}" if prefix else str(k)))
+    return out
 
 
 def _coords(plan: _Plan) -> dict[str, xr.Variable]:
@@ -407,7 +728,10 @@ def _run_local(
     on_result: Callable[[tuple[int, ...], dict[str, NDArray[Any]]], None],
     token: str,
 ) -> None:
-    import dask
+    if scheduler not in ("processes", "multiprocessing") and not available("dask"):
+        _run_plain(func, plan, pending, scheduler, num_workers, on_result)
+        return
+    dask = require("dask", f"the {scheduler!r} Dask scheduler")
     from dask.callbacks import Callback
 
     keys: dict[str, tuple[int, ...]] = {}
@@ -431,6 +755,35 @@ def _run_local(
         kwargs["num_workers"] = num_workers
     with Callback(posttask=posttask):
         dask.compute(*sinks, **kwargs)
+
+
+def _run_plain(
+    func: SweepFunction,
+    plan: _Plan,
+    pending: list[tuple[int, ...]],
+    scheduler: str,
+    num_workers: int | None,
+    on_result: Callable[[tuple[int, ...], dict[str, NDArray[Any]]], None],
+) -> None:
+    """Local threads (or the calling thread for ``"sync"``) without Dask (light install)."""
+    from concurrent.futures import ThreadPoolExecutor, as_completed
+
+    def args(index: tuple[int, ...]) -> tuple[Any, ...]:
+        shape = tuple(s.stop - s.start for s in plan.chunk_slices(index))
+        return func, plan.chunk_kwargs(index), shape, index
+
+    if scheduler in ("sync", "synchronous", "single-threaded"):
+        for index in pending:
+            on_result(index, _run_chunk(*args(index)))
+        return
+    with ThreadPoolExecutor(max_workers=num_workers or os.cpu_count()) as pool:
+        futures = {pool.submit(_run_chunk, *args(index)): index for index in pending}
+        try:
+            for fut in as_completed(futures):
+                on_result(futures[fut], fut.result())
+        finally:
+            for fut in futures:  # interrupted: start no further chunk
+                fut.cancel()
 
 
 def _run_distributed(
@@ -469,7 +822,7 @@ def _resolve_client(scheduler: Any) -> tuple[Any, bool] | None:
     """``(client, owned)`` for a distributed scheduler, None for a local one."""
     if scheduler is None or (isinstance(scheduler, str) and scheduler in _LOCAL_SCHEDULERS):
         return None
-    from distributed import Client
+    Client = require("distributed", "a Dask cluster scheduler").Client
 
     if isinstance(scheduler, Client):
         return scheduler, False
@@ -498,6 +851,7 @@ def sweep(
     output_dims: Mapping[str, Sequence[str]] | None = None,
     num_workers: int | None = None,
     overwrite: bool = False,
+    lock_timeout: float | None = 0.0,
 ) -> xr.Dataset:
     """Evaluate ``func`` on the outer product of ``grid``, chunked, with Dask; optionally resumable.
 
@@ -515,16 +869,30 @@ def sweep(
         Chunk length per grid name (names left out are not split), or one length for all.
         Default: about 65536 points per chunk, split along the leading names.
     store : path, optional
-        Zarr directory. Each chunk is written as soon as it finishes and recorded as done; if the
-        store holds an unfinished run of the same sweep (same grid, chunks, function name, code
-        and bound arguments) only the missing chunks are computed. A store of a different sweep
-        raises :class:`SweepStoreMismatchError` unless ``overwrite=True``.
+        Zarr directory. Each chunk is written as soon as it finishes and recorded as done, with
+        a SHA-256 checksum of its data; if the store holds a run of the same sweep, only the
+        missing chunks are computed, and finished chunks whose data fail their checksum (deleted
+        or overwritten files) are computed again, with a :class:`SweepStoreRepairWarning`.
+        "The same sweep" means the same grid, chunks, heelstrike version and function identity:
+        the function's name and bytecode and those of every Python function it reaches outside
+        the standard library and site-packages (and in heelstrike), through globals, closures,
+        defaults, partials and the methods of classes it uses; the values of its closure cells,
+        defaults and bound arguments; the referenced module globals that are plain data
+        (numbers, strings, numeric arrays and containers of them); and the source text of every
+        module reached. Other objects (third-party functions, locks, caches) count by name
+        only. A store of a different sweep raises :class:`SweepStoreMismatchError` naming what
+        differs (e.g. ``function.closure``), unless ``overwrite=True`` (compute afresh).
+        While the sweep runs it holds an exclusive lock, the sibling file ``<store>.lock``
+        (:mod:`filelock`), so a second sweep on the same store cannot interleave with it.
     scheduler : str, distributed.Client or cluster, optional
         ``None`` or ``"threads"`` (default): Dask's local thread pool; ``"processes"``: local
         process pool; ``"sync"``: in the calling thread. A scheduler address
         (``"tcp://host:8786"``), a :class:`distributed.Client` or a cluster object (e.g.
         :class:`distributed.LocalCluster`) runs the chunks on that cluster; results are written
-        by the calling process, so workers need no access to ``store``.
+        by the calling process, so workers need no access to ``store``. Without Dask (the light
+        install) ``"threads"`` and ``"sync"`` run on a :mod:`concurrent.futures` thread pool
+        with the same results; ``"processes"``, clusters and ``store`` need the ``scale`` extra
+        (``pip install 'heelstrike[scale]'``).
     progress : bool
         Show a tqdm progress bar over chunks (default True).
     units : mapping of str to str, optional
@@ -537,6 +905,9 @@ def sweep(
         Worker count of the local thread or process pool (Dask's default: the CPU count).
     overwrite : bool
         Replace an existing store instead of resuming or refusing it.
+    lock_timeout : float or None
+        Seconds to wait for another sweep holding ``store``'s lock: 0 (default) fails at once
+        with :class:`SweepStoreLockedError`, ``None`` waits as long as it takes.
 
     Returns
     -------
@@ -552,9 +923,43 @@ def sweep(
         Invalid grid, chunks or function output; a non-sweep directory at ``store``.
     SweepStoreMismatchError
         ``store`` holds a different sweep.
+    SweepStoreLockedError
+        Another sweep holds ``store``'s lock (for longer than ``lock_timeout``).
+    heelstrike._optional.MissingExtraError
+        ``store``, ``"processes"`` or a cluster without the ``scale`` extra installed.
     """
+    lock = None
+    if store is not None:
+        require("zarr", "a sweep store (store=...)")
+        require("dask.array", "a sweep store (store=...)")
+        lock = _lock_store(Path(os.fspath(store)), lock_timeout)
+    try:
+        return _sweep(func, grid, chunks=chunks, store=store, scheduler=scheduler,
+                      progress=progress, units=units, output_dims=output_dims,
+                      num_workers=num_workers, overwrite=overwrite)
+    finally:
+        if lock is not None:
+            lock.release()
+
+
+def _sweep(
+    func: SweepFunction,
+    grid: Mapping[str, ArrayLike],
+    *,
+    chunks: int | Mapping[str, int] | None,
+    store: str | os.PathLike[str] | None,
+    scheduler: str | Any | None,
+    progress: bool,
+    units: Mapping[str, str] | None,
+    output_dims: Mapping[str, Sequence[str]] | None,
+    num_workers: int | None,
+    overwrite: bool,
+) -> xr.Dataset:
+    """:func:`sweep` with the store (if any) locked by the caller."""
     plan = _plan(grid, chunks, dict(units or {}))
     ident = {
+        "format": 2,
+        "heelstrike_version": _heelstrike_version(),
         "function": _func_identity(func),
         "grid": {"names": list(plan.names), "sha256": plan.grid_digest()},
         "chunks": list(plan.chunk_sizes),
@@ -579,13 +984,16 @@ def sweep(
         elif path.exists():
             if not _is_sweep_store(path):
                 raise SweepError(
-                    f"{str(path)!r} exists and is not a heelstrike sweep store; remove it or "
-                    "pass overwrite=True"
+                    f"{str(path)!r} exists and is not a heelstrike sweep store: remove it or "
+                    "choose another store"
                 )
             record = st.open_existing()
             if record is not None:
                 done = record
     pending = [i for i in all_chunks if not done[i]]
+    if st is not None:
+        _log.info("store %s: %d of %d chunks already done, computing %d", st.path,
+                  len(all_chunks) - len(pending), len(all_chunks), len(pending))
 
     memory: dict[str, NDArray[Any]] = {}
     d = len(plan.names)
@@ -676,7 +1084,7 @@ def sweep_progress(store: str | os.PathLike[str]) -> tuple[int, int]:
     SweepError
         If ``store`` is not a heelstrike sweep store.
     """
-    import zarr
+    zarr = require("zarr", "a sweep store")
 
     path = Path(os.fspath(store))
     if not _is_sweep_store(path):

@@ -40,6 +40,11 @@ STATUS_OK = 0
 STATUS_NOT_FINITE = 1
 STATUS_NOT_SPD = 2
 STATUS_RANK_DEFICIENT = 3
+STATUS_SINGULAR = 4
+
+#: Items whose mass matrix, scaled to unit diagonal, has a 1-norm condition number at or above
+#: this are rejected as singular to working precision (cf. ``heelstrike.core.impact``).
+SINGULAR_COND = 1.0 / (4.0 * float(np.finfo(float).eps))
 
 
 class FastImpactResult(NamedTuple):
@@ -94,42 +99,108 @@ def _solve_2x4(
     Writes ``q_dot+`` into ``qp`` (4,) and ``lambda`` into ``lam`` (2,); returns
     ``(status, T, T_c, T_a)``. Inputs are assumed finite.
     """
-    # Cholesky M = L L^T (lower triangle of M is used).
+    # Scale to unit diagonal: M~ = D^-1 M D^-1, A~ = A D^-1 (rows then normalized to unit
+    # length, scales rs), q~ = D qd. Makes the checks and the accuracy independent of units.
+    sc = np.empty(4)
+    for j in range(4):
+        if not M[j, j] > 0.0:
+            return STATUS_NOT_SPD, 0.0, 0.0, 0.0
+        sc[j] = math.sqrt(M[j, j])
+    At = np.empty((2, 4))
+    rs = np.empty(2)
+    for c in range(2):
+        amax = 0.0
+        for r in range(4):
+            At[c, r] = A[c, r] / sc[r]
+            amax = max(amax, abs(At[c, r]))
+        if not amax > 0.0:
+            return STATUS_RANK_DEFICIENT, 0.0, 0.0, 0.0
+        nrm = 0.0
+        for r in range(4):
+            nrm += (At[c, r] / amax) ** 2
+        rs[c] = amax * math.sqrt(nrm)
+        for r in range(4):
+            At[c, r] /= rs[c]
+    qt = np.empty(4)
+    for r in range(4):
+        qt[r] = qd[r] * sc[r]
+    # Cholesky M~ = L L^T (lower triangle of M is used).
     L = np.zeros((4, 4))
     for j in range(4):
-        d = M[j, j]
+        d = M[j, j] / (sc[j] * sc[j])
         for p in range(j):
             d -= L[j, p] * L[j, p]
         if not d > 0.0:
             return STATUS_NOT_SPD, 0.0, 0.0, 0.0
         L[j, j] = math.sqrt(d)
         for r in range(j + 1, 4):
-            s = M[r, j]
+            s = M[r, j] / (sc[r] * sc[j])
             for p in range(j):
                 s -= L[r, p] * L[j, p]
             L[r, j] = s / L[j, j]
-    # Y = L^-1 A^T (4 x 2), forward substitution.
+    # Singular to working precision: 1-norm condition estimate of M~ via L^-1.
+    Li = np.zeros((4, 4))
+    for c in range(4):
+        for r in range(c, 4):
+            s = 1.0 if r == c else 0.0
+            for p in range(c, r):
+                s -= L[r, p] * Li[p, c]
+            Li[r, c] = s / L[r, r]
+    n1 = 0.0
+    ni = 0.0
+    for c in range(4):
+        col = 0.0
+        coli = 0.0
+        for r in range(4):
+            col += abs(M[r, c]) / (sc[r] * sc[c])
+            mi = 0.0
+            for p in range(max(r, c), 4):
+                mi += Li[p, r] * Li[p, c]
+            coli += abs(mi)
+        n1 = max(n1, col)
+        ni = max(ni, coli)
+    if not n1 * ni < SINGULAR_COND:
+        return STATUS_SINGULAR, 0.0, 0.0, 0.0
+    # Y = L^-1 A~^T (4 x 2), forward substitution.
     Y = np.empty((4, 2))
     for c in range(2):
         for r in range(4):
-            s = A[c, r]
+            s = At[c, r]
             for p in range(r):
                 s -= L[r, p] * Y[p, c]
             Y[r, c] = s / L[r, r]
-    W00 = Y[0, 0] * Y[0, 0] + Y[1, 0] * Y[1, 0] + Y[2, 0] * Y[2, 0] + Y[3, 0] * Y[3, 0]
-    W01 = Y[0, 0] * Y[0, 1] + Y[1, 0] * Y[1, 1] + Y[2, 0] * Y[2, 1] + Y[3, 0] * Y[3, 1]
-    W11 = Y[0, 1] * Y[0, 1] + Y[1, 1] * Y[1, 1] + Y[2, 1] * Y[2, 1] + Y[3, 1] * Y[3, 1]
-    det = W00 * W11 - W01 * W01
-    if not det > 1e-24 * W00 * W11:
+    # Y = Q R (2 columns, Gram-Schmidt with one re-orthogonalization): W = R^T R without
+    # forming it; w = R^-T b, mu = R^-1 w, z = Q w = Y mu, 2 T_c = |w|^2.
+    r00 = math.sqrt(Y[0, 0] ** 2 + Y[1, 0] ** 2 + Y[2, 0] ** 2 + Y[3, 0] ** 2)
+    ny1 = math.sqrt(Y[0, 1] ** 2 + Y[1, 1] ** 2 + Y[2, 1] ** 2 + Y[3, 1] ** 2)
+    if not (r00 > 0.0 and ny1 > 0.0):
         return STATUS_RANK_DEFICIENT, 0.0, 0.0, 0.0
-    b0 = A[0, 0] * qd[0] + A[0, 1] * qd[1] + A[0, 2] * qd[2] + A[0, 3] * qd[3]
-    b1 = A[1, 0] * qd[0] + A[1, 1] * qd[1] + A[1, 2] * qd[2] + A[1, 3] * qd[3]
-    mu0 = (W11 * b0 - W01 * b1) / det
-    mu1 = (W00 * b1 - W01 * b0) / det
-    # z = Y mu = L^T v_c; v_c by back substitution with L^T.
+    q0 = np.empty(4)
+    q1 = np.empty(4)
+    for r in range(4):
+        q0[r] = Y[r, 0] / r00
+        q1[r] = Y[r, 1]
+    r01 = 0.0
+    for _ in range(2):
+        c = q0[0] * q1[0] + q0[1] * q1[1] + q0[2] * q1[2] + q0[3] * q1[3]
+        r01 += c
+        for r in range(4):
+            q1[r] -= c * q0[r]
+    r11 = math.sqrt(q1[0] ** 2 + q1[1] ** 2 + q1[2] ** 2 + q1[3] ** 2)
+    if not r11 > 1e-12 * ny1:
+        return STATUS_RANK_DEFICIENT, 0.0, 0.0, 0.0
+    for r in range(4):
+        q1[r] /= r11
+    b0 = At[0, 0] * qt[0] + At[0, 1] * qt[1] + At[0, 2] * qt[2] + At[0, 3] * qt[3]
+    b1 = At[1, 0] * qt[0] + At[1, 1] * qt[1] + At[1, 2] * qt[2] + At[1, 3] * qt[3]
+    w0 = b0 / r00
+    w1 = (b1 - r01 * w0) / r11
+    mu1 = w1 / r11
+    mu0 = (w0 - r01 * mu1) / r00
+    # z = Q w = L^T v_c; v_c by back substitution with L^T.
     z = np.empty(4)
     for r in range(4):
-        z[r] = Y[r, 0] * mu0 + Y[r, 1] * mu1
+        z[r] = q0[r] * w0 + q1[r] * w1
     vc = np.empty(4)
     for r in range(3, -1, -1):
         s = z[r]
@@ -144,15 +215,15 @@ def _solve_2x4(
         u = 0.0
         ua = 0.0
         for p in range(r, 4):
-            u += L[p, r] * qd[p]
-            ua += L[p, r] * (qd[p] - vc[p])
+            u += L[p, r] * qt[p]
+            ua += L[p, r] * (qt[p] - vc[p])
         t += u * u
         ta += ua * ua
         tc += z[r] * z[r]
     for r in range(4):
-        qp[r] = qd[r] - (1.0 + e) * vc[r]
-    lam[0] = -(1.0 + e) * mu0
-    lam[1] = -(1.0 + e) * mu1
+        qp[r] = qd[r] - (1.0 + e) * vc[r] / sc[r]
+    lam[0] = -(1.0 + e) * mu0 / rs[0]
+    lam[1] = -(1.0 + e) * mu1 / rs[1]
     return STATUS_OK, 0.5 * t, 0.5 * tc, 0.5 * ta
 
 
@@ -217,6 +288,31 @@ def raise_for_status(status: NDArray[np.uint8], messages: dict[int, str]) -> Non
             f"{messages.get(code, f'status {code}')} (flat batch index {first}; "
             f"{bad.size} bad item(s) in total)"
         )
+
+
+def _cond_note(M: FloatArray, status: NDArray[np.uint8], code: int) -> str:
+    """Why the first item with ``status == code`` was refused: indefinite or singular to working
+    precision, with the condition number of ``M`` scaled to unit diagonal; ``""`` if none."""
+    bad = np.flatnonzero(status == code)
+    if not bad.size:
+        return ""
+    Mi = M[int(bad[0])]
+    d = np.diagonal(Mi)
+    if not np.all(d > 0):
+        return f": a diagonal entry is {float(d[~(d > 0)][0]):.6g} (must be > 0)"
+    s = np.sqrt(d)
+    Mt = (Mi / s[:, None]) / s[None, :]
+    ev = np.linalg.eigvalsh(0.5 * (Mt + Mt.T))
+    if ev[0] < -4.0 * float(np.finfo(float).eps) * ev[-1]:
+        return (
+            f": it is indefinite (after scaling to unit diagonal its eigenvalues range from "
+            f"{ev[0]:.3g} to {ev[-1]:.3g})"
+        )
+    cond = float(ev[-1] / ev[0]) if ev[0] > 0 else float("inf")
+    return (
+        f": it is singular to working precision (condition number {cond:.3g} after scaling "
+        f"to unit diagonal; the limit is about {SINGULAR_COND:.3g})"
+    )
 
 
 def impact_2x4(
@@ -291,8 +387,9 @@ def impact_2x4(
         status,
         {
             STATUS_NOT_FINITE: "M, A or q_dot contains non-finite values (nan or inf)",
-            STATUS_NOT_SPD: "M is not positive definite",
+            STATUS_NOT_SPD: "M is not positive definite" + _cond_note(Mf, status, STATUS_NOT_SPD),
             STATUS_RANK_DEFICIENT: "A is rank deficient (fewer than k=2 independent rows)",
+            STATUS_SINGULAR: "M is not positive definite" + _cond_note(Mf, status, STATUS_SINGULAR),
         },
     )
     Tc_ = Tc.reshape(batch)

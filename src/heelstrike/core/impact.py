@@ -20,8 +20,16 @@ The impact equations are
 so that with :math:`W = A M^{-1} A^T` and the constrained projector
 :math:`P_c = M^{-1} A^T W^{-1} A` (eq. 6), :math:`\\lambda = -(1 + e) W^{-1} A \\dot q^-` and
 :math:`\\dot q^+ = \\dot q^- - (1 + e) P_c \\dot q^-`; for ``e = 0`` (the paper)
-:math:`\\dot q^+ = P_a \\dot q^-` (eq. 13). All solves use LU/Cholesky factorizations;
-``M`` is never inverted explicitly.
+:math:`\\dot q^+ = P_a \\dot q^-` (eq. 13).
+
+Numerics: ``M`` is scaled to unit diagonal (so that results and checks do not depend on units
+or on an overall scale), factorized by Cholesky, and ``L^-1 A^T`` by QR; energies are computed
+as sums of squares (``T_c = 1/2 |R^-T A q_dot|^2``), never as differences or as
+``v^T M v`` of large vectors. Neither ``M^-1`` nor ``W`` is formed, so results stay accurate
+for condition numbers of the scaled ``M`` up to about 1e14, and of ``M`` itself far beyond
+when the ill-conditioning comes from units or scales. ``M`` that is singular to working
+precision (scaled condition number above about ``1 / (n eps)``) or indefinite is rejected with
+:class:`ImpactInputError` stating the condition number.
 """
 
 from __future__ import annotations
@@ -30,6 +38,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+from heelstrike.core._scalars import python_scalars
 
 __all__ = [
     "ImpactInputError",
@@ -93,28 +103,188 @@ def _validate(
         ) from exc
     if check:
         scale = np.max(np.abs(M_), axis=(-2, -1), keepdims=True)
-        if not np.all(np.abs(M_ - np.swapaxes(M_, -1, -2)) <= 1e-10 * scale + 1e-300):
+        if not np.all(np.abs(M_ - np.swapaxes(M_, -1, -2)) <= 1e-10 * scale):
             raise ImpactInputError("M is not symmetric")
-        try:
-            np.linalg.cholesky(M_)
-        except np.linalg.LinAlgError as exc:
-            raise ImpactInputError("M is not positive definite") from exc
-        sv = np.linalg.svd(A_, compute_uv=False)
-        if np.any(sv[..., -1] <= 1e-12 * max(n, k) * np.maximum(sv[..., 0], 1e-300)):
-            raise ImpactInputError(f"A is rank deficient (fewer than k={k} independent rows)")
+        _check_definite(M_)
+        _check_rank(A_)
     return M_, A_, qd
 
 
-def _minv_at(M: FloatArray, A: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Return ``X = M^-1 A^T`` (..., n, k) and ``W = A M^-1 A^T`` (..., k, k) by LU solves."""
-    At = np.swapaxes(A, -1, -2)
-    shape = np.broadcast_shapes(M.shape[:-2], At.shape[:-2])
-    X = np.linalg.solve(
-        np.broadcast_to(M, (*shape, *M.shape[-2:])), np.broadcast_to(At, (*shape, *At.shape[-2:]))
+#: ``M`` is rejected as singular when, after symmetric diagonal scaling to unit diagonal, its
+#: smallest eigenvalue is below ``SINGULAR_RTOL * n`` times its largest one, i.e. when its
+#: condition number exceeds ``1 / (n * SINGULAR_RTOL)`` (about 1e15 for ``n = 4``): such a
+#: matrix is within rounding of a singular one and the impact is not determined by it.
+SINGULAR_RTOL = float(np.finfo(float).eps)
+
+
+def _diag_scale(M: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Return ``(s, M~)`` with ``s = sqrt(diag M)`` (..., n) and ``M~ = M / (s s^T)``.
+
+    Raises :class:`ImpactInputError` if a diagonal entry is not positive.
+    """
+    d = np.diagonal(M, axis1=-2, axis2=-1)
+    if not np.all(d > 0):
+        bad = float(d[~(d > 0)].flat[0])
+        raise ImpactInputError(
+            f"M is not positive definite: a diagonal entry is {bad:.6g} (must be > 0)"
+        )
+    s = np.sqrt(d)
+    return s, (M / s[..., :, None]) / s[..., None, :]
+
+
+def _check_definite(M: FloatArray) -> None:
+    """Raise unless ``M`` is positive definite and not singular to working precision.
+
+    Scale-free: ``M`` and ``c M`` (any ``c > 0``), and ``D M D`` for positive diagonal ``D``
+    (a change of units of the coordinates), pass or fail together.
+    """
+    _, Mt = _diag_scale(M)
+    ev = np.linalg.eigvalsh(Mt)
+    n = M.shape[-1]
+    lo, hi = ev[..., 0], ev[..., -1]
+    tol = n * SINGULAR_RTOL * hi
+    if np.any(lo < -tol):
+        i = np.unravel_index(int(np.argmin(lo / hi)), lo.shape)
+        raise ImpactInputError(
+            "M is not positive definite: it is indefinite (after scaling to unit diagonal its "
+            f"eigenvalues range from {float(lo[i]):.3g} to {float(hi[i]):.3g})"
+        )
+    if np.any(lo <= tol):
+        i = np.unravel_index(int(np.argmin(lo / hi)), lo.shape)
+        cond = float(hi[i] / lo[i]) if lo[i] > 0 else float("inf")
+        raise ImpactInputError(
+            f"M is not positive definite: it is singular to working precision (condition "
+            f"number {cond:.3g} after scaling to unit diagonal; the limit is "
+            f"{1.0 / (n * SINGULAR_RTOL):.3g})"
+        )
+
+
+def _row_norms(A: FloatArray) -> FloatArray:
+    """Euclidean norms of the rows of ``A`` (..., k), without overflow or underflow."""
+    amax = np.max(np.abs(A), axis=-1)
+    safe = np.where(amax > 0, amax, 1.0)
+    return np.asarray(amax * np.linalg.norm(A / safe[..., None], axis=-1))
+
+
+def _check_rank(A: FloatArray) -> None:
+    """Raise unless ``A`` has full row rank; scale-free (rows are normalized first)."""
+    k, n = A.shape[-2:]
+    norms = _row_norms(A)
+    if not np.all(norms > 0):
+        raise ImpactInputError(f"A is rank deficient (fewer than k={k} independent rows)")
+    sv = np.linalg.svd(A / norms[..., None], compute_uv=False)
+    if np.any(sv[..., -1] <= 1e-12 * max(n, k) * sv[..., 0]):
+        raise ImpactInputError(f"A is rank deficient (fewer than k={k} independent rows)")
+
+
+@dataclass(frozen=True)
+class _Solved:
+    """Intermediate results of :func:`_solve` (batch shape ``(...)`` broadcast)."""
+
+    s: FloatArray  # (..., n) sqrt(diag M)
+    L: FloatArray  # (..., n, n) Cholesky factor of the scaled M~
+    Q: FloatArray  # (..., n, k) orthonormal basis of L^-1 A~^T
+    mu: FloatArray  # (..., k) W^-1 A q_dot
+    z: FloatArray  # (..., n) L^T P~_c q~  (|z|^2 = 2 T_c)
+    u: FloatArray  # (..., n) L^T q~       (|u|^2 = 2 T)
+    v_c: FloatArray  # (..., n) P_c q_dot
+    qd: FloatArray  # (..., n) q_dot broadcast
+
+
+def _factor_cholesky(F: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """``(s, L)`` from a mass factor ``F`` (``M = F^T F``) without forming ``M``: ``s`` the
+    column norms of ``F`` (``sqrt(diag M)``) and ``L = R^T`` from ``F D^-1 = Q R``, with a
+    positive diagonal, so that ``M~ = D^-1 M D^-1 = L L^T``."""
+    s = _row_norms(np.swapaxes(F, -1, -2))
+    if not np.all(s > 0):
+        raise ImpactInputError("mass_factor has a zero column: M is singular")
+    R = np.linalg.qr(F / s[..., None, :], mode="r")
+    d = np.diagonal(R, axis1=-2, axis2=-1)
+    sign = np.where(d < 0, -1.0, 1.0)
+    return s, np.swapaxes(R * sign[..., :, None], -1, -2)
+
+
+def _check_factor(F: FloatArray) -> None:
+    """Raise unless the mass factor has full column rank to working precision (scale-free)."""
+    n = F.shape[-1]
+    if F.shape[-2] < n:
+        raise ImpactInputError(
+            f"mass_factor must have at least n={n} rows (M = F^T F), got shape {F.shape}"
+        )
+    s = _row_norms(np.swapaxes(F, -1, -2))
+    if not np.all(s > 0):
+        raise ImpactInputError("mass_factor has a zero column: M is singular")
+    sv = np.linalg.svd(F / s[..., None, :], compute_uv=False)
+    lo, hi = sv[..., -1], sv[..., 0]
+    if np.any(lo <= n * SINGULAR_RTOL * hi):
+        i = np.unravel_index(int(np.argmin(lo / hi)), lo.shape)
+        cond = float(hi[i] / lo[i]) if lo[i] > 0 else float("inf")
+        raise ImpactInputError(
+            f"M = F^T F is singular to working precision (condition number of the factor "
+            f"{cond:.3g} after scaling its columns; the limit is "
+            f"{1.0 / (n * SINGULAR_RTOL):.3g})"
+        )
+
+
+def _solve(
+    M: FloatArray, A: FloatArray, qd: FloatArray, factor: FloatArray | None = None
+) -> _Solved:
+    """Cholesky/QR solution of the impact equations; never forms ``M^-1`` or ``W``.
+
+    With ``D = diag(sqrt(diag M))``, ``M~ = D^-1 M D^-1 = L L^T``, ``A~ = A D^-1`` with unit
+    rows (row scales ``r``), ``q~ = D q_dot`` and ``L^-1 A~^T = Q R``:
+    ``W = diag(r) R^T R diag(r)``, ``w = R^-T A~ q~``, ``2 T_c = |w|^2``, ``z = Q w = L^T D v_c``,
+    ``P~_c = L^-T Q Q^T L^T``. Energies are sums of squares, so no cancellation occurs.
+    """
+    batch = np.broadcast_shapes(M.shape[:-2], A.shape[:-2], qd.shape[:-1])
+    n, k = M.shape[-1], A.shape[-2]
+    M = np.broadcast_to(M, (*batch, n, n))
+    A = np.broadcast_to(A, (*batch, k, n))
+    qd = np.broadcast_to(qd, (*batch, n))
+    if factor is not None:
+        F = np.broadcast_to(factor, (*batch, *factor.shape[-2:]))
+        s, L = _factor_cholesky(F)
+        if not np.all(np.diagonal(L, axis1=-2, axis2=-1) > 0):
+            raise ImpactInputError("M = F^T F is singular (the factor is rank deficient)")
+    else:
+        s, Mt = _diag_scale(M)
+        try:
+            L = np.asarray(np.linalg.cholesky(Mt), dtype=float)
+        except np.linalg.LinAlgError as exc:
+            raise ImpactInputError("M is not positive definite") from exc
+    At = A / s[..., None, :]
+    r = _row_norms(At)
+    if not np.all(r > 0):
+        raise ImpactInputError(f"A is rank deficient (fewer than k={k} independent rows)")
+    Ah = At / r[..., None]
+    qt = qd * s
+    Y = np.linalg.solve(L, np.swapaxes(Ah, -1, -2))
+    Q, R = np.linalg.qr(Y)
+    b = np.einsum("...ij,...j->...i", Ah, qt)
+    try:
+        w = np.linalg.solve(np.swapaxes(R, -1, -2), b[..., None])[..., 0]
+        mu_h = np.linalg.solve(R, w[..., None])[..., 0]
+    except np.linalg.LinAlgError as exc:
+        raise ImpactInputError(
+            f"A is rank deficient (fewer than k={k} independent rows)"
+        ) from exc
+    z = np.einsum("...ij,...j->...i", Q, w)
+    v_ct = np.linalg.solve(np.swapaxes(L, -1, -2), z[..., None])[..., 0]
+    u = np.einsum("...ji,...j->...i", L, qt)
+    return _Solved(
+        s=s, L=np.asarray(L, dtype=float), Q=Q, mu=mu_h / r, z=z, u=u, v_c=v_ct / s, qd=qd
     )
-    W = A @ X
-    W = 0.5 * (W + np.swapaxes(W, -1, -2))
-    return X, W
+
+
+def _projector(S: _Solved) -> FloatArray:
+    """``P_c = D^-1 L^-T Q Q^T L^T D``, shape (..., n, n)."""
+    LT = np.swapaxes(S.L, -1, -2)
+    Pt = np.linalg.solve(LT, S.Q @ (np.swapaxes(S.Q, -1, -2) @ LT))
+    return np.asarray((Pt / S.s[..., :, None]) * S.s[..., None, :])
+
+
+def _half_sq(x: FloatArray) -> FloatArray:
+    return np.asarray(0.5 * np.einsum("...i,...i->...", x, x))
 
 
 def constrained_projector(M: ArrayLike, A: ArrayLike, *, check: bool = True) -> FloatArray:
@@ -137,8 +307,7 @@ def constrained_projector(M: ArrayLike, A: ArrayLike, *, check: bool = True) -> 
         ``P_c``; idempotent and mass-orthogonal to ``P_a = I - P_c``.
     """
     M_, A_, _ = _validate(M, A, None, check)
-    X, W = _minv_at(M_, A_)
-    return np.asarray(X @ np.linalg.solve(W, A_))
+    return _projector(_solve(M_, A_, np.zeros(M_.shape[-1])))
 
 
 def admissible_projector(M: ArrayLike, A: ArrayLike, *, check: bool = True) -> FloatArray:
@@ -209,6 +378,8 @@ class ImpactResult:
         ``T- - T+ = (1 - e^2) T_c`` (J); equals ``|W_col|`` of eq. (15).
     restitution : float
         Coefficient ``e`` applied to the constrained part.
+
+    The energies of one collision (batch shape ``()``) are Python floats.
     """
 
     constrained_projector: FloatArray
@@ -219,28 +390,43 @@ class ImpactResult:
     velocity_post: FloatArray
     constraint_impulse: FloatArray
     generalized_impulse: FloatArray
-    kinetic_energy: FloatArray
-    kinetic_energy_constrained: FloatArray
-    kinetic_energy_admissible: FloatArray
-    kinetic_energy_post: FloatArray
-    energy_lost: FloatArray
+    kinetic_energy: FloatArray | float
+    kinetic_energy_constrained: FloatArray | float
+    kinetic_energy_admissible: FloatArray | float
+    kinetic_energy_post: FloatArray | float
+    energy_lost: FloatArray | float
     restitution: float
+
+    def __post_init__(self) -> None:
+        # One collision (batch shape ()): the energies are Python floats.
+        python_scalars(self, _SCALAR_FIELDS)
+
+
+_SCALAR_FIELDS = (
+    "kinetic_energy",
+    "kinetic_energy_constrained",
+    "kinetic_energy_admissible",
+    "kinetic_energy_post",
+    "energy_lost",
+)
 
 
 def impact(
-    M: ArrayLike,
+    M: ArrayLike | None,
     A: ArrayLike,
     q_dot: ArrayLike,
     *,
     restitution: float = 0.0,
     check: bool = True,
+    mass_factor: ArrayLike | None = None,
 ) -> ImpactResult:
     """Resolve a collision with inert constraints ``A`` (paper eqs. 2-13).
 
     Parameters
     ----------
-    M : array_like, shape (..., n, n)
-        Mass matrix at the impact configuration; symmetric positive definite.
+    M : array_like, shape (..., n, n), or None
+        Mass matrix at the impact configuration; symmetric positive definite. None if
+        ``mass_factor`` is given.
     A : array_like, shape (..., k, n)
         Jacobian of the constraints that become active (e.g. the striking foot's, eq. 4-5).
     q_dot : array_like, shape (..., n)
@@ -250,6 +436,12 @@ def impact(
         ``A q_dot+ = -e A q_dot-``. ``e = 0`` (default) is the paper's inert impact.
     check : bool, optional
         Validate shapes, finiteness, symmetry and definiteness of ``M`` and rank of ``A``.
+    mass_factor : array_like, shape (..., p, n), optional
+        ``F`` with ``M = F^T F`` (``p >= n``), e.g. the stacked ``sqrt(m_i) J_i`` of the bodies'
+        point Jacobians, instead of ``M``. ``M`` is then never formed, so that accuracy depends
+        on the condition number of ``F`` (the square root of that of ``M``): a mass matrix that
+        is singular to working precision only because it is formed (e.g. a leg whose centre of
+        mass is 1e-9 m from the hip) is resolved accurately.
 
     Returns
     -------
@@ -265,24 +457,34 @@ def impact(
     e = float(restitution)
     if not (np.isfinite(e) and 0.0 <= e <= 1.0):
         raise ImpactInputError(f"restitution must lie in [0, 1], got {restitution!r}")
-    M_, A_, qd = _validate(M, A, q_dot, check)
+    F: FloatArray | None = None
+    if mass_factor is not None:
+        if M is not None:
+            raise ImpactInputError("give M or mass_factor, not both")
+        F = _as_float("mass_factor", mass_factor, 2)
+        M_ = np.swapaxes(F, -1, -2) @ F
+        M_, A_, qd = _validate(M_, A, q_dot, False)
+        if check:
+            _check_factor(F)
+            _check_rank(A_)
+    elif M is None:
+        raise ImpactInputError("M is required (or give mass_factor)")
+    else:
+        M_, A_, qd = _validate(M, A, q_dot, check)
     assert qd is not None
-    X, W = _minv_at(M_, A_)
-    Aqd = np.einsum("...ij,...j->...i", A_, qd)
-    mu = np.linalg.solve(W, Aqd[..., None])[..., 0]  # W^-1 A q_dot-
-    v_c = np.einsum("...ij,...j->...i", X, mu)  # P_c q_dot- = M^-1 A^T W^-1 A q_dot-
-    shape = np.broadcast_shapes(v_c.shape, qd.shape)
-    qd_b = np.broadcast_to(qd, shape)
-    v_a = qd_b - v_c
-    P_c = X @ np.linalg.solve(W, np.broadcast_to(A_, (*X.shape[:-2], *A_.shape[-2:])))
+    S = _solve(M_, A_, qd, F)
+    P_c = _projector(S)
     P_a = np.eye(P_c.shape[-1]) - P_c
-    lam = -(1.0 + e) * mu
-    f = np.einsum("...ji,...j->...i", A_, lam)
-    q_plus = qd_b - (1.0 + e) * v_c
-    T = kinetic_energy(M_, qd_b)
-    T_c = kinetic_energy(M_, v_c)
-    T_a = kinetic_energy(M_, v_a)
-    T_plus = kinetic_energy(M_, q_plus)
+    v_c = S.v_c
+    v_a = S.qd - v_c
+    lam = -(1.0 + e) * S.mu
+    f = np.einsum("...ji,...j->...i", np.broadcast_to(A_, (*lam.shape[:-1], *A_.shape[-2:])), lam)
+    q_plus = S.qd - (1.0 + e) * v_c
+    T = _half_sq(S.u)
+    T_c = _half_sq(S.z)
+    T_a = _half_sq(S.u - S.z)
+    T_plus = _half_sq(S.u - (1.0 + e) * S.z)
+    qd_b = S.qd
     return ImpactResult(
         constrained_projector=P_c,
         admissible_projector=P_a,

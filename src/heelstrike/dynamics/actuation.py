@@ -16,7 +16,19 @@ On a periodic level gait the energy theorem of Font & Kövecses (2008), eq. (14)
 ``W_act = -W_col``, and eq. (15) ``|W_col| = T_c``.
 
 All torque laws saturate: ``|u| <= max_torque``.
+
+Default gains
+-------------
+The defaults (:data:`DEFAULT_ENERGY_GAIN`, :data:`DEFAULT_PD_KP`, :data:`DEFAULT_PD_KD`,
+:data:`DEFAULT_MAX_TORQUE`) are chosen so that ``heelstrike powered`` finds the default target,
+0.5 m/s on level ground, for the paper's walker (``m_H = 10``, ``m = 5`` kg, ``l = 1``,
+``b = 0.5`` m) with point feet and with ``R = 0.3`` m. Their physical reasons are given with each
+constant. On level ground a hip torque alone powers the gait only through the swing leg (its
+reaction on the stance leg pushes the stance leg forward) and, with no stiffness of its own, the
+step period stays near the swing leg's pendulum half-period ``pi sqrt(b / g) = 0.71 s``; the
+speed ``L_S / T`` then grows only through longer steps.
 """
+
 
 from __future__ import annotations
 
@@ -34,6 +46,10 @@ from heelstrike.models.base import PlanarWalker
 FloatArray = NDArray[np.float64]
 
 __all__ = [
+    "DEFAULT_ENERGY_GAIN",
+    "DEFAULT_MAX_TORQUE",
+    "DEFAULT_PD_KD",
+    "DEFAULT_PD_KP",
     "CustomTorque",
     "EnergyTracking",
     "HipTorque",
@@ -43,6 +59,38 @@ __all__ = [
     "mechanical_energy",
     "push_off_velocity_change",
 ]
+
+#: Energy-tracking gain ``k`` (s/rad: ``u = -k (E - E_ref) q4_dot`` in N m with ``E`` in J).
+#: In single support the energy error decays at the rate ``k q4_dot^2``; with ``q4_dot^2`` of
+#: order 3 (rad/s)^2 on 0.5 m/s gaits, ``k = 3`` makes that rate ~9 1/s, about one step
+#: frequency (``2 pi / T`` with ``T ~ 0.7 s``): the energy is restored over a step, not in a
+#: burst. Larger gains make the closed loop faster than the step dynamics and the equations
+#: stiff (right-hand-side evaluations per step grow with ``k``: ~200 at k = 1, ~500 at k = 10)
+#: without buying much reach: with point feet the *stable* gaits level off at ~0.42 m/s for
+#: k = 10 (20 N m limit) and had reached only 0.47 m/s at k = 100 (100 N m) when a step cost
+#: ~1 s, so at 0.5 m/s with point feet the default gives an unstable gait (found by Newton,
+#: reported as such); with ``R = 0.3`` m it is stable.
+DEFAULT_ENERGY_GAIN = 3.0
+
+#: Swing-leg PD stiffness (N m/rad). The swing leg's own gravitational stiffness about the hip is
+#: ``m g b = 24.5 N m/rad``; with a much weaker PD (the former 5 N m/rad) the leg swings
+#: passively, the period stays ~0.75 s and point-foot gaits cannot exceed ~0.42 m/s. Twice the
+#: gravitational stiffness makes the set point, not gravity, place the swing foot and triples
+#: the leg's stiffness, which shortens the swing (half-period ``pi sqrt(J / (k_p + m g b))``
+#: ~0.41 s with ``J = m b^2 = 1.25 kg m^2``): 0.5 m/s is then a stable gait with point feet
+#: (``A ~ 0.19 rad``) and with ``R = 0.3`` m (``A ~ 0.07 rad``).
+DEFAULT_PD_KP = 50.0
+
+#: Swing-leg PD damping (N m s/rad): damping ratio ``k_d / (2 sqrt(J (k_p + m g b)))`` ~0.26 for
+#: the paper's walker: light enough not to brake the swing (the hip pays for what it damps),
+#: enough to stop the leg ringing about its set point within a step.
+DEFAULT_PD_KD = 5.0
+
+#: Hip torque limit (N m) of the built-in laws: about twice the largest gravitational torque on
+#: the swing leg (``m g b = 24.5 N m`` when horizontal), so the 0.5 m/s gaits are not clipped
+#: (the PD's peak is ``k_p`` times a tracking error of up to ~0.5 rad) while the transients of
+#: the seed iterations stay bounded.
+DEFAULT_MAX_TORQUE = 50.0
 
 
 def mechanical_energy(
@@ -232,9 +280,9 @@ class EnergyTracking(HipTorque):
     energy : float
         Target mechanical energy ``E_ref`` (J).
     gain : float
-        ``k`` (N m s / (J rad)), > 0.
+        ``k`` (N m s / (J rad) = s/rad), > 0; default :data:`DEFAULT_ENERGY_GAIN`.
     max_torque : float
-        Torque limit (N m), > 0.
+        Torque limit (N m), > 0; default :data:`DEFAULT_MAX_TORQUE`.
     slope : float
         Slope (rad) in ``V`` (0: level ground, the case this law is meant for).
     walker : PlanarWalker
@@ -243,8 +291,8 @@ class EnergyTracking(HipTorque):
 
     walker: PlanarWalker
     energy: float
-    gain: float = 5.0
-    max_torque: float = 20.0
+    gain: float = DEFAULT_ENERGY_GAIN
+    max_torque: float = DEFAULT_MAX_TORQUE
     slope: float = 0.0
 
     def __post_init__(self) -> None:
@@ -275,19 +323,19 @@ class SwingLegPD(HipTorque):
     amplitude : float
         ``A`` (rad).
     kp : float
-        Stiffness (N m / rad), >= 0.
+        Stiffness (N m / rad), >= 0; default :data:`DEFAULT_PD_KP`.
     kd : float
-        Damping (N m s / rad), >= 0.
+        Damping (N m s / rad), >= 0; default :data:`DEFAULT_PD_KD`.
     max_torque : float
-        Torque limit (N m), > 0.
+        Torque limit (N m), > 0; default :data:`DEFAULT_MAX_TORQUE`.
     profile : callable ``t -> float`` or None
         ``s(t)``; None for a constant 1.
     """
 
     amplitude: float
-    kp: float = 5.0
-    kd: float = 1.0
-    max_torque: float = 20.0
+    kp: float = DEFAULT_PD_KP
+    kd: float = DEFAULT_PD_KD
+    max_torque: float = DEFAULT_MAX_TORQUE
     profile: Callable[[float], float] | None = None
 
     def __post_init__(self) -> None:

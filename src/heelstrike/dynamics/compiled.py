@@ -32,8 +32,9 @@ on a slope (no torque, no push-off, inert impact):
   Jacobian ``A_L`` (Cholesky solves), ``T_c = 1/2 mu^T (A M^-1 A^T) mu``; the trailing foot must
   lift (``q2_dot+ > 1e-12 m/s``); then ``q3 <- q3 + q4``, ``q4 <- -q4`` and the velocities alike.
 
-Status codes are the positions of the members of :class:`~heelstrike.dynamics.hybrid.WalkStatus`
-(see :data:`STATUS_NAMES`). ``tests/test_compiled.py`` checks everything against ``simulate``.
+Status codes are :attr:`WalkStatus.code <heelstrike.dynamics.hybrid.WalkStatus>` (module-level
+constants below, compile-time constants for numba; :meth:`WalkStatus.from_code` converts back).
+``tests/test_compiled.py`` checks everything against ``simulate``.
 """
 
 from __future__ import annotations
@@ -64,16 +65,16 @@ __all__ = [
     "walker_parameters",
 ]
 
-#: Status names indexed by the integer codes written by the kernels (``WalkStatus`` order).
-STATUS_NAMES: tuple[str, ...] = tuple(s.value for s in WalkStatus)
-_CODE = {name: i for i, name in enumerate(STATUS_NAMES)}
-COMPLETED = _CODE["completed"]
-FELL_FORWARD = _CODE["fell_forward"]
-FELL_BACKWARD = _CODE["fell_backward"]
-TRAILING_FOOT_STAYS = _CODE["trailing_foot_stays"]
-LOST_CONTACT = _CODE["lost_contact"]
-NO_HEEL_STRIKE = _CODE["no_heel_strike"]
-INTEGRATION_FAILED = _CODE["integration_failed"]
+#: Status names indexed by the integer codes written by the kernels (``WalkStatus.code``).
+STATUS_NAMES: tuple[str, ...] = WalkStatus.names_by_code()
+# Kernel status codes: plain ints taken from the enum (numba freezes globals at compile time).
+COMPLETED = WalkStatus.COMPLETED.code
+FELL_FORWARD = WalkStatus.FELL_FORWARD.code
+FELL_BACKWARD = WalkStatus.FELL_BACKWARD.code
+TRAILING_FOOT_STAYS = WalkStatus.TRAILING_FOOT_STAYS.code
+LOST_CONTACT = WalkStatus.LOST_CONTACT.code
+NO_HEEL_STRIKE = WalkStatus.NO_HEEL_STRIKE.code
+INTEGRATION_FAILED = WalkStatus.INTEGRATION_FAILED.code
 
 #: Layout of a row of the parameter array: mH, m, l, b, R, I, g, slope.
 PARAMETER_NAMES: tuple[str, ...] = (
@@ -950,7 +951,7 @@ def step_map_compiled(
     )
     assert res.impact_angle is not None and res.step_time is not None
     assert res.collision_loss is not None and res.step_length is not None
-    status = WalkStatus(STATUS_NAMES[int(res.status[0])])
+    status = WalkStatus.from_code(int(res.status[0]))
     ok = status is WalkStatus.COMPLETED
     return CompiledStep(
         z=res.z[0] if ok else np.full(3, np.nan),

@@ -29,7 +29,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.integrate import solve_ivp
 
 from heelstrike.core.impact import ImpactResult, impact
 from heelstrike.dynamics.events import Event, to_scipy
@@ -54,31 +53,81 @@ PushOff = Callable[[PlanarWalker, FloatArray, FloatArray], tuple[FloatArray, flo
 
 
 class WalkStatus(StrEnum):
-    """How a simulation ended."""
+    """How a simulation ended: the one status vocabulary of every backend.
 
-    COMPLETED = "completed"
-    FELL_FORWARD = "fell_forward"
-    FELL_BACKWARD = "fell_backward"
-    TRAILING_FOOT_STAYS = "trailing_foot_stays"
-    LOST_CONTACT = "lost_contact"
-    SLIPPED = "slipped"
-    NO_HEEL_STRIKE = "no_heel_strike"
-    INTEGRATION_FAILED = "integration_failed"
+    Each member is its string name (a :class:`~enum.StrEnum`, so ``status == "completed"``
+    holds), carries a human-readable :attr:`message` and a stable integer :attr:`code`: the
+    code the compiled (numba) kernels write and ensemble results store (:meth:`from_code`
+    converts back). Codes never change meaning; new statuses get new codes.
+
+    ``NO_CONSISTENT_ASSIGNMENT`` and ``NO_LEG_SWAP`` are reported by the compiled phased
+    kernels only and raised as errors by their Python wrappers, as the scipy backend does.
+    """
+
+    code: int
+    message: str
+
+    # Members are defined as ``value, code, message``; ``WalkStatus("completed")`` looks a
+    # member up by value (the defaults only let type checkers accept that call).
+    def __new__(cls, value: str, code: int = -1, message: str = "") -> WalkStatus:
+        obj = str.__new__(cls, value)
+        obj._value_ = value
+        obj.code = code
+        obj.message = message
+        return obj
+
+    COMPLETED = "completed", 0, "all requested steps were taken"
+    FELL_FORWARD = "fell_forward", 1, "the stance leg fell forward to the ground"
+    FELL_BACKWARD = "fell_backward", 2, "the walker stopped and fell backward"
+    TRAILING_FOOT_STAYS = (
+        "trailing_foot_stays",
+        3,
+        "after heel strike the trailing foot does not lift (its contact point's normal "
+        "velocity is not positive, or the complementarity conditions keep it on the ground): "
+        "double support would begin, which this gait model does not allow",
+    )
+    LOST_CONTACT = (
+        "lost_contact",
+        4,
+        "the ground's normal force on the stance foot became negative",
+    )
+    SLIPPED = "slipped", 5, "the stance foot needs more friction than the given coefficient"
+    NO_HEEL_STRIKE = (
+        "no_heel_strike",
+        6,
+        "no heel strike (or knee strike) within the time bound of a step",
+    )
+    INTEGRATION_FAILED = "integration_failed", 7, "the integrator failed"
+    NO_CONSISTENT_ASSIGNMENT = (
+        "no_consistent_assignment",
+        8,
+        "no consistent contact assignment at an impact (rank-deficient constraints?)",
+    )
+    NO_LEG_SWAP = "no_leg_swap", 9, "no leg swap: the walker declares no link mirrors"
+
+    @classmethod
+    def from_code(cls, code: int) -> WalkStatus:
+        """The member with integer code ``code`` (as written by the compiled kernels).
+
+        Raises
+        ------
+        ValueError
+            If no status has that code.
+        """
+        try:
+            return _BY_CODE[int(code)]
+        except (KeyError, TypeError, ValueError):
+            raise ValueError(f"no walk status has code {code!r}") from None
+
+    @classmethod
+    def names_by_code(cls) -> tuple[str, ...]:
+        """Status names indexed by code: ``names_by_code()[s.code] == s.value``."""
+        return tuple(_BY_CODE[c].value for c in range(len(_BY_CODE)))
 
 
-_MESSAGES = {
-    WalkStatus.COMPLETED: "all requested steps were taken",
-    WalkStatus.FELL_FORWARD: "the stance leg fell forward to the ground",
-    WalkStatus.FELL_BACKWARD: "the walker stopped before mid-stance and fell backward",
-    WalkStatus.TRAILING_FOOT_STAYS: (
-        "after heel strike the trailing foot does not lift (q2_dot+ <= 0): double support "
-        "would begin, which this gait model does not allow"
-    ),
-    WalkStatus.LOST_CONTACT: "the ground's normal force on the stance foot became negative",
-    WalkStatus.SLIPPED: "the stance foot needs more friction than the given coefficient",
-    WalkStatus.NO_HEEL_STRIKE: "no heel strike within the time bound of a step",
-    WalkStatus.INTEGRATION_FAILED: "the integrator failed",
-}
+_BY_CODE: dict[int, WalkStatus] = {s.code: s for s in WalkStatus}
+if sorted(_BY_CODE) != list(range(len(WalkStatus))):  # pragma: no cover - definition check
+    raise RuntimeError("WalkStatus codes must be 0, 1, ... without gaps or repeats")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -299,6 +348,8 @@ def integrate_segment(
     """
     if t_end <= t0:
         return Segment(t=np.array([t0]), x=x0[None, :], event=None, failed=False)
+    from scipy.integrate import solve_ivp  # lazy: ~0.7 s per process otherwise
+
     sol: Any = solve_ivp(
         support.rhs,
         (t0, t_end),
@@ -476,11 +527,11 @@ def simulate(
             )
         common, phases = _step_events(walker, step_support, q_ref, friction, before=x[0] < 0.0)
         t_limit = t_step + max_step_duration
-        ended: str | None = None
+        ended: WalkStatus | None = None
         # A crossing cannot be detected if the step already starts past it.
         for ev in common:
             if ev.function(t, x) <= 0.0:
-                ended = ev.name
+                ended = WalkStatus(ev.name)
                 phases = []
                 ts.append(np.array([t]))
                 xs.append(x[None, :])
@@ -499,17 +550,17 @@ def simulate(
             step_ids.append(np.full(len(seg.t), k))
             t, x = float(seg.t[-1]), seg.x[-1].copy()
             if seg.failed:
-                ended = "integration_failed"
+                ended = WalkStatus.INTEGRATION_FAILED
                 break
             if seg.event is None:
-                ended = "no_heel_strike"
+                ended = WalkStatus.NO_HEEL_STRIKE
                 break
             if seg.event not in ("midstance", "heel_strike"):
-                ended = seg.event
+                ended = WalkStatus(seg.event)
                 break
         work = float(x[-1])
         if ended is not None:
-            status = WalkStatus(ended)
+            status = ended
             q, qd = step_support.unpack(x[: 2 * m], q_ref)
             break
 
@@ -556,7 +607,7 @@ def simulate(
     q_all, qd_all = support.unpack(x_all[:, : 2 * m], ref_all)
     return WalkResult(
         status=status,
-        message=_MESSAGES[status],
+        message=status.message,
         t=t_all,
         q=q_all,
         q_dot=qd_all,

@@ -83,20 +83,6 @@ __all__ = [
 
 ImpactKind = Literal["knee_strike", "heel_strike"]
 
-_MESSAGES = {
-    "completed": "all requested steps were taken",
-    "fell_forward": "the stance leg fell forward to the ground",
-    "fell_backward": "the walker stopped and fell backward",
-    "trailing_foot_stays": (
-        "at heel strike the complementarity conditions keep the trailing foot on the ground "
-        "(it does not lift): double support would begin, which this gait model does not allow"
-    ),
-    "lost_contact": "the ground's normal force on the stance foot became negative",
-    "slipped": "the stance foot needs more friction than the given coefficient",
-    "no_heel_strike": "no heel strike (or knee strike) within the time bound of a step",
-    "integration_failed": "the integrator failed",
-}
-
 
 # -- walker with a Poincare section ------------------------------------------------------------
 class PhasedWalker(BuiltWalker):
@@ -386,14 +372,14 @@ class _Seg:
     failed: bool
 
 
-def _segment_outcome(seg: _Seg, want: str) -> str | None:
+def _segment_outcome(seg: _Seg, want: str) -> WalkStatus | None:
     """Status that ends the walk after a segment, or None if it ended with the wanted event."""
     if seg.failed:
-        return "integration_failed"
+        return WalkStatus.INTEGRATION_FAILED
     if seg.event is None:
-        return "no_heel_strike"
+        return WalkStatus.NO_HEEL_STRIKE
     if seg.event != want:
-        return seg.event
+        return WalkStatus(seg.event)
     return None
 
 
@@ -499,7 +485,7 @@ def simulate_phased(
     records: list[ImpactRecord] = []
     events_out: list[PhasedImpact] = []
     t, work, stance = 0.0, 0.0, 0
-    status = "completed"
+    status = WalkStatus.COMPLETED
 
     def lock_angle(j: int) -> float:
         return float(walker.lock_angles[walker.lockable_joints.index(j)])
@@ -539,7 +525,7 @@ def simulate_phased(
                 evs.append(Event(name="slipped", function=slip, direction=-1))
             return evs
 
-        ended: str | None = None
+        ended: WalkStatus | None = None
 
         def record(seg: _Seg, label: str, _k: int = k, _leg: int = stance) -> None:
             t_s.append(seg.t)
@@ -572,7 +558,7 @@ def simulate_phased(
                 t, q, qd = float(seg.t[-1]), seg.q[-1].copy(), seg.qd[-1].copy()
                 work = float(seg.w[-1])
                 ended = _segment_outcome(seg, want)
-                if ended:
+                if ended is not None:
                     break
             del m
             if ended is None:
@@ -638,7 +624,7 @@ def simulate_phased(
                 t, q, qd = float(seg.t[-1]), seg.q[-1].copy(), seg.qd[-1].copy()
                 work = float(seg.w[-1])
                 ended = _segment_outcome(seg, want)
-                if ended:
+                if ended is not None:
                     break
         if ended is not None:
             status = ended
@@ -689,7 +675,7 @@ def simulate_phased(
             )
         )
         if mc.modes[0] != "separate" or not v_trail > 1e-12:
-            status = "trailing_foot_stays"
+            status = WalkStatus.TRAILING_FOOT_STAYS
             qd = qd_plus
             break
         q, qd = walker.swap_legs(q, qd_plus)
@@ -701,10 +687,9 @@ def simulate_phased(
     t_all = np.concatenate(t_s)
     q_all = np.concatenate(q_s)
     qd_all = np.concatenate(qd_s)
-    st = WalkStatus(status)
     return PhasedWalkResult(
-        status=st,
-        message=_MESSAGES[status],
+        status=status,
+        message=status.message,
         t=t_all,
         q=q_all,
         q_dot=qd_all,

@@ -26,7 +26,7 @@ from heelstrike.models.base import PlanarWalker
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["SingleSupport", "TorqueLaw"]
+__all__ = ["SingleSupport", "TorqueLaw", "solve_small"]
 
 
 class TorqueLaw(Protocol):
@@ -61,6 +61,10 @@ class SingleSupport:
     locked: tuple[int, ...] = ()
     _free: tuple[int, ...] = field(init=False, repr=False)
     _basis: FloatArray = field(init=False, repr=False)
+    _basis_t: FloatArray = field(init=False, repr=False)
+    _reduce: FloatArray = field(init=False, repr=False)
+    _radius: float = field(init=False, repr=False)
+    _actuation: FloatArray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         n = self.walker.n_coordinates
@@ -75,8 +79,17 @@ class SingleSupport:
         J[0, 0] = -R  # q1_dot = -R q3_dot (rolling)
         object.__setattr__(self, "_free", free)
         object.__setattr__(self, "_basis", J)
+        # Constant data of the hot path (rhs), fixed once per phase.
+        object.__setattr__(self, "_basis_t", np.ascontiguousarray(J.T))
+        # vec(J^T M J) = (J^T kron J^T) vec(M): the reduced mass matrix in one product
+        object.__setattr__(self, "_reduce", np.kron(J.T, J.T))
+        object.__setattr__(self, "_radius", R)
+        object.__setattr__(
+            self, "_actuation", np.asarray(self.walker.actuation_matrix(), dtype=float)
+        )
         if not np.isfinite(self.slope):
             raise ValueError("slope must be finite (rad)")
+        object.__setattr__(self, "slope", float(self.slope))
 
     @property
     def free_coordinates(self) -> tuple[int, ...]:
@@ -106,6 +119,8 @@ class SingleSupport:
         x_ = np.asarray(x, dtype=float)
         ref = np.asarray(q_ref, dtype=float)
         m = len(self._free)
+        if x_.ndim == 1 and ref.ndim == 1:
+            return self._unpack_one(x_, ref)
         theta, theta_dot = x_[..., :m], x_[..., m : 2 * m]
         J = self._basis
         q = np.broadcast_to(ref, (*theta.shape[:-1], ref.shape[-1])).copy()
@@ -116,9 +131,24 @@ class SingleSupport:
         q_dot = np.einsum("ij,...j->...i", J, theta_dot)
         return q, q_dot
 
+    def _unpack_one(self, x: FloatArray, ref: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """:meth:`unpack` of one state (``x`` (>= 2 m,), ``ref`` (n,)), without broadcasting."""
+        m = len(self._free)
+        R = self._radius
+        qv = ref.tolist()
+        xv = x.tolist()
+        q0 = qv[0] + R * qv[2] - R * xv[0]
+        qdv = [0.0] * len(qv)
+        for k, i in enumerate(self._free):
+            qv[i] = xv[k]
+            qdv[i] = xv[m + k]
+        qv[0], qv[1] = q0, R
+        qdv[0] = -R * xv[m]
+        return np.array(qv), np.array(qdv)
+
     # -- dynamics ----------------------------------------------------------------------------
     def _u(self, t: float, q: FloatArray, q_dot: FloatArray) -> FloatArray:
-        n_u = self.walker.actuation_matrix().shape[1]
+        n_u = self._actuation.shape[1]
         if self.torque is None:
             return np.zeros((*q.shape[:-1], n_u))
         return np.asarray(self.torque(t, q, q_dot), dtype=float)
@@ -126,8 +156,7 @@ class SingleSupport:
     def generalized_actuation(self, t: float, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
         """``B u`` (..., n): actuator torques as generalized forces."""
         q_, qd = np.asarray(q, dtype=float), np.asarray(q_dot, dtype=float)
-        B = self.walker.actuation_matrix()
-        return np.asarray(np.einsum("ij,...j->...i", B, self._u(t, q_, qd)))
+        return np.asarray(np.einsum("ij,...j->...i", self._actuation, self._u(t, q_, qd)))
 
     def reduced_mass_matrix(self, q: ArrayLike) -> FloatArray:
         """``J^T M(q) J``, shape (..., m, m)."""
@@ -154,11 +183,14 @@ class SingleSupport:
         rolling stance foot): ``lambda = (A M^-1 A^T)^-1 A M^-1 (h - B u)``.
         """
         q_, qd = np.asarray(q, dtype=float), np.asarray(q_dot, dtype=float)
-        M = self.walker.mass_matrix(q_)
+        M, rhs = self.walker.dynamics_terms(q_, qd, self.slope)
         A = self.walker.contact_jacobian(q_, "right")
-        rhs = self.walker.bias_forces(q_, qd, self.slope) - self.generalized_actuation(t, q_, qd)
+        if self.torque is not None:
+            rhs = rhs - self.generalized_actuation(t, q_, qd)
         X = np.linalg.solve(M, np.concatenate((np.swapaxes(A, -1, -2), rhs[..., None]), axis=-1))
         W = A @ X[..., :2]
+        if W.ndim == 2:  # one state: the 2x2 system in closed form (an event function's case)
+            return solve_small(W, (A @ X[:, 2:])[:, 0])
         return np.asarray(np.linalg.solve(W, (A @ X[..., 2:])[..., :])[..., 0])
 
     def actuator_power(self, t: float, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
@@ -169,16 +201,49 @@ class SingleSupport:
     def rhs(self, t: float, x: FloatArray, q_ref: FloatArray) -> FloatArray:
         """Time derivative of ``(theta, theta_dot, W_act)`` for ``solve_ivp``.
 
-        The last entry integrates the actuator work (J) along the motion.
+        The last entry integrates the actuator work (J) along the motion. This is the hot path
+        of every scipy simulation: ``x`` (2 m + 1,) and ``q_ref`` (n,) are taken as valid
+        (checked where a phase starts), ``M`` and ``h`` come from one
+        :meth:`~heelstrike.models.base.PlanarWalker.dynamics_terms` call and the reduced
+        system is solved directly (:func:`solve_small`).
         """
         m = len(self._free)
-        q, q_dot = self.unpack(x[: 2 * m], q_ref)
-        Mr = self.reduced_mass_matrix(q)
-        Fr = self.reduced_forcing(t, q, q_dot)
-        theta_dd = np.linalg.solve(Mr, Fr)
-        power = self.actuator_power(t, q, q_dot) if self.torque is not None else 0.0
+        q, q_dot = self._unpack_one(x, q_ref)
+        M, h = self.walker.dynamics_terms(q, q_dot, self.slope)
         out = np.empty(2 * m + 1)
+        if self.torque is None:
+            f = -h
+            out[2 * m] = 0.0
+        else:
+            u = np.asarray(self.torque(t, q, q_dot), dtype=float)
+            Bu = self._actuation @ u
+            f = Bu - h
+            out[2 * m] = Bu @ q_dot
         out[:m] = x[m : 2 * m]
-        out[m : 2 * m] = theta_dd
-        out[2 * m] = power
+        Mr = (self._reduce @ M.reshape(-1)).reshape(m, m)
+        out[m : 2 * m] = solve_small(Mr, self._basis_t @ f)
         return out
+
+
+def solve_small(A: FloatArray, b: FloatArray) -> FloatArray:
+    """Solve one small symmetric positive-definite system ``A y = b`` (m <= 2 in closed form).
+
+    Parameters
+    ----------
+    A : ndarray, shape (m, m)
+        A reduced mass matrix (symmetric positive definite).
+    b : ndarray, shape (m,)
+
+    Returns
+    -------
+    ndarray, shape (m,)
+    """
+    m = b.shape[0]
+    if m == 1:
+        return b / A[0, 0]
+    if m == 2:
+        (a, c), (_, d) = A.tolist()
+        b0, b1 = b.tolist()
+        det = a * d - c * c
+        return np.array(((d * b0 - c * b1) / det, (a * b1 - c * b0) / det))
+    return np.asarray(np.linalg.solve(A, b))

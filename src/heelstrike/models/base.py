@@ -18,7 +18,8 @@ with ``h`` the Coriolis, centrifugal and gravity terms (:meth:`PlanarWalker.bias
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from typing import Literal
+from dataclasses import dataclass
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -26,7 +27,30 @@ from numpy.typing import ArrayLike, NDArray
 FloatArray = NDArray[np.float64]
 Foot = Literal["right", "left"]
 
-__all__ = ["Foot", "PlanarWalker", "gravity_vector"]
+__all__ = ["Foot", "PlanarWalker", "WalkerScale", "gravity_vector"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class WalkerScale:
+    """The scales of a walker: what dimensionless results (cost of transport, Froude numbers,
+    default gains) are made with.
+
+    Attributes
+    ----------
+    total_mass : ndarray, shape (...)
+        Total mass ``m`` (kg).
+    gravity : ndarray, shape (...)
+        Gravitational acceleration ``g`` (m/s^2).
+    leg_length : ndarray, shape (...)
+        Leg length ``l`` (m): hip to the foot's lowest point with the leg straight.
+    """
+
+    total_mass: FloatArray
+    gravity: FloatArray
+    leg_length: FloatArray
+
+    def __iter__(self) -> Any:
+        return iter((self.total_mass, self.gravity, self.leg_length))
 
 
 def gravity_vector(gravity: ArrayLike, slope: ArrayLike = 0.0) -> FloatArray:
@@ -78,6 +102,17 @@ class PlanarWalker(ABC):
     def bias_forces(self, q: ArrayLike, q_dot: ArrayLike, slope: ArrayLike = 0.0) -> FloatArray:
         """Velocity-product and gravity terms ``h`` in ``M q_ddot + h = Q``, shape (..., n)."""
 
+    def dynamics_terms(
+        self, q: ArrayLike, q_dot: ArrayLike, slope: ArrayLike = 0.0
+    ) -> tuple[FloatArray, FloatArray]:
+        """``(M(q), h(q, q_dot))`` in one call, shapes (..., n, n) and (..., n).
+
+        What a right-hand side evaluation needs; equal to ``(mass_matrix(q),
+        bias_forces(q, q_dot, slope))``. Walkers override it to share the kinematics (point
+        Jacobians) between the two terms.
+        """
+        return self.mass_matrix(q), self.bias_forces(q, q_dot, slope)
+
     @abstractmethod
     def potential_energy(self, q: ArrayLike, slope: ArrayLike = 0.0) -> FloatArray:
         """Gravitational potential energy (J), zero at the ground frame origin, shape (...)."""
@@ -108,6 +143,38 @@ class PlanarWalker(ABC):
     @abstractmethod
     def actuation_matrix(self) -> FloatArray:
         """Matrix ``B`` (n, n_u) mapping actuator torques to generalized forces."""
+
+    def replace(self, **params: Any) -> PlanarWalker:
+        """A copy with some named parameters changed (validated again)."""
+        raise NotImplementedError(f"{type(self).__name__} has no named parameters to replace")
+
+    @property
+    def scale(self) -> WalkerScale:
+        """``(total mass, gravity, leg length)`` of the walker (kg, m/s^2, m).
+
+        The default derives them from the model itself, so that it holds for every walker:
+        ``g`` is the weight per unit mass, ``(V(y = 1 m) - V(y = 0)) / m`` on level ground (the
+        potential energy is linear in the height ``q[1]``), and ``l`` the distance from the hip
+        (joint ``"hip"``, else coordinate 3) to the swing foot's lowest point with every joint
+        straight: half the rise of the swing foot's arc centre when the hip turns by pi, plus
+        the foot radius. Walkers with these as parameters override it.
+        """
+        m = np.asarray(self.total_mass, dtype=float)
+        n = self.n_coordinates
+        names = self.coordinate_names
+        hip = names.index("hip") if "hip" in names else 3
+        r_stance, r_swing = (np.asarray(r, dtype=float) for r in self.foot_radii)
+        q0 = np.zeros((*np.broadcast_shapes(m.shape, r_stance.shape), n))
+        q0[..., 1] = r_stance
+        q_up = q0.copy()
+        q_up[..., 1] += 1.0
+        g = (self.potential_energy(q_up) - self.potential_energy(q0)) / m
+        q_flip = q0.copy()
+        q_flip[..., hip] = np.pi
+        rise = self.foot_clearance(q_flip, "left") - self.foot_clearance(q0, "left")
+        return WalkerScale(
+            total_mass=m, gravity=np.asarray(g), leg_length=np.asarray(0.5 * rise + r_swing)
+        )
 
     def heel_strike_function(self, q: ArrayLike) -> FloatArray:
         """Smooth function that crosses zero upwards when the swing foot strikes ahead.

@@ -53,7 +53,7 @@ from heelstrike.models._generated import (
     read_cached,
     write_cached,
 )
-from heelstrike.models.base import Foot, PlanarWalker
+from heelstrike.models.base import Foot, PlanarWalker, WalkerScale
 from heelstrike.models.description import (
     ModelDescriptionError,
     WalkerDescription,
@@ -317,6 +317,21 @@ class BuiltWalker(PlanarWalker):
             self._eval(pm.mass) for pm in d.point_masses
         ]
         return np.asarray(sum(masses))
+
+    @property
+    def scale(self) -> WalkerScale:
+        """``(total mass, gravity, leg length)`` (kg, m/s^2, m).
+
+        Gravity is the walker's ``g`` parameter; the leg length is measured on the model (see
+        :attr:`PlanarWalker.scale`), e.g. ``a1 + b1 + a2 + b2`` for the kneed walker.
+        """
+        measured = super().scale
+        g = np.asarray(self._values["g"], dtype=float)
+        return WalkerScale(
+            total_mass=measured.total_mass,
+            gravity=np.broadcast_to(g, np.shape(measured.gravity)).copy(),
+            leg_length=measured.leg_length,
+        )
 
     @property
     def foot_radii(self) -> tuple[FloatArray, FloatArray]:

@@ -17,13 +17,14 @@ over array-valued parameters (e.g. a grid of foot radii).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, fields, replace
-from typing import Any, NamedTuple, final
+from typing import Any, ClassVar, NamedTuple, final
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from heelstrike.models.base import Foot, PlanarWalker, gravity_vector
+from heelstrike.models.base import Foot, PlanarWalker, WalkerScale, gravity_vector
 
 FloatArray = NDArray[np.float64]
 
@@ -32,6 +33,21 @@ __all__ = ["CompassGait", "CompassPositions", "heel_strike_state"]
 
 class WalkerParameterError(ValueError):
     """Raised when walker parameters are physically invalid."""
+
+
+class _Columns(NamedTuple):
+    """Unit leg vectors and non-trivial point-Jacobian columns (``(x, y)`` pairs), see
+    :meth:`CompassGait._jacobian_columns`."""
+
+    e3: tuple[Any, Any]
+    e34: tuple[Any, Any]
+    s: Any
+    H3: tuple[Any, Any]
+    R3: tuple[Any, Any]
+    L3: tuple[Any, Any]
+    L4: tuple[Any, Any]
+    #: Computed for one state on Python floats (every entry a ``float``).
+    scalar: bool
 
 
 class CompassPositions(NamedTuple):
@@ -100,6 +116,8 @@ class CompassGait(PlanarWalker):
     gravity: Any = 9.81
 
     coordinate_names = ("q1", "q2", "q3", "q4")
+    #: Every parameter is a scalar (set per instance): one state runs on Python floats.
+    _scalar: ClassVar[bool] = False
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -125,6 +143,10 @@ class CompassGait(PlanarWalker):
         for ok, msg in checks:
             if not ok:
                 raise WalkerParameterError(msg)
+        # One state of a walker with scalar parameters: the dynamics run on Python floats.
+        object.__setattr__(
+            self, "_scalar", all(isinstance(getattr(self, f.name), float) for f in fields(self))
+        )
 
     # -- convenience --------------------------------------------------------------------------
     def replace(self, **changes: Any) -> CompassGait:
@@ -139,6 +161,15 @@ class CompassGait(PlanarWalker):
     @property
     def total_mass(self) -> FloatArray:
         return np.asarray(self.hip_mass + 2.0 * self.leg_mass)
+
+    @property
+    def scale(self) -> WalkerScale:
+        """``(mH + 2 m, g, l)`` (kg, m/s^2, m)."""
+        return WalkerScale(
+            total_mass=self.total_mass,
+            gravity=np.asarray(self.gravity, dtype=float),
+            leg_length=np.asarray(self.leg_length, dtype=float),
+        )
 
     @property
     def foot_radii(self) -> tuple[FloatArray, FloatArray]:
@@ -197,23 +228,127 @@ class CompassGait(PlanarWalker):
         return np.asarray(self.contact_point(q, foot)[..., 1])
 
     # -- dynamics -----------------------------------------------------------------------------
+    def _jacobian_columns(self, q: FloatArray) -> _Columns:
+        """The non-trivial columns of the point Jacobians of :meth:`_point_jacobians`.
+
+        Every point Jacobian is ``[I_2, c3, c4]``; ``c4`` vanishes for the hip and the right
+        leg. Each column is an ``(x, y)`` pair of arrays (or scalars) broadcast like ``q[..., 0]``
+        and the parameters, so one state costs scalar arithmetic only.
+        """
+        l, b, R = self.leg_length, self.leg_com_from_hip, self.foot_radius
+        s = l - R
+        scalar = q.ndim == 1 and self._scalar
+        q3: Any
+        q34: Any
+        if scalar:
+            q3 = float(q[2])
+            q34 = q3 + float(q[3])
+            c3, s3 = math.cos(q3), math.sin(q3)
+            c34, s34 = math.cos(q34), math.sin(q34)
+        else:
+            q3 = q[..., 2]
+            q34 = q3 + q[..., 3]
+            c3, s3, c34, s34 = np.cos(q3), np.sin(q3), np.cos(q34), np.sin(q34)
+        # _de(theta) = (-cos theta, -sin theta)
+        de3 = (-c3, -s3)
+        de34 = (-c34, -s34)
+        cL4 = (-b * de34[0], -b * de34[1])
+        return _Columns(
+            e3=(-s3, c3),
+            e34=(-s34, c34),
+            s=s,
+            H3=(s * de3[0], s * de3[1]),
+            R3=((s - b) * de3[0], (s - b) * de3[1]),
+            L3=(s * de3[0] + cL4[0], s * de3[1] + cL4[1]),
+            L4=cL4,
+            scalar=scalar,
+        )
+
+    def _mass_from(self, c: _Columns, lead: tuple[int, ...]) -> FloatArray:
+        """``M = sum_i m_i J_i^T J_i + I (w_R w_R^T + w_L w_L^T)`` from the Jacobian columns."""
+        mH, m, inertia = self.hip_mass, self.leg_mass, self.leg_inertia
+        H3, R3, L3, L4 = c.H3, c.R3, c.L3, c.L4
+        total = mH + 2.0 * m
+        col2 = (mH * H3[0] + m * (R3[0] + L3[0]), mH * H3[1] + m * (R3[1] + L3[1]))
+        col3 = (m * L4[0], m * L4[1])
+        m22 = (
+            mH * (H3[0] * H3[0] + H3[1] * H3[1])
+            + m * (R3[0] * R3[0] + R3[1] * R3[1] + L3[0] * L3[0] + L3[1] * L3[1])
+            + 2.0 * inertia
+        )
+        m23 = m * (L3[0] * L4[0] + L3[1] * L4[1]) + inertia
+        m33 = m * (L4[0] * L4[0] + L4[1] * L4[1]) + inertia
+        if c.scalar and lead == ():
+            return np.array(
+                (
+                    (total, 0.0, col2[0], col3[0]),
+                    (0.0, total, col2[1], col3[1]),
+                    (col2[0], col2[1], m22, m23),
+                    (col3[0], col3[1], m23, m33),
+                )
+            )
+        entries = (total, *col2, *col3, m22, m23, m33)
+        M = np.empty((*np.broadcast_shapes(lead, *(np.shape(e) for e in entries)), 4, 4))
+        M[..., 0, 0] = total
+        M[..., 1, 1] = total
+        M[..., 0, 1] = 0.0
+        M[..., 1, 0] = 0.0
+        for i in (0, 1):
+            M[..., i, 2] = M[..., 2, i] = col2[i]
+            M[..., i, 3] = M[..., 3, i] = col3[i]
+        M[..., 2, 2] = m22
+        M[..., 2, 3] = M[..., 3, 2] = m23
+        M[..., 3, 3] = m33
+        return M
+
+    def _bias_from(
+        self, c: _Columns, q_dot: FloatArray, slope: ArrayLike, lead: tuple[int, ...]
+    ) -> FloatArray:
+        """``h = sum_i m_i J_i^T (a_i - g)`` from the Jacobian columns (see :meth:`bias_forces`)."""
+        mH, m, b = self.hip_mass, self.leg_mass, self.leg_com_from_hip
+        scalar = c.scalar and lead == () and (isinstance(slope, float) or np.ndim(slope) == 0)
+        if scalar:
+            w3: Any = float(q_dot[2])
+            w34: Any = w3 + float(q_dot[3])
+            gam = float(slope)  # type: ignore[arg-type]
+            g = (-self.gravity * math.sin(gam), -self.gravity * math.cos(gam))
+        else:
+            w3 = q_dot[..., 2]
+            w34 = w3 + q_dot[..., 3]
+            gam_ = np.asarray(slope, dtype=float)
+            g = (-self.gravity * np.sin(gam_), -self.gravity * np.cos(gam_))
+        s, e3, e34 = c.s, c.e3, c.e34
+        k3, k34 = w3 * w3, w34 * w34
+        # f_i = a_i - g: velocity-product acceleration of each point less gravity
+        f_H = (-s * e3[0] * k3 - g[0], -s * e3[1] * k3 - g[1])
+        f_R = (-(s - b) * e3[0] * k3 - g[0], -(s - b) * e3[1] * k3 - g[1])
+        f_L = (
+            -s * e3[0] * k3 + b * e34[0] * k34 - g[0],
+            -s * e3[1] * k3 + b * e34[1] * k34 - g[1],
+        )
+        H3, R3, L3, L4 = c.H3, c.R3, c.L3, c.L4
+        h01 = (mH * f_H[0] + m * (f_R[0] + f_L[0]), mH * f_H[1] + m * (f_R[1] + f_L[1]))
+        h2 = mH * (H3[0] * f_H[0] + H3[1] * f_H[1]) + m * (
+            R3[0] * f_R[0] + R3[1] * f_R[1] + L3[0] * f_L[0] + L3[1] * f_L[1]
+        )
+        h3 = m * (L4[0] * f_L[0] + L4[1] * f_L[1])
+        if scalar:
+            return np.array((h01[0], h01[1], h2, h3))
+        entries = (*h01, h2, h3)
+        h = np.empty((*np.broadcast_shapes(lead, *(np.shape(e) for e in entries)), 4))
+        for i, e in enumerate(entries):
+            h[..., i] = e
+        return h
+
     def mass_matrix(self, q: ArrayLike) -> FloatArray:
         """Mass matrix ``M(q)`` of eq. (1), shape (..., 4, 4).
 
         ``M = mH J_H^T J_H + m (J_R^T J_R + J_L^T J_L) + I (w_R w_R^T + w_L w_L^T)`` with
-        ``w_R = (0, 0, 1, 0)``, ``w_L = (0, 0, 1, 1)`` the legs' angular-velocity rows.
+        ``w_R = (0, 0, 1, 0)``, ``w_L = (0, 0, 1, 1)`` the legs' angular-velocity rows; the
+        products are assembled from the Jacobians' columns (``J_i = [I_2, c3, c4]``).
         """
         q_ = _q(q)
-        J_H, J_R, J_L = self._point_jacobians(q_)
-        mH, m, inertia = (self._p(k, q_) for k in ("hip_mass", "leg_mass", "leg_inertia"))
-
-        def jtj(J: FloatArray) -> FloatArray:
-            return np.asarray(np.swapaxes(J, -1, -2) @ J)
-
-        M = mH[..., None, None] * jtj(J_H) + m[..., None, None] * (jtj(J_R) + jtj(J_L))
-        rot = np.zeros((4, 4))
-        rot[2:, 2:] = [[2.0, 1.0], [1.0, 1.0]]
-        return np.asarray(M + inertia[..., None, None] * rot)
+        return self._mass_from(self._jacobian_columns(q_), q_.shape[:-1])
 
     def bias_forces(self, q: ArrayLike, q_dot: ArrayLike, slope: ArrayLike = 0.0) -> FloatArray:
         """``h = C(q, q_dot) q_dot + dV/dq`` so that ``M q_ddot + h = Q``, shape (..., 4).
@@ -222,25 +357,22 @@ class CompassGait(PlanarWalker):
         ``-sum_k c_k e(theta_k) theta_dot_k^2``; ``h = sum_i m_i J_i^T (a_i - g)``.
         """
         q_, qd = _q(q), _q(q_dot, name="q_dot")
-        l, b, R = (self._p(k, q_) for k in ("leg_length", "leg_com_from_hip", "foot_radius"))
-        mH, m = self._p("hip_mass", q_), self._p("leg_mass", q_)
-        s = (l - R)[..., None]
-        w3 = qd[..., 2][..., None]
-        w34 = (qd[..., 2] + qd[..., 3])[..., None]
-        e3, e34 = _e(q_[..., 2]), _e(q_[..., 2] + q_[..., 3])
-        g = gravity_vector(self.gravity, slope)
-        a_H = -s * e3 * w3**2
-        a_R = -(s - b[..., None]) * e3 * w3**2
-        a_L = a_H + b[..., None] * e34 * w34**2
-        J_H, J_R, J_L = self._point_jacobians(q_)
+        lead = np.broadcast_shapes(q_.shape[:-1], qd.shape[:-1])
+        return self._bias_from(self._jacobian_columns(q_), qd, slope, lead)
 
-        def jt(J: FloatArray, f: FloatArray) -> FloatArray:
-            return np.einsum("...ji,...j->...i", J, f)
+    def dynamics_terms(
+        self, q: ArrayLike, q_dot: ArrayLike, slope: ArrayLike = 0.0
+    ) -> tuple[FloatArray, FloatArray]:
+        """``(M(q), h(q, q_dot))`` with the point Jacobians built once.
 
-        return np.asarray(
-            mH[..., None] * jt(J_H, a_H - g)
-            + m[..., None] * (jt(J_R, a_R - g) + jt(J_L, a_L - g))
-        )
+        Equal to ``(mass_matrix(q), bias_forces(q, q_dot, slope))``; shapes (..., 4, 4) and
+        (..., 4).
+        """
+        q_, qd = _q(q), _q(q_dot, name="q_dot")
+        c = self._jacobian_columns(q_)
+        one = q_.ndim == 1 and qd.ndim == 1
+        lead = () if one else np.broadcast_shapes(q_.shape[:-1], qd.shape[:-1])
+        return self._mass_from(c, lead), self._bias_from(c, qd, slope, lead)
 
     def potential_energy(self, q: ArrayLike, slope: ArrayLike = 0.0) -> FloatArray:
         pos = self.positions(q)

@@ -56,6 +56,11 @@ TOML format
     link = "stance_leg"
     at = "l"
     mass = "mH"
+    [control.torso]         # optional: a declared posture law (PD on the joint's child link)
+    joint = "torso"         # an actuated joint whose parent is the root link
+    kp = "60.0 * mT"        # stiffness (N m/rad), >= 0; a number or an expression
+    kd = 30.0               # damping (N m s/rad), >= 0
+    angle = 0.0             # optional, set point of the link's absolute angle (rad)
 
 Walker files are data: nothing in them is ever executed or pasted into code. Parameter names
 must be ASCII identifiers (not keywords, not reserved); expressions are bounded in length,
@@ -86,10 +91,12 @@ __all__ = [
     "LinkSpec",
     "ModelDescriptionError",
     "PointMassSpec",
+    "PostureLawSpec",
     "WalkerDescription",
     "check_parameter_name",
     "constraint_holds",
     "evaluate_expression",
+    "parameter_units",
     "parse_description",
     "read_description",
 ]
@@ -448,6 +455,37 @@ class PointMassSpec:
 
 
 @dataclass(frozen=True, kw_only=True)
+class PostureLawSpec:
+    """A declared PD posture law (``[control.<name>]``): the torque across ``joint``
+
+    .. math:: u = -k_p (\\theta - \\theta_{ref}) - k_d \\dot\\theta,
+
+    with ``theta`` the absolute angle of the joint's child link (rad, from the ground normal);
+    the reaction acts on the root (stance) link. Simulated by
+    :class:`heelstrike.dynamics.phased.TorsoPD`.
+
+    Attributes
+    ----------
+    name : str
+        Table key (e.g. ``"torso"``).
+    joint : str
+        An actuated joint whose parent link is the root.
+    kp : float or str
+        Stiffness (N m/rad), >= 0.
+    kd : float or str
+        Damping (N m s/rad), >= 0.
+    angle : float or str
+        Set point ``theta_ref`` (rad).
+    """
+
+    name: str
+    joint: str
+    kp: Expr
+    kd: Expr
+    angle: Expr = 0.0
+
+
+@dataclass(frozen=True, kw_only=True)
 class WalkerDescription:
     """A validated walker description.
 
@@ -467,6 +505,8 @@ class WalkerDescription:
         Conditions on the parameter values that the model needs to make physical sense, e.g.
         ``"R <= l"`` (comparisons ``< <= > >=`` of expressions, chains allowed); checked by
         :meth:`check_values` whenever values are set.
+    control : tuple of PostureLawSpec
+        Declared posture laws (``[control.<name>]`` tables); not part of the derivation.
     source : str
         Where the description came from (file path or ``"<dict>"``); not part of the model.
     """
@@ -477,6 +517,7 @@ class WalkerDescription:
     feet: tuple[FootSpec, FootSpec]
     point_masses: tuple[PointMassSpec, ...] = ()
     constraints: tuple[str, ...] = ()
+    control: tuple[PostureLawSpec, ...] = ()
     source: str = field(default="<dict>", compare=False)
 
     @property
@@ -528,6 +569,7 @@ class WalkerDescription:
         d = asdict(self)
         d.pop("source")
         d.pop("constraints")
+        d.pop("control")
         d["params"] = [k for k, _ in self.params]
         return json.dumps(d, sort_keys=True, default=str)
 
@@ -578,6 +620,12 @@ class WalkerDescription:
                 raise ModelDescriptionError(f"{p}.mass: must be > 0")
             ev(pm.at, f"{p}.at")
             ev(pm.offset, f"{p}.offset")
+        for law in self.control:
+            p = f"control.{law.name}"
+            for key in ("kp", "kd"):
+                if not np.all(ev(getattr(law, key), f"{p}.{key}") >= 0):
+                    raise ModelDescriptionError(f"{p}.{key}: must be >= 0")
+            ev(law.angle, f"{p}.angle")
         for i, text in enumerate(self.constraints):
             if not constraint_holds(text, values):
                 tree = ast.parse(text, mode="eval")
@@ -592,6 +640,63 @@ class WalkerDescription:
 def _show(v: Any) -> str:
     a = np.asarray(v, dtype=float)
     return f"{float(a):g}" if a.ndim == 0 else f"array of shape {a.shape}"
+
+
+# -- units ----------------------------------------------------------------------------------------
+
+
+def _names(expr: Any) -> set[str] | None:
+    """Parameter names of an additive expression (``"l - b"``); None for products of names."""
+    if not isinstance(expr, str):
+        return set()
+    try:
+        tree = ast.parse(expr, mode="eval")
+    except SyntaxError:
+        return None
+    for node in ast.walk(tree):
+        if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Mult | ast.Div | ast.Pow):
+            if all(any(isinstance(n, ast.Name) for n in ast.walk(side))
+                   for side in (node.left, node.right)):
+                return None  # e.g. "m * l": no single unit per name
+        if isinstance(node, ast.Call):
+            return None
+    return {n.id for n in ast.walk(tree) if isinstance(n, ast.Name) and n.id != "pi"}
+
+
+def parameter_units(description: WalkerDescription) -> dict[str, str]:
+    """SI unit of every description parameter, read from where the parameter is used.
+
+    Lengths, positions and foot radii are ``m``, masses ``kg``, inertias ``kg m^2``, lock angles
+    ``rad`` and ``g`` ``m/s^2``. A parameter used with two different units, or only inside
+    products of parameters, gets no entry.
+
+    Parameters
+    ----------
+    description : WalkerDescription
+
+    Returns
+    -------
+    dict of str to str
+        Parameter name to unit.
+    """
+    uses: list[tuple[Any, str]] = []
+    for lk in description.links:
+        uses += [(lk.length, "m"), (lk.com, "m"), (lk.com_offset, "m"),
+                 (lk.attach_offset, "m"), (lk.mass, "kg"), (lk.inertia, "kg m^2")]
+        if lk.attach is not None:
+            uses.append((lk.attach, "m"))
+        if lk.joint is not None:
+            uses.append((lk.joint.lock_angle, "rad"))
+    for ft in description.feet:
+        uses += [(ft.radius, "m"), (ft.centre, "m"), (ft.centre_offset, "m")]
+    for pm in description.point_masses:
+        uses += [(pm.at, "m"), (pm.offset, "m"), (pm.mass, "kg")]
+    found: dict[str, set[str]] = {"g": {"m/s^2"}}
+    for expr, unit in uses:
+        for name in _names(expr) or ():
+            found.setdefault(name, set()).add(unit)
+    return {k: next(iter(v)) for k, v in found.items() if len(v) == 1}
+
 
 
 # -- parsing ------------------------------------------------------------------------------------
@@ -625,7 +730,10 @@ _TOP_KEYS = {
     "constraints",
     "description",
     "reference",
+    "control",
 }
+_CONTROL_KEYS = {"joint", "kp", "kd", "angle"}
+_CONTROL_REQUIRED = ("joint", "kp", "kd")
 _NUMERIC = {
     "length",
     "mass",
@@ -694,7 +802,8 @@ def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> Wal
     ----------
     data : mapping
         Top-level keys ``name``, ``params``, ``link`` (list), ``foot`` (list of two) and
-        optionally ``point_mass`` (list), ``description``, ``reference`` (free text).
+        optionally ``point_mass`` (list), ``constraints``, ``control`` (declared posture laws,
+        :class:`PostureLawSpec`), ``description``, ``reference`` (free text).
     source : str
         Origin, for messages.
 
@@ -890,6 +999,8 @@ def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> Wal
         _parse_constraint(c, params, f"constraints[{i}]") for i, c in enumerate(raw_constraints)
     )
 
+    control = _parse_control(top.get("control", {}), params, links, roots[0])
+
     desc = WalkerDescription(
         name=name,
         params=tuple(sorted(params.items())),
@@ -897,6 +1008,7 @@ def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> Wal
         feet=(feet_by_role["stance"], feet_by_role["swing"]),
         point_masses=tuple(pms),
         constraints=constraints,
+        control=control,
         source=source,
     )
     seen_points: set[str] = set()
@@ -917,6 +1029,47 @@ def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> Wal
             msg = f"link[{order[k_tree]}]" + msg[msg.index("]") + 1 :]
         raise ModelDescriptionError(msg) from None
     return desc
+
+
+def _parse_control(
+    raw: Any, params: Mapping[str, float], links: list[LinkSpec], root: int
+) -> tuple[PostureLawSpec, ...]:
+    """Validate the optional ``[control.<name>]`` tables (declared posture laws)."""
+    tab = _table(raw, "control")
+    out: list[PostureLawSpec] = []
+    joints = {lk.joint.name: lk for lk in links if lk.joint is not None}
+    used: set[str] = set()
+    for key, value in tab.items():
+        p = f"control.{key}"
+        if not isinstance(key, str) or not key.isascii() or not key.isidentifier():
+            raise ModelDescriptionError(f"{p}: the law's name must be an ASCII identifier")
+        law = _table(value, p)
+        _check_keys(law, _CONTROL_KEYS, _CONTROL_REQUIRED, p)
+        joint = _str(law, "joint", p)
+        lk = joints.get(joint)
+        if lk is None or lk.joint is None or not lk.joint.actuated:
+            raise ModelDescriptionError(
+                f"{p}.joint: {joint!r} is not an actuated joint (actuated joints: "
+                f"{sorted(j for j, k in joints.items() if k.joint and k.joint.actuated)})"
+            )
+        if lk.parent != links[root].name:
+            raise ModelDescriptionError(
+                f"{p}.joint: {joint!r} must connect a link to the root link "
+                f"{links[root].name!r} (the law's reaction acts on the stance link)"
+            )
+        if joint in used:
+            raise ModelDescriptionError(f"{p}.joint: {joint!r} already has a posture law")
+        used.add(joint)
+        out.append(
+            PostureLawSpec(
+                name=key,
+                joint=joint,
+                kp=_expr(law, "kp", params, p),
+                kd=_expr(law, "kd", params, p),
+                angle=_expr(law, "angle", params, p) if "angle" in law else 0.0,
+            )
+        )
+    return tuple(out)
 
 
 def read_description(path: str | Path) -> WalkerDescription:

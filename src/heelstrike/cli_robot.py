@@ -1,0 +1,300 @@
+"""Command line for robots: ``heelstrike robot list|info|state`` and ``heelstrike impact --robot``.
+
+Parses and calls :mod:`heelstrike.robots`, nothing more. Errors are raised as
+:class:`RobotCliError` (a ``ValueError``), which :func:`heelstrike.cli.main` prints as one line
+``heelstrike: error: ...`` with exit status 2. Pinocchio is imported only when a robot command
+runs, so the rest of the command line works without ``heelstrike[robots]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Any
+
+__all__ = [
+    "RobotCliError",
+    "add_robot_command",
+    "add_robot_impact_options",
+    "robot_requested",
+    "run_robot_impact",
+]
+
+
+class RobotCliError(ValueError):
+    """Bad robot input on the command line (one line, exit status 2)."""
+
+
+def _print_json(obj: Any, units: dict[str, Any]) -> None:
+    """Print one JSON object with its ``units`` map (the CLI's convention)."""
+    json.dump({**obj, "units": units}, sys.stdout, allow_nan=False)
+    sys.stdout.write("\n")
+
+
+_LIST_UNITS: dict[str, Any] = {
+    "name": None, "nq": "1", "nv": "1", "mass": "kg", "source": None, "feet": None,
+    "foot_contact": None,
+}
+
+
+def _joint_units(model: Any) -> tuple[list[str], list[str]]:
+    """Units of the entries of ``q`` and ``v`` in Pinocchio's conventions, joint by joint."""
+    q_units: list[str] = []
+    v_units: list[str] = []
+    for jid in range(1, model.njoints):
+        joint = model.joints[jid]
+        kind = joint.shortname()
+        nq, nv = int(joint.nq), int(joint.nv)
+        if kind == "JointModelFreeFlyer":
+            q_units += ["m"] * 3 + ["1"] * 4  # position, unit quaternion
+            v_units += ["m/s"] * 3 + ["rad/s"] * 3
+        elif kind == "JointModelTranslation" or (
+            kind.startswith("JointModelP") and kind != "JointModelPlanar"
+        ):
+            q_units += ["m"] * nq
+            v_units += ["m/s"] * nv
+        elif kind == "JointModelPlanar":
+            q_units += ["m", "m", "1", "1"]
+            v_units += ["m/s", "m/s", "rad/s"]
+        else:  # revolute (cos/sin pairs for unbounded ones), spherical (quaternion)
+            q_units += (["rad"] if nq == nv == 1 else ["1"]) * nq
+            v_units += ["rad/s"] * nv
+    return q_units, v_units
+
+
+def add_robot_command(sub: Any) -> None:
+    """Register ``heelstrike robot list [--json]``, ``robot info NAME`` and ``robot state NAME``."""
+    p = sub.add_parser(
+        "robot",
+        help="robots shipped offline (example-robot-data, needs heelstrike[robots])",
+        description="List the robots shipped with heelstrike[robots], describe one, or write "
+        "a gait-like pre-impact state of one for 'heelstrike impact --state'.",
+    )
+    rsub = p.add_subparsers(dest="robot_command", required=True, parser_class=type(p))
+    pl = rsub.add_parser("list", help="list shipped robots (name, nq, nv, mass, source)")
+    pl.add_argument("--json", action="store_true", help="print one JSON object")
+    pl.set_defaults(func=_run_robot_list)
+    pi = rsub.add_parser("info", help="describe one robot: sizes, mass, feet, frames")
+    pi.add_argument("name", help="robot name (see 'heelstrike robot list')")
+    pi.add_argument("--json", action="store_true", help="print one JSON object")
+    pi.set_defaults(func=_run_robot_info)
+    ps = rsub.add_parser(
+        "state", help="write a gait-like pre-impact STATE.json for 'impact --state'",
+        description="Gait-like pre-impact state of a shipped biped (heelstrike.robots.states."
+        "gait_state): both soles flat on the ground, the leading one STEP_LENGTH ahead and "
+        "descending at STRIKE_SPEED, the trailing one at rest, the base moving forward; the "
+        "velocity of least kinetic energy with these. Written as {\"q\": [...], \"v\": [...], "
+        "...} in Pinocchio's conventions, the file 'heelstrike impact --robot NAME --state' reads.")
+    ps.add_argument("name", help="robot name (see 'heelstrike robot list')")
+    ps.add_argument("--step-length", type=float, default=0.3, metavar="M",
+                    help="distance between the soles along x (m, default 0.3)")
+    ps.add_argument("--strike-speed", type=float, default=0.3, metavar="M/S",
+                    help="downward speed of the leading sole (m/s, > 0, default 0.3)")
+    ps.add_argument("--forward-speed", type=float, default=0.5, metavar="M/S",
+                    help="forward speed of the base (m/s, default 0.5)")
+    ps.add_argument("--swing-forward-speed", type=float, default=0.0, metavar="M/S",
+                    help="forward speed of the leading sole (m/s, default 0)")
+    ps.add_argument("--leading", choices=("left", "right"), default="left",
+                    help="striking foot (default left)")
+    ps.add_argument("--out", type=Path, default=None, metavar="FILE",
+                    help="write the state here (default: print it on stdout)")
+    ps.add_argument("--json", action="store_true",
+                    help="with --out: print one JSON object describing what was written")
+    ps.set_defaults(func=_run_robot_state)
+
+
+def _run_robot_list(args: argparse.Namespace) -> int:
+    from heelstrike.robots import list_robots
+
+    robots = list_robots()
+    if args.json:
+        _print_json({"robots": [{k: r[k] for k in _LIST_UNITS} for r in robots]},
+                    {"robots": dict(_LIST_UNITS)})
+        return 0
+    print(f"{'name':<8} {'nq':>4} {'nv':>4} {'mass (kg)':>10}  source")
+    for r in robots:
+        print(f"{r['name']:<8} {r['nq']:>4} {r['nv']:>4} {r['mass']:>10.3f}  {r['source']}")
+    return 0
+
+
+def _run_robot_info(args: argparse.Namespace) -> int:
+    from heelstrike.robots import load_robot
+
+    r = load_robot(args.name)
+    model = r.model
+    joints = [str(model.names[j]) for j in range(1, model.njoints)]
+    frames = [str(f.name) for f in model.frames]
+    info = {
+        "name": r.name, "nq": r.nq, "nv": r.nv, "mass": r.mass, "source": r.source,
+        "feet": list(r.feet), "foot_contact": r.foot_contact,
+        "reference_q": [float(x) for x in r.reference_q], "joints": joints, "frames": frames,
+    }
+    if args.json:
+        q_units, _ = _joint_units(model)
+        _print_json(info, {**_LIST_UNITS, "reference_q": q_units, "joints": None,
+                           "frames": None})
+        return 0
+    print(f"{r.name}: nq={r.nq} nv={r.nv} mass={r.mass:.3f} kg")
+    print(f"  source  {r.source}")
+    print(f"  feet    {', '.join(r.feet)} ({r.foot_contact} contact)")
+    print(f"  joints  {len(joints)} (root: {joints[0]}, free flyer)")
+    print(f"  frames  {len(frames)}")
+    return 0
+
+
+def _run_robot_state(args: argparse.Namespace) -> int:
+    from heelstrike.robots import load_robot
+    from heelstrike.robots.states import gait_state
+
+    for option, value in (("--step-length", args.step_length),
+                          ("--strike-speed", args.strike_speed),
+                          ("--forward-speed", args.forward_speed),
+                          ("--swing-forward-speed", args.swing_forward_speed)):
+        if not math.isfinite(value):
+            raise RobotCliError(f"{option} must be finite, got {value!r}")
+    if args.step_length < 0.0:
+        raise RobotCliError(f"--step-length must be >= 0 m, got {args.step_length!r}")
+    if args.strike_speed <= 0.0:
+        raise RobotCliError(f"--strike-speed must be > 0 m/s, got {args.strike_speed!r}")
+    if args.json and args.out is None:
+        raise RobotCliError("--json needs --out (without --out the state itself is printed)")
+    if args.out is not None and not args.out.parent.is_dir():
+        raise RobotCliError(f"cannot write {str(args.out)!r}: no directory "
+                            f"{str(args.out.parent)!r}")
+    robot = load_robot(args.name)
+    q, v = gait_state(robot, args.step_length, args.strike_speed,
+                      forward_speed=args.forward_speed,
+                      swing_forward_speed=args.swing_forward_speed, leading=args.leading)
+    lead, trail = robot.feet if args.leading == "left" else robot.feet[::-1]
+    q_units, v_units = _joint_units(robot.model)
+    state = {
+        "robot": robot.name, "q": [float(x) for x in q], "v": [float(x) for x in v],
+        "leading_foot": lead, "trailing_foot": trail, "foot_contact": robot.foot_contact,
+        "step_length": args.step_length, "strike_speed": args.strike_speed,
+        "forward_speed": args.forward_speed, "swing_forward_speed": args.swing_forward_speed,
+    }
+    units = {"robot": None, "q": q_units, "v": v_units, "leading_foot": None,
+             "trailing_foot": None, "foot_contact": None, "step_length": "m",
+             "strike_speed": "m/s", "forward_speed": "m/s", "swing_forward_speed": "m/s"}
+    if args.out is None:
+        _print_json(state, units)
+        return 0
+    text = json.dumps({**state, "units": units}, allow_nan=False)
+    try:
+        args.out.write_text(text + "\n")
+    except OSError as exc:
+        raise RobotCliError(f"cannot write {str(args.out)!r}: {exc.strerror or exc}") from None
+    if args.json:
+        _print_json({"out": str(args.out), "robot": robot.name, "nq": robot.nq, "nv": robot.nv,
+                     "leading_foot": lead, "trailing_foot": trail},
+                    {"out": None, "robot": None, "nq": "1", "nv": "1", "leading_foot": None,
+                     "trailing_foot": None})
+        return 0
+    print(f"wrote {args.out}: {robot.name} (nq={robot.nq}, nv={robot.nv}), leading foot "
+          f"{lead} {args.step_length:g} m ahead of {trail}, descending at "
+          f"{args.strike_speed:g} m/s")
+    return 0
+
+
+def add_robot_impact_options(p: argparse.ArgumentParser) -> None:
+    """Add ``--robot/--urdf/--mjcf``, ``--strike``, ``--keep`` and ``--friction`` to ``impact``."""
+    g = p.add_argument_group("robots (heelstrike[robots]; --state is then a STATE.json file)")
+    g.add_argument("--robot", default=None, metavar="NAME",
+                   help="a shipped robot (see 'heelstrike robot list')")
+    g.add_argument("--urdf", default=None, metavar="FILE", help="a URDF robot (floating base)")
+    g.add_argument("--mjcf", default=None, metavar="FILE", help="an MJCF robot (floating base)")
+    g.add_argument("--strike", action="append", default=None, metavar="FRAME:point|flat",
+                   help="striking contact (repeatable; FRAME:arc:RADIUS for an arc heel); "
+                   "unilateral, with --friction and --restitution, its lift is decided")
+    g.add_argument("--keep", action="append", default=None, metavar="FRAME:point|flat",
+                   help="persistent contact (repeatable): bilateral and inert, stays fixed")
+    g.add_argument("--friction", type=float, default=math.inf, metavar="MU",
+                   help="Coulomb coefficient of the striking contacts (default inf: no slip)")
+
+
+def robot_requested(args: argparse.Namespace) -> bool:
+    """Whether ``impact`` was called for a robot."""
+    return any(getattr(args, k, None) is not None for k in ("robot", "urdf", "mjcf"))
+
+
+def _read_state(path: str, nq: int, nv: int) -> tuple[list[float], list[float]]:
+    try:
+        text = Path(path).read_text()
+    except OSError as exc:
+        raise RobotCliError(f"cannot read state file {path!r}: {exc.strerror or exc}") from None
+    try:
+        obj = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise RobotCliError(f"state file {path!r} is not JSON: {exc.msg}") from None
+    if not isinstance(obj, dict) or "q" not in obj or "v" not in obj:
+        raise RobotCliError(f'state file {path!r} must be {{"q": [...], "v": [...]}}')
+    out = []
+    for key, n in (("q", nq), ("v", nv)):
+        vals = obj[key]
+        if not isinstance(vals, list) or not all(
+            isinstance(x, int | float) and not isinstance(x, bool) for x in vals
+        ):
+            raise RobotCliError(f"state file {path!r}: {key!r} must be a list of numbers")
+        if len(vals) != n:
+            raise RobotCliError(
+                f"state file {path!r}: {key!r} has {len(vals)} entries, the robot needs {n}"
+            )
+        out.append([float(x) for x in vals])
+    return out[0], out[1]
+
+
+def run_robot_impact(args: argparse.Namespace) -> int:
+    """``heelstrike impact --robot NAME | --urdf FILE | --mjcf FILE --state STATE.json ...``."""
+    from heelstrike.robots import load_mjcf, load_robot, load_urdf, parse_contact, robot_impact
+
+    given = [k for k in ("robot", "urdf", "mjcf") if getattr(args, k, None) is not None]
+    if len(given) > 1:
+        raise RobotCliError(f"give only one of --robot, --urdf, --mjcf (got {', '.join(given)})")
+    if getattr(args, "model", None) is not None or getattr(args, "angle", None) is not None:
+        raise RobotCliError("--model and --angle do not apply to robots")
+    if args.state is None:
+        raise RobotCliError("robots need --state STATE.json with {\"q\": [...], \"v\": [...]}")
+    if not args.strike:
+        raise RobotCliError("robots need at least one --strike FRAME:point|flat")
+    strike = [parse_contact(s) for s in args.strike]
+    keep = [parse_contact(s) for s in (args.keep or [])]
+    if args.robot is not None:
+        robot = load_robot(args.robot)
+    elif args.urdf is not None:
+        robot = load_urdf(args.urdf)
+    else:
+        robot = load_mjcf(args.mjcf)
+    for c in (*strike, *keep):
+        robot.frame_id(c.frame)
+    q, v = _read_state(args.state, robot.nq, robot.nv)
+    res = robot_impact(robot, q, v, strike=strike, keep=keep, friction=args.friction,
+                       restitution=args.restitution)
+    d = res.to_dict()
+    d = {"robot": robot.name, "nq": robot.nq, "nv": robot.nv, **d}
+    if args.json:
+        _, v_units = _joint_units(robot.model)
+        impulse_units = [u for c in res.contacts
+                         for u in ["N s"] * 3 + ["N m s"] * (c.rows - 3)]
+        contact_units = {
+            "frame": None, "type": None, "role": None, "mode": None, "T_c_normal": "J",
+            "T_c_tangential": "J", "force_impulse": "N s", "moment_impulse": "N m s",
+            "normal_velocity_pre": "m/s", "normal_velocity_post": "m/s",
+            "slip_speed_post": "m/s",
+        }
+        units = {
+            "robot": None, "nq": "1", "nv": "1", "T": "J", "T_c": "J", "T_a": "J",
+            "T_plus": "J", "energy_lost": "J", "qdot_plus": v_units, "impulse": impulse_units,
+            "contacts": contact_units,
+        }
+        _print_json(d, {k: units[k] for k in d})
+        return 0
+    print(f"impact of '{robot.name}' (nq={robot.nq}, nv={robot.nv})")
+    for key in ("T", "T_c", "T_a", "T_plus", "energy_lost"):
+        print(f"  {key:<12} {d[key]:12.6f} J")
+    for c in d["contacts"]:
+        print(f"  {c['role']:<6} {c['frame']:<24} {c['type']:<5} {c['mode']:<8} "
+              f"T_c normal {c['T_c_normal']:.6f} J, tangential {c['T_c_tangential']:.6f} J")
+    return 0

@@ -1,0 +1,403 @@
+"""Load URDF/MJCF robots with Pinocchio, floating base, and the robots shipped offline.
+
+Pinocchio (package ``pin``) and the robot files (package ``example-robot-data``, whose wheel
+carries the URDF/SRDF files under ``cmeel.prefix/share/example-robot-data/robots``; version 6 has
+no Python loader, so the files are located through the package's installed metadata) come with
+the optional extra ``heelstrike[robots]``. Nothing is fetched from the network.
+
+Every model gets a floating base ``JointModelFreeFlyer`` as its root joint (a root ``floating``
+joint in a URDF is ignored by Pinocchio's parser; an MJCF ``freejoint`` at the root is kept and
+no second one is added). Pinocchio's conventions hold: ``q`` has ``nq`` entries (the base as
+position and unit quaternion ``x, y, z, w``), ``v`` has ``nv`` entries (the base's linear and
+angular velocity in its own frame), world ``z`` is up.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import importlib.metadata
+import math
+import os
+import sys
+import tempfile
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "SHIPPED_ROBOTS",
+    "Robot",
+    "RobotError",
+    "RobotSpec",
+    "list_robots",
+    "load_mjcf",
+    "load_robot",
+    "load_urdf",
+    "robot_data_dir",
+]
+
+FloatArray = NDArray[np.float64]
+
+
+class RobotError(ValueError):
+    """Bad robot input: unknown robot or frame, a file that is not a robot, wrong q or v size."""
+
+
+def _pin() -> Any:
+    try:
+        import pinocchio
+    except ImportError as exc:  # pragma: no cover - exercised only without the extra
+        raise RobotError(
+            "robots need Pinocchio: pip install 'heelstrike[robots]'"
+        ) from exc
+    return pinocchio
+
+
+@dataclass(frozen=True, kw_only=True)
+class RobotSpec:
+    """A robot shipped by ``example-robot-data``.
+
+    Parameters
+    ----------
+    name : str
+        Short name (``heelstrike robot list``).
+    urdf : str
+        Path of the URDF relative to the package's ``robots/`` directory.
+    srdf : str or None
+        Path of the SRDF holding the reference pose, or None.
+    pose : str or None
+        Name of the reference configuration in the SRDF (e.g. ``half_sitting``).
+    feet : tuple of (str, str)
+        Left and right sole (or foot) frames, used for gait-like states.
+    foot_contact : {"flat", "point"}
+        Natural contact type of the feet.
+    knee_bend : float
+        Without SRDF pose: added to the ``*knee*`` joints, and half of it subtracted from the
+        ``*hip_pitch*`` and ``*ankle_pitch*`` joints (rad), to stand with bent knees.
+    """
+
+    name: str
+    urdf: str
+    srdf: str | None
+    pose: str | None
+    feet: tuple[str, str]
+    foot_contact: str = "flat"
+    knee_bend: float = 0.0
+
+
+SHIPPED_ROBOTS: dict[str, RobotSpec] = {
+    s.name: s
+    for s in (
+        RobotSpec(
+            name="talos",
+            urdf="talos_data/robots/talos_reduced.urdf",
+            srdf="talos_data/srdf/talos.srdf",
+            pose="half_sitting",
+            feet=("left_sole_link", "right_sole_link"),
+        ),
+        RobotSpec(
+            name="g1",
+            urdf="g1_description/urdf/g1_29dof_rev_1_0.urdf",
+            srdf=None,
+            pose=None,
+            feet=("left_ankle_roll_link", "right_ankle_roll_link"),
+            knee_bend=0.6,
+        ),
+        RobotSpec(
+            name="bolt",
+            urdf="bolt_description/robots/bolt.urdf",
+            srdf="bolt_description/srdf/bolt.srdf",
+            pose="standing",
+            feet=("FL_FOOT", "FR_FOOT"),
+            foot_contact="point",
+        ),
+    )
+}
+
+
+def robot_data_dir() -> Path:
+    """Directory of the robot files installed by ``example-robot-data`` (no network).
+
+    Raises
+    ------
+    RobotError
+        If the package is not installed.
+    """
+    try:
+        dist = importlib.metadata.distribution("example-robot-data")
+    except importlib.metadata.PackageNotFoundError as exc:
+        raise RobotError(
+            "shipped robots need example-robot-data: pip install 'heelstrike[robots]'"
+        ) from exc
+    path = Path(str(dist.locate_file("cmeel.prefix/share/example-robot-data/robots")))
+    if not path.is_dir():  # pragma: no cover - broken install
+        raise RobotError(f"example-robot-data has no robots directory at {path}")
+    return path
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Robot:
+    """A floating-base robot loaded into Pinocchio.
+
+    Attributes
+    ----------
+    name : str
+        Robot name.
+    source : str
+        File it was loaded from.
+    model : pinocchio.Model
+        The kinematic and inertial model (root joint: free flyer).
+    reference_q : ndarray, shape (nq,)
+        Reference configuration (SRDF pose, or neutral).
+    feet : tuple of str
+        Left and right foot frames ("" if unknown).
+    foot_contact : str
+        Natural foot contact type, ``"flat"`` or ``"point"``.
+    data : pinocchio.Data
+        Work space reused by this robot's computations (not thread-safe; one per thread).
+    cache : dict
+        Derived data reused between calls (row layouts of contact sets).
+    """
+
+    name: str
+    source: str
+    model: Any
+    reference_q: FloatArray
+    feet: tuple[str, str] = ("", "")
+    foot_contact: str = "flat"
+    data: Any = field(default=None, repr=False, compare=False)
+    cache: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        if self.data is None:
+            object.__setattr__(self, "data", self.model.createData())
+
+    @property
+    def nq(self) -> int:
+        """Number of configuration entries."""
+        return int(self.model.nq)
+
+    @property
+    def nv(self) -> int:
+        """Number of velocity entries (degrees of freedom)."""
+        return int(self.model.nv)
+
+    @property
+    def mass(self) -> float:
+        """Total mass (kg)."""
+        return float(_pin().computeTotalMass(self.model))
+
+    def frame_id(self, frame: str) -> int:
+        """Index of a frame; raises :class:`RobotError` naming it if absent."""
+        if not self.model.existFrame(frame):
+            raise RobotError(f"unknown frame {frame!r} in robot {self.name!r}")
+        return int(self.model.getFrameId(frame))
+
+    def check_state(
+        self, q: ArrayLike, v: ArrayLike | None = None
+    ) -> tuple[FloatArray, FloatArray]:
+        """Validate sizes and finiteness; normalise the base quaternion.
+
+        Returns
+        -------
+        q : ndarray, shape (nq,)
+        v : ndarray, shape (nv,) (zeros if ``v`` is None)
+        """
+        nq, nv = self.nq, self.nv
+        q_ = np.array(q, dtype=float).reshape(-1)  # a copy: normalised below
+        if q_.shape != (nq,):
+            raise RobotError(f"q has {q_.size} entries, robot {self.name!r} needs nq={nq}")
+        v_ = np.zeros(nv) if v is None else np.asarray(v, dtype=float).reshape(-1)
+        if v_.shape != (nv,):
+            raise RobotError(f"v has {v_.size} entries, robot {self.name!r} needs nv={nv}")
+        if not (np.isfinite(q_).all() and np.isfinite(v_).all()):
+            raise RobotError("q and v must be finite")
+        quat = q_[3:7]
+        nrm = math.sqrt(float(quat.dot(quat)))  # np.linalg.norm of a vector, without overhead
+        if not 0.5 < nrm < 1.5:
+            raise RobotError(f"q[3:7] must be the base's unit quaternion, |q[3:7]| = {nrm:g}")
+        quat /= nrm
+        return q_, v_
+
+    def check_states(self, qs: ArrayLike) -> FloatArray:
+        """:meth:`check_state` for many configurations at once: (B, nq) with unit quaternions.
+
+        Raises
+        ------
+        RobotError
+            As :meth:`check_state`, naming the first offending configuration.
+        """
+        q_all = np.asarray(qs, dtype=float)
+        if q_all.ndim != 2 or q_all.shape[1] != self.nq:
+            raise RobotError(
+                f"configurations must be (B, nq={self.nq}) for robot {self.name!r}, "
+                f"got {q_all.shape}"
+            )
+        if not np.all(np.isfinite(q_all)):
+            raise RobotError("q and v must be finite")
+        nrm = np.linalg.norm(q_all[:, 3:7], axis=1)
+        bad = ~((nrm > 0.5) & (nrm < 1.5))
+        if np.any(bad):
+            i = int(np.argmax(bad))
+            raise RobotError(
+                f"q[3:7] must be the base's unit quaternion, |q[3:7]| = {nrm[i]:g} "
+                f"(configuration {i})"
+            )
+        out = q_all.copy()
+        out[:, 3:7] /= nrm[:, None]
+        return out
+
+    def mass_matrix(self, q: ArrayLike, data: Any = None) -> FloatArray:
+        """Joint-space mass matrix ``M(q)`` from ``crba``, symmetrised, shape (nv, nv)."""
+        q_, _ = self.check_state(q)
+        return self._mass_matrix(q_, self.data if data is None else data)
+
+    def _mass_matrix(self, q: FloatArray, data: Any) -> FloatArray:
+        """``crba`` at a checked ``q``, upper triangle mirrored into the lower one."""
+        M = np.array(_pin().crba(self.model, data, q))
+        np.copyto(M, M.T, where=_strictly_lower(M.shape[0]))
+        return M
+
+
+@functools.lru_cache(maxsize=16)
+def _strictly_lower(n: int) -> NDArray[np.bool_]:
+    """Mask of the strictly lower triangle of an (n, n) matrix (read-only)."""
+    mask = np.tril(np.ones((n, n), dtype=bool), -1)
+    mask.setflags(write=False)
+    return mask
+
+
+@contextlib.contextmanager
+def _quiet_native_stderr() -> Iterator[None]:
+    """Silence what the C++ parsers print on file descriptor 2 (the error is raised anyway)."""
+    try:
+        fd = sys.stderr.fileno()
+    except (AttributeError, OSError, ValueError):  # pragma: no cover - no real stderr
+        yield
+        return
+    sys.stderr.flush()
+    saved = os.dup(fd)
+    try:
+        with tempfile.TemporaryFile() as sink:
+            os.dup2(sink.fileno(), fd)
+            yield
+    finally:
+        os.dup2(saved, fd)
+        os.close(saved)
+
+
+def _has_free_root(model: Any) -> bool:
+    return model.njoints > 1 and model.joints[1].shortname() == "JointModelFreeFlyer"
+
+
+def _finish(model: Any, name: str, source: Path, q_ref: FloatArray | None,
+            feet: tuple[str, str] = ("", ""), foot_contact: str = "flat") -> Robot:
+    pin = _pin()
+    if not _has_free_root(model):
+        raise RobotError(f"{source}: model has no floating base")
+    if model.nv <= 6 or pin.computeTotalMass(model) <= 0.0:
+        raise RobotError(f"{source}: not a robot (no joints or no mass)")
+    q = np.array(pin.neutral(model)) if q_ref is None else np.asarray(q_ref, dtype=float)
+    return Robot(name=name, source=str(source), model=model, reference_q=q, feet=feet,
+                 foot_contact=foot_contact)
+
+
+def _checked_path(path: str | Path, kind: str) -> Path:
+    p = Path(path)
+    if not p.is_file():
+        raise RobotError(f"{kind} file {str(p)!r} does not exist")
+    return p
+
+
+def load_urdf(path: str | Path, *, name: str | None = None) -> Robot:
+    """Load a URDF with a free-flyer root joint.
+
+    Raises
+    ------
+    RobotError
+        If the file is missing or not a URDF robot.
+    """
+    pin = _pin()
+    p = _checked_path(path, "URDF")
+    try:
+        with _quiet_native_stderr():
+            model = pin.buildModelFromUrdf(str(p), pin.JointModelFreeFlyer())
+    except (RuntimeError, ValueError, OSError) as exc:
+        raise RobotError(f"{p}: not a URDF robot ({str(exc).splitlines()[0][:120]})") from None
+    return _finish(model, name or p.stem, p, None)
+
+
+def load_mjcf(path: str | Path, *, name: str | None = None) -> Robot:
+    """Load an MJCF (MuJoCo XML) with a free-flyer root joint (kept if it already has one).
+
+    Raises
+    ------
+    RobotError
+        If the file is missing or not an MJCF robot.
+    """
+    pin = _pin()
+    p = _checked_path(path, "MJCF")
+    try:
+        with _quiet_native_stderr():
+            model = pin.buildModelFromMJCF(str(p))
+            if not _has_free_root(model):
+                model = pin.buildModelFromMJCF(str(p), pin.JointModelFreeFlyer())
+    except (RuntimeError, ValueError, OSError) as exc:
+        raise RobotError(f"{p}: not an MJCF robot ({str(exc).splitlines()[0][:120]})") from None
+    if isinstance(model, tuple):  # pragma: no cover - overload returning constraints too
+        model = model[0]
+    return _finish(model, name or p.stem, p, None)
+
+
+def _bent_neutral(model: Any, bend: float) -> FloatArray:
+    pin = _pin()
+    q = np.array(pin.neutral(model))
+    for jid in range(2, model.njoints):
+        jname = model.names[jid]
+        iq = model.joints[jid].idx_q
+        if "knee" in jname:
+            q[iq] += bend
+        elif "hip_pitch" in jname or "ankle_pitch" in jname:
+            q[iq] -= 0.5 * bend
+    return q
+
+
+def load_robot(name: str) -> Robot:
+    """Load a robot shipped by ``example-robot-data`` (see :data:`SHIPPED_ROBOTS`).
+
+    Raises
+    ------
+    RobotError
+        If ``name`` is unknown or the package is not installed.
+    """
+    pin = _pin()
+    spec = SHIPPED_ROBOTS.get(name)
+    if spec is None:
+        raise RobotError(f"unknown robot {name!r}; known: {', '.join(sorted(SHIPPED_ROBOTS))}")
+    root = robot_data_dir()
+    path = root / spec.urdf
+    model = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
+    if spec.srdf is not None and spec.pose is not None:
+        pin.loadReferenceConfigurations(model, str(root / spec.srdf), False)
+        q_ref = np.array(model.referenceConfigurations[spec.pose])
+    else:
+        q_ref = _bent_neutral(model, spec.knee_bend)
+    robot = _finish(model, spec.name, path, q_ref, spec.feet, spec.foot_contact)
+    for f in spec.feet:
+        robot.frame_id(f)
+    return robot
+
+
+def list_robots() -> list[dict[str, Any]]:
+    """Name, ``nq``, ``nv``, mass (kg), source file and feet of every shipped robot."""
+    out = []
+    for name in SHIPPED_ROBOTS:
+        r = load_robot(name)
+        out.append({"name": r.name, "nq": r.nq, "nv": r.nv, "mass": r.mass,
+                    "source": r.source, "feet": list(r.feet), "foot_contact": r.foot_contact})
+    return out

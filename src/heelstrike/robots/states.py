@@ -1,0 +1,153 @@
+"""Gait-like pre-impact states of a biped robot: stance sole at rest, swing sole descending.
+
+The configuration places both feet flat on the ground (point feet: on the ground; world ``z``
+up, ``x`` forward), the leading (swing) foot ``step_length`` ahead of the trailing (stance) one,
+each at the lateral offset it has in the reference pose, with the base level and midway between
+them; its height is left to the inverse kinematics (damped Gauss-Newton on the feet's and base's
+placements, minimum-norm steps, so joints that move neither stay at the reference pose).
+
+The velocity is the one of least kinetic energy (``min 1/2 v^T M v``) among those with the
+trailing sole at rest (6 rows; 3 for point feet), the leading sole moving with
+``(swing_forward_speed, 0, -strike_speed)`` and no rotation (6 rows; 3 for point feet), and the
+base moving forward at ``forward_speed`` without sideways or angular velocity (5 rows).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from heelstrike.robots.loading import Robot, RobotError, _pin
+
+__all__ = ["gait_configuration", "gait_state", "gait_velocity"]
+
+FloatArray = NDArray[np.float64]
+Leading = Literal["left", "right"]
+
+
+def _feet(robot: Robot, leading: Leading) -> tuple[str, str]:
+    left, right = robot.feet
+    if not left or not right:
+        raise RobotError(f"robot {robot.name!r} has no feet frames for gait states")
+    if leading not in ("left", "right"):
+        raise RobotError(f"leading must be 'left' or 'right', got {leading!r}")
+    return (left, right) if leading == "left" else (right, left)
+
+
+def gait_configuration(
+    robot: Robot,
+    step_length: float,
+    *,
+    leading: Leading = "left",
+    max_iterations: int = 200,
+    tol: float = 1e-10,
+) -> FloatArray:
+    """Configuration (nq,) with both feet flat, the leading one ``step_length`` (m) ahead.
+
+    Raises
+    ------
+    RobotError
+        If the inverse kinematics does not converge (step too long for the legs).
+    """
+    pin = _pin()
+    if not (np.isfinite(step_length) and step_length >= 0.0):
+        raise RobotError(f"step_length must be >= 0 m, got {step_length!r}")
+    lead, trail = _feet(robot, leading)
+    model = robot.model
+    data = model.createData()
+    q = robot.reference_q.copy()
+    pin.framesForwardKinematics(model, data, q)
+    fl, ft = robot.frame_id(lead), robot.frame_id(trail)
+    base0 = data.oMi[1].translation.copy()
+    z0 = 0.5 * (data.oMf[fl].translation[2] + data.oMf[ft].translation[2])
+    target_lead = pin.SE3(np.eye(3), np.array(
+        [base0[0] + 0.5 * step_length, data.oMf[fl].translation[1], z0]))
+    target_trail = pin.SE3(np.eye(3), np.array(
+        [base0[0] - 0.5 * step_length, data.oMf[ft].translation[1], z0]))
+    base_rows = [0, 1, 3, 4, 5]
+    point_feet = robot.foot_contact == "point"
+    for _ in range(max_iterations):
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        errs, jacs = [], []
+        for fid, target in ((fl, target_lead), (ft, target_trail)):
+            if point_feet:
+                errs.append(target.translation - data.oMf[fid].translation)
+                jacs.append(np.array(pin.getFrameJacobian(
+                    model, data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED))[:3])
+                continue
+            errs.append(np.array(pin.log6(data.oMf[fid].actInv(target)).vector))
+            jacs.append(np.array(pin.getFrameJacobian(model, data, fid, pin.ReferenceFrame.LOCAL)))
+        oMb = data.oMi[1]
+        target_b = pin.SE3(np.eye(3), np.array([base0[0], base0[1], oMb.translation[2]]))
+        errs.append(np.array(pin.log6(oMb.actInv(target_b)).vector)[base_rows])
+        jacs.append(np.array(
+            pin.getJointJacobian(model, data, 1, pin.ReferenceFrame.LOCAL))[base_rows])
+        err, J = np.concatenate(errs), np.vstack(jacs)
+        if np.max(np.abs(err)) < tol:
+            return np.asarray(q)
+        dq = J.T @ np.linalg.solve(J @ J.T + 1e-10 * np.eye(J.shape[0]), err)
+        q = pin.integrate(model, q, dq)
+    raise RobotError(
+        f"no feet placement for step length {step_length:g} m on robot {robot.name!r}"
+    )
+
+
+def gait_velocity(
+    robot: Robot,
+    q: FloatArray,
+    *,
+    strike_speed: float,
+    forward_speed: float = 0.5,
+    swing_forward_speed: float = 0.0,
+    leading: Leading = "left",
+    data: Any = None,
+) -> FloatArray:
+    """Least-kinetic-energy pre-impact velocity (nv,) of a gait-like state (module doc).
+
+    Parameters
+    ----------
+    strike_speed : float
+        Downward speed of the leading sole (m/s), > 0 for an impact.
+    forward_speed : float
+        Forward speed of the base (m/s).
+    swing_forward_speed : float
+        Forward speed of the leading sole (m/s).
+    """
+    pin = _pin()
+    lead, trail = _feet(robot, leading)
+    model = robot.model
+    data = model.createData() if data is None else data
+    q_, _ = robot.check_state(q)
+    M = robot.mass_matrix(q_, data)
+    pin.computeJointJacobians(model, data, q_)
+    pin.updateFramePlacements(model, data)
+    lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+    J_trail = np.array(pin.getFrameJacobian(model, data, robot.frame_id(trail), lwa))
+    J_lead = np.array(pin.getFrameJacobian(model, data, robot.frame_id(lead), lwa))
+    J_base = np.array(pin.getJointJacobian(model, data, 1, lwa))[[0, 1, 3, 4, 5]]
+    k = 3 if robot.foot_contact == "point" else 6  # point feet: no sole orientation
+    C = np.vstack((J_trail[:k], J_lead[:k], J_base))
+    d = np.zeros(C.shape[0])
+    d[k], d[k + 2] = swing_forward_speed, -strike_speed
+    d[2 * k] = forward_speed
+    X = np.linalg.solve(M, C.T)
+    return np.asarray(X @ np.linalg.solve(C @ X, d))
+
+
+def gait_state(
+    robot: Robot,
+    step_length: float,
+    strike_speed: float,
+    *,
+    forward_speed: float = 0.5,
+    swing_forward_speed: float = 0.0,
+    leading: Leading = "left",
+) -> tuple[FloatArray, FloatArray]:
+    """Pre-impact ``(q, v-)``: :func:`gait_configuration` and :func:`gait_velocity`."""
+    q = gait_configuration(robot, step_length, leading=leading)
+    v = gait_velocity(robot, q, strike_speed=strike_speed, forward_speed=forward_speed,
+                      swing_forward_speed=swing_forward_speed, leading=leading)
+    return q, v

@@ -1,0 +1,182 @@
+"""The paper's Figs. 2-3 for a robot: ``T_c``, ``T_a`` and loss per metre over step length and
+strike speed, from gait-like pre-impact states, batched over configurations.
+
+For every step length ``L`` the feet are placed by :func:`heelstrike.robots.states.
+gait_configuration`; for every strike speed the pre-impact velocity is
+:func:`heelstrike.robots.states.gait_velocity` (trailing sole at rest, leading sole descending,
+base moving forward). The leading foot strikes with the paper's inert law (all its rows, no slip,
+no rebound) and the trailing foot is left free, as in the paper; the impact is *admissible* when
+the trailing foot lifts (its sole's vertical velocity after impact is positive). All impacts of
+the grid are resolved in one batched call of :func:`heelstrike.core.impact.impact`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from heelstrike.core.impact import impact
+from heelstrike.robots.contacts import ContactSpec, mass_matrices_and_jacobians
+from heelstrike.robots.loading import Robot, RobotError
+from heelstrike.robots.states import Leading, gait_configuration, gait_velocity
+
+__all__ = ["RobotStudy", "plot_robot_study", "robot_heel_strike_study"]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True, kw_only=True)
+class RobotStudy:
+    """Heel-strike energetics of a robot over step length x strike speed.
+
+    Every array has shape ``(len(step_length), len(strike_speed))``.
+
+    Attributes
+    ----------
+    robot : str
+    contact : str
+        Contact type of the striking foot.
+    step_length : ndarray, shape (nL,)
+        Distance between the soles along ``x`` (m).
+    strike_speed : ndarray, shape (nS,)
+        Downward speed of the leading sole before impact (m/s).
+    T, T_c, T_a : ndarray
+        Pre-impact kinetic energy and its constrained (lost) and admissible parts (J).
+    T_c_normal, T_c_tangential : ndarray
+        ``T_c`` split by the nested projection: normal rows first (J).
+    loss_per_metre : ndarray
+        ``T_c / L`` (J/m); ``nan`` for ``L = 0``.
+    trailing_lift_speed : ndarray
+        Vertical velocity of the trailing sole after impact (m/s).
+    admissible : ndarray of bool
+        ``trailing_lift_speed > 0``.
+    """
+
+    robot: str
+    contact: str
+    step_length: FloatArray
+    strike_speed: FloatArray
+    T: FloatArray
+    T_c: FloatArray
+    T_a: FloatArray
+    T_c_normal: FloatArray
+    T_c_tangential: FloatArray
+    loss_per_metre: FloatArray
+    trailing_lift_speed: FloatArray
+    admissible: NDArray[np.bool_]
+
+
+def robot_heel_strike_study(
+    robot: Robot,
+    step_lengths: ArrayLike,
+    strike_speeds: ArrayLike,
+    *,
+    contact: str | None = None,
+    forward_speed: float = 0.5,
+    leading: Leading = "left",
+) -> RobotStudy:
+    """Batched heel-strike study (module doc).
+
+    Parameters
+    ----------
+    robot : Robot
+        A robot with feet frames (e.g. ``load_robot("talos")``).
+    step_lengths : array_like, shape (nL,)
+        Step lengths (m), >= 0.
+    strike_speeds : array_like, shape (nS,)
+        Downward speeds of the leading sole (m/s), > 0.
+    contact : {"flat", "point"}, optional
+        Striking contact type (default: the robot's natural foot contact).
+    forward_speed : float
+        Forward speed of the base (m/s).
+    leading : {"left", "right"}
+        Striking foot.
+    """
+    L = np.atleast_1d(np.asarray(step_lengths, dtype=float))
+    S = np.atleast_1d(np.asarray(strike_speeds, dtype=float))
+    if L.ndim != 1 or S.ndim != 1 or not (np.all(L >= 0) and np.all(S > 0)):
+        raise RobotError("step lengths must be >= 0 m and strike speeds > 0 m/s (1-D)")
+    kind = contact or robot.foot_contact
+    lead, trail = robot.feet if leading == "left" else robot.feet[::-1]
+    strike = ContactSpec(frame=lead, kind=kind)  # type: ignore[arg-type]
+    trailing = ContactSpec(frame=trail, kind="point")
+    qs = np.stack([gait_configuration(robot, float(x), leading=leading) for x in L])
+    data = robot.model.createData()
+    # v is linear in the strike speed: one least-energy solve per speed and step length.
+    vs = np.stack([
+        np.stack([gait_velocity(robot, q, strike_speed=float(s), forward_speed=forward_speed,
+                                leading=leading, data=data) for s in S])
+        for q in qs
+    ])  # (nL, nS, nv)
+    Ms, As = mass_matrices_and_jacobians(robot, qs, [strike, trailing])
+    k = strike.rows
+    A = As[:, None, :k, :]
+    res = impact(Ms[:, None], A, vs)
+    normal = impact(Ms[:, None], A[..., list(strike.normal), :], vs)
+    lift = np.einsum("lj,lsj->ls", As[:, 2 + k, :], res.velocity_post)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        per_m = np.where(L[:, None] > 0, res.kinetic_energy_constrained / L[:, None], np.nan)
+    T_cn = np.asarray(normal.kinetic_energy_constrained)
+    return RobotStudy(
+        robot=robot.name,
+        contact=kind,
+        step_length=L,
+        strike_speed=S,
+        T=np.asarray(res.kinetic_energy),
+        T_c=np.asarray(res.kinetic_energy_constrained),
+        T_a=np.asarray(res.kinetic_energy_admissible),
+        T_c_normal=T_cn,
+        T_c_tangential=np.asarray(res.kinetic_energy_constrained) - T_cn,
+        loss_per_metre=np.asarray(per_m),
+        trailing_lift_speed=np.asarray(lift),
+        admissible=np.asarray(lift > 0.0),
+    )
+
+
+def plot_robot_study(study: RobotStudy, fig: Any = None) -> Any:
+    """Draw the study on a matplotlib figure (draw only: nothing is shown or saved).
+
+    Left: ``T_c`` (solid) and ``T_a`` (dashed) against step length, one colour per strike
+    speed, inadmissible impacts (trailing foot not lifting) marked with crosses. Right: loss per
+    metre ``T_c / L`` over (step length, strike speed).
+
+    Parameters
+    ----------
+    study : RobotStudy
+    fig : matplotlib.figure.Figure, optional
+        Figure to draw on (a new ``Figure`` if None; pyplot is not used).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(10, 4)) if fig is None else fig
+    ax1, ax2 = fig.subplots(1, 2)
+    L, S = study.step_length, study.strike_speed
+    colours = [f"C{i % 10}" for i in range(S.size)]
+    for j, s in enumerate(S):
+        ax1.plot(L, study.T_c[:, j], "-", color=colours[j], label=f"T_c, {s:g} m/s")
+        ax1.plot(L, study.T_a[:, j], "--", color=colours[j], label=f"T_a, {s:g} m/s")
+        bad = ~study.admissible[:, j]
+        ax1.plot(L[bad], study.T_c[bad, j], "x", color=colours[j])
+    ax1.set_xlabel("step length (m)")
+    ax1.set_ylabel("energy (J)")
+    ax1.set_title(f"{study.robot}: {study.contact} strike")
+    ax1.legend(fontsize="small")
+    if L.size > 1 and S.size > 1:
+        mesh = ax2.pcolormesh(L, S, study.loss_per_metre.T, shading="nearest")
+        fig.colorbar(mesh, ax=ax2, label="T_c / L (J/m)")
+        ax2.contour(L, S, study.trailing_lift_speed.T, levels=[0.0], colors="k",
+                    linestyles="--")
+        ax2.set_ylabel("strike speed (m/s)")
+    else:
+        ax2.plot(L, study.loss_per_metre[:, 0], "o-")
+        ax2.set_ylabel("T_c / L (J/m)")
+    ax2.set_xlabel("step length (m)")
+    return fig
+

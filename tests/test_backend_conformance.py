@@ -1,0 +1,354 @@
+"""Backend conformance: every simulation backend against the scipy reference, every walker.
+
+The reference is :func:`heelstrike.dynamics.phased.simulate_phased` (scipy DOP853). Every other
+backend must reproduce its impacts (kind, time, configuration, velocities before and after,
+``T``, ``T_c``, ``T_a``, impulses, the trailing foot's mode), its per-step records and its
+status, to 1e-8, over a few steps from a gait state and in falling cases. Also checked here:
+the numba functions generated from the walker's sympy expressions equal the numpy ones, and the
+generated source holds nothing but numbers and generated identifiers.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import re
+import tokenize
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pytest
+
+from heelstrike.analysis.model_gaits import find_model_gait
+from heelstrike.dynamics.actuation import PushOff
+from heelstrike.dynamics.compiled_phased import simulate_phased_compiled
+from heelstrike.dynamics.phased import (
+    PhasedWalker,
+    PhasedWalkResult,
+    TorsoPD,
+    load_phased_walker,
+    simulate_phased,
+)
+from heelstrike.models._codegen_numba import build_numba, check_source, generate_numba_source
+from heelstrike.models.builder import shipped_walkers
+
+TOL = 1e-8
+KNEED_SLOPE = 0.0504
+KNEED_GAIT = [-0.2647694, 1.2181144, -1.0955048]
+COMPASS_SLOPE = 0.05
+COMPASS_GAIT = [-0.26682122, 1.08394013, -0.68587173]
+TORSO_GAIT = [-0.1180757, 0.1118158, 0.5531974, -0.0140899, -0.6214368]
+
+#: Backends under test besides the reference (name -> simulator with simulate_phased's API).
+BACKENDS: dict[str, Callable[..., PhasedWalkResult]] = {"compiled": simulate_phased_compiled}
+
+
+@dataclass(frozen=True)
+class Case:
+    walker: str
+    z: list[float]
+    status: str
+    slope: float = 0.0
+    steps: int = 3
+    options: tuple[tuple[str, Any], ...] = ()
+
+
+CASES = {
+    "compass-gait": Case("compass", COMPASS_GAIT, "completed", slope=COMPASS_SLOPE),
+    "kneed-gait": Case("kneed", KNEED_GAIT, "completed", slope=KNEED_SLOPE),
+    "torso-powered-gait": Case(
+        "torso", TORSO_GAIT, "completed",
+        options=(("torque", "torso_pd"), ("push_off", PushOff(impulse=2.0))),
+    ),
+    "kneed-falls-backward": Case("kneed", [-0.26, 0.5, -1.0], "fell_backward",
+                                 slope=KNEED_SLOPE),
+    "compass-too-fast": Case("compass", [-0.2, 3.5, -2.0], "fell_forward", slope=COMPASS_SLOPE),
+    "compass-swing-lifts-stance": Case("compass", [-0.05, 0.3, -0.6], "lost_contact",
+                                       slope=COMPASS_SLOPE),
+    "kneed-trailing-foot-stays": Case("kneed", [-0.4, 1.871, -2.0], "trailing_foot_stays",
+                                      slope=KNEED_SLOPE),
+    "torso-passive-falls": Case("torso", TORSO_GAIT, "fell_backward", steps=2),
+    "kneed-time-bound": Case("kneed", KNEED_GAIT, "no_heel_strike", slope=KNEED_SLOPE,
+                             options=(("max_step_duration", 0.3),)),
+    "kneed-slips": Case("kneed", KNEED_GAIT, "slipped", slope=KNEED_SLOPE,
+                        options=(("friction", 0.05),)),
+}
+
+
+@pytest.fixture(scope="module")
+def walkers() -> dict[str, PhasedWalker]:
+    return {name: load_phased_walker(name) for name in shipped_walkers()}
+
+
+def _run(sim: Callable[..., PhasedWalkResult], w: PhasedWalker, case: Case) -> PhasedWalkResult:
+    opts = dict(case.options)
+    if opts.get("torque") == "torso_pd":
+        opts["torque"] = TorsoPD(walker=w)
+    q, qd = w.section_to_state(np.asarray(case.z))
+    return sim(w, q, qd, slope=case.slope, steps=case.steps, rtol=1e-11, atol=1e-11, **opts)
+
+
+def _close(a: Any, b: Any, what: str) -> None:
+    np.testing.assert_allclose(a, b, rtol=TOL, atol=TOL, err_msg=what)
+
+
+def test_cases_cover_every_shipped_walker() -> None:
+    assert {c.walker for c in CASES.values()} == set(shipped_walkers())
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("backend", sorted(BACKENDS))
+@pytest.mark.parametrize("case_name", sorted(CASES))
+def test_backend_matches_scipy_reference(
+    backend: str, case_name: str, walkers: dict[str, PhasedWalker]
+) -> None:
+    case = CASES[case_name]
+    w = walkers[case.walker]
+    ref = _run(simulate_phased, w, case)
+    got = _run(BACKENDS[backend], w, case)
+    assert ref.status.value == case.status  # the case exercises what it says
+    assert got.status is ref.status
+    assert got.message == ref.message
+    assert [e.kind for e in got.events] == [e.kind for e in ref.events]
+    for i, (a, b) in enumerate(zip(got.events, ref.events, strict=True)):
+        tag = f"impact {i} ({b.kind}, step {b.step})"
+        assert a.step == b.step, tag
+        assert a.trailing_mode == b.trailing_mode, tag
+        _close(a.time, b.time, f"{tag}: time")
+        _close(a.q, b.q, f"{tag}: q")
+        _close(a.q_dot_minus, b.q_dot_minus, f"{tag}: q_dot-")
+        _close(a.q_dot_plus, b.q_dot_plus, f"{tag}: q_dot+")
+        _close(a.kinetic_energy, b.kinetic_energy, f"{tag}: T")
+        _close(a.kinetic_energy_constrained, b.kinetic_energy_constrained, f"{tag}: T_c")
+        _close(a.kinetic_energy_admissible, b.kinetic_energy_admissible, f"{tag}: T_a")
+        _close(a.energy_lost, b.energy_lost, f"{tag}: energy lost")
+        _close(a.impulse, b.impulse, f"{tag}: impulse")
+        _close(a.rows, b.rows, f"{tag}: rows")
+        _close(a.lock_velocity_post, b.lock_velocity_post, f"{tag}: lock velocity")
+        _close(a.trailing_normal_velocity, b.trailing_normal_velocity, f"{tag}: v_trailing")
+    assert len(got.impacts) == len(ref.impacts)
+    for ra, rb in zip(got.impacts, ref.impacts, strict=True):
+        for name in ("time", "step_length", "potential_energy_released", "actuator_work",
+                     "push_off_work", "step_duration", "impulse", "impact_angle"):
+            _close(getattr(ra, name), getattr(rb, name), f"step {rb.step}: {name}")
+    _close(got.t[-1], ref.t[-1], "final time")
+    _close(got.final_q, ref.final_q, "final q")
+    _close(got.final_q_dot, ref.final_q_dot, "final q_dot")
+    # samples: the same walk (per-step energy bookkeeping holds on the backend's own samples)
+    assert np.all(np.diff(got.t) >= 0.0)
+    assert set(np.unique(got.step)) == set(np.unique(ref.step))
+    assert set(np.unique(got.phase)) == set(np.unique(ref.phase))
+
+
+@pytest.mark.slow
+def test_passive_energy_is_conserved_on_compiled_samples(walkers: dict[str, PhasedWalker]) -> None:
+    w = walkers["kneed"]
+    walk = _run(simulate_phased_compiled, w, CASES["kneed-gait"])
+    for k in np.unique(walk.step):
+        for ph in ("knee_swing", "locked_swing"):
+            sel = (walk.step == k) & (walk.phase == ph)
+            E = walk.mechanical_energy[sel]
+            assert E.size > 10
+            assert np.ptp(E) < 1e-8
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["compass", "kneed", "torso"])
+def test_generated_numba_functions_equal_numpy(name: str, walkers: dict[str, PhasedWalker]) -> None:
+    w = walkers[name]
+    model = build_numba(w.description)
+    n = w.n_coordinates
+    p = np.array([float(w.params[k]) for k in w.description.param_names])
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        q = rng.uniform(-0.7, 0.7, n)
+        u = rng.normal(size=n)
+        slope = float(rng.uniform(-0.2, 0.2))
+        M, h = np.empty((n, n)), np.empty(n)
+        model.dynamics(q, u, p, slope, M, h)
+        np.testing.assert_allclose(M, w.mass_matrix(q), rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(h, w.bias_forces(q, u, slope), rtol=1e-12, atol=1e-12)
+        A, rate, c = np.empty((2, 2, n)), np.empty((2, 2)), np.empty((2, 2))
+        model.contacts(q, u, p, A, rate, c)
+        for f, foot in enumerate(("right", "left")):
+            np.testing.assert_allclose(A[f], w.contact_jacobian(q, foot), atol=1e-12)  # type: ignore[arg-type]
+            np.testing.assert_allclose(
+                rate[f], w.contact_jacobian_rate(q, u, foot), atol=1e-12  # type: ignore[arg-type]
+            )
+            np.testing.assert_allclose(c[f], w.foot_centre(q, foot), atol=1e-12)  # type: ignore[arg-type]
+        qn, un = np.empty(n), np.empty(n)
+        assert model.swap(q, u, p, qn, un) == 1.0
+        q_ref, u_ref = w.swap_legs(q, u)
+        np.testing.assert_allclose(qn, q_ref, atol=1e-12)
+        np.testing.assert_allclose(un, u_ref, atol=1e-12)
+
+
+_GENERATED_NAME = re.compile(r"^(q|u|p|t)_\d+$")
+_FIXED_NAMES = {
+    "def", "return", "math", "sin", "cos", "sqrt", "pi", "q", "u", "p", "slope", "M", "h", "A",
+    "rate", "c", "q_new", "u_new", "dynamics", "contacts", "swap",
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["compass", "kneed", "torso"])
+def test_generated_source_contains_no_walker_strings(
+    name: str, walkers: dict[str, PhasedWalker]
+) -> None:
+    source = generate_numba_source(walkers[name].description)
+    check_source(source)
+    tokens = list(tokenize.generate_tokens(io.StringIO(source).readline))
+    names = {t.string for t in tokens if t.type == tokenize.NAME}
+    assert names, "no identifiers at all?"
+    unexpected = {s for s in names if not _GENERATED_NAME.match(s) and s not in _FIXED_NAMES}
+    assert not unexpected
+    assert not [t for t in tokens if t.type == tokenize.STRING]
+    desc = walkers[name].description
+    words = {lk.name for lk in desc.links} | {k for k in desc.param_names if len(k) > 2}
+    assert not [wd for wd in words if wd in source]
+
+
+@pytest.mark.parametrize(
+    "bad",
+    [
+        "def f(q):\n    return 'text'\n",
+        "import os\n",
+        "def f(q):\n    return q.__class__\n",
+        "def f(q):\n    return open(q)\n",
+        "def f(q):\n    return numpy.load(q)\n",
+        "def f(q):\n    return [x for x in q]\n",
+        "@numba.njit\ndef f(q):\n    return 0.0\n",
+    ],
+)
+def test_check_source_rejects_anything_but_arithmetic(bad: str) -> None:
+    with pytest.raises(ValueError):
+        check_source(bad)
+
+
+def test_check_source_accepts_generated_style() -> None:
+    check_source("def dynamics(q, p, M):\n    q_0 = q[0]\n    t_0 = math.sin(q_0) ** 2 / 3\n"
+                 "    M[0, 1] = -t_0 * math.pi + math.sqrt(p[1])\n    return 0.0\n")
+
+
+def test_compiled_backend_refuses_actuation_it_cannot_run(
+    walkers: dict[str, PhasedWalker],
+) -> None:
+    w = walkers["compass"]
+    q, qd = w.section_to_state(np.asarray(COMPASS_GAIT))
+
+    def zero(t: float, q: Any, qd: Any) -> Any:
+        return np.zeros(1)
+
+    law: Any = zero
+
+    with pytest.raises(ValueError, match="backend='scipy'"):
+        simulate_phased_compiled(w, q, qd, slope=COMPASS_SLOPE, torque=law)
+    with pytest.raises(ValueError, match="backend='scipy'"):
+        find_model_gait(w, slope=COMPASS_SLOPE, guess=COMPASS_GAIT, torque=law)
+    with pytest.raises(ValueError, match="backend"):
+        find_model_gait(w, slope=COMPASS_SLOPE, guess=COMPASS_GAIT, backend="fortran")
+
+
+@pytest.mark.slow
+def test_model_gait_same_on_both_backends(walkers: dict[str, PhasedWalker]) -> None:
+    w = walkers["kneed"]
+    ref = find_model_gait(w, slope=KNEED_SLOPE, guess=KNEED_GAIT, backend="scipy")
+    got = find_model_gait(w, slope=KNEED_SLOPE, guess=KNEED_GAIT, backend="compiled")
+    _close(got.cycle.fixed_point, ref.cycle.fixed_point, "fixed point")
+    _close(got.cycle.period, ref.cycle.period, "period")
+    _close(got.cycle.step_length, ref.cycle.step_length, "step length")
+    _close(got.collision_loss, ref.collision_loss, "collision loss")
+    _close([e.kinetic_energy_constrained for e in got.impacts],
+           [e.kinetic_energy_constrained for e in ref.impacts], "T_c of each impact")
+    np.testing.assert_allclose(np.abs(got.cycle.multipliers), np.abs(ref.cycle.multipliers),
+                               atol=1e-5)
+    assert abs(got.energy_residual) < 1e-8
+
+
+def _cli(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    from heelstrike.cli import main
+
+    rc = main(list(argv))
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+def test_cli_gait_rejects_unknown_backend(capsys: pytest.CaptureFixture[str]) -> None:
+    rc, out, err = _cli(capsys, "gait", "--model", "kneed", "--backend", "fortran", "--json")
+    assert rc == 2
+    assert out == ""
+    assert "--backend" in err
+
+
+@pytest.mark.slow
+def test_cli_gait_model_same_answer_on_both_backends(capsys: pytest.CaptureFixture[str]) -> None:
+    common = ("gait", "--model", "kneed", "--slope", f"{KNEED_SLOPE}rad",
+              "--guess=" + ",".join(map(str, KNEED_GAIT)), "--json")
+    outs = {}
+    for backend in ("scipy", "compiled"):
+        rc, out, _ = _cli(capsys, *common, "--backend", backend)
+        assert rc == 0
+        outs[backend] = json.loads(out)
+    a, b = outs["compiled"], outs["scipy"]
+    for key in ("period", "step_length", "collision_loss", "potential_energy_released"):
+        _close(a[key], b[key], key)
+    for key in b["fixed_point"]:
+        _close(a["fixed_point"][key], b["fixed_point"][key], key)
+    _close([i["T_c"] for i in a["impacts"]], [i["T_c"] for i in b["impacts"]], "T_c")
+
+
+@pytest.mark.slow
+def test_walker_without_mirrors_same_on_both_backends(tmp_path: Any) -> None:
+    """No leg swap declared: a walk that falls returns; one that strikes the ground raises."""
+    import importlib.resources
+
+    text = (importlib.resources.files("heelstrike") / "walkers" / "compass.toml").read_text()
+    text = "\n".join(ln for ln in text.splitlines() if not ln.startswith("mirror"))
+    path = tmp_path / "nomirror.toml"
+    path.write_text(text.replace('name = "compass"', 'name = "nomirror"'))
+    w = load_phased_walker(path)
+    assert not build_numba(w.description).has_swap
+    for sim in (simulate_phased, simulate_phased_compiled):
+        q, qd = w.section_to_state(np.asarray([-0.2, 3.5, -2.0]))
+        assert sim(w, q, qd, slope=COMPASS_SLOPE).status.value == "fell_forward"
+        q, qd = w.section_to_state(np.asarray(COMPASS_GAIT))
+        with pytest.raises(NotImplementedError, match="mirrors"):
+            sim(w, q, qd, slope=COMPASS_SLOPE)
+
+
+@pytest.mark.slow
+def test_numba_source_cache_round_trip_and_tampering(
+    tmp_path: Any, monkeypatch: pytest.MonkeyPatch, walkers: dict[str, PhasedWalker]
+) -> None:
+    import heelstrike.models._codegen_numba as cg
+    from heelstrike.models._generated import CacheWarning
+
+    monkeypatch.setenv("HEELSTRIKE_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(cg, "_MEMORY", {})
+    monkeypatch.setattr(cg, "_BY_DESCRIPTION", {})
+    desc = walkers["compass"].description
+    first = cg.build_numba(desc)
+    assert not first.from_cache
+    assert first.path is not None and first.path.parent == tmp_path / "numba"
+    assert first.path.stat().st_mode & 0o077 == 0
+    monkeypatch.setattr(cg, "_MEMORY", {})
+    monkeypatch.setattr(cg, "_BY_DESCRIPTION", {})
+    again = cg.build_numba(desc)
+    assert again.from_cache and again.key == first.key
+    n = 4
+    q, u = np.array([0.0, 0.0, 0.2, -0.4]), np.array([0.0, 0.0, 1.0, -0.5])
+    p = np.array([float(walkers["compass"].params[k]) for k in desc.param_names])
+    M1, M2, h = np.empty((n, n)), np.empty((n, n)), np.empty(n)
+    first.dynamics(q, u, p, 0.05, M1, h)
+    again.dynamics(q, u, p, 0.05, M2, h)
+    np.testing.assert_array_equal(M1, M2)
+    # a tampered cache entry is refused, rebuilt and replaced
+    first.path.write_text("import os\n" + first.path.read_text())
+    monkeypatch.setattr(cg, "_MEMORY", {})
+    monkeypatch.setattr(cg, "_BY_DESCRIPTION", {})
+    with pytest.warns(CacheWarning, match="failed verification"):
+        rebuilt = cg.build_numba(desc)
+    assert not rebuilt.from_cache
+    assert "import" not in first.path.read_text()

@@ -1,0 +1,269 @@
+"""Described walkers in the ensemble commands: the compiled ensemble runner, ``basin --model``,
+``walk --model``, ``map --model`` and ``bifurcation --model``.
+
+Physics checks: the ensemble reproduces single-walker runs of both backends, a basin point at
+the fixed point converges and one far off falls, and the fixed points of a map are fixed points
+of the step map.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from heelstrike.analysis.basin import OUTCOMES, model_basin_of_attraction
+from heelstrike.analysis.model_gaits import ModelGait, find_model_gait
+from heelstrike.cli import main
+from heelstrike.dynamics.compiled_phased import (
+    STATUS_NAMES,
+    ensemble_walk_phased,
+    section_states,
+    simulate_phased_compiled,
+)
+from heelstrike.dynamics.phased import PhasedWalker, load_phased_walker, simulate_phased
+
+SLOPE = math.radians(3.0)
+TOL = 1e-8
+
+
+@pytest.fixture(scope="module")
+def kneed() -> PhasedWalker:
+    return load_phased_walker("kneed")
+
+
+@pytest.fixture(scope="module")
+def kneed_gait(kneed: PhasedWalker) -> ModelGait:
+    return find_model_gait(kneed, slope=SLOPE)
+
+
+def _states(gait: ModelGait) -> np.ndarray:
+    """Section points: the gait, small and large perturbations, a backward fall, a stuck foot."""
+    z = np.asarray(gait.cycle.fixed_point)
+    return np.array([
+        z,
+        z + np.array([0.01, 0.05, -0.05]),
+        z + np.array([0.0, -0.6, 0.0]),  # too slow: falls backward
+        [-0.4, 1.871, -2.0],  # trailing foot stays on the ground
+        z + np.array([0.05, 0.4, 0.0]),  # too fast
+    ])
+
+
+# -- the ensemble runner -------------------------------------------------------------------------
+@pytest.mark.parametrize("parallel", [False, True])
+def test_ensemble_equals_single_walker_runs(
+    kneed: PhasedWalker, kneed_gait: ModelGait, parallel: bool
+) -> None:
+    Z = _states(kneed_gait)
+    ens = ensemble_walk_phased(kneed, Z, slope=SLOPE, steps=4, parallel=parallel)
+    assert len(set(ens.status_names)) >= 3  # the states exercise different endings
+    for i, z in enumerate(Z):
+        q, qd = kneed.section_to_state(z)
+        one = simulate_phased_compiled(kneed, q, qd, slope=SLOPE, steps=4)
+        assert ens.status_names[i] == one.status.value, i
+        assert ens.steps[i] == one.n_steps, i
+        np.testing.assert_allclose(ens.q[i], one.final_q, rtol=TOL, atol=TOL)
+        np.testing.assert_allclose(ens.q_dot[i], one.final_q_dot, rtol=TOL, atol=TOL)
+        np.testing.assert_allclose(ens.z[i], kneed.state_to_section(one.final_q,
+                                                                    one.final_q_dot))
+
+
+@pytest.mark.slow
+def test_ensemble_matches_scipy_reference(kneed: PhasedWalker, kneed_gait: ModelGait) -> None:
+    Z = _states(kneed_gait)[:4]
+    ens = ensemble_walk_phased(kneed, Z, slope=SLOPE, steps=2, rtol=1e-11, atol=1e-11)
+    for i, z in enumerate(Z):
+        q, qd = kneed.section_to_state(z)
+        ref = simulate_phased(kneed, q, qd, slope=SLOPE, steps=2, rtol=1e-11, atol=1e-11)
+        assert ens.status_names[i] == ref.status.value, i
+        assert ens.steps[i] == ref.n_steps, i
+        np.testing.assert_allclose(ens.q[i], ref.final_q, rtol=TOL, atol=TOL)
+        np.testing.assert_allclose(ens.q_dot[i], ref.final_q_dot, rtol=TOL, atol=TOL)
+
+
+def test_ensemble_states_input_and_stop_near(kneed: PhasedWalker, kneed_gait: ModelGait) -> None:
+    Z = _states(kneed_gait)
+    Q, QD = section_states(kneed, Z)
+    for i, z in enumerate(Z):  # the batched conversion is the walker's own
+        q, qd = kneed.section_to_state(z)
+        np.testing.assert_allclose(Q[i], q, atol=1e-12)
+        np.testing.assert_allclose(QD[i], qd, atol=1e-12)
+    a = ensemble_walk_phased(kneed, Z, slope=SLOPE, steps=3, parallel=False)
+    b = ensemble_walk_phased(kneed, states=(Q, QD), slope=SLOPE, steps=3, parallel=False)
+    np.testing.assert_array_equal(a.status, b.status)
+    np.testing.assert_allclose(a.q, b.q, atol=1e-12)
+    # a walker on the fixed point stops after its first step; the others walk on
+    zstar = np.asarray(kneed_gait.cycle.fixed_point)
+    s = ensemble_walk_phased(kneed, Z[:2], slope=SLOPE, steps=5, stop_near=(zstar, 1e-6))
+    assert list(s.steps) == [1, 5]
+    assert np.linalg.norm(s.z[0] - zstar) < 1e-6
+    with pytest.raises(ValueError, match="stance foot"):
+        ensemble_walk_phased(kneed, states=(Q + np.array([0.0, 0.1, 0, 0, 0, 0]), QD), slope=SLOPE)
+    with pytest.raises(ValueError, match="exactly one"):
+        ensemble_walk_phased(kneed, Z, states=(Q, QD), slope=SLOPE)
+    assert STATUS_NAMES[0] == "completed"
+
+
+# -- basin -----------------------------------------------------------------------------------------
+def test_model_basin_fixed_point_converges_far_point_falls(
+    kneed: PhasedWalker, kneed_gait: ModelGait
+) -> None:
+    z = np.asarray(kneed_gait.cycle.fixed_point)
+    basin = model_basin_of_attraction(
+        kneed, SLOPE, grid=(3, 3), ranges=((z[0] - 0.2, z[0] + 0.2), (z[1] - 0.9, z[1] + 0.9)),
+        steps=30, fixed_point=z,
+    )
+    ds = basin.dataset
+    assert ds["outcome"].dims == ("stance_shank", "stance_shank_dot")
+    assert ds["stance_shank"].attrs["units"] == "rad"
+    assert ds["stance_shank_dot"].attrs["units"] == "rad s-1"
+    out = ds["outcome"].values
+    assert OUTCOMES[out[1, 1]] == "converged"  # the fixed point itself
+    assert ds["steps"].values[1, 1] == 1
+    assert OUTCOMES[out[2, 0]] in ("fell_forward", "fell_backward", "lost_contact",
+                                   "trailing_foot_stays")  # far off: a fall
+    # every grid point's fate is the single walker's
+    for i, a in enumerate(ds["stance_shank"].values):
+        for j, b in enumerate(ds["stance_shank_dot"].values):
+            q, qd = kneed.section_to_state([a, b, z[2]])
+            walks = OUTCOMES[out[i, j]] in ("converged", "keeps_walking")
+            taken = int(ds["steps"].values[i, j])
+            one = simulate_phased_compiled(kneed, q, qd, slope=SLOPE, rtol=1e-8, atol=1e-9,
+                                           steps=taken if walks else taken + 1)
+            assert one.status.value == ("completed" if walks else OUTCOMES[out[i, j]])
+            assert one.n_steps == taken
+
+
+def test_basin_command_with_model(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["basin", "--model", "kneed", "--param", "R=0.1", "--grid", "4x3", "--steps",
+                 "10", "--out", str(tmp_path), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert set(d["fixed_point"]) == {"stance_shank", "stance_shank_dot", "hip_dot"}
+    assert sum(d["fractions"].values()) == pytest.approx(1.0)
+    assert (tmp_path / "basin.png").stat().st_size > 0
+    import xarray as xr
+
+    with xr.open_dataset(tmp_path / "basin.nc") as ds:
+        assert ds.attrs["model"] == "kneed"
+        assert ds["outcome"].shape == (4, 3)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["basin", "--param", "R=0.1"], "--param needs --model"),
+    (["basin", "--backend", "scipy"], "--model compass --backend scipy"),
+    (["basin", "--model", "kneed", "--leg-length", "2"], "does not have"),
+    (["basin", "--model", "kneed", "--q3-range=-0.3:-0.2"], "both --q3-range"),
+])
+def test_basin_model_option_errors(
+    argv: list[str], message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main([*argv, "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+
+
+# -- walk ------------------------------------------------------------------------------------------
+def test_walk_command_with_model(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                 kneed_gait: ModelGait) -> None:
+    import pandas as pd
+
+    assert main(["walk", "--model", "kneed", "--steps", "2", "--fps", "10", "--out",
+                 str(tmp_path)]) == 0
+    out, err = capsys.readouterr()
+    assert "2 steps, status: completed" in out
+    assert "strobe and step figures are drawn for the compass gait only" in err
+    for name in ("walk.gif", "phase_portrait.png", "energy.png"):
+        assert (tmp_path / name).stat().st_size > 0
+    # starts on the gait, and every heel strike drops the energy by its T_c
+    portrait = pd.read_csv(tmp_path / "phase_portrait.csv")
+    z = kneed_gait.cycle.fixed_point
+    assert portrait["q3_rad"].iloc[0] == pytest.approx(z[0], abs=1e-9)
+    assert portrait["q3_dot_rad_s"].iloc[0] == pytest.approx(z[1], abs=1e-9)
+    impacts = pd.read_csv(tmp_path / "impacts.csv")
+    assert len(impacts) == 2
+    np.testing.assert_allclose(impacts["drop_J"], impacts["T_c_J"], rtol=1e-6)
+    assert np.all(impacts["T_c_J"] > 0)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["walk", "--backend", "compiled"], "use --model compass"),
+    (["walk", "--param", "R=0.1"], "--param needs --model"),
+    (["walk", "--model", "kneed", "--guess", "1,2"], "--guess"),
+    (["bifurcation", "--backend", "scipy"], "--model compass --backend scipy"),
+    (["bifurcation", "--model", "kneed", "--slope-range", "0.5deg:1deg:2"], "no gait found"),
+    (["map", "--x", "R:0:0.1:2"], "--x needs --model"),
+    (["map", "--backend", "scipy"], "--model compass --backend scipy"),
+    (["map", "--model", "kneed", "--x", "nope:0:1:2"], "unknown parameter 'nope'"),
+    (["map", "--model", "kneed", "--x", "R:0:0.1:2", "--radius", "0:0.1"], "not both"),
+])
+def test_model_option_errors(
+    argv: list[str], message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main([*argv, "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+
+
+# -- map -------------------------------------------------------------------------------------------
+def test_model_gait_map_points_are_fixed_points(kneed: PhasedWalker) -> None:
+    from heelstrike.analysis.gait_map import model_gait_map
+
+    slopes = np.radians([2.5, 3.0, 3.5])
+    gmap = model_gait_map(kneed, "R", [0.05, 0.1], slopes)
+    ds = gmap.dataset
+    assert ds["spectral_radius"].dims == ("R", "slope")
+    found = ds["gait_found"].values
+    assert found.sum() >= 4
+    for i, R in enumerate(ds["R"].values):
+        w = kneed.replace(R=float(R))
+        for j, s in enumerate(slopes):
+            if not found[i, j]:
+                continue
+            z = ds["fixed_point"].values[i, j]
+            q, qd = w.section_to_state(z)
+            one = simulate_phased_compiled(w, q, qd, slope=float(s), steps=1, rtol=1e-11,
+                                           atol=1e-11)
+            assert one.ok
+            np.testing.assert_allclose(w.state_to_section(one.final_q, one.final_q_dot), z,
+                                       rtol=0, atol=1e-8)
+            assert bool(ds["stable"].values[i, j]) == (ds["spectral_radius"].values[i, j] < 1)
+
+
+def test_map_command_with_model(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["map", "--model", "kneed", "--x", "R:0.05:0.1:2", "--slope", "2.5deg:3deg:2",
+                 "--out", str(tmp_path), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["model"] == "kneed" and d["parameter_name"] == "R"
+    assert np.asarray(d["gait_found"]).shape == (2, 2)
+    assert d["gait_found_fraction"] > 0
+    assert (tmp_path / "gait_map.png").stat().st_size > 0
+
+
+# -- bifurcation -----------------------------------------------------------------------------------
+def test_model_bifurcation_steady_states_lie_on_the_branch(kneed: PhasedWalker) -> None:
+    from heelstrike.analysis.gait_map import model_bifurcation
+
+    diagram, branch = model_bifurcation(kneed, np.radians([3.0, 3.5]), transient=40, record=4,
+                                        continuation_points=2)
+    assert branch.stopped is None and len(branch.cycles) == 2
+    for i, cycle in enumerate(branch.cycles):
+        assert cycle.stable  # so the simulated walk settles on it
+        np.testing.assert_allclose(diagram.impact_angles[i], cycle.impact_angle, atol=1e-5)
+        np.testing.assert_allclose(diagram.periods[i], cycle.period, atol=1e-5)
+    assert branch.period_doubling.size == 0
+
+
+def test_bifurcation_command_with_model(tmp_path: Path, capsys: pytest.CaptureFixture[str]
+                                        ) -> None:
+    import pandas as pd
+
+    assert main(["bifurcation", "--model", "kneed", "--slope-range", "3deg:3.5deg:2",
+                 "--transient", "5", "--record", "2", "--out", str(tmp_path)]) == 0
+    assert (tmp_path / "bifurcation.png").stat().st_size > 0
+    rows = pd.read_csv(tmp_path / "bifurcation.csv")
+    assert len(rows) == 4 and rows["impact_angle_rad"].notna().all()
+    branch = pd.read_csv(tmp_path / "period_one_branch.csv")
+    assert branch["stable"].all()

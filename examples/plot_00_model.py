@@ -12,8 +12,8 @@ to the right one.
 
 import numpy as np
 
-from heelstrike.gait_plots import model_diagram
 from heelstrike.models import CompassGait
+from heelstrike.plots.gait import model_diagram
 
 walker = CompassGait(foot_radius=0.3)  # the paper's l = 1 m, a = b = 0.5 m, mH = 2 m = 10 kg
 fig = model_diagram(walker)

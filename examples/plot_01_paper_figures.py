@@ -6,11 +6,11 @@ Kinetic energy at heel strike split into the part the collision destroys (``T_c`
 it keeps (``T_a``) over the impact angle ``q3`` for five foot radii (Fig. 2), the energy lost
 per metre walked ``eta = T_c / L_S`` (Fig. 3a), and ``eta`` over ``(q3, R)`` with the region
 where the trailing foot does not lift left white (Fig. 3b). The data come from
-:mod:`heelstrike.analysis.paper` as pandas DataFrames; :mod:`heelstrike.plots` draws them.
+:mod:`heelstrike.analysis.paper` as pandas DataFrames; :mod:`heelstrike.plots.paper` draws them.
 """
 
 from heelstrike.analysis.paper import paper_figure_data
-from heelstrike.plots import figure2, figure3a, figure3b
+from heelstrike.plots.paper import figure2, figure3a, figure3b
 
 data = paper_figure_data()  # the paper's walker: mH = 2 m = 10 kg, a = b = 0.5 m, l = 1 m
 print(data.figure2.head())

@@ -13,7 +13,8 @@ strike (``heelstrike walk --out DIR`` writes the same figures with their data as
 import numpy as np
 
 from heelstrike.analysis.limit_cycle import PoincareMap, find_limit_cycle
-from heelstrike.gait_plots import (
+from heelstrike.models import CompassGait
+from heelstrike.plots.gait import (
     energy_figure,
     phase_portrait_figure,
     phase_portrait_table,
@@ -24,7 +25,6 @@ from heelstrike.gait_plots import (
     walk_energy_table,
     walk_impact_table,
 )
-from heelstrike.models import CompassGait
 
 walker = CompassGait(foot_radius=0.3)
 slope = np.deg2rad(3.0)

@@ -20,8 +20,8 @@ from heelstrike.analysis.limit_cycle import (
     find_limit_cycle,
 )
 from heelstrike.dynamics.compiled import ensemble_walk
-from heelstrike.gait_plots import bifurcation_figure
 from heelstrike.models import CompassGait
+from heelstrike.plots.gait import bifurcation_figure
 
 walker = CompassGait(foot_radius=0.0)
 slopes = np.deg2rad(np.linspace(3.0, 5.3, 47))

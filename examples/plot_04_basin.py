@@ -13,8 +13,8 @@ command line's ``heelstrike basin --grid 400x400`` draws the fine one.
 import numpy as np
 
 from heelstrike.analysis.basin import basin_of_attraction
-from heelstrike.gait_plots import basin_figure
 from heelstrike.models import CompassGait
+from heelstrike.plots.gait import basin_figure
 
 walker = CompassGait(foot_radius=0.0)
 basin = basin_of_attraction(walker, np.deg2rad(3.0), grid=(60, 60), steps=40)

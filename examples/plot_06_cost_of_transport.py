@@ -5,7 +5,7 @@ The cost-of-transport map
 How much work per metre and per newton of weight does a push-off walker need, for a range of
 foot radii and step lengths? :func:`heelstrike.analysis.cost_study.cost_study` finds a powered
 gait at every grid point (by continuation), and returns an xarray Dataset with the cost of
-transport, ``eta`` and the actuator work; :func:`heelstrike.plots_powered.cost_figure` draws
+transport, ``eta`` and the actuator work; :func:`heelstrike.plots.powered.cost_figure` draws
 it. Two foot radii and two step lengths here (integrator tolerances 1e-8, the radius grid
 jumped in one continuation step) keep it to seconds; ``heelstrike study cost`` runs bigger
 ones.
@@ -14,7 +14,7 @@ ones.
 import numpy as np
 
 from heelstrike.analysis.cost_study import cost_study
-from heelstrike.plots_powered import cost_figure, paper_comparison_figure
+from heelstrike.plots.powered import cost_figure, paper_comparison_figure
 
 radii = np.array([0.0, 0.5])  # m
 step_lengths = np.array([0.3, 0.5])  # m

@@ -230,7 +230,7 @@ def test_basin_unwritable_out_fails_before_computing(
 
 @pytest.mark.parametrize(
     ("command", "module", "function"),
-    [(["bifurcation"], "heelstrike.gait_plots", "write_bifurcation"),
+    [(["bifurcation"], "heelstrike.plots.gait", "write_bifurcation"),
      (["map"], "heelstrike.analysis.gait_map", "gait_map"),
      (["study", "cost"], "heelstrike.analysis.cost_study", "cost_study")],
 )
@@ -344,7 +344,7 @@ def _synthetic_map() -> ImpactMap:
 def test_impact_map_boundary_between_lifting_and_non_lifting_cells() -> None:
     from matplotlib.collections import QuadMesh
 
-    from heelstrike.plots_models import LIFT_BOUNDARY_GID, impact_map_figure
+    from heelstrike.plots.models import LIFT_BOUNDARY_GID, impact_map_figure
 
     m = _synthetic_map()
     fig = impact_map_figure(m, {"R": "m"})
@@ -364,7 +364,7 @@ def test_impact_map_boundary_between_lifting_and_non_lifting_cells() -> None:
 
 def test_impact_map_axes_have_units() -> None:
     from heelstrike.models.description import parameter_units
-    from heelstrike.plots_models import impact_map_figure
+    from heelstrike.plots.models import impact_map_figure
 
     for name in ("compass", "kneed", "torso"):
         w = load_walker(name)

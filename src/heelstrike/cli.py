@@ -283,7 +283,7 @@ def _add_reproduce(sub: Any) -> None:
 
 
 def _run_reproduce(args: argparse.Namespace) -> int:
-    from heelstrike.plots import reproduce_paper
+    from heelstrike.plots.paper import reproduce_paper
 
     try:
         paths = reproduce_paper(args.out)
@@ -654,7 +654,7 @@ def _walk_model(args: argparse.Namespace, out: Any, to_dir: bool) -> int:
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
     from heelstrike.analysis.model_gaits import find_model_gait
     from heelstrike.dynamics.phased import simulate_phased
-    from heelstrike.gait_plots import (
+    from heelstrike.plots.gait import (
         COMPASS_ONLY_WALK_FIGURES,
         animate_model_walk,
         write_model_walk_figures,
@@ -692,7 +692,7 @@ def _run_walk(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from heelstrike.analysis.limit_cycle import GaitNotFoundError, PoincareMap, find_limit_cycle
-    from heelstrike.gait_plots import animate_walk, write_walk_figures
+    from heelstrike.plots.gait import animate_walk, write_walk_figures
 
     if args.model is None and args.backend == "compiled":
         raise CliError("the compass walk (without --model) runs on the scipy reference; for "
@@ -758,7 +758,7 @@ def _add_bifurcation(sub: Any) -> None:
 def _run_bifurcation(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from heelstrike.gait_plots import write_bifurcation
+    from heelstrike.plots.gait import write_bifurcation
 
     if args.model is None and args.backend != "compiled":
         raise CliError("--backend scipy is not supported by the compass bifurcation diagram "
@@ -770,7 +770,7 @@ def _run_bifurcation(args: argparse.Namespace) -> int:
     _writable_dir(args.out)
     if args.model is not None:
         from heelstrike.analysis.limit_cycle import GaitNotFoundError
-        from heelstrike.gait_plots import write_model_bifurcation
+        from heelstrike.plots.gait import write_model_bifurcation
 
         try:
             paths = write_model_bifurcation(
@@ -893,7 +893,7 @@ def _add_basin(sub: Any) -> None:
 def _run_basin_model(args: argparse.Namespace) -> int:
     from heelstrike.analysis import basin as basin_module
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
-    from heelstrike.gait_plots import write_basin
+    from heelstrike.plots.gait import write_basin
 
     walker = _model_from_args(args)
     grid = args.grid or (100, 100)
@@ -951,7 +951,7 @@ def _run_basin_model(args: argparse.Namespace) -> int:
 def _run_basin(args: argparse.Namespace) -> int:
     from heelstrike.analysis.basin import basin_of_attraction
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
-    from heelstrike.gait_plots import write_basin
+    from heelstrike.plots.gait import write_basin
 
     if args.model is not None:
         return _run_basin_model(args)
@@ -1039,7 +1039,7 @@ def _run_map_model(args: argparse.Namespace) -> int:
     import numpy as np
 
     from heelstrike.analysis.gait_map import model_gait_map
-    from heelstrike.gait_plots import write_gait_map
+    from heelstrike.plots.gait import write_gait_map
 
     walker = _model_from_args(args)
     if args.store is not None:
@@ -1104,7 +1104,7 @@ def _run_map(args: argparse.Namespace) -> int:
 
     from heelstrike.analysis.gait_map import gait_map
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
-    from heelstrike.gait_plots import write_gait_map
+    from heelstrike.plots.gait import write_gait_map
 
     if args.model is not None:
         return _run_map_model(args)
@@ -1198,7 +1198,7 @@ def _run_impact_map(args: argparse.Namespace) -> int:
 
     from heelstrike.analysis.model_gaits import ANGLE, impact_map
     from heelstrike.models.description import parameter_units
-    from heelstrike.plots_models import write_impact_map
+    from heelstrike.plots.models import write_impact_map
 
     if args.model is None:
         raise CliError("--model is required (a .toml file or compass, kneed, torso)")
@@ -1363,7 +1363,7 @@ def _run_powered(args: argparse.Namespace) -> int:
     d = gait.to_dict()
     if out is not None:
         from heelstrike.analysis.powered import energy_book_tables
-        from heelstrike.gait_plots import energy_figure
+        from heelstrike.plots.gait import energy_figure
 
         energy, impacts = energy_book_tables(walker, gait)
         name = gait.model or "compass gait"
@@ -1417,14 +1417,17 @@ def _add_study(sub: Any) -> None:
         help="cost of transport over foot radius x step length (or speed)",
         description="Periodic level-ground gaits over foot radius x step length (or speed) "
         "for each actuation model; writes cost_study.nc and figures, including the paper's "
-        "impact-only eta against the actuator work per metre of the real gaits.",
+        "impact-only eta against the actuator work per metre of the real gaits. With --model "
+        "(a walker file with a foot radius parameter R, e.g. compass, kneed, torso): push-off "
+        "plus the posture law the file declares.",
         conflict_handler="resolve",
     )
     _add_walker_options(c)  # its --radius is replaced by the range below
     _add_model_options(c)
     c.add_argument("--backend", choices=("compiled", "scipy"), default=None,
-                   help="the cost study runs the compass gait on the scipy reference; "
-                   "--model and --backend compiled are not supported yet (refused)")
+                   help="step simulator with --model: compiled (default; generated from the "
+                   "walker file) or the scipy reference; the compass gait without --model "
+                   "runs on the scipy reference")
     c.add_argument("--radius", dest="radii", type=parse_range, default=(0.0, 0.9, 4),
                    help="foot radii START:STOP:COUNT (m), default 0:0.9:4")
     tgt = c.add_mutually_exclusive_group()
@@ -1447,23 +1450,58 @@ def _grid(r: tuple[float, float, int | None], default_count: int) -> list[float]
     return [float(v) for v in np.linspace(start, stop, count or default_count)]
 
 
+def _cost_figures(ds: Any, out: Any) -> list[Any]:
+    """The study's figures; without the paper's impact-only eta (described walkers) the cost
+    figures only."""
+    from heelstrike.plots.powered import cost_figure, write_cost_figures
+
+    if "eta_paper" in ds:
+        return write_cost_figures(ds, out)
+    paths = []
+    for var in ("cost_of_transport", "eta", "actuator_work"):
+        if bool(ds[var].notnull().any()):
+            path = out / f"{var}.png"
+            cost_figure(ds, var).savefig(path, dpi=120)
+            paths.append(path)
+    return paths
+
+
 def _run_study(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from heelstrike.analysis.cost_study import cost_study, save_study
-    from heelstrike.plots_powered import write_cost_figures
 
-    if args.model is not None or args.param:
-        raise CliError("study cost does not take --model/--param yet (it sweeps the compass "
-                       "gait's foot radius); for a described walker run `heelstrike powered "
-                       "--model NAME` per point")
-    if args.backend == "compiled":
-        raise CliError("study cost runs on the scipy reference (the compass gait); --backend "
-                       "compiled is not supported there yet")
-    walker = _walker_from_args(args)  # validates the other walker parameters (radius unused)
+    model = None
+    if args.model is None:
+        if args.param:
+            raise CliError("--param sets a described walker's parameter: give --model too")
+        if args.backend == "compiled":
+            raise CliError("--backend compiled is not supported by the compass cost study "
+                           "without --model (it runs on the scipy reference); for the compiled "
+                           "backend use --model compass")
+        walker = _walker_from_args(args)  # validates the other walker parameters
+        leg_length = float(args.leg_length)
+    else:
+        acts_given = [a for a in args.actuation or () if a != "pushoff"]
+        if acts_given:
+            raise CliError(f"--actuation {acts_given[0]} is not supported with --model (only "
+                           "pushoff, with the posture law the walker file declares)")
+        given = [f"--{k.replace('_', '-')}" for k in ("gain", "kp", "kd", "max_torque")
+                 if getattr(args, k) is not None]
+        if given:
+            raise CliError(f"{', '.join(given)} set(s) the compass hip laws, not used with "
+                           "--model (the posture law's gains are declared in the walker file)")
+        if any(item.partition("=")[0].strip() == "R" for item in args.param):
+            raise CliError("--param R=... is swept by --radius START:STOP:COUNT: give it there")
+        model = _model_from_args(args)
+        if "R" not in model.params:
+            raise CliError(f"model {model.description.name!r} has no foot radius parameter 'R' "
+                           f"(its parameters: {', '.join(sorted(model.params))})")
+        walker = None
+        leg_length = float(model.scale.leg_length)
     radii = _grid(args.radii, 4)
-    if min(radii) < 0 or max(radii) > args.leg_length:
-        raise CliError(f"--radius must lie in [0, {args.leg_length:g}] m")
+    if min(radii) < 0 or max(radii) > leg_length:
+        raise CliError(f"--radius must lie in [0, {leg_length:g}] m")
     if args.speeds is not None:
         target, values = "speed", _grid(args.speeds, 4)
     else:
@@ -1473,13 +1511,17 @@ def _run_study(args: argparse.Namespace) -> int:
     acts = args.actuation or ["pushoff"]
     options = _actuation_options(args)
     _writable_dir(args.out)
-    ds = _run_with_store(args.store, lambda: cost_study(
-        radii, values, target=target, actuations=acts, walker=walker,
-        actuation_options=options, progress=True, store=args.store))
+    try:
+        ds = _run_with_store(args.store, lambda: cost_study(
+            radii, values, target=target, actuations=acts, walker=walker, model=model,
+            backend=args.backend or "compiled", actuation_options=options, progress=True,
+            store=args.store))
+    except ValueError as exc:  # e.g. a radius the walker file's constraints reject
+        raise CliError(str(exc)) from exc
     out = Path(args.out)
     try:
         nc = save_study(ds, out / "cost_study.nc")
-        paths = [nc, *write_cost_figures(ds, out)]
+        paths = [nc, *_cost_figures(ds, out)]
     except OSError as exc:
         raise CliError(f"cannot write to {args.out!r}: {exc.strerror or exc}") from exc
     for path in paths:

@@ -1,0 +1,91 @@
+"""Studies built on the walker models: heel strikes, gaits, their stability and their cost.
+
+The public analysis API, importable from here (``from heelstrike.analysis import
+find_limit_cycle``); each name is loaded from its submodule on first use, so
+``import heelstrike.analysis`` stays cheap (no scipy, numba or matplotlib).
+
+Main entry points:
+
+- :func:`~heelstrike.analysis.heel_strike.heel_strike_study`: energy split ``T_c`` / ``T_a``
+  at heel strike over impact angles and foot radii;
+- :func:`~heelstrike.analysis.limit_cycle.find_limit_cycle`,
+  :func:`~heelstrike.analysis.limit_cycle.find_limit_cycles`: passive limit cycles on a slope
+  and their Floquet multipliers;
+- :func:`~heelstrike.analysis.limit_cycle.continue_limit_cycle`,
+  :func:`~heelstrike.analysis.limit_cycle.bifurcation_diagram`: continuation in a parameter,
+  period doubling;
+- :func:`~heelstrike.analysis.basin.basin_of_attraction`,
+  :func:`~heelstrike.analysis.gait_map.gait_map`: basins of attraction and gait maps;
+- :func:`~heelstrike.analysis.powered.find_powered_gait`,
+  :func:`~heelstrike.analysis.cost_study.cost_study`: powered gaits and the cost of transport;
+- :func:`~heelstrike.analysis.model_gaits.find_model_gait`,
+  :func:`~heelstrike.analysis.model_gaits.impact_map`: gaits and impact maps of described
+  walkers;
+- :func:`~heelstrike.analysis.sweep.sweep`: parameter sweeps with a resumable store.
+
+``gait_map``, ``sweep`` and ``cost_study`` name both a submodule and its main function; here
+they stay the submodules (``from heelstrike.analysis import sweep`` gives the module, as it
+always has): call ``heelstrike.analysis.sweep.sweep`` and so on.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+#: Public names of each submodule (its ``__all__``, less the name of the submodule itself).
+_PUBLIC: dict[str, tuple[str, ...]] = {
+    "basin": (
+        "BYTES_PER_POINT", "OUTCOMES", "Basin", "available_memory", "basin_memory_estimate",
+        "basin_of_attraction", "model_basin_of_attraction", "model_slice_axes",
+    ),
+    "cost_study": (
+        "BRANCH_NOTE", "GAIT_VARIABLES", "impact_angle_for_step_length", "paper_eta", "save_study",
+    ),
+    "gait_map": (
+        "GaitMap", "NewtonGait", "model_bifurcation", "model_gait_map", "newton_gait",
+        "newton_gaits",
+    ),
+    "heel_strike": (
+        "CONTACT_TOLERANCE", "LIFT_TOLERANCE", "HeelStrikeStudy", "NotAHeelStrikeError",
+        "check_heel_strike_state", "heel_strike_study", "step_length", "trailing_foot_lifts",
+    ),
+    "limit_cycle": (
+        "BifurcationDiagram", "Continuation", "GaitNotFoundError", "LimitCycle", "PoincareMap",
+        "bifurcation_diagram", "continue_limit_cycle", "find_limit_cycle", "find_limit_cycles",
+    ),
+    "model_gaits": (
+        "ANGLE", "ImpactMap", "ModelGait", "ModelHeelStrike", "find_model_gait", "impact_map",
+        "model_heel_strike", "symmetric_heel_strike_state",
+    ),
+    "paper": (
+        "FIGURE_RADII", "MAX_IMPACT_ANGLE", "Figure3bData", "PaperFigureData", "figure2_data",
+        "figure3a_data", "figure3b_data", "heel_strike_table", "impact_angle_grid",
+        "paper_figure_data", "write_figure_data",
+    ),
+    "powered": (
+        "ACTUATIONS", "ActuationFamily", "PoweredGait", "PoweredGaitNotFoundError",
+        "SearchLimitError", "actuation_family", "declared_posture_law", "energy_book_tables",
+        "find_model_powered_gait", "find_powered_gait", "max_walking_speed", "powered_step",
+    ),
+    "sweep": (
+        "KNOWN_UNITS", "SweepError", "SweepFunction", "SweepStoreLockedError",
+        "SweepStoreMismatchError", "SweepStoreRepairWarning", "sweep_progress",
+    ),
+}
+_SUBMODULE = {name: module for module, names in _PUBLIC.items() for name in names}
+
+__all__ = sorted(_SUBMODULE)
+
+
+def __getattr__(name: str) -> Any:
+    module = _SUBMODULE.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -16,6 +16,13 @@ The paper's own measure is evaluated alongside: ``eta`` of the heel strike alone
 *imposed* pre-impact velocities of the paper (``q3_dot = 1 rad/s``, ``q4_dot = 0``) at the
 impact angle that gives the same step length, ``L = 2 (l - R) sin q3 + 2 R q3``; and with the
 real gait's own pre-impact velocities this is exactly the gait's ``eta``.
+
+Described walkers (``model``, a walker file with a foot radius parameter ``R``: the shipped
+compass, kneed and torso walkers) are studied the same way with
+:func:`~heelstrike.analysis.powered.find_model_powered_gait`: push-off actuation plus the posture
+law the file declares, the cost of transport with the walker's own scale (total mass, gravity,
+leg length). Their energy book per step is ``push_off_work + torque_work = collision_loss`` (the
+paper's impact-only measure is for the compass gait only and is not evaluated for them).
 """
 
 from __future__ import annotations
@@ -38,6 +45,7 @@ from heelstrike.analysis.powered import (
     PoweredGait,
     PoweredGaitNotFoundError,
     actuation_family,
+    find_model_powered_gait,
     find_powered_gait,
 )
 from heelstrike.models.compass import CompassGait
@@ -58,6 +66,8 @@ GAIT_VARIABLES: dict[str, tuple[str, str]] = {
     "cost_of_transport": ("1", "W_act / (m_total g L_S)"),
     "eta": ("J/m", "collision loss per metre T_c / L_S (eq. 16)"),
     "actuator_work": ("J", "actuator work per step"),
+    "push_off_work": ("J", "work of the push-off impulse per step"),
+    "torque_work": ("J", "work of the torque law (hip or posture) per step"),
     "collision_loss": ("J", "collision loss per step T_c (eq. 15)"),
     "work_per_metre": ("J/m", "actuator work per metre W_act / L_S"),
     "period": ("s", "step duration"),
@@ -100,6 +110,8 @@ def _row(g: PoweredGait) -> dict[str, float]:
         "cost_of_transport": g.cost_of_transport,
         "eta": g.eta,
         "actuator_work": g.actuator_work,
+        "push_off_work": g.push_off_work,
+        "torque_work": g.torque_work,
         "collision_loss": g.collision_loss,
         "work_per_metre": g.actuator_work / g.step_length,
         "period": g.period,
@@ -120,6 +132,8 @@ def cost_study(
     target: str = "step_length",
     actuations: Sequence[str] = ("pushoff",),
     walker: CompassGait | None = None,
+    model: Any | None = None,
+    backend: str = "compiled",
     actuation_options: dict[str, float] | None = None,
     radius_step: float = 0.05,
     progress: bool = False,
@@ -140,6 +154,12 @@ def cost_study(
         Actuation models (:data:`heelstrike.analysis.powered.ACTUATIONS`).
     walker : CompassGait, optional
         Other parameters of the walker (paper defaults).
+    model : BuiltWalker, optional
+        A described walker with a foot radius parameter ``R`` (m) instead of the compass gait
+        (:func:`~heelstrike.analysis.powered.find_model_powered_gait`: ``actuations`` must be
+        ``("pushoff",)``, no ``actuation_options``); its other parameters are kept.
+    backend : {"compiled", "scipy"}
+        Step simulator of ``model`` (ignored for the compass gait, which runs on scipy).
     actuation_options : dict, optional
         Gains and torque limit for :func:`~heelstrike.analysis.powered.actuation_family`.
     radius_step : float
@@ -159,8 +179,15 @@ def cost_study(
     xarray.Dataset
         Dimensions ``actuation`` x ``radius`` x ``step_length`` (or ``speed``) with the
         :data:`GAIT_VARIABLES` but the target itself (NaN where no gait was found),
-        ``failure`` messages, and the paper's impact-only ``eta_paper`` and
-        ``collision_loss_paper`` over ``radius`` x target (only for ``target="step_length"``).
+        ``found`` (1 where a gait was found, else 0), ``failure`` messages, and the paper's
+        impact-only ``eta_paper`` and ``collision_loss_paper`` over ``radius`` x target (only
+        for the compass gait and ``target="step_length"``).
+
+    Raises
+    ------
+    ValueError
+        Bad target or actuation; with ``model``: no parameter ``R``, a radius the walker file
+        rejects, another actuation than push-off, ``actuation_options`` or ``walker`` given.
     """
     if target not in ("step_length", "speed"):
         raise ValueError("target must be 'step_length' or 'speed'")
@@ -170,6 +197,8 @@ def cost_study(
     base = walker if walker is not None else CompassGait()
     R = np.asarray(radii, dtype=float).ravel()
     T = np.asarray(targets, dtype=float).ravel()
+    if model is not None:
+        _check_model(model, R, actuations, actuation_options, walker, backend)
     shape = (len(actuations), R.size, T.size)
     data = {k: np.full(shape, np.nan) for k in GAIT_VARIABLES}
     branch = np.full(shape, np.nan)
@@ -189,6 +218,8 @@ def cost_study(
                 actuation_options=tuple(sorted((actuation_options or {}).items())),
                 walker=base, radii=tuple(map(float, R)), i=i, previous=previous, kind=target,
                 radius_step=float(radius_step), options=tuple(sorted(kwargs.items())),
+                model=model, backend=backend,
+                model_key="" if model is None else _model_key(model),
             )
             row = _run_row(func, T, target,
                            None if store is None else Path(store) / act / f"radius_{i:03d}.zarr")
@@ -215,13 +246,15 @@ def cost_study(
          for k, v in data.items() if k != target},
         coords=coords,
     )
+    ds["found"] = (dims, np.isfinite(data["cost_of_transport"]).astype(np.int8), {
+        "units": "1", "long_name": "1 where a periodic gait was found, 0 where none"})
     ds["failure"] = (dims, failure.astype(str))
     ds["branch"] = (dims, branch, {
         "units": "1", "long_name": "how the kept (cheapest) gait was found",
         "flag_values": "0 1", "flag_meanings": "continuation fresh_search"})
     ds["gaits_found"] = (dims, n_found, {
         "units": "1", "long_name": "distinct periodic gaits found meeting the target"})
-    if target == "step_length":
+    if target == "step_length" and model is None:
         eta_p = np.full((R.size, T.size), np.nan)
         tc_p = np.full((R.size, T.size), np.nan)
         for i, r in enumerate(R):
@@ -235,12 +268,57 @@ def cost_study(
             "units": "J", "long_name": "paper's impact-only T_c, imposed velocities"})
     ds.attrs.update(
         title="heelstrike cost-of-transport study (level ground, periodic powered gaits)",
-        hip_mass=float(base.hip_mass), leg_mass=float(base.leg_mass),
-        leg_length=float(base.leg_length), leg_com_from_hip=float(base.leg_com_from_hip),
-        leg_inertia=float(base.leg_inertia), gravity=float(base.gravity), target=target,
-        branch_note=BRANCH_NOTE,
+        target=target, branch_note=BRANCH_NOTE,
     )
+    if model is None:
+        ds.attrs.update(
+            hip_mass=float(base.hip_mass), leg_mass=float(base.leg_mass),
+            leg_length=float(base.leg_length), leg_com_from_hip=float(base.leg_com_from_hip),
+            leg_inertia=float(base.leg_inertia), gravity=float(base.gravity),
+        )
+    else:
+        scale = model.scale
+        ds.attrs.update(
+            model=str(model.description.name), backend=backend,
+            total_mass=float(scale.total_mass), gravity=float(scale.gravity),
+            leg_length=float(scale.leg_length),
+            **{f"param_{k}": float(v) for k, v in sorted(model.params.items()) if k != "R"},
+        )
     return ds
+
+
+def _check_model(
+    model: Any, radii: FloatArray, actuations: Sequence[str],
+    actuation_options: dict[str, float] | None, walker: CompassGait | None, backend: str,
+) -> None:
+    """Refuse what the described-walker study does not support (one-line messages)."""
+    name = str(model.description.name)
+    if walker is not None:
+        raise ValueError("give either walker (the compass gait) or model, not both")
+    if tuple(actuations) != ("pushoff",):
+        raise ValueError(
+            f"described walkers support the pushoff actuation only (with the posture law the "
+            f"walker file declares), not {', '.join(a for a in actuations if a != 'pushoff')}")
+    if actuation_options:
+        raise ValueError("actuation_options set the compass hip laws, not used with a model")
+    if backend not in ("compiled", "scipy"):
+        raise ValueError(f"backend must be 'compiled' or 'scipy', got {backend!r}")
+    if "R" not in model.params:
+        raise ValueError(f"model {name!r} has no foot radius parameter 'R' (its parameters: "
+                         f"{', '.join(sorted(model.params))})")
+    leg = float(model.scale.leg_length)
+    for r in radii:
+        if not 0.0 <= float(r) <= leg:
+            raise ValueError(f"foot radius R = {float(r):g} m outside [0, {leg:g}] m "
+                             f"(the leg length of model {name!r})")
+        model.replace(R=float(r))  # the walker file's constraints (e.g. R <= l)
+
+
+def _model_key(model: Any) -> str:
+    """What identifies a described walker in a resumable store: its file's content and values."""
+    desc = model.description
+    key = getattr(desc, "structure_key", None)
+    return f"{model!r}|{key() if callable(key) else desc!r}"
 
 
 #: How each entry of the study was chosen (also on stdout and in the figures).
@@ -285,19 +363,32 @@ def _study_row(
     kind: str,
     radius_step: float,
     options: tuple[tuple[str, Any], ...],
+    model: Any | None = None,
+    backend: str = "compiled",
+    model_key: str = "",
 ) -> dict[str, NDArray[Any]]:
     """Gaits of radius row ``i`` over every target (a sweep function of the ``target`` grid).
 
     ``previous`` holds the continuation seeds of row ``i - 1`` per target (empty: none). Returns
     the :data:`GAIT_VARIABLES`, the row's own seeds (``seed``, NaN-padded, and ``seed_size``)
-    and ``failure`` messages (UTF-8 bytes), each of shape ``(J, ...)``.
+    and ``failure`` messages (UTF-8 bytes), each of shape ``(J, ...)``. With ``model`` (a
+    described walker; ``model_key`` identifies it in a store) the gaits are those of
+    :func:`~heelstrike.analysis.powered.find_model_powered_gait` on ``backend``.
     """
+    del model_key  # only part of the sweep's fingerprint
     T = np.asarray(target, dtype=float).ravel()
     R = np.asarray(radii, dtype=float)
     r = float(R[i])
     base = walker
     kwargs = dict(options)
     family = actuation_family(actuation, **dict(actuation_options))
+
+    def solve(radius: float, **opts: Any) -> PoweredGait:
+        if model is None:
+            return find_powered_gait(base.replace(foot_radius=radius), actuation=family,
+                                     **opts)
+        return find_model_powered_gait(model.replace(R=radius), backend=backend, **opts)
+
     found: dict[tuple[int, int], FloatArray] = {
         (i - 1, j): np.asarray(x, dtype=float) for j, x in enumerate(previous) if len(x)
     }
@@ -307,7 +398,6 @@ def _study_row(
     seed_size = np.zeros(T.size, dtype=np.int64)
     branch = np.full(T.size, np.nan)
     n_found = np.zeros(T.size, dtype=np.int64)
-    w = base.replace(foot_radius=r)
     for j, v in enumerate(T):
         speed = float(v) if kind == "speed" else None
         length = float(v) if kind == "step_length" else None
@@ -324,17 +414,16 @@ def _study_row(
             x = found[key]
             try:
                 for r_sub in np.linspace(r_from, r, n_sub + 1)[1:]:
-                    g_sub = find_powered_gait(
-                        base.replace(foot_radius=float(r_sub)), actuation=family,
-                        guess=x, speed=speed, step_length=length, fallback=False,
-                        **kwargs)
+                    g_sub = solve(float(r_sub), guess=x, speed=speed, step_length=length,
+                                  fallback=False, **kwargs)
                     x = np.append(g_sub.fixed_point, g_sub.parameter)
                 gaits.append(g_sub)
             except (PoweredGaitNotFoundError, ValueError):
                 pass
         n_continued = len(gaits)
         # fresh searches too (issue 11.8): continuation may sit on a costlier branch
-        fresh, exc_fresh = _fresh_gaits(w, family, speed, length, kwargs)
+        fresh, exc_fresh = _fresh_gaits(solve, r, _seed_walker(base, model, r), family,
+                                        speed, length, kwargs)
         gaits += fresh
         if not gaits and exc_fresh is not None:
             msg = str(exc_fresh).encode()[:_FAILURE_BYTES]
@@ -342,6 +431,13 @@ def _study_row(
         if gaits:
             best = int(np.argmin([x.actuator_work for x in gaits]))
             g = gaits[best]
+            if model is not None and g.residual > float(kwargs.get("tol", 1e-9)):
+                # a fresh start's looser tolerance: polish it so that its energy book closes
+                try:
+                    g = solve(r, guess=np.append(g.fixed_point, g.parameter), speed=speed,
+                              step_length=length, fallback=False, **kwargs)
+                except (PoweredGaitNotFoundError, ValueError):
+                    pass
             branch[j] = 0.0 if best < n_continued else 1.0
             n_found[j] = _count_distinct(gaits)
             for k, val in _row(g).items():
@@ -360,20 +456,52 @@ def _study_row(
 _FRESH_STARTS = ((0.6, -0.3), (0.9, -0.3))
 
 
+def _seed_walker(base: CompassGait, model: Any | None, r: float) -> Any:
+    """The walker at radius ``r`` whose section the fresh starts are laid out on."""
+    if model is None:
+        return base.replace(foot_radius=r)
+    from heelstrike.dynamics.phased import PhasedWalker
+
+    return PhasedWalker.from_built(model.replace(R=r))
+
+
+def _fresh_start(w: Any, q3: float, w3: float, w4: float, p0: float) -> FloatArray:
+    """Newton start on ``w``'s section: stance angle ``-q3``, rates ``(w3, w4)``, parameter
+    ``p0``; further joints of a described walker (a torso) start upright (relative angle
+    ``q3``, rate ``-w3``), as in :func:`heelstrike.analysis.powered._model_seed_sections`."""
+    if isinstance(w, CompassGait):
+        return np.array([-q3, w3, w4, p0])
+    d = len(w.section_names)
+    n_ang = d - len(w._section_v)
+    z = np.zeros(d + 1)
+    z[0], z[n_ang], z[n_ang + 1], z[d] = -q3, w3, w4, p0
+    if n_ang > 1:
+        z[1:n_ang] = q3
+        z[n_ang + 2 : d] = -w3
+    return z
+
+
 def _fresh_gaits(
-    w: CompassGait, family: Any, speed: float | None, length: float | None,
+    solve: Any, r: float, w: Any, family: Any, speed: float | None, length: float | None,
     kwargs: dict[str, Any],
 ) -> tuple[list[PoweredGait], Exception | None]:
-    """Gaits found without continuation: the seed search of ``find_powered_gait`` and Newton
-    from :data:`_FRESH_STARTS`. Returns the gaits and the seed search's failure (or None)."""
+    """Gaits found without continuation at radius ``r``: the seed search of ``solve`` (the
+    compass or described walker's ``find_*powered_gait``) and Newton from
+    :data:`_FRESH_STARTS`. Returns the gaits and the seed search's failure (or None)."""
     gaits: list[PoweredGait] = []
     err: Exception | None = None
     try:
-        gaits.append(find_powered_gait(w, actuation=family, speed=speed, step_length=length,
-                                       **kwargs))
+        gaits.append(solve(r, speed=speed, step_length=length, **kwargs))
     except (PoweredGaitNotFoundError, ValueError) as exc:
         err = exc
-    q3 = impact_angle_for_step_length(w, length) if length is not None else 0.2
+    if length is not None:
+        try:
+            q3 = impact_angle_for_step_length(
+                CompassGait(leg_length=float(w.scale.leg_length), foot_radius=r), length)
+        except ValueError:  # a described walker's R beyond its leg length
+            q3 = float("nan")
+    else:
+        q3 = 0.2
     if not np.isfinite(q3):
         return gaits, err
     p0 = float(min(family.seed(w)))
@@ -381,9 +509,8 @@ def _fresh_gaits(
     opts = {"max_iter": 12, "max_evaluations": 200, "tol": 1e-7} | kwargs
     for w3, w4 in _FRESH_STARTS:
         try:
-            gaits.append(find_powered_gait(
-                w, actuation=family, speed=speed, step_length=length,
-                guess=[-q3, w3, w4, p0], fallback=False, **opts))
+            gaits.append(solve(r, speed=speed, step_length=length,
+                               guess=_fresh_start(w, q3, w3, w4, p0), fallback=False, **opts))
         except (PoweredGaitNotFoundError, ValueError):
             pass
     return gaits, err

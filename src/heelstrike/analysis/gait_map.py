@@ -283,7 +283,7 @@ def _branch(
         a, b = mnr[i], mnr[i + 1]
         if np.isfinite(a) and np.isfinite(b) and (a + 1.0) * (b + 1.0) < 0.0:
             pd = _refine_period_doubling(
-                walker, float(slopes[i]), float(slopes[i + 1]), gaits[i], a, b, rtol, atol
+                walker, float(slopes[i]), float(slopes[i + 1]), gaits[i], a, rtol, atol
             )
             break
     return out, fixed, mnr, pd
@@ -295,7 +295,6 @@ def _refine_period_doubling(
     s1: float,
     g0: NewtonGait,
     m0: float,
-    m1: float,
     rtol: float,
     atol: float,
     iterations: int = 12,

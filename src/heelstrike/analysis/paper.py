@@ -1,7 +1,7 @@
 """Data of the figures of Font & Kövecses (2008): Fig. 2, Fig. 3a and Fig. 3b.
 
 This module computes (and writes as CSV) what the figures show; the drawing is in
-:mod:`heelstrike.plots`, which also holds :func:`heelstrike.plots.reproduce_paper`.
+:mod:`heelstrike.plots.paper`, which also holds :func:`heelstrike.plots.paper.reproduce_paper`.
 
 Conventions shared by the figures
 ---------------------------------

@@ -1168,7 +1168,7 @@ def find_model_powered_gait(
 
 def energy_book_tables(walker: PlanarWalker, gait: PoweredGait) -> tuple[Any, Any]:
     """The energy of one period of a powered gait, for
-    :func:`heelstrike.gait_plots.energy_figure`.
+    :func:`heelstrike.plots.gait.energy_figure`.
 
     Parameters
     ----------

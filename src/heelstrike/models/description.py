@@ -734,21 +734,6 @@ _TOP_KEYS = {
 }
 _CONTROL_KEYS = {"joint", "kp", "kd", "angle"}
 _CONTROL_REQUIRED = ("joint", "kp", "kd")
-_NUMERIC = {
-    "length",
-    "mass",
-    "com",
-    "com_offset",
-    "inertia",
-    "attach",
-    "attach_offset",
-    "lock_angle",
-    "radius",
-    "centre",
-    "centre_offset",
-    "at",
-    "offset",
-}
 
 
 def _table(obj: Any, path: str) -> dict[str, Any]:

@@ -1,0 +1,32 @@
+"""Figures: results in, :class:`~matplotlib.figure.Figure` out (matplotlib object API, Agg canvas).
+
+- :mod:`heelstrike.plots.paper`: the paper's Figs. 2, 3a and 3b
+  (:func:`~heelstrike.plots.paper.reproduce_paper` writes them);
+- :mod:`heelstrike.plots.gait`: passive gaits (walks, animations, phase portraits, bifurcation
+  diagrams, basins, gait maps);
+- :mod:`heelstrike.plots.models`: impact maps of described walkers;
+- :mod:`heelstrike.plots.powered`: cost-of-transport figures of powered gaits.
+
+The paper's figure functions are re-exported here (``from heelstrike.plots import figure3b``).
+They are loaded on first use, so ``import heelstrike.plots`` does not import matplotlib.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from heelstrike.plots.paper import figure2, figure3a, figure3b, reproduce_paper
+
+__all__ = ["figure2", "figure3a", "figure3b", "reproduce_paper"]
+
+
+def __getattr__(name: str) -> Any:
+    if name in __all__:
+        return getattr(importlib.import_module("heelstrike.plots.paper"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

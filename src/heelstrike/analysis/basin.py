@@ -153,6 +153,30 @@ class Basin:
         return {name: float(np.mean(codes == i)) for i, name in enumerate(OUTCOMES)}
 
 
+def _basin_variables(
+    dims: tuple[str, str],
+    shape: tuple[int, int],
+    outcome: Any,
+    taken: Any,
+    dist: Any,
+) -> dict[str, Any]:
+    """The data variables of every basin dataset (compass and described walkers alike)."""
+    return {
+        "outcome": (dims, np.asarray(outcome).reshape(shape), {
+            "long_name": "fate of the initial state",
+            "flag_values": np.arange(len(OUTCOMES), dtype=np.int8),
+            "flag_meanings": " ".join(OUTCOMES),
+        }),
+        "steps": (dims, np.asarray(taken).reshape(shape).astype(np.int32), {
+            "long_name": "heel strikes taken (a converged walk stops on arrival)",
+            "units": "1",
+        }),
+        "distance": (dims, np.asarray(dist).reshape(shape), {
+            "long_name": "final distance to the fixed point in section coordinates",
+        }),
+    }
+
+
 def basin_of_attraction(
     walker: CompassGait,
     slope: float,
@@ -248,20 +272,7 @@ def basin_of_attraction(
     shape = (n3, nd)
     dims = ("q3", "q3_dot")
     ds = xr.Dataset(
-        {
-            "outcome": (dims, outcome.reshape(shape), {
-                "long_name": "fate of the initial state",
-                "flag_values": np.arange(len(OUTCOMES), dtype=np.int8),
-                "flag_meanings": " ".join(OUTCOMES),
-            }),
-            "steps": (dims, taken.reshape(shape).astype(np.int32), {
-                "long_name": "heel strikes taken (a converged walk stops on arrival)",
-                "units": "1",
-            }),
-            "distance": (dims, dist.reshape(shape), {
-                "long_name": "final distance to the fixed point in section coordinates",
-            }),
-        },
+        _basin_variables(dims, shape, outcome, taken, dist),
         coords={
             "q3": ("q3", q3, {"units": "rad", "long_name": "post-impact stance angle q3",
                               "label": r"post-impact stance angle $q_3$ (rad)"}),
@@ -484,20 +495,7 @@ def model_basin_of_attraction(
     for name, value in w.params.items():
         attrs[f"param_{name}"] = float(np.asarray(value))
     ds = xr.Dataset(
-        {
-            "outcome": (dims, outcome.reshape(shape), {
-                "long_name": "fate of the initial state",
-                "flag_values": np.arange(len(OUTCOMES), dtype=np.int8),
-                "flag_meanings": " ".join(OUTCOMES),
-            }),
-            "steps": (dims, taken.reshape(shape).astype(np.int32), {
-                "long_name": "heel strikes taken (a converged walk stops on arrival)",
-                "units": "1",
-            }),
-            "distance": (dims, dist.reshape(shape), {
-                "long_name": "final distance to the fixed point in section coordinates",
-            }),
-        },
+        _basin_variables(dims, shape, outcome, taken, dist),
         coords={
             xn: (xn, xa, {"units": "rad", "long_name": f"post-heel-strike stance angle {xn}",
                           "label": f"post-impact stance angle {xn} (rad)"}),

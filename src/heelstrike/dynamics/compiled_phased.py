@@ -59,6 +59,7 @@ from heelstrike.dynamics.phased import (
     PhasedWalker,
     PhasedWalkResult,
     TorsoPD,
+    check_initial_state,
     stance_and_swing_locks,
 )
 from heelstrike.models._codegen_numba import (
@@ -978,34 +979,17 @@ def simulate_phased_compiled(
     NotImplementedError
         If a step ends in a heel strike and the walker declares no mirrors (no leg swap).
     """
-    if steps < 1:
-        raise ValueError("steps must be >= 1")
+    q, qd = check_initial_state(walker, q0, q_dot0, steps)
     check_compiled_actuation(walker, torque, push_off)
     tj, tang, kp, kd = _torque_config(walker, torque)
     n = walker.n_coordinates
-    q = np.array(q0, dtype=float)
-    qd = np.array(q_dot0, dtype=float)
-    if q.shape != (n,) or qd.shape != (n,):
-        raise ValueError(f"q0 and q_dot0 must have shape ({n},)")
-    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
-        raise ValueError("initial state must be finite")
     R = float(np.asarray(walker.foot_radii[0]))
     R_sw = float(np.asarray(walker.foot_radii[1]))
-    if abs(q[1] - R) > 1e-9 or np.max(np.abs(walker.contact_jacobian(q, "right") @ qd)) > 1e-9:
-        raise ValueError(
-            "initial state must have the stance foot on the ground (y = R) and rolling without "
-            "slip (A_R q_dot = 0)"
-        )
     stance_locks, swing_locks = stance_and_swing_locks(walker)
     all_locks = stance_locks + swing_locks
     lockv = np.zeros(n)
     for j, a in zip(walker.lockable_joints, walker.lock_angles, strict=True):
         lockv[j] = float(a)
-        if abs(q[j] - float(a)) > 1e-9 or abs(qd[j]) > 1e-9:
-            raise ValueError(
-                f"initial state must have {walker.coordinate_names[j]} locked at {float(a)} rad "
-                "with zero rate (the state just after a heel strike)"
-            )
     values = [np.asarray(walker.params[k], dtype=float) for k in walker.description.param_names]
     if any(v.ndim != 0 for v in values):
         raise ValueError("the compiled backend needs scalar parameter values (one walker)")

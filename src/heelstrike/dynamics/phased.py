@@ -197,6 +197,51 @@ def load_phased_walker(
     return PhasedWalker.from_built(load_walker(name_or_path, **params))  # type: ignore[arg-type]
 
 
+def check_initial_state(
+    walker: BuiltWalker, q0: ArrayLike, q_dot0: ArrayLike, steps: int
+) -> tuple[FloatArray, FloatArray]:
+    """The one definition of a valid start of a phased walk: the state just after a heel strike.
+
+    The stance foot is on the ground (``y = R``) and rolls without slip (``A_R q_dot = 0``),
+    every lockable joint is locked at its angle with zero rate, the state is finite and of
+    length ``n``, and at least one step is asked for. Both backends
+    (:func:`simulate_phased`, :func:`~heelstrike.dynamics.compiled_phased.simulate_phased_compiled`)
+    check it here.
+
+    Returns
+    -------
+    q, q_dot : ndarray, shape (n,)
+        Float copies of the state.
+
+    Raises
+    ------
+    ValueError
+        Naming what is wrong.
+    """
+    if steps < 1:
+        raise ValueError("steps must be >= 1")
+    n = walker.n_coordinates
+    q = np.array(q0, dtype=float)
+    qd = np.array(q_dot0, dtype=float)
+    if q.shape != (n,) or qd.shape != (n,):
+        raise ValueError(f"q0 and q_dot0 must have shape ({n},)")
+    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
+        raise ValueError("initial state must be finite")
+    R = float(np.asarray(walker.foot_radii[0]))
+    if abs(q[1] - R) > 1e-9 or np.max(np.abs(walker.contact_jacobian(q, "right") @ qd)) > 1e-9:
+        raise ValueError(
+            "initial state must have the stance foot on the ground (y = R) and rolling without "
+            "slip (A_R q_dot = 0)"
+        )
+    for j, a in zip(walker.lockable_joints, walker.lock_angles, strict=True):
+        if abs(q[j] - float(a)) > 1e-9 or abs(qd[j]) > 1e-9:
+            raise ValueError(
+                f"initial state must have {walker.coordinate_names[j]} locked at {float(a)} rad "
+                "with zero rate (the state just after a heel strike)"
+            )
+    return q, qd
+
+
 def stance_and_swing_locks(walker: BuiltWalker) -> tuple[tuple[int, ...], tuple[int, ...]]:
     """Split the lockable joints into stance-leg and swing-leg ones.
 
@@ -450,29 +495,10 @@ def simulate_phased(
     -------
     PhasedWalkResult
     """
-    if steps < 1:
-        raise ValueError("steps must be >= 1")
+    q, qd = check_initial_state(walker, q0, q_dot0, steps)
     n = walker.n_coordinates
-    q = np.array(q0, dtype=float)
-    qd = np.array(q_dot0, dtype=float)
-    if q.shape != (n,) or qd.shape != (n,):
-        raise ValueError(f"q0 and q_dot0 must have shape ({n},)")
-    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
-        raise ValueError("initial state must be finite")
-    R = float(np.asarray(walker.foot_radii[0]))
-    if abs(q[1] - R) > 1e-9 or np.max(np.abs(walker.contact_jacobian(q, "right") @ qd)) > 1e-9:
-        raise ValueError(
-            "initial state must have the stance foot on the ground (y = R) and rolling without "
-            "slip (A_R q_dot = 0)"
-        )
     stance_locks, swing_locks = stance_and_swing_locks(walker)
     all_locks = stance_locks + swing_locks
-    for j, a in zip(walker.lockable_joints, walker.lock_angles, strict=True):
-        if abs(q[j] - float(a)) > 1e-9 or abs(qd[j]) > 1e-9:
-            raise ValueError(
-                f"initial state must have {walker.coordinate_names[j]} locked at {float(a)} rad "
-                "with zero rate (the state just after a heel strike)"
-            )
     A_lock = walker.lock_jacobian(all_locks) if all_locks else np.zeros((0, n))
 
     t_s: list[FloatArray] = []

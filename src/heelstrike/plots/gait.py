@@ -79,6 +79,26 @@ def _to_world(points: NDArray[np.float64], slope: float) -> NDArray[np.float64]:
     return np.stack((c * x - s * y, s * x + c * y), axis=-1)
 
 
+def _walk_scene(
+    xmin: float, xmax: float, ytop: float, slope: float, margins: tuple[float, float], title: str
+) -> tuple[Figure, Any]:
+    """Axes of an animation: equal aspect, the slope drawn from ``xmin`` to ``xmax`` (m), room
+    ``margins`` (m) below the ground and above ``ytop``."""
+    fig = Figure(figsize=(7, 3.6), dpi=90)
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    ax.set_aspect("equal")
+    ax.set_xlim(xmin, xmax)
+    ends = np.array([[xmin / np.cos(slope), 0.0], [xmax / np.cos(slope), 0.0]])
+    y_ground = _to_world(ends, slope)
+    ax.set_ylim(float(y_ground[:, 1].min()) - margins[0], ytop + margins[1])
+    ax.plot(y_ground[:, 0], y_ground[:, 1], color="0.3", lw=2)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_title(title)
+    return fig, ax
+
+
 def _foot_arc(centre: NDArray[np.float64], leg_angle: float, radius: float) -> NDArray[np.float64]:
     """Polyline of a circular foot arc (+-60 deg about the leg's downward direction)."""
     if radius <= 0:
@@ -113,18 +133,10 @@ def animate_walk(
     hip = _to_world(pos.hip, slope)
     xmin, xmax = float(hip[:, 0].min()) - 1.0, float(hip[:, 0].max()) + 1.0
 
-    fig = Figure(figsize=(7, 3.6), dpi=90)
-    FigureCanvasAgg(fig)
-    ax = fig.add_subplot()
-    ax.set_aspect("equal")
-    ax.set_xlim(xmin, xmax)
-    ends = np.array([[xmin / np.cos(slope), 0.0], [xmax / np.cos(slope), 0.0]])
-    y_ground = _to_world(ends, slope)
-    ax.set_ylim(float(y_ground[:, 1].min()) - 0.2, float(hip[:, 1].max()) + 0.4)
-    ax.plot(y_ground[:, 0], y_ground[:, 1], color="0.3", lw=2)
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.set_title(f"compass gait, R = {R:g} m, slope = {np.rad2deg(slope):.2f} deg")
+    fig, ax = _walk_scene(
+        xmin, xmax, float(hip[:, 1].max()), slope, (0.2, 0.4),
+        f"compass gait, R = {R:g} m, slope = {np.rad2deg(slope):.2f} deg",
+    )
     legs = [ax.plot([], [], lw=3, color=c, solid_capstyle="round")[0] for c in LEG_COLOURS]
     feet = [ax.plot([], [], lw=2, color=c)[0] for c in LEG_COLOURS]
     (hip_dot,) = ax.plot([], [], "o", color="k", ms=10)
@@ -1052,18 +1064,10 @@ def animate_model_walk(walker: Any, walk: WalkResult, path: str | Path, *,
     masses = [f"{pm.name}" for pm in desc.point_masses if f"{pm.name}" in pos]
     every = np.concatenate([_to_world(v, slope) for v in pos.values()])
     xmin, xmax = float(every[:, 0].min()) - 0.3, float(every[:, 0].max()) + 0.3
-    fig = Figure(figsize=(7, 3.6), dpi=90)
-    FigureCanvasAgg(fig)
-    ax = fig.add_subplot()
-    ax.set_aspect("equal")
-    ax.set_xlim(xmin, xmax)
-    ends = np.array([[xmin / np.cos(slope), 0.0], [xmax / np.cos(slope), 0.0]])
-    y_ground = _to_world(ends, slope)
-    ax.set_ylim(float(y_ground[:, 1].min()) - 0.1, float(every[:, 1].max()) + 0.2)
-    ax.plot(y_ground[:, 0], y_ground[:, 1], color="0.3", lw=2)
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.set_title(f"{desc.name}, slope = {np.rad2deg(slope):.2f} deg")
+    fig, ax = _walk_scene(
+        xmin, xmax, float(every[:, 1].max()), slope, (0.1, 0.2),
+        f"{desc.name}, slope = {np.rad2deg(slope):.2f} deg",
+    )
     stance_side = {lk.name for lk in desc.links if lk.name.startswith("stance")}
     links = [ax.plot([], [], lw=3, solid_capstyle="round",
                      color=LEG_COLOURS[0] if lk.name in stance_side else LEG_COLOURS[1])[0]

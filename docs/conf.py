@@ -69,7 +69,7 @@ nitpicky = True
 nitpick_ignore_regex = [
     # third-party objects: no intersphinx inventories (the build needs no network)
     (r"py:.*", r"(numpy|matplotlib|pandas|scipy|xarray|dask|distributed|zarr|pinocchio|pin"
-               r"|collections\.abc|abc|enum|functools|typing|concurrent\.futures|filelock)"
+               r"|collections\.abc|abc|dataclasses|enum|functools|typing|concurrent\.futures|filelock)"
                r"(\..*)?"),
     # private modules (heelstrike.models._generated, ...) and functions are not documented
     (r"py:.*", r"heelstrike(\.\w+)*\._\w+(\..*)?"),

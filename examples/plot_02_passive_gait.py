@@ -7,23 +7,27 @@ Newton's method on the Poincare map (:func:`heelstrike.analysis.limit_cycle.find
 the compiled step map for speed), read its Floquet multipliers, and look at the walk: a
 stick-figure strobe of one step, the phase portrait, the joint angles and ground reaction over a
 step, and the mechanical energy, constant between impacts and dropping by ``T_c`` at every heel
-strike (``heelstrike walk --out DIR`` writes the same figures with their data as CSV).
+strike. :mod:`heelstrike.analysis.walk_tables` turns the walk into tables and
+:mod:`heelstrike.plots.gait` draws them (``heelstrike walk --out DIR`` writes the same figures
+with their data as CSV, through :func:`heelstrike.outputs.write_walk_figures`).
 """
 
 import numpy as np
 
 from heelstrike.analysis.limit_cycle import PoincareMap, find_limit_cycle
+from heelstrike.analysis.walk_tables import (
+    phase_portrait_table,
+    step_table,
+    strobe_table,
+    walk_energy_table,
+    walk_impact_table,
+)
 from heelstrike.models import CompassGait
 from heelstrike.plots.gait import (
     energy_figure,
     phase_portrait_figure,
-    phase_portrait_table,
     step_figure,
-    step_table,
     strobe_figure,
-    strobe_table,
-    walk_energy_table,
-    walk_impact_table,
 )
 
 walker = CompassGait(foot_radius=0.3)

@@ -13,7 +13,7 @@ from heelstrike.analysis.gait_map import gait_map, newton_gait
 from heelstrike.cli import main
 from heelstrike.dynamics.hybrid import simulate
 from heelstrike.models.compass import CompassGait
-from heelstrike.plots.gait import write_basin
+from heelstrike.outputs import write_basin
 
 SLOPE3 = np.deg2rad(3.0)
 Z3 = np.array([-0.27102868, 1.09238359, -0.71500964])

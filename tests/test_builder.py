@@ -94,6 +94,90 @@ def test_parameter_arrays_broadcast_like_a_loop() -> None:
         np.testing.assert_allclose(A[i], cg.contact_jacobian(q, "left"), atol=1e-14)
 
 
+# -- the combined (M, h) of a right-hand side evaluation --------------------------------------
+
+
+@pytest.mark.parametrize("name", ["compass", "kneed", "torso"])
+def test_dynamics_terms_equals_the_separate_functions(name: str) -> None:
+    """One generated function (one CSE over M and h) gives what mass_matrix and bias_forces
+    give: single states (the integrator's Python-float path), batches, mixed broadcasting."""
+    w = load_walker(name)
+    n = w.n_coordinates
+    rng = np.random.default_rng(sum(map(ord, name)))
+    for lead in [(), (), (), (7,), (3, 4)]:
+        q = rng.uniform(-np.pi, np.pi, (*lead, n))
+        qd = rng.normal(size=(*lead, n)) * 3.0
+        slope = float(rng.uniform(-0.3, 0.3))
+        M, h = w.dynamics_terms(q, qd, slope)
+        assert M.shape == (*lead, n, n) and h.shape == (*lead, n)
+        assert _rel_err(M, w.mass_matrix(q)) < 1e-13
+        assert _rel_err(h, w.bias_forces(q, qd, slope)) < 1e-13
+    q, qd, slopes = rng.normal(size=n), rng.normal(size=(5, n)), rng.uniform(-0.2, 0.2, 5)
+    M, h = w.dynamics_terms(q, qd, slopes)
+    assert M.shape == (n, n) and h.shape == (5, n)
+    assert _rel_err(M, w.mass_matrix(q)) < 1e-13
+    assert _rel_err(h, w.bias_forces(q, qd, slopes)) < 1e-13
+
+
+def test_dynamics_terms_of_the_compass_equals_compassgait() -> None:
+    w, cg = load_walker("compass", R=0.3), CompassGait(foot_radius=0.3)
+    rng = np.random.default_rng(11)
+    for _ in range(20):
+        q, qd = rng.uniform(-1.0, 1.0, 4), rng.normal(size=4) * 2.0
+        slope = float(rng.uniform(-0.2, 0.2))
+        (M, h), (Mc, hc) = w.dynamics_terms(q, qd, slope), cg.dynamics_terms(q, qd, slope)
+        assert _rel_err(M, Mc) < 1e-12 and _rel_err(h, hc) < 1e-12
+
+
+def test_dynamics_terms_with_parameter_arrays_and_overflow() -> None:
+    radii = np.array([0.0, 0.3, 0.6])
+    w = load_walker("compass", R=radii)
+    q, qd = np.array([0.1, 0.2, 0.3, -0.5]), np.array([-0.2, 0.0, 1.0, 0.4])
+    M, h = w.dynamics_terms(q, qd, 0.05)
+    assert M.shape == (3, 4, 4) and h.shape == (3, 4)
+    for i, R in enumerate(radii):
+        Mc, hc = CompassGait(foot_radius=R).dynamics_terms(q, qd, 0.05)
+        assert _rel_err(M[i], Mc) < 1e-12 and _rel_err(h[i], hc) < 1e-12
+    # where Python floats would raise (u**2 overflows), numpy semantics: inf, like bias_forces
+    huge = np.array([0.0, 0.0, 1e200, 0.0])
+    with np.errstate(over="ignore", invalid="ignore"):
+        _, h_big = load_walker("compass").dynamics_terms(q, huge, 0.05)
+        ref = load_walker("compass").bias_forces(q, huge, 0.05)
+    assert not np.all(np.isfinite(h_big))
+    np.testing.assert_array_equal(h_big, ref)
+
+
+def test_scipy_right_hand_side_evaluates_dynamics_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 9 item 6: one (M, h) evaluation per right-hand side call, nothing built twice."""
+    from heelstrike.dynamics.single_support import SingleSupport
+
+    w = load_walker("kneed")
+    sup = SingleSupport(walker=w, slope=0.05, torque=None, locked=w.lockable_joints[:1])
+    rng = np.random.default_rng(2)
+    q, qd = _rolling_state(w, rng)
+    m = len(sup.free_coordinates)
+    x = np.concatenate((sup.pack(q, qd), [0.0]))
+    q, qd = sup.unpack(x[: 2 * m], q)  # the locked knee at rest
+    expected = sup.accelerations(0.0, q, qd)  # from mass_matrix and bias_forces
+    calls = {"dynamics_terms": 0}
+    original = BuiltWalker.dynamics_terms
+
+    def counted(self: BuiltWalker, *args: object) -> tuple[np.ndarray, np.ndarray]:
+        calls["dynamics_terms"] += 1
+        return original(self, *args)  # type: ignore[arg-type]
+
+    def forbidden(*_: object, **__: object) -> None:
+        raise AssertionError("the right-hand side evaluated M or h separately")
+
+    monkeypatch.setattr(BuiltWalker, "dynamics_terms", counted)
+    monkeypatch.setattr(BuiltWalker, "mass_matrix", forbidden)
+    monkeypatch.setattr(BuiltWalker, "bias_forces", forbidden)
+    dx = sup.rhs(0.0, x, q)
+    assert calls["dynamics_terms"] == 1
+    _, qdd_free = sup.unpack(np.concatenate((x[m : 2 * m], dx[m : 2 * m])), q)
+    assert _rel_err(qdd_free, expected) < 1e-12
+
+
 # -- derived equations conserve energy (kneed, torso) -------------------------------------------
 
 

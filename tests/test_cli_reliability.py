@@ -230,7 +230,7 @@ def test_basin_unwritable_out_fails_before_computing(
 
 @pytest.mark.parametrize(
     ("command", "module", "function"),
-    [(["bifurcation"], "heelstrike.plots.gait", "write_bifurcation"),
+    [(["bifurcation"], "heelstrike.outputs", "write_bifurcation"),
      (["map"], "heelstrike.analysis.gait_map", "gait_map"),
      (["study", "cost"], "heelstrike.analysis.cost_study", "cost_study")],
 )

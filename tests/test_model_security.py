@@ -158,6 +158,35 @@ def test_tampered_cache_entry_is_rebuilt_not_run(tmp_path: Path, tamper: str) ->
     assert "PWNED" not in path.read_text()  # the entry was rewritten
 
 
+DYNAMICS_TAMPERINGS = [
+    '\ndef dynamics_terms(q, qd, p, slope, lead_m, lead_h):\n    return open("PWNED", "w"), q\n',
+    "\ndef dynamics_terms(q, qd, p, slope, lead_m, lead_h):\n    return q.__class__, qd\n",
+    # plain arithmetic, but a second definition would silently replace the generated one
+    "\ndef dynamics_terms(q, qd, p, slope, lead_m, lead_h):\n"
+    "    M = zeros(lead_m + (4, 4))\n    h = zeros(lead_h + (4,))\n    return M, h\n",
+]
+
+
+@pytest.mark.parametrize("tamper", DYNAMICS_TAMPERINGS)
+def test_tampered_dynamics_terms_is_rebuilt_not_run(tmp_path: Path, tamper: str) -> None:
+    """The combined ``(M, h)`` function (the scipy right-hand side's) is verified like the rest."""
+    path, w = _cached_file()
+    assert "def dynamics_terms(" in path.read_text()
+    rng = np.random.default_rng(5)
+    q, qd = rng.normal(size=4), rng.normal(size=4)
+    with open(path, "a", encoding="utf-8") as fh:
+        fh.write(tamper)
+    with pytest.warns(CacheWarning, match="failed verification"):
+        w2 = load_walker("compass")
+    assert not w2.model.from_cache
+    assert not (tmp_path / "PWNED").exists()
+    M, h = w2.dynamics_terms(q, qd, 0.1)
+    np.testing.assert_allclose(M, w.mass_matrix(q), rtol=1e-13, atol=1e-13)
+    np.testing.assert_allclose(h, w.bias_forces(q, qd, 0.1), rtol=1e-13, atol=1e-13)
+    assert np.all(np.linalg.eigvalsh(M) > 0)
+    assert path.read_text().count("def dynamics_terms(") == 1  # the entry was rewritten
+
+
 def test_world_writable_or_foreign_cache_entries_are_not_used(tmp_path: Path) -> None:
     path, _ = _cached_file()
     os.chmod(path, 0o666)
@@ -219,6 +248,7 @@ def test_generated_modules_verify_and_run_without_builtins() -> None:
         "def f(q):\n    return q if q else q\n",
         "def __init__(q):\n    return q\n",
         "def f(q):\n    import os\n    return q\n",
+        "def f(q):\n    return q\n\ndef f(q):\n    return q\n",
     ],
 )
 def test_verifier_rejects(body: str) -> None:

@@ -8,14 +8,10 @@ import pytest
 from matplotlib.figure import Figure
 
 from heelstrike.analysis.limit_cycle import PoincareMap
+from heelstrike.analysis.walk_tables import strobe_table, walk_energy_table, walk_impact_table
 from heelstrike.cli import main
 from heelstrike.models.compass import CompassGait
-from heelstrike.plots.gait import (
-    model_diagram,
-    strobe_table,
-    walk_energy_table,
-    walk_impact_table,
-)
+from heelstrike.plots.gait import model_diagram
 
 # Post-impact state of the R = 0.3 m gait on a 3 deg slope (rounded: close to, not on, the cycle).
 GUESS = "--guess=-0.386284,1.419327,-0.967944"

@@ -5,18 +5,17 @@
 (``pip install 'heelstrike[scale]'``) adds Dask process pools and clusters (``dask``,
 ``distributed``), resumable Zarr sweep stores (``zarr``) and netCDF-4 files (``netCDF4``).
 Without ``netCDF4``, netCDF files are written in the classic 64-bit-offset format through
-scipy (readable by every netCDF library and by :func:`xarray.open_dataset`).
+scipy (readable by every netCDF library and by :func:`xarray.open_dataset`); the writing is
+:func:`heelstrike.io.write_netcdf`'s. This module holds the import helpers only.
 """
 
 from __future__ import annotations
 
 import importlib
 import importlib.util
-from pathlib import Path
 from types import ModuleType
-from typing import Any
 
-__all__ = ["MissingExtraError", "require", "write_netcdf"]
+__all__ = ["MissingExtraError", "available", "require"]
 
 
 class MissingExtraError(ImportError):
@@ -58,24 +57,3 @@ def available(module: str) -> bool:
     except (ImportError, ValueError):
         return False
 
-
-def write_netcdf(ds: Any, path: str | Path) -> Path:
-    """Write an :class:`xarray.Dataset` to ``path`` as netCDF and return the path.
-
-    netCDF-4 (HDF5) with the ``scale`` extra's ``netCDF4``; otherwise the classic 64-bit-offset
-    format through scipy, which holds the same data for the datasets heelstrike writes
-    (booleans are stored as ``int8`` by xarray in both). A dataset that the classic format
-    cannot hold raises :class:`MissingExtraError`.
-    """
-    p = Path(path)
-    if available("netCDF4"):
-        ds.to_netcdf(p, engine="netcdf4")
-        return p
-    try:
-        ds.to_netcdf(p, engine="scipy", format="NETCDF3_64BIT")
-    except (ValueError, TypeError, OverflowError) as exc:
-        p.unlink(missing_ok=True)
-        raise MissingExtraError(
-            missing_extra_message(f"netCDF-4 output ({exc})")
-        ) from exc
-    return p

@@ -21,7 +21,12 @@ Main entry points:
 - :func:`~heelstrike.analysis.model_gaits.find_model_gait`,
   :func:`~heelstrike.analysis.model_gaits.impact_map`: gaits and impact maps of described
   walkers;
-- :func:`~heelstrike.analysis.sweep.sweep`: parameter sweeps with a resumable store.
+- :func:`~heelstrike.analysis.sweep.sweep`: parameter sweeps with a resumable store;
+- :func:`~heelstrike.analysis.newton.newton_solve`: the one Newton engine every gait search
+  runs (batched starts, per-start :class:`~heelstrike.analysis.newton.NewtonStatus`).
+- :func:`~heelstrike.analysis.walk_tables.walk_energy_table` and the other tables of
+  :mod:`~heelstrike.analysis.walk_tables`: a simulated walk as DataFrames (what the walk's
+  figures draw).
 
 ``gait_map``, ``sweep`` and ``cost_study`` name both a submodule and its main function; here
 they stay the submodules (``from heelstrike.analysis import sweep`` gives the module, as it
@@ -43,8 +48,8 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "BRANCH_NOTE", "GAIT_VARIABLES", "impact_angle_for_step_length", "paper_eta", "save_study",
     ),
     "gait_map": (
-        "GaitMap", "NewtonGait", "model_bifurcation", "model_gait_map", "newton_gait",
-        "newton_gaits",
+        "GaitMap", "NewtonGait", "compass_bifurcation", "model_bifurcation", "model_gait_map",
+        "newton_gait", "newton_gaits",
     ),
     "heel_strike": (
         "CONTACT_TOLERANCE", "LIFT_TOLERANCE", "HeelStrikeStudy", "NotAHeelStrikeError",
@@ -58,10 +63,11 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "ANGLE", "ImpactMap", "ModelGait", "ModelHeelStrike", "find_model_gait", "impact_map",
         "model_heel_strike", "symmetric_heel_strike_state",
     ),
+    "newton": ("NewtonSolution", "NewtonStatus", "newton_solve"),
     "paper": (
         "FIGURE_RADII", "MAX_IMPACT_ANGLE", "Figure3bData", "PaperFigureData", "figure2_data",
         "figure3a_data", "figure3b_data", "heel_strike_table", "impact_angle_grid",
-        "paper_figure_data", "write_figure_data",
+        "paper_figure_data",
     ),
     "powered": (
         "ACTUATIONS", "ActuationFamily", "PoweredGait", "PoweredGaitNotFoundError",
@@ -71,6 +77,10 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
     "sweep": (
         "KNOWN_UNITS", "SweepError", "SweepFunction", "SweepStoreLockedError",
         "SweepStoreMismatchError", "SweepStoreRepairWarning", "sweep_progress",
+    ),
+    "walk_tables": (
+        "WalkResult", "model_phase_portrait_table", "phase_portrait_table", "step_table",
+        "strobe_table", "walk_energy_table", "walk_impact_table",
     ),
 }
 _SUBMODULE = {name: module for module, names in _PUBLIC.items() for name in names}

@@ -33,6 +33,8 @@ import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
+from heelstrike._results import ResultDictMixin
+from heelstrike._typing import FloatArray
 from heelstrike.analysis.limit_cycle import find_limit_cycle
 from heelstrike.dynamics.compiled import ensemble_walk
 from heelstrike.dynamics.hybrid import WalkStatus
@@ -43,7 +45,6 @@ if TYPE_CHECKING:
     from heelstrike.models.builder import BuiltWalker
     from heelstrike.models.description import WalkerDescription
 
-FloatArray = NDArray[np.float64]
 
 __all__ = [
     "BYTES_PER_POINT",
@@ -119,7 +120,7 @@ def _check_memory(grid: tuple[int, int]) -> None:
 
 
 @dataclass(frozen=True, kw_only=True)
-class Basin:
+class Basin(ResultDictMixin):
     """A computed basin of attraction.
 
     Attributes

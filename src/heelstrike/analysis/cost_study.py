@@ -38,7 +38,7 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq
 
-from heelstrike._optional import write_netcdf
+from heelstrike._typing import FloatArray
 from heelstrike.analysis.heel_strike import heel_strike_study
 from heelstrike.analysis.powered import (
     ACTUATIONS,
@@ -48,9 +48,8 @@ from heelstrike.analysis.powered import (
     find_model_powered_gait,
     find_powered_gait,
 )
+from heelstrike.io import write_netcdf
 from heelstrike.models.compass import CompassGait
-
-FloatArray = NDArray[np.float64]
 
 __all__ = [
     "BRANCH_NOTE",
@@ -317,8 +316,8 @@ def _check_model(
 def _model_key(model: Any) -> str:
     """What identifies a described walker in a resumable store: its file's content and values."""
     desc = model.description
-    key = getattr(desc, "structure_key", None)
-    return f"{model!r}|{key() if callable(key) else desc!r}"
+    key = "None" if desc is None else desc.structure_key()
+    return f"{model!r}|{key}"
 
 
 #: How each entry of the study was chosen (also on stdout and in the figures).
@@ -469,10 +468,8 @@ def _fresh_start(w: Any, q3: float, w3: float, w4: float, p0: float) -> FloatArr
     """Newton start on ``w``'s section: stance angle ``-q3``, rates ``(w3, w4)``, parameter
     ``p0``; further joints of a described walker (a torso) start upright (relative angle
     ``q3``, rate ``-w3``), as in :func:`heelstrike.analysis.powered._model_seed_sections`."""
-    if isinstance(w, CompassGait):
-        return np.array([-q3, w3, w4, p0])
     d = len(w.section_names)
-    n_ang = d - len(w._section_v)
+    n_ang = w.n_section_angles
     z = np.zeros(d + 1)
     z[0], z[n_ang], z[n_ang + 1], z[d] = -q3, w3, w4, p0
     if n_ang > 1:

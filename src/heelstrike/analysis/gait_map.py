@@ -14,7 +14,6 @@ radius per chunk).
 from __future__ import annotations
 
 import functools
-import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -22,6 +21,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from heelstrike._results import ResultDictMixin
+from heelstrike._typing import FloatArray
 from heelstrike.analysis.limit_cycle import GaitNotFoundError, find_limit_cycle
 from heelstrike.dynamics.compiled import COMPLETED, ensemble_walk
 from heelstrike.models.compass import CompassGait
@@ -33,11 +34,11 @@ if TYPE_CHECKING:
     from heelstrike.dynamics.phased import PhasedWalker
     from heelstrike.models.builder import BuiltWalker
 
-FloatArray = NDArray[np.float64]
 
 __all__ = [
     "GaitMap",
     "NewtonGait",
+    "compass_bifurcation",
     "gait_map",
     "model_bifurcation",
     "model_gait_map",
@@ -47,7 +48,7 @@ __all__ = [
 
 
 @dataclass(frozen=True, kw_only=True)
-class NewtonGait:
+class NewtonGait(ResultDictMixin):
     """A period-one gait found on the compiled map.
 
     Attributes
@@ -60,6 +61,8 @@ class NewtonGait:
         Step duration (s), step length (m), ``T_c`` (J), ``q3`` at heel strike (rad).
     residual : float
         ``|P(z) - z|``.
+    iterations : int
+        Newton iterations, counted as maps of an iterate (1: the guess was already periodic).
     """
 
     z: FloatArray
@@ -69,6 +72,7 @@ class NewtonGait:
     collision_loss: float
     impact_angle: float
     residual: float
+    iterations: int = 0
 
     @property
     def spectral_radius(self) -> float:
@@ -105,9 +109,11 @@ def newton_gaits(
 ) -> list[NewtonGait | str]:
     """Newton's method for ``P(z) = z`` on the compiled map, from many guesses at once.
 
-    All unconverged iterates advance together: each iteration maps every iterate and its 6
-    central-difference neighbours in one ensemble call, and the damped line search (halving
-    until the walker takes a step) evaluates every pending trial point in one call per halving.
+    Runs the one Newton engine (:func:`~heelstrike.analysis.newton.newton_solve`) on
+    ``P(z) - z``. All unconverged iterates advance together: each iteration maps every iterate
+    and its 6 central-difference neighbours in one ensemble call, and the damped line search
+    (halving until the walker takes a step) evaluates every pending trial point in one call per
+    halving.
 
     Parameters
     ----------
@@ -133,76 +139,32 @@ def newton_gaits(
     list of NewtonGait or str
         Per guess, the converged gait or the reason it failed.
     """
-    Z = np.atleast_2d(np.asarray(guesses, dtype=float)).reshape(-1, 3).copy()
-    K = Z.shape[0]
-    out: list[NewtonGait | str] = [f"Newton did not converge in {max_iter} iterations"] * K
-    eye = np.eye(3)
-    active = np.arange(K)
-    for it in range(max_iter + 1):
-        if active.size == 0:
-            break
-        if deadline is not None and time.monotonic() > deadline:
-            for k in active:
-                out[k] = "time limit reached"
-            break
-        z = Z[active]  # (A, 3)
-        dzs = fd_step * np.maximum(1.0, np.abs(z))  # (A, 3)
-        zc, offset = z[:, None, :], eye * dzs[:, None, :]
-        pts = np.concatenate((zc, zc + offset, zc - offset), axis=1)  # (A, 7, 3)
-        mapped, res = _map_many(walker, pts.reshape(-1, 3), slope, rtol, atol)
-        mapped = mapped.reshape(-1, 7, 3)
-        Pz = mapped[:, 0]
-        jac = np.swapaxes((mapped[:, 1:4] - mapped[:, 4:7]) / (2.0 * dzs[:, :, None]), 1, 2)
-        F = Pz - z
-        residual = np.linalg.norm(F, axis=1)
-        keep = np.ones(active.size, dtype=bool)
-        for a, k in enumerate(active):
-            if not np.all(np.isfinite(Pz[a])):
-                out[k] = f"the walker fails to take a step from {np.round(z[a], 6)}"
-                keep[a] = False
-            elif residual[a] < tol:
-                keep[a] = False
-                if not np.all(np.isfinite(jac[a])):
-                    out[k] = "a step failed while estimating the Jacobian"
-                    continue
-                mult = np.linalg.eigvals(jac[a]).astype(complex)
-                mult = mult[np.argsort(-np.abs(mult), kind="stable")]
-                row = 7 * a
-                out[k] = NewtonGait(
-                    z=z[a].copy(),
-                    multipliers=mult,
-                    period=float(res.step_time[row, 0]),
-                    step_length=float(res.step_length[row, 0]),
-                    collision_loss=float(res.collision_loss[row, 0]),
-                    impact_angle=float(res.impact_angle[row, 0]),
-                    residual=float(residual[a]),
-                )
-            elif it == max_iter or not np.all(np.isfinite(jac[a])):
-                out[k] = (
-                    "a step failed while estimating the Jacobian"
-                    if not np.all(np.isfinite(jac[a]))
-                    else f"Newton did not converge in {max_iter} iterations"
-                )
-                keep[a] = False
-        step = np.zeros_like(z)
-        for a, k in enumerate(active):
-            if keep[a]:
-                try:
-                    step[a] = np.linalg.solve(jac[a] - eye, -F[a])
-                except np.linalg.LinAlgError:
-                    out[k] = "singular Newton system"
-                    keep[a] = False
-        # damped step, all pending iterates per halving: keep the walkers taking steps
-        lam = np.ones(active.size)
-        pending = keep.copy()
-        while np.any(pending) and np.min(lam[pending]) > 1e-3:
-            idx = np.flatnonzero(pending)
-            trial, _ = _map_many(walker, z[idx] + lam[idx, None] * step[idx], slope, rtol, atol)
-            fine = np.all(np.isfinite(trial), axis=1)
-            pending[idx[fine]] = False
-            lam[idx[~fine]] *= 0.5
-        Z[active[keep]] = z[keep] + lam[keep, None] * step[keep]
-        active = active[keep]
+    from heelstrike.analysis.newton import NewtonStatus, newton_solve
+
+    Z = np.atleast_2d(np.asarray(guesses, dtype=float)).reshape(-1, 3)
+    sol = newton_solve(lambda X: _map_many(walker, X, slope, rtol, atol)[0] - X, Z, tol=tol,
+                       max_iter=max_iter, fd_step=fd_step, deadline=deadline)
+    out: list[NewtonGait | str] = [sol.message(k) for k in range(Z.shape[0])]
+    done = np.flatnonzero(sol.converged)
+    if done.size == 0:
+        return out
+    _, res = _map_many(walker, sol.x[done], slope, rtol, atol)  # the step of each gait
+    for j, k in enumerate(done):
+        jac = sol.jacobian[k] + np.eye(3)  # DP = D(P - id) + I
+        if not np.all(np.isfinite(jac)):
+            out[k] = NewtonStatus.JACOBIAN_FAILED.message
+            continue
+        mult = np.linalg.eigvals(jac).astype(complex)
+        out[k] = NewtonGait(
+            z=sol.x[k].copy(),
+            multipliers=mult[np.argsort(-np.abs(mult), kind="stable")],
+            period=float(res.step_time[j, 0]),
+            step_length=float(res.step_length[j, 0]),
+            collision_loss=float(res.collision_loss[j, 0]),
+            impact_angle=float(res.impact_angle[j, 0]),
+            residual=float(sol.residual_norm[k]),
+            iterations=int(sol.iterations[k]),
+        )
     return out
 
 
@@ -363,7 +325,7 @@ def _map_chunk(
 
 
 @dataclass(frozen=True, kw_only=True)
-class GaitMap:
+class GaitMap(ResultDictMixin):
     """The stable-gait map.
 
     Attributes
@@ -684,6 +646,62 @@ def model_gait_map(
     return GaitMap(dataset=ds)
 
 
+def compass_bifurcation(
+    walker: CompassGait,
+    slopes: ArrayLike,
+    *,
+    transient: int = 50,
+    record: int = 16,
+    continuation_points: int = 12,
+    progress: bool = False,
+) -> tuple[BifurcationDiagram, Continuation]:
+    """Slope bifurcation diagram of the compass gait and its period-one branch.
+
+    The gait at the first slope (:func:`~heelstrike.analysis.limit_cycle.find_limit_cycle`)
+    seeds the brute-force diagram
+    (:func:`~heelstrike.analysis.limit_cycle.bifurcation_diagram`: ``transient`` steps
+    discarded, ``record`` impact angles and step periods kept per slope) and the continuation of
+    the period-one gait over ``continuation_points`` slopes evenly spaced over the same range
+    (:func:`~heelstrike.analysis.limit_cycle.continue_limit_cycle`, tolerances 1e-10), which
+    marks the period-doubling slopes. :func:`model_bifurcation` is the same for a described
+    walker.
+
+    Parameters
+    ----------
+    walker : CompassGait
+    slopes : array_like, shape (K,)
+        Increasing slopes (rad), > 0.
+    transient, record : int
+        Steps discarded and recorded per slope.
+    continuation_points : int
+        Slopes of the branch.
+    progress : bool
+        Report progress on stderr.
+
+    Returns
+    -------
+    (BifurcationDiagram, Continuation)
+
+    Raises
+    ------
+    GaitNotFoundError
+        If there is no gait at the first slope.
+    """
+    from heelstrike.analysis.limit_cycle import bifurcation_diagram, continue_limit_cycle
+
+    sl = np.asarray(slopes, dtype=float).ravel()
+    first = find_limit_cycle(walker, slope=float(sl[0]), progress=progress)
+    diagram = bifurcation_diagram(
+        walker, sl, guess=first.fixed_point, transient=transient, record=record,
+        progress=progress,
+    )
+    branch = continue_limit_cycle(
+        walker, "slope", np.linspace(sl[0], sl[-1], continuation_points),
+        guess=first.fixed_point, progress=progress, rtol=1e-10, atol=1e-10,
+    )
+    return diagram, branch
+
+
 def model_bifurcation(
     walker: BuiltWalker,
     slopes: ArrayLike,
@@ -735,15 +753,11 @@ def model_bifurcation(
         PoincareMap,
     )
     from heelstrike.analysis.model_gaits import find_model_gait
-    from heelstrike.dynamics.phased import PhasedWalker, simulate_phased
+    from heelstrike.dynamics.backends import simulator as backend_simulator
+    from heelstrike.dynamics.phased import PhasedWalker
 
-    if backend == "compiled":
-        from heelstrike.dynamics.compiled_phased import simulate_phased_compiled as simulator
-    elif backend == "scipy":
-        simulator = simulate_phased
-    else:
-        raise ValueError(f"backend must be 'compiled' or 'scipy', got {backend!r}")
     w = PhasedWalker.from_built(walker)
+    simulator = backend_simulator(w, backend)  # ValueError: unknown or unsupported backend
     sl = np.asarray(slopes, dtype=float).ravel()
     if sl.size < 1 or np.any(np.diff(sl) <= 0) or sl[0] <= 0:
         raise ValueError("slopes must be positive and increasing")

@@ -19,12 +19,14 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from heelstrike._results import ResultDictMixin
+from heelstrike._typing import FloatArray
 from heelstrike.core._scalars import python_scalars
 from heelstrike.core.impact import ImpactResult, impact
+from heelstrike.models._contact import LIFT_TOLERANCE, trailing_foot_lifts
 from heelstrike.models.base import PlanarWalker
 from heelstrike.models.compass import CompassGait, heel_strike_state
 
-FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
 __all__ = [
@@ -37,31 +39,6 @@ __all__ = [
     "step_length",
     "trailing_foot_lifts",
 ]
-
-#: Relative tolerance on the trailing foot's post-impact vertical velocity ``q2_dot+``: the foot
-#: lifts if ``q2_dot+ > LIFT_TOLERANCE * l (|q3_dot-| + |q4_dot-|)``. It absorbs round-off, so that
-#: McGeer's wheel (``R = l``, where ``q2_dot+ = 0`` exactly) is reported as not lifting.
-LIFT_TOLERANCE = 1e-9
-
-def trailing_foot_lifts(normal_velocity: ArrayLike, velocity_scale: ArrayLike) -> BoolArray:
-    """The one definition of an admissible heel strike: the trailing foot lifts.
-
-    Parameters
-    ----------
-    normal_velocity : array_like, shape (...)
-        Post-impact normal (upward) velocity of the trailing foot's contact point (m/s),
-        ``q2_dot+`` for the paper's walker.
-    velocity_scale : array_like, shape (...)
-        Size of the pre-impact velocities (m/s), e.g. ``l (|q3_dot-| + |q4_dot-|)``.
-
-    Returns
-    -------
-    ndarray of bool, shape (...)
-        ``normal_velocity > LIFT_TOLERANCE * velocity_scale``.
-    """
-    v = np.asarray(normal_velocity, dtype=float)
-    return np.asarray(v > LIFT_TOLERANCE * np.asarray(velocity_scale, dtype=float))
-
 
 #: Largest foot clearance accepted in a heel-strike state, relative to the leg length: at a heel
 #: strike both feet touch the ground (``|clearance| <= CONTACT_TOLERANCE * l``; 1 um for a
@@ -132,7 +109,7 @@ def step_length(walker: CompassGait, impact_angle: ArrayLike) -> FloatArray:
 
 
 @dataclass(frozen=True, kw_only=True)
-class HeelStrikeStudy:
+class HeelStrikeStudy(ResultDictMixin):
     """Energy decomposition of one (batched) heel strike of the circular-feet compass gait.
 
     All arrays share the broadcast shape ``(...)`` of the impact angle and the walker's

@@ -14,17 +14,21 @@ from __future__ import annotations
 import sys
 import time
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass, replace
-from typing import Any
+from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from heelstrike._results import ResultDictMixin
+from heelstrike._typing import FloatArray
 from heelstrike.dynamics.hybrid import PushOff, WalkResult, simulate
 from heelstrike.dynamics.single_support import TorqueLaw
 from heelstrike.models.base import PlanarWalker
 
-FloatArray = NDArray[np.float64]
+if TYPE_CHECKING:
+    from heelstrike.analysis.gait_map import NewtonGait
+
 
 __all__ = [
     "BifurcationDiagram",
@@ -132,8 +136,45 @@ class PoincareMap:
         return Jac
 
 
+class _WalkField:
+    """Data descriptor of :attr:`LimitCycle.walk`: holds a :class:`WalkResult`, or a
+    zero-argument callable that simulates it, called on first access (then kept).
+
+    A gait characterised on the compiled backend needs no trajectory; its ``walk`` (the scipy
+    reference's samples of one period) is simulated only if asked for.
+    """
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self._slot = f"_{name}_value"
+
+    def __get__(self, obj: object | None, objtype: type | None = None) -> WalkResult:
+        if obj is None:
+            raise AttributeError("walk is set per instance")
+        value = obj.__dict__[self._slot]
+        if not isinstance(value, WalkResult):
+            value = value()
+            obj.__dict__[self._slot] = value
+        return cast(WalkResult, value)
+
+    def __set__(self, obj: object, value: WalkResult | Callable[[], WalkResult]) -> None:
+        if isinstance(value, _WalkField):  # the dataclass default: the argument was left out
+            raise TypeError(f"{type(obj).__name__}() needs the keyword argument 'walk'")
+        obj.__dict__[self._slot] = value
+
+
 @dataclass(frozen=True, kw_only=True)
-class LimitCycle:
+class _OneStep:
+    """``pmap.walk(z, 1)`` deferred (picklable, unlike a closure)."""
+
+    pmap: PoincareMap
+    z: FloatArray
+
+    def __call__(self) -> WalkResult:
+        return self.pmap.walk(self.z, 1)
+
+
+@dataclass(frozen=True, kw_only=True)
+class LimitCycle(ResultDictMixin):
     """A period-one gait and its energetics.
 
     Attributes
@@ -171,7 +212,9 @@ class LimitCycle:
     slope : float
         Ground slope (rad).
     walk : WalkResult
-        One simulated period from the fixed point.
+        One simulated period from the fixed point (the map's simulator; for a gait
+        characterised on the compiled backend the scipy reference, simulated on first access).
+        The constructor also takes a zero-argument callable returning it.
     """
 
     fixed_point: FloatArray
@@ -193,7 +236,7 @@ class LimitCycle:
     residual: float
     iterations: int
     slope: float
-    walk: WalkResult
+    walk: _WalkField = field(default=_WalkField(), repr=False, compare=False)
 
     @property
     def spectral_radius(self) -> float:
@@ -293,18 +336,15 @@ def _check_passive_slope(pmap: PoincareMap) -> None:
 
 
 def _compiled_ok(pmap: PoincareMap) -> bool:
-    """Whether the batched compiled map can seed the search (passive scalar CompassGait)."""
-    from heelstrike.models.compass import CompassGait
-
+    """Whether the batched compiled map can seed the search: a passive walker, not a batch,
+    simulated by the compass-gait kernel (:mod:`heelstrike.dynamics.compiled`)."""
     w = pmap.walker
     return (
-        isinstance(w, CompassGait)
+        w.compiled_kernel == "compass"
         and pmap.torque is None
         and pmap.push_off is None
         and pmap.simulator is None
-        and all(np.ndim(getattr(w, f)) == 0 for f in (
-            "hip_mass", "leg_mass", "leg_length", "leg_com_from_hip", "foot_radius",
-            "leg_inertia", "gravity"))
+        and not w.is_batched
     )
 
 
@@ -324,48 +364,74 @@ def _add_distinct(found: list[FloatArray], z: FloatArray, tol: float = SAME_GAIT
     return False
 
 
+#: ``(tol, rtol = atol)`` of the first, coarse Newton stage of the compiled search.
+_COARSE_NEWTON = (1e-7, 1e-9)
+
+
 def _compiled_seeds(
     walker: Any, slope: float, rtol: float, atol: float, deadline: float, progress: bool,
-    n_seeds: int = 40,
-) -> list[FloatArray]:
-    """Distinct fixed points of the compiled map found from a grid of seeds.
+    n_seeds: int = 40, tol: float = 1e-10, fd_step: float = 1e-6,
+) -> list[NewtonGait]:
+    """Distinct gaits of the compiled map found from a grid of seeds.
 
     The grid is mapped once in one batched call; the seeds that survive 80 steps give the
     attracting gaits, the most nearly periodic seeds (smallest ``|P(z) - z|``) the others. Newton
-    (on the compiled map) is run from each; duplicates are dropped.
+    runs on the compiled map in two stages: from every start on the map at rtol = atol = 1e-9 to
+    ``|P(z) - z| < 1e-7`` (:data:`_COARSE_NEWTON`), then, from the distinct coarse fixed points
+    only (closer than 1e-5: the same gait), at ``rtol``, ``atol``, ``tol`` and ``fd_step`` of
+    :func:`find_limit_cycles`; duplicates are dropped. Every compiled call is serial (one numba
+    kernel to load).
     """
     from heelstrike.analysis.gait_map import newton_gaits
     from heelstrike.dynamics.compiled import COMPLETED, ensemble_walk
 
     Z = _seed_grid()
-    r1 = ensemble_walk(walker, Z, slope, steps=1, rtol=1e-7, atol=1e-8, record=False)
+    r1 = ensemble_walk(
+        walker, Z, slope, steps=1, rtol=1e-7, atol=1e-8, record=False, parallel=False
+    )
     ok = r1.status == COMPLETED
     if not np.any(ok):
         return []
     res = np.linalg.norm(r1.z - Z, axis=1)
     res[~ok] = np.inf
-    rk = ensemble_walk(walker, Z[ok], slope, steps=80, rtol=1e-7, atol=1e-8, record=False)
+    rk = ensemble_walk(
+        walker, Z[ok], slope, steps=80, rtol=1e-7, atol=1e-8, record=False, parallel=False
+    )
     starts: list[FloatArray] = []
     for z in rk.z[rk.status == COMPLETED]:
         _add_distinct(starts, z, 1e-3)
     for i in np.argsort(res)[:n_seeds]:
         if np.isfinite(res[i]):
             starts.append(Z[i])
-    found: list[FloatArray] = []
+    found: list[NewtonGait] = []
     if not starts:
         return found
-    results = newton_gaits(
-        walker, slope, np.asarray(starts), max_iter=15, rtol=rtol, atol=atol, deadline=deadline
+    c_tol, c_rtol = _COARSE_NEWTON
+    coarse = newton_gaits(
+        walker, slope, np.asarray(starts), tol=max(tol, c_tol), max_iter=15, fd_step=fd_step,
+        rtol=max(rtol, c_rtol), atol=max(atol, c_rtol), deadline=deadline,
     )
-    for g in results:
+    near: list[FloatArray] = []
+    for g in coarse:
         if not isinstance(g, str):
-            _add_distinct(found, g.z)
+            _add_distinct(near, g.z, 1e-5)
+    if not near:
+        return found
+    results = newton_gaits(
+        walker, slope, np.asarray(near), tol=tol, max_iter=15, fd_step=fd_step, rtol=rtol,
+        atol=atol, deadline=deadline,
+    )
+    zs: list[FloatArray] = []
+    for g in results:
+        if not isinstance(g, str) and _add_distinct(zs, g.z):
+            found.append(g)
     return found
 
 
 def _radius_continuation_seeds(
-    walker: Any, slope: float, rtol: float, atol: float, deadline: float, progress: bool
-) -> list[FloatArray]:
+    walker: Any, slope: float, rtol: float, atol: float, deadline: float, progress: bool,
+    tol: float = 1e-10, fd_step: float = 1e-6,
+) -> list[NewtonGait]:
     """Gaits of a round-footed walker continued in the foot radius from the point foot's (steps
     of at most 0.05 m), as :func:`heelstrike.analysis.gait_map.gait_map` does."""
     from heelstrike.analysis.gait_map import newton_gait
@@ -373,58 +439,42 @@ def _radius_continuation_seeds(
     R = float(walker.foot_radius)
     if R <= 0.0:
         return []
-    out: list[FloatArray] = []
+    out: list[NewtonGait] = []
+    zs: list[FloatArray] = []
     base = _compiled_seeds(walker.replace(foot_radius=0.0), slope, rtol, atol, deadline, False)
     n_sub = max(1, int(np.ceil(R / 0.05)))
-    for z in _progress(base, progress, "continuing gaits in the foot radius"):
+    for g in _progress(base, progress, "continuing gaits in the foot radius"):
         try:
             for Rs in np.linspace(0.0, R, n_sub + 1)[1:]:
                 if time.monotonic() > deadline:
                     return out
-                z = newton_gait(walker.replace(foot_radius=float(Rs)), slope, z,
-                                rtol=rtol, atol=atol).z
+                g = newton_gait(walker.replace(foot_radius=float(Rs)), slope, g.z, tol=tol,
+                                fd_step=fd_step, rtol=rtol, atol=atol)
         except GaitNotFoundError:
             continue
-        _add_distinct(out, z)
+        if _add_distinct(zs, g.z):
+            out.append(g)
     return out
 
 
 def _newton(
     pmap: PoincareMap, z: FloatArray, tol: float, max_iter: int, fd_step: float
 ) -> tuple[FloatArray, float, int]:
-    """Newton's method for ``P(z) = z``; returns ``(z*, residual, iterations)``."""
-    residual = np.inf
-    it = 0
-    while True:
-        it += 1
-        if it > max_iter:
-            raise GaitNotFoundError(
-                f"Newton did not converge in {max_iter} iterations (residual {residual:.2e})"
-            )
-        Pz = pmap(z)
-        if not np.all(np.isfinite(Pz)):
-            raise GaitNotFoundError(
-                f"the walker fails to take a step from the Newton iterate {np.round(z, 6)}"
-            )
-        F = Pz - z
-        residual = float(np.linalg.norm(F))
-        if residual < tol:
-            return z, residual, it
-        Jac = pmap.jacobian(z, fd_step)
-        if not np.all(np.isfinite(Jac)):
-            raise GaitNotFoundError("a step failed while estimating the Jacobian")
-        try:
-            dz = np.linalg.solve(Jac - np.eye(z.size), -F)
-        except np.linalg.LinAlgError as exc:
-            raise GaitNotFoundError("singular Newton system (a multiplier equals 1)") from exc
-        # damped step: keep the walker taking steps
-        lam = 1.0
-        while lam > 1e-3:
-            z_try = z + lam * dz
-            if np.all(np.isfinite(pmap(z_try))):
-                break
-            lam *= 0.5
-        z = z + lam * dz
+    """Newton's method for ``P(z) = z`` on ``pmap`` (the one engine,
+    :func:`~heelstrike.analysis.newton.newton_solve`); returns ``(z*, residual, iterations)``.
+
+    Raises
+    ------
+    GaitNotFoundError
+        If a step fails, the system is singular or Newton does not converge.
+    """
+    from heelstrike.analysis.newton import newton_solve
+
+    sol = newton_solve(lambda Z: np.stack([pmap(x) for x in Z]) - Z, z, tol=tol,
+                       max_iter=max_iter, fd_step=fd_step, jacobian_at_root=False)
+    if not sol.converged[0]:
+        raise GaitNotFoundError(sol.message(0))
+    return sol.x[0], float(sol.residual_norm[0]), int(sol.iterations[0])
 
 
 def _preference(c: LimitCycle) -> tuple[int, float]:
@@ -457,7 +507,9 @@ def find_limit_cycles(
     compiled map. If nothing is found for a round foot, the point foot's gaits are continued in
     the radius. Other walkers use a coarse grid, map iteration and Newton from the most nearly
     periodic seeds. Every distinct fixed point is then converged with ``method`` and
-    characterised.
+    characterised; with ``method="compiled"`` the compiled Newton solution (converged to ``tol``
+    with the same ``fd_step``) is the gait, characterised on the compiled backend (see
+    :func:`find_limit_cycle`).
 
     Parameters
     ----------
@@ -487,9 +539,14 @@ def find_limit_cycles(
     _check_passive_slope(pmap)
     deadline = time.monotonic() + float(time_limit)
     if _compiled_ok(pmap):
-        starts = _compiled_seeds(walker, slope, rtol, atol, deadline, progress)
-        if not starts:
-            starts = _radius_continuation_seeds(walker, slope, rtol, atol, deadline, progress)
+        gaits = _compiled_seeds(
+            walker, slope, rtol, atol, deadline, progress, tol=tol, fd_step=fd_step
+        )
+        if not gaits:
+            gaits = _radius_continuation_seeds(
+                walker, slope, rtol, atol, deadline, progress, tol=tol, fd_step=fd_step
+            )
+        starts = [g.z for g in gaits]
         if not starts and time.monotonic() > deadline:
             raise GaitNotFoundError(f"gave up after {time_limit:g} s (time limit of the search)")
         if not starts:
@@ -499,9 +556,16 @@ def find_limit_cycles(
                 + (", nor by continuation in the foot radius from the point foot"
                    if float(walker.foot_radius) > 0 else "")  # type: ignore[attr-defined]
             )
+        if method == "compiled":  # already converged on this map: characterise them
+            cycles = [
+                _characterise_compiled(pmap, g.z, g.period, g.multipliers, g.residual,
+                                       g.iterations)
+                for g in gaits
+            ]
+            return tuple(sorted(cycles, key=_preference))
     else:
         starts = [_automatic_guess(pmap, progress)]
-    cycles: list[LimitCycle] = []
+    cycles = []
     zs: list[FloatArray] = []
     last: Exception | None = None
     for z0 in starts:
@@ -560,8 +624,11 @@ def find_limit_cycle(
     progress : bool
         Show a progress bar (stderr, after 2 s) during the automatic search.
     method : {"scipy", "compiled"}
-        Poincare map used by Newton (see :class:`PoincareMap`); the returned cycle's ``walk``
-        and energetics always come from the scipy reference.
+        Poincare map used by Newton (see :class:`PoincareMap`). With ``"compiled"`` the gait
+        is also characterised on the compiled backend (period, step length, energies at the
+        compiled pre-impact state, multipliers of the compiled map; equal to the scipy
+        reference's to about the integration tolerances) and the returned cycle's ``walk`` is
+        the scipy reference's, simulated on first access.
     simulator : callable, optional
         Step simulator (see :class:`PoincareMap`), e.g.
         :func:`heelstrike.dynamics.phased.simulate_phased` for described walkers.
@@ -594,11 +661,20 @@ def _characterise(
     pmap: PoincareMap, z: FloatArray, residual: float, iterations: int, fd_step: float
 ) -> LimitCycle:
     walker = pmap.walker
-    walk = pmap.walk(z, 1)
-    rec = walk.impacts[0]
     Jac = pmap.jacobian(z, fd_step)
     mult = np.linalg.eigvals(Jac).astype(complex)
     mult = mult[np.argsort(-np.abs(mult), kind="stable")]
+    if pmap.method == "compiled":
+        from heelstrike.dynamics.compiled import step_map_compiled
+
+        step = step_map_compiled(
+            walker,  # type: ignore[arg-type]
+            z, pmap.slope, rtol=pmap.rtol, atol=pmap.atol,
+            max_step_duration=pmap.max_step_duration,
+        )
+        return _characterise_compiled(pmap, z, step.step_time, mult, residual, iterations)
+    walk = pmap.walk(z, 1)
+    rec = walk.impacts[0]
     q, q_dot = walker.section_to_state(z)
     return LimitCycle(
         fixed_point=np.asarray(z, dtype=float),
@@ -624,8 +700,71 @@ def _characterise(
     )
 
 
+def _characterise_compiled(
+    pmap: PoincareMap,
+    z: FloatArray,
+    period: float,
+    multipliers: NDArray[np.complex128],
+    residual: float,
+    iterations: int,
+) -> LimitCycle:
+    """A gait of the compiled map characterised on the compiled backend.
+
+    The pre-impact state is the compiled integration of single support from the fixed point
+    over the step's duration ``period`` (the compiled map's heel-strike time), at the map's
+    tolerances; the impact decomposition (``T``, ``T_c``, ``T_a``), the step length and the
+    potential energy released are then computed there exactly as
+    :func:`~heelstrike.dynamics.hybrid.simulate` computes them. ``multipliers`` are those of the
+    compiled map's Jacobian. The ``walk`` (trajectory samples) is the scipy reference's,
+    simulated on first access.
+    """
+    from heelstrike.dynamics.compiled import single_support_compiled
+    from heelstrike.dynamics.hybrid import heel_strike
+    from heelstrike.dynamics.single_support import SingleSupport
+
+    walker, slope = pmap.walker, float(pmap.slope)
+    z = np.asarray(z, dtype=float)
+    if not (np.isfinite(period) and period > 0.0):
+        raise GaitNotFoundError(f"the walker fails to take a step from {np.round(z, 6)}")
+    q0, qd0 = walker.section_to_state(z)
+    support = SingleSupport(walker=walker, slope=slope)
+    path = single_support_compiled(
+        walker,  # type: ignore[arg-type]
+        support.pack(q0, qd0), slope, float(period), rtol=pmap.rtol, atol=pmap.atol,
+    )
+    q, q_dot = support.unpack(path[-1], q0)
+    impact, _ = heel_strike(walker, q, q_dot)
+    step_length = float(walker.step_length(q0, q))
+    loss = float(impact.energy_lost)
+    mult = np.asarray(multipliers, dtype=complex)
+    return LimitCycle(
+        fixed_point=z.copy(),
+        section_names=walker.section_names,
+        q=q0,
+        q_dot=qd0,
+        period=float(period),
+        step_length=step_length,
+        speed=step_length / float(period),
+        impact_angle=float(q[2]),
+        multipliers=mult,
+        stable=bool(np.all(np.abs(mult) < 1.0)),
+        collision_loss=loss,
+        kinetic_energy_pre=float(impact.kinetic_energy),
+        kinetic_energy_admissible=float(impact.kinetic_energy_admissible),
+        eta=loss / step_length,
+        potential_energy_released=float(
+            walker.potential_energy(q0, slope) - walker.potential_energy(q, slope)
+        ),
+        actuator_work=0.0,
+        residual=float(residual),
+        iterations=int(iterations),
+        slope=slope,
+        walk=_OneStep(pmap=pmap, z=z.copy()),
+    )
+
+
 @dataclass(frozen=True, kw_only=True)
-class Continuation:
+class Continuation(ResultDictMixin):
     """A branch of period-one gaits along a parameter.
 
     Attributes
@@ -739,7 +878,7 @@ def _most_negative_real(mult: NDArray[np.complex128]) -> float | None:
 
 
 @dataclass(frozen=True, kw_only=True)
-class BifurcationDiagram:
+class BifurcationDiagram(ResultDictMixin):
     """Steady-state step-to-step values along the slope (brute force, as Goswami et al. 1998).
 
     Attributes

@@ -22,6 +22,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from heelstrike._results import ResultDictMixin
+from heelstrike._typing import FloatArray
 from heelstrike.analysis.heel_strike import trailing_foot_lifts
 from heelstrike.analysis.limit_cycle import (
     GaitNotFoundError,
@@ -30,17 +32,15 @@ from heelstrike.analysis.limit_cycle import (
     find_limit_cycle,
 )
 from heelstrike.core.complementarity import CandidateContact, resolve_impact
+from heelstrike.dynamics.backends import simulator as backend_simulator
 from heelstrike.dynamics.hybrid import PushOff
 from heelstrike.dynamics.phased import (
     PhasedImpact,
     PhasedWalker,
     PhasedWalkResult,
-    simulate_phased,
 )
 from heelstrike.dynamics.single_support import TorqueLaw
 from heelstrike.models.builder import BuiltWalker
-
-FloatArray = NDArray[np.float64]
 
 __all__ = [
     "ANGLE",
@@ -59,7 +59,7 @@ ANGLE = "angle"
 
 # -- gaits --------------------------------------------------------------------------------------
 @dataclass(frozen=True, kw_only=True)
-class ModelGait:
+class ModelGait(ResultDictMixin):
     """A period-one gait of a described walker with its energy book.
 
     Attributes
@@ -177,19 +177,8 @@ def find_model_gait(
         Unknown backend, or actuation the compiled backend does not support.
     """
     w = PhasedWalker.from_built(walker)
-    simulator: Any
-    if backend == "scipy":
-        simulator = simulate_phased
-    elif backend == "compiled":
-        from heelstrike.dynamics.compiled_phased import (
-            check_compiled_actuation,
-            simulate_phased_compiled,
-        )
-
-        check_compiled_actuation(w, torque, push_off)
-        simulator = simulate_phased_compiled
-    else:
-        raise ValueError(f"backend must be 'compiled' or 'scipy', got {backend!r}")
+    # the one entry point, checked for this walker and actuation (ValueError if unsupported)
+    simulator = backend_simulator(w, backend, torque=torque, push_off=push_off)
     kw: dict[str, Any] = dict(slope=slope, torque=torque, push_off=push_off, simulator=simulator)
     if guess is not None:
         starts = [np.asarray(guess, dtype=float)]
@@ -264,7 +253,7 @@ def symmetric_heel_strike_state(
 
 
 @dataclass(frozen=True, kw_only=True)
-class ModelHeelStrike:
+class ModelHeelStrike(ResultDictMixin):
     """Decomposition of one heel strike of a described walker (all energies in J).
 
     Attributes
@@ -371,7 +360,7 @@ def model_heel_strike(walker: BuiltWalker, q: ArrayLike, q_dot: ArrayLike) -> Mo
 
 # -- maps over two swept quantities -------------------------------------------------------------
 @dataclass(frozen=True, kw_only=True)
-class ImpactMap:
+class ImpactMap(ResultDictMixin):
     """Heel-strike energetics over a grid of two swept quantities.
 
     Attributes

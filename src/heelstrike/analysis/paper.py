@@ -1,7 +1,8 @@
 """Data of the figures of Font & Kövecses (2008): Fig. 2, Fig. 3a and Fig. 3b.
 
-This module computes (and writes as CSV) what the figures show; the drawing is in
-:mod:`heelstrike.plots.paper`, which also holds :func:`heelstrike.plots.paper.reproduce_paper`.
+This module computes what the figures show; :mod:`heelstrike.plots.paper` draws it and
+:func:`heelstrike.outputs.reproduce_paper` writes figures and data
+(:func:`heelstrike.outputs.write_figure_data`: one CSV per figure).
 
 Conventions shared by the figures
 ---------------------------------
@@ -19,16 +20,16 @@ Conventions shared by the figures
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
+from heelstrike._results import ResultDictMixin
+from heelstrike._typing import FloatArray
 from heelstrike.analysis.heel_strike import heel_strike_study
 from heelstrike.models.compass import CompassGait
 
-FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
 
 __all__ = [
@@ -42,7 +43,6 @@ __all__ = [
     "heel_strike_table",
     "impact_angle_grid",
     "paper_figure_data",
-    "write_figure_data",
 ]
 
 #: Foot radii (m) of the curves of Figs. 2 and 3a.
@@ -144,7 +144,7 @@ def figure3a_data(
 
 
 @dataclass(frozen=True, kw_only=True)
-class Figure3bData:
+class Figure3bData(ResultDictMixin):
     """Data of Fig. 3b: ``eta`` over the (``q3``, ``R``) plane.
 
     Attributes
@@ -226,7 +226,7 @@ def figure3b_data(
 
 
 @dataclass(frozen=True, kw_only=True)
-class PaperFigureData:
+class PaperFigureData(ResultDictMixin):
     """The data of the paper's three figures (see the ``figure*_data`` functions)."""
 
     figure2: pd.DataFrame
@@ -241,30 +241,3 @@ def paper_figure_data(walker: CompassGait | None = None) -> PaperFigureData:
         figure3a=figure3a_data(walker),
         figure3b=figure3b_data(walker),
     )
-
-
-def write_figure_data(data: PaperFigureData, out_dir: str | Path) -> list[Path]:
-    """Write ``fig2.csv``, ``fig3a.csv`` and ``fig3b.csv`` into ``out_dir`` (created).
-
-    Returns
-    -------
-    list of Path
-        The files written, in figure order.
-    """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    fig2_cols = ["R_m", "q3_deg", "q3_rad", "T_J", "T_c_J", "T_a_J", "q2_dot_plus_m_per_s",
-                 "trailing_foot_lifts", "degenerate_wheel"]
-    fig3a_cols = ["R_m", "q3_deg", "q3_rad", "eta_J_per_m", "energy_lost_J", "step_length_m",
-                  "q2_dot_plus_m_per_s", "trailing_foot_lifts", "degenerate_wheel"]
-    frames = {
-        "fig2.csv": data.figure2[fig2_cols],
-        "fig3a.csv": data.figure3a[fig3a_cols],
-        "fig3b.csv": data.figure3b.to_frame(),
-    }
-    paths = []
-    for name, frame in frames.items():
-        path = out / name
-        frame.to_csv(path, index=False, float_format="%.12g")
-        paths.append(path)
-    return paths

@@ -49,6 +49,8 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from heelstrike._results import ResultDictMixin
+from heelstrike._typing import FloatArray
 from heelstrike.core.impact import kinetic_energy
 from heelstrike.dynamics.actuation import (
     DEFAULT_ENERGY_GAIN,
@@ -64,7 +66,6 @@ from heelstrike.dynamics.hybrid import ImpactRecord, WalkResult, WalkStatus, sim
 from heelstrike.dynamics.single_support import TorqueLaw
 from heelstrike.models.base import PlanarWalker
 
-FloatArray = NDArray[np.float64]
 Target = Literal["speed", "step_length"]
 
 __all__ = [
@@ -109,14 +110,11 @@ def max_walking_speed(walker: PlanarWalker) -> float:
     ``l^2 / (l - R)`` (a point at ``l - R`` from the centre of a rolling arc of radius ``R``);
     keeping the stance foot on the ground needs a centripetal acceleration ``<= g``:
     ``v <= l sqrt(g / (l - R))`` (Froude number ``v^2 / (g l) <= l / (l - R)``; ``sqrt(g l)``
-    for point feet). ``inf`` for McGeer's wheel (``R = l``) or a walker without ``leg_length``.
+    for point feet). ``inf`` for McGeer's wheel (``R = l``). ``l`` and ``g`` are the walker's
+    :attr:`~heelstrike.models.base.PlanarWalker.scale`, ``R`` its stance foot radius.
     """
-    l = float(np.asarray(getattr(walker, "leg_length", np.nan)))
-    g = float(np.asarray(getattr(walker, "gravity", np.nan)))
-    try:
-        R = float(np.asarray(walker.foot_radii[0]))
-    except (AttributeError, IndexError, TypeError):
-        return float("inf")
+    _, g, l = _scale(walker)
+    R = float(np.asarray(walker.foot_radii[0]))
     if not (np.isfinite(l) and np.isfinite(g) and l > R):
         return float("inf")
     return float(l * np.sqrt(g / (l - R)))
@@ -251,7 +249,7 @@ def actuation_family(
 
 
 @dataclass(frozen=True, kw_only=True)
-class PoweredStep:
+class PoweredStep(ResultDictMixin):
     """One step of a powered walker from a section point (see :func:`powered_step`).
 
     Attributes
@@ -282,7 +280,7 @@ class PoweredStep:
 
 def _is_wheel(walker: PlanarWalker) -> bool:
     R = float(np.asarray(walker.foot_radii[0]))
-    l = float(np.asarray(getattr(walker, "leg_length", np.inf)))
+    l = _scale(walker)[2]
     return bool(np.isclose(R, l, rtol=1e-12, atol=0.0))
 
 
@@ -316,7 +314,7 @@ def powered_step(
     if walk.ok:
         qf, qdf = walk.final_q, walk.final_q_dot
     elif walk.status is WalkStatus.TRAILING_FOOT_STAYS and rec is not None and _is_wheel(walker):
-        l = float(np.asarray(getattr(walker, "leg_length", 1.0)))
+        l = _scale(walker)[2]
         scale = l * (abs(rec.q_dot_minus[2]) + abs(rec.q_dot_minus[3]))
         if abs(rec.trailing_normal_velocity) > GRAZING_TOLERANCE * scale:
             return PoweredStep(z_next=np.full(z_.shape, np.nan), walk=walk, record=rec,
@@ -337,7 +335,7 @@ def powered_step(
 
 
 @dataclass(frozen=True, kw_only=True)
-class PoweredGait:
+class PoweredGait(ResultDictMixin):
     """A period-one powered gait on level ground and its energy books (per step).
 
     Attributes
@@ -571,7 +569,9 @@ def _newton(
     *, forward: bool = False, accept: float | None = None, min_step: float = 1e-3,
     min_rate: float = 1.0,
 ) -> tuple[FloatArray, float, int, FloatArray]:
-    """Damped Newton on the augmented map; returns ``(x, residual, iterations, jacobian)``.
+    """Damped Newton on the augmented map (the one engine,
+    :func:`~heelstrike.analysis.newton.newton_solve`); returns ``(x, residual, iterations,
+    jacobian)``.
 
     ``forward``: forward-difference Jacobians updated by Broyden's rank-one formula between
     recomputations (about ``1 + n/k`` steps per iteration instead of ``2n + 1``; used by the
@@ -579,60 +579,30 @@ def _newton(
     A stall with the residual below ``accept`` (default ``10 tol``, the integrator's noise
     floor) returns the iterate.
     ``min_step`` is the smallest line-search step (a fraction of the Newton step); an accepted
-    step must also reduce the residual at least ``1 / min_rate``-fold (else: stalled).
+    step must also reduce the residual at least ``1 / min_rate``-fold (else: stalled). The
+    actuation parameter (the last unknown) is kept at or above the family's lower bound.
     """
-    floor = 10.0 * tol if accept is None else accept
-    x = x0.copy()
-    F = prob.residual(x, value)
-    if not np.all(np.isfinite(F)):
-        raise PoweredGaitNotFoundError("the walker fails to take a step from a Newton iterate")
-    res = float(np.linalg.norm(F))
-    J: FloatArray | None = None
-    fresh = False
-    for it in range(1, max_iter + 1):
-        if res < tol:
-            return x, res, it, (J if J is not None else np.full((x.size, x.size), np.nan))
-        if J is None:
-            J = prob.jacobian(x, value, h, F if forward else None)
-            fresh = True
-            if not np.all(np.isfinite(J)):
-                raise PoweredGaitNotFoundError("a step failed while estimating the Jacobian")
-        try:
-            dx = np.linalg.solve(J, -F)
-        except np.linalg.LinAlgError as exc:
-            raise PoweredGaitNotFoundError("singular Newton system") from exc
-        lam = 1.0
-        ok = False
-        while lam >= min_step:
-            x_try = x + lam * dx
-            x_try[-1] = max(x_try[-1], prob.family.lower)
-            F_try = prob.residual(x_try, value)
-            if np.all(np.isfinite(F_try)) and np.linalg.norm(F_try) < (1 - 0.25 * lam) * res:
-                ok = True
-                break
-            lam *= 0.5
-        if not ok:
-            if forward and not fresh:
-                J = None  # a stale Broyden Jacobian: recompute and retry
-                continue
-            if res < floor:
-                return x, res, it, J
-            raise PoweredGaitNotFoundError(f"Newton stalled (residual {res:.2e})")
-        if float(np.linalg.norm(F_try)) > min_rate * res and res >= floor:
-            raise PoweredGaitNotFoundError(
-                f"Newton converges too slowly (residual {res:.2e} -> "
-                f"{float(np.linalg.norm(F_try)):.2e})"
-            )
-        step = x_try - x
-        if forward:  # Broyden's update keeps J consistent with the step just taken
-            J = J + np.outer(F_try - F - J @ step, step) / float(step @ step)
-            fresh = False
-        else:
-            J = None
-        x, F, res = x_try, F_try, float(np.linalg.norm(F_try))
-    if res < tol:
-        return x, res, max_iter, (J if J is not None else np.full((x.size, x.size), np.nan))
-    raise PoweredGaitNotFoundError(f"Newton did not converge in {max_iter} iterations")
+    from heelstrike.analysis.newton import newton_solve
+
+    lower = prob.family.lower
+
+    def residual(X: FloatArray) -> FloatArray:
+        return np.stack([prob.residual(x, value) for x in X])
+
+    def project(X: FloatArray) -> FloatArray:
+        Y = X.copy()
+        Y[:, -1] = np.maximum(Y[:, -1], lower)
+        return Y
+
+    sol = newton_solve(
+        residual, x0, tol=tol, max_iter=max_iter, fd_step=h,
+        jacobian="broyden" if forward else "central", jacobian_at_root=False,
+        line_search="decrease", min_step=min_step, accept=accept, min_rate=min_rate,
+        project=project,
+    )
+    if not sol.converged[0]:
+        raise PoweredGaitNotFoundError(sol.message(0))
+    return sol.x[0], float(sol.residual_norm[0]), int(sol.iterations[0]), sol.jacobian[0]
 
 
 def _polish(
@@ -801,18 +771,20 @@ def find_powered_gait(
     value = float(speed if speed is not None else step_length)  # type: ignore[arg-type]
     if not (np.isfinite(value) and value > 0):
         raise ValueError(f"the target {target} must be > 0, got {value}")
-    if target == "step_length" and hasattr(walker, "leg_length"):
-        l, R = float(np.asarray(walker.leg_length)), float(np.asarray(walker.foot_radii[0]))
+    if target == "step_length":
+        l, R = _scale(walker)[2], float(np.asarray(walker.foot_radii[0]))
         longest = 2.0 * (l - R) + np.pi * R  # L_S at q3 = 90 deg
         if value >= longest:
             raise PoweredGaitNotFoundError(
-                f"step length {value:g} m is not below the geometric limit {longest:.3g} m"
+                f"no gait with step_length {value:g} m: it is not below the geometric limit "
+                f"{longest:.3g} m"
             )
     if target == "speed":
         vmax = max_walking_speed(walker)
         if value >= vmax:
             raise PoweredGaitNotFoundError(
-                f"speed {value:g} m/s is outside the reachable range 0 < speed < {vmax:.3g} m/s "
+                f"no gait with speed {value:g} m/s: it is outside the reachable range "
+                f"0 < speed < {vmax:.3g} m/s "
                 "of this walker: faster, the hip's centripetal acceleration at mid-stance would "
                 "exceed g and the stance foot would leave the ground (v <= l sqrt(g / (l - R)))"
             )
@@ -963,6 +935,8 @@ def _characterise(
     (``~h``) and integration noise (``~rtol / h``): multipliers to ~1e-5, which is as good as
     central differences at ``h = 1e-6`` get with that noise (``rtol / h ~ 1e-4``).
     """
+    from heelstrike.dynamics.phased import PhasedWalkResult
+
     walker = prob.walker
     st = prob.step(x)
     rec = st.record
@@ -981,10 +955,10 @@ def _characterise(
     L = rec.step_length
     dE = st.energy_end - st.energy_start
     # every impact of the step (a described walker's knee strikes too), else the heel strike
-    events = getattr(st.walk, "events", None)
+    events = st.walk.events if isinstance(st.walk, PhasedWalkResult) else ()
     loss = (float(sum(e.kinetic_energy_constrained for e in events)) if events
             else rec.energy_lost)
-    desc = getattr(walker, "description", None)
+    desc = walker.description
     return PoweredGait(
         actuation=prob.family.name,
         parameter_name=prob.family.parameter_name,
@@ -1110,8 +1084,8 @@ def find_model_powered_gait(
     speed, step_length : float, optional
         Target (m/s or m); exactly one.
     backend : {"compiled", "scipy"}
-        :func:`~heelstrike.dynamics.compiled_phased.simulate_phased_compiled` (numba, default)
-        or the scipy reference :func:`~heelstrike.dynamics.phased.simulate_phased`.
+        Backend of :func:`heelstrike.dynamics.simulate`: the generated numba kernel (default)
+        or the scipy reference.
     posture : bool
         Apply the declared posture law (default); False: push-off only.
     **options
@@ -1128,7 +1102,8 @@ def find_model_powered_gait(
         Unknown backend or an actuation other than ``"pushoff"``.
     PoweredGaitNotFoundError
     """
-    from heelstrike.dynamics.phased import PhasedWalker, simulate_phased
+    from heelstrike.dynamics.backends import simulator as backend_simulator
+    from heelstrike.dynamics.phased import PhasedWalker
 
     if actuation != "pushoff":
         raise ValueError(
@@ -1138,19 +1113,8 @@ def find_model_powered_gait(
         )
     w = PhasedWalker.from_built(walker)
     law = declared_posture_law(w) if posture else None
-    simulator: Callable[..., WalkResult]
-    if backend == "scipy":
-        simulator = simulate_phased
-    elif backend == "compiled":
-        from heelstrike.dynamics.compiled_phased import (
-            check_compiled_actuation,
-            simulate_phased_compiled,
-        )
-
-        check_compiled_actuation(w, law, PushOff(impulse=0.0))
-        simulator = simulate_phased_compiled
-    else:
-        raise ValueError(f"backend must be 'compiled' or 'scipy', got {backend!r}")
+    # the one entry point, checked for this walker and actuation (ValueError if unsupported)
+    simulator = backend_simulator(w, backend, torque=law, push_off=PushOff(impulse=0.0))
     base = actuation_family("pushoff")
     family = ActuationFamily(
         name="pushoff",

@@ -44,13 +44,14 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from heelstrike._results import ResultDictMixin
+from heelstrike._typing import FloatArray
 from heelstrike.core.impact import ImpactInputError, ImpactResult, impact
 
 __all__ = ["CandidateContact", "ContactMode", "MultiContactImpact", "resolve_impact"]
 
-FloatArray = NDArray[np.float64]
 ContactMode = Literal["separate", "stick", "slip"]
 
 
@@ -82,7 +83,7 @@ class CandidateContact:
 
 
 @dataclass(frozen=True, kw_only=True)
-class MultiContactImpact:
+class MultiContactImpact(ResultDictMixin):
     """Outcome of :func:`resolve_impact`.
 
     Attributes

@@ -75,6 +75,8 @@ import scipy.linalg
 import scipy.optimize
 from numpy.typing import ArrayLike, NDArray
 
+from heelstrike._results import ResultDictMixin
+from heelstrike._typing import FloatArray
 from heelstrike.core.impact import ImpactInputError, impact
 
 __all__ = [
@@ -93,7 +95,6 @@ __all__ = [
     "resolve_contact_impact",
 ]
 
-FloatArray = NDArray[np.float64]
 ImpactMode = Literal["stick", "slip", "separate"]
 
 
@@ -185,7 +186,7 @@ class ContactRows:
 
 
 @dataclass(frozen=True, kw_only=True)
-class ContactImpact:
+class ContactImpact(ResultDictMixin):
     """Resolved impact with per-contact laws.
 
     Attributes
@@ -809,7 +810,7 @@ def inert_contact_impact(
 
 
 @dataclass(frozen=True, kw_only=True)
-class InertImpactBatch:
+class InertImpactBatch(ResultDictMixin):
     """Direct inert impacts of bilateral contacts over a batch of configurations.
 
     Attributes

@@ -29,11 +29,11 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import ArrayLike, NDArray
 
+from heelstrike._typing import FloatArray
 from heelstrike.core.impact import ImpactInputError
 
 __all__ = ["FastImpactResult", "impact_2x4", "use_parallel"]
 
-FloatArray = NDArray[np.float64]
 
 #: Status codes written by the kernels, per item.
 STATUS_OK = 0

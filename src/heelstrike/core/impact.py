@@ -37,8 +37,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from heelstrike._results import ResultDictMixin
+from heelstrike._typing import FloatArray
 from heelstrike.core._scalars import python_scalars
 
 __all__ = [
@@ -52,7 +54,6 @@ __all__ = [
     "kinetic_energy",
 ]
 
-FloatArray = NDArray[np.float64]
 
 
 class ImpactInputError(ValueError):
@@ -351,7 +352,7 @@ def decompose_impulse(P_c: ArrayLike, f: ArrayLike) -> tuple[FloatArray, FloatAr
 
 
 @dataclass(frozen=True, kw_only=True)
-class ImpactResult:
+class ImpactResult(ResultDictMixin):
     """Everything the impact algebra says about one (batched) collision.
 
     All arrays share the broadcast leading shape ``(...)`` of the inputs.

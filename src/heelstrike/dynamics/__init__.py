@@ -1,5 +1,11 @@
-"""Single support, events and hybrid simulation."""
+"""Single support, events and hybrid simulation.
 
+:func:`~heelstrike.dynamics.backends.simulate` is the one simulation entry point: every walker
+on every backend it declares (:mod:`heelstrike.dynamics.backends`; ``backend="scipy"`` by
+default, the numbers of :func:`heelstrike.dynamics.hybrid.simulate` for hand-written walkers).
+"""
+
+from heelstrike.dynamics.backends import BACKENDS, kernel_kind, simulate
 from heelstrike.dynamics.events import Event
 from heelstrike.dynamics.hybrid import (
     GroundReaction,
@@ -8,11 +14,11 @@ from heelstrike.dynamics.hybrid import (
     WalkStatus,
     ground_reaction,
     heel_strike,
-    simulate,
 )
 from heelstrike.dynamics.single_support import SingleSupport, TorqueLaw
 
 __all__ = [
+    "BACKENDS",
     "Event",
     "GroundReaction",
     "ImpactRecord",
@@ -22,5 +28,6 @@ __all__ = [
     "WalkStatus",
     "ground_reaction",
     "heel_strike",
+    "kernel_kind",
     "simulate",
 ]

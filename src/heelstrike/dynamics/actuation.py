@@ -32,18 +32,15 @@ speed ``L_S / T`` then grows only through longer steps.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from heelstrike._typing import FloatArray
 from heelstrike.core.impact import kinetic_energy
 from heelstrike.models.base import PlanarWalker
-
-FloatArray = NDArray[np.float64]
 
 __all__ = [
     "DEFAULT_ENERGY_GAIN",
@@ -100,46 +97,13 @@ def mechanical_energy(
 
     ``T = 1/2 q_dot^T M(q) q_dot`` (eq. 1) and ``V`` the walker's gravitational potential in the
     ground frame (zero at its origin); on level ground (``slope = 0``) ``V`` does not depend on
-    the position along the ground, so ``E`` is comparable from step to step.
+    the position along the ground, so ``E`` is comparable from step to step. The walker
+    evaluates it (:meth:`~heelstrike.models.base.PlanarWalker.mechanical_energy`; the compass
+    gait has a plain-float path for one state on level ground).
     """
     q_ = np.asarray(q, dtype=float)
     qd = np.asarray(q_dot, dtype=float)
-    if q_.shape == (4,) and qd.shape == (4,) and slope == 0.0 and _scalar_compass(walker):
-        return np.asarray(_compass_energy(walker, q_, qd))
-    T = kinetic_energy(walker.mass_matrix(q_), qd)
-    return np.asarray(T + walker.potential_energy(q_, slope))
-
-
-def _scalar_compass(walker: PlanarWalker) -> bool:
-    from heelstrike.models.compass import CompassGait
-
-    return isinstance(walker, CompassGait) and all(
-        np.ndim(getattr(walker, k)) == 0
-        for k in ("hip_mass", "leg_mass", "leg_length", "leg_com_from_hip", "foot_radius",
-                  "leg_inertia", "gravity")
-    )
-
-
-def _compass_energy(walker: Any, q: FloatArray, qd: FloatArray) -> float:
-    """``T + V`` of a scalar-parameter compass gait on level ground in plain floats (fast path
-    of :func:`mechanical_energy` for torque laws evaluated inside the integrator; equal to the
-    generic ``1/2 q_dot^T M q_dot + V``, which the tests check)."""
-    mH, m, I, g = walker.hip_mass, walker.leg_mass, walker.leg_inertia, walker.gravity
-    b = walker.leg_com_from_hip
-    s = walker.leg_length - walker.foot_radius
-    y0, q3, q4 = float(q[1]), float(q[2]), float(q[3])
-    vx, vy, w3, w4 = (float(v) for v in qd)
-    w34 = w3 + w4
-    c3, s3, c34, s34 = math.cos(q3), math.sin(q3), math.cos(q3 + q4), math.sin(q3 + q4)
-    # e(t) = (-sin t, cos t), de/dt = (-cos t, -sin t) t_dot
-    hx, hy = vx - s * c3 * w3, vy - s * s3 * w3
-    rx, ry = vx - (s - b) * c3 * w3, vy - (s - b) * s3 * w3
-    lx, ly = hx + b * c34 * w34, hy + b * s34 * w34
-    T = 0.5 * mH * (hx * hx + hy * hy) + 0.5 * m * (rx * rx + ry * ry + lx * lx + ly * ly)
-    T += 0.5 * I * (w3 * w3 + w34 * w34)
-    yH = y0 + s * c3
-    V = g * (mH * yH + m * (yH - b * c3) + m * (yH - b * c34))
-    return float(T + V)
+    return np.asarray(walker.mechanical_energy(q_, qd, slope))
 
 
 def _leg_direction(theta: FloatArray) -> FloatArray:

@@ -20,17 +20,21 @@ on a slope (no torque, no push-off, inert impact):
   (``a_H = -s e(q3) q3_dot^2``, ``a_R = -(s - b) e(q3) q3_dot^2``,
   ``a_L = a_H + b e(q34) q34_dot^2``) and ``g = g (-sin gamma, -cos gamma)``. The ground
   reaction is Newton's law for the whole walker, ``lambda = sum m_i (j_i theta_dd + a_i) - m g``.
-- **Integrator.** Dormand-Prince 5(4) with scipy's error norm (RMS of
+- **Integrator.** Dormand-Prince 5(4) of :mod:`heelstrike.dynamics._dp5` (shared with the
+  described walkers' kernel) with scipy's error norm (RMS of
   ``err / (atol + rtol max(|y|, |y_new|))``) and step-size control.
 - **Events.** The two phases of a step and their terminal events are those of ``simulate``
   (mid-stance, falls, lost contact, heel strike ``2 q3 + q4`` rising through 0), detected by a
-  sign change over an accepted step with the same direction rules as ``solve_ivp``. The event
+  sign change over an accepted step with the same direction rules as ``solve_ivp`` (a phase
+  that starts with a normal force ``<= 0`` ends at once with lost contact). The event
   time is located by the Illinois method on the *exact* Runge-Kutta step of length ``tau`` from
   the step's start (each trial is a fresh DP5 step), to ``|d tau| < 1e-13 s``; the earliest
   event of a step ends the phase.
 - **Impact and swap.** ``q_dot+ = P_a q_dot-`` with the full 4x4 ``M`` and the left foot's
   Jacobian ``A_L`` (Cholesky solves), ``T_c = 1/2 mu^T (A M^-1 A^T) mu``; the trailing foot must
-  lift (``q2_dot+ > 1e-12 m/s``); then ``q3 <- q3 + q4``, ``q4 <- -q4`` and the velocities alike.
+  lift (``q2_dot+ > LIFT_TOLERANCE l (|q3_dot-| + |q4_dot-|)``, the rule of
+  :mod:`heelstrike.models._contact` compiled); then ``q3 <- q3 + q4``, ``q4 <- -q4`` and the
+  velocities alike.
 
 Status codes are :attr:`WalkStatus.code <heelstrike.dynamics.hybrid.WalkStatus>` (module-level
 constants below, compile-time constants for numba; :meth:`WalkStatus.from_code` converts back).
@@ -48,18 +52,23 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import ArrayLike, NDArray
 
-from heelstrike.dynamics.hybrid import WalkStatus
+from heelstrike._results import ResultDictMixin
+from heelstrike._typing import FloatArray, IntArray
+from heelstrike.dynamics import _dp5 as dp5
+from heelstrike.dynamics.hybrid import ImpactRecord, WalkResult, WalkStatus
+from heelstrike.models import _contact
+from heelstrike.models.base import PlanarWalker
 from heelstrike.models.compass import CompassGait
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
+from heelstrike.models.compass_fast import strike
 
 __all__ = [
     "STATUS_NAMES",
     "CompiledStep",
     "EnsembleResult",
+    "check_compiled_compass",
     "ensemble_walk",
     "reduced_dynamics_compiled",
+    "simulate_compiled",
     "single_support_compiled",
     "step_map_compiled",
     "walker_parameters",
@@ -88,6 +97,15 @@ PARAMETER_NAMES: tuple[str, ...] = (
     "slope",
 )
 
+# The one lift rule (heelstrike.models._contact), compiled for the kernels of both modules.
+lifts_jit: Any = njit(cache=True, nogil=True, inline="always")(_contact.lifts)
+lift_velocity_scale_jit: Any = njit(cache=True, nogil=True, inline="always")(
+    _contact.lift_velocity_scale
+)
+_lifts, _lift_scale = lifts_jit, lift_velocity_scale_jit
+# The one definition of step length (heelstrike.models._contact), compiled.
+_step_length: Any = njit(cache=True, nogil=True, inline="always")(_contact.step_length)
+
 # Event kinds. Phase 1 (before mid-stance): MID, BACK1, NORMAL; phase 2: STRIKE, BACK2, FWD,
 # NORMAL (the order of ``_step_events`` in hybrid.py).
 _EV_MID = 0
@@ -98,30 +116,6 @@ _EV_BACK2 = 4
 _EV_FWD = 5
 _EV_NONE = -1  # time limit reached
 _EV_FAIL = -2  # integrator failure
-
-# Dormand-Prince 5(4) tableau.
-_C2, _C3, _C4, _C5 = 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0
-_A21 = 1.0 / 5.0
-_A31, _A32 = 3.0 / 40.0, 9.0 / 40.0
-_A41, _A42, _A43 = 44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0
-_A51, _A52, _A53, _A54 = 19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0
-_A61, _A62, _A63, _A64, _A65 = (
-    9017.0 / 3168.0,
-    -355.0 / 33.0,
-    46732.0 / 5247.0,
-    49.0 / 176.0,
-    -5103.0 / 18656.0,
-)
-_B1, _B3, _B4, _B5, _B6 = 35.0 / 384.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0
-_E1, _E3, _E4, _E5, _E6, _E7 = (
-    71.0 / 57600.0,
-    -71.0 / 16695.0,
-    71.0 / 1920.0,
-    -17253.0 / 339200.0,
-    22.0 / 525.0,
-    -1.0 / 40.0,
-)
-
 
 # ---------------------------------------------------------------------------------------------
 # Dynamics (numba functions are typed for readers; numba ignores the annotations).
@@ -196,47 +190,27 @@ def _dp5(
     tmp: FloatArray,
     ynew: FloatArray,
     full: bool,
-) -> float:
-    """One DP5 step of size ``h`` from ``y`` with ``k[0] = f(y)``; writes ``ynew``.
+) -> None:
+    """One DP5 step (:mod:`heelstrike.dynamics._dp5`) of size ``h`` from ``y`` with
+    ``k[0] = f(y)``; writes ``ynew``.
 
     With ``full`` the FSAL stage ``k[6] = f(ynew)`` is evaluated and the error estimate's
-    components are left in ``tmp``; returns 0.
+    components are left in ``tmp``.
     """
-    for i in range(4):
-        tmp[i] = y[i] + h * _A21 * k[0, i]
+    dp5.stage(y, h, k, 1, tmp)
     _rhs(p, tmp, k[1])
-    for i in range(4):
-        tmp[i] = y[i] + h * (_A31 * k[0, i] + _A32 * k[1, i])
+    dp5.stage(y, h, k, 2, tmp)
     _rhs(p, tmp, k[2])
-    for i in range(4):
-        tmp[i] = y[i] + h * (_A41 * k[0, i] + _A42 * k[1, i] + _A43 * k[2, i])
+    dp5.stage(y, h, k, 3, tmp)
     _rhs(p, tmp, k[3])
-    for i in range(4):
-        tmp[i] = y[i] + h * (
-            _A51 * k[0, i] + _A52 * k[1, i] + _A53 * k[2, i] + _A54 * k[3, i]
-        )
+    dp5.stage(y, h, k, 4, tmp)
     _rhs(p, tmp, k[4])
-    for i in range(4):
-        tmp[i] = y[i] + h * (
-            _A61 * k[0, i] + _A62 * k[1, i] + _A63 * k[2, i] + _A64 * k[3, i] + _A65 * k[4, i]
-        )
+    dp5.stage(y, h, k, 5, tmp)
     _rhs(p, tmp, k[5])
-    for i in range(4):
-        ynew[i] = y[i] + h * (
-            _B1 * k[0, i] + _B3 * k[2, i] + _B4 * k[3, i] + _B5 * k[4, i] + _B6 * k[5, i]
-        )
+    dp5.solution(y, h, k, ynew)
     if full:
         _rhs(p, ynew, k[6])
-        for i in range(4):
-            tmp[i] = h * (
-                _E1 * k[0, i]
-                + _E3 * k[2, i]
-                + _E4 * k[3, i]
-                + _E5 * k[4, i]
-                + _E6 * k[5, i]
-                + _E7 * k[6, i]
-            )
-    return 0.0
+        dp5.error_estimate(h, k, tmp)
 
 
 @njit(cache=True, nogil=True)
@@ -254,52 +228,15 @@ def _event_value(p: FloatArray, y: FloatArray, kind: int) -> float:
 
 
 @njit(cache=True, nogil=True)
-def _crossed(g0: float, g1: float, direction: int) -> bool:
-    """``solve_ivp``'s rule: up ``g0 <= 0 <= g1``, down ``g0 >= 0 >= g1``."""
-    if direction > 0:
-        return g0 <= 0.0 and g1 >= 0.0
-    return g0 >= 0.0 and g1 <= 0.0
-
-
-@njit(cache=True, nogil=True)
-def _error_norm(
-    y: FloatArray, ynew: FloatArray, err: FloatArray, rtol: float, atol: float
-) -> float:
-    acc = 0.0
-    for i in range(4):
-        sc = atol + rtol * max(abs(y[i]), abs(ynew[i]))
-        r = err[i] / sc
-        acc += r * r
-    return math.sqrt(acc / 4.0)
-
-
-@njit(cache=True, nogil=True)
 def _initial_step(p: FloatArray, y: FloatArray, f0: FloatArray, rtol: float, atol: float) -> float:
     """Hairer's starting step for a 5th-order method (as ``solve_ivp``)."""
-    d0 = 0.0
-    d1 = 0.0
-    for i in range(4):
-        sc = atol + abs(y[i]) * rtol
-        d0 += (y[i] / sc) ** 2
-        d1 += (f0[i] / sc) ** 2
-    d0 = math.sqrt(d0 / 4.0)
-    d1 = math.sqrt(d1 / 4.0)
-    h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
+    h0, d1 = dp5.initial_step_first(y, f0, rtol, atol)
     y1 = np.empty(4)
     f1 = np.empty(4)
     for i in range(4):
         y1[i] = y[i] + h0 * f0[i]
     _rhs(p, y1, f1)
-    d2 = 0.0
-    for i in range(4):
-        sc = atol + abs(y[i]) * rtol
-        d2 += ((f1[i] - f0[i]) / sc) ** 2
-    d2 = math.sqrt(d2 / 4.0) / h0
-    if d1 <= 1e-15 and d2 <= 1e-15:
-        h1 = max(1e-6, h0 * 1e-3)
-    else:
-        h1 = (0.01 / max(d1, d2)) ** (1.0 / 5.0)
-    return min(100.0 * h0, h1)
+    return dp5.initial_step(y, f0, f1, h0, d1, rtol, atol)
 
 
 @njit(cache=True, nogil=True)
@@ -335,9 +272,10 @@ def _integrate_phase(
     _rhs(p, y, k[0])
     for j in range(n_ev):
         g_old[j] = _event_value(p, y, kinds[j])
+        if kinds[j] == _EV_NORMAL and g_old[j] <= 0.0:
+            return _EV_NORMAL, t, h  # contact already lost: no sign change to detect
     if not h > 0.0:
         h = _initial_step(p, y, k[0], rtol, atol)
-    h_min_rel = 1e-14
     n_steps = 0
     while True:
         if t >= t_limit:
@@ -345,30 +283,27 @@ def _integrate_phase(
         n_steps += 1
         if n_steps > 2_000_000:
             return _EV_FAIL, t, h
-        h_min = h_min_rel * max(1.0, abs(t))
+        h_min = dp5.min_step(t)
         if h < h_min:
             return _EV_FAIL, t, h
         hh = min(h, t_limit - t)
         # --- attempt a step
         while True:
             _dp5(p, y, hh, k, tmp, ynew, True)
-            en = _error_norm(y, ynew, tmp, rtol, atol)
-            if not math.isfinite(en):
-                en = 1e10
+            en = dp5.error_norm(y, ynew, tmp, rtol, atol)
             if en <= 1.0:
-                fac = 10.0 if en == 0.0 else min(10.0, 0.9 * en ** -0.2)
                 break
-            hh *= max(0.2, 0.9 * en ** -0.2)
+            hh *= dp5.shrink_factor(en)
             if hh < h_min:
                 return _EV_FAIL, t, hh
-        h_next = hh * fac if en <= 1.0 else hh
+        h_next = hh * dp5.grow_factor(en)
         # --- events over [t, t + hh]
         best = -1
         best_tau = hh
         for j in range(n_ev):
             g_new[j] = _event_value(p, ynew, kinds[j])
         for j in range(n_ev):
-            if not _crossed(g_old[j], g_new[j], dirs[j]):
+            if not dp5.crossed(g_old[j], g_new[j], dirs[j]):
                 continue
             # Illinois on the exact RK step of length tau
             lo, flo = 0.0, g_old[j]
@@ -379,9 +314,7 @@ def _integrate_phase(
             elif fhi != 0.0:
                 side = 0
                 for _ in range(200):
-                    c = (lo * fhi - hi * flo) / (fhi - flo)
-                    if not (lo < c < hi):
-                        c = 0.5 * (lo + hi)
+                    c = dp5.secant_point(lo, flo, hi, fhi)
                     for r in range(4):
                         ktry[0, r] = k[0, r]
                     _dp5(p, y, c, ktry, tmp, ytry, False)
@@ -389,17 +322,8 @@ def _integrate_phase(
                     root = c
                     if fc == 0.0:
                         break
-                    if (fc > 0.0) == (fhi > 0.0):
-                        hi, fhi = c, fc
-                        if side == -1:
-                            flo *= 0.5
-                        side = -1
-                    else:
-                        lo, flo = c, fc
-                        if side == 1:
-                            fhi *= 0.5
-                        side = 1
-                    if hi - lo <= 1e-13 + 4e-16 * abs(t):
+                    lo, flo, hi, fhi, side = dp5.illinois_update(lo, flo, hi, fhi, side, c, fc)
+                    if dp5.bracket_closed(lo, hi, t):
                         root = hi if abs(fhi) < abs(flo) else lo
                         break
             if best < 0 or root < best_tau:
@@ -432,88 +356,13 @@ def _integrate_phase(
 def _impact(p: FloatArray, y: FloatArray, qp: FloatArray) -> tuple[float, float]:
     """Heel strike of the left foot at reduced state ``y``; writes ``q_dot+`` (4,) into ``qp``.
 
-    Returns ``(T, T_c)`` (J).
+    The impact is :func:`heelstrike.models.compass_fast.strike` (the one compass impact kernel)
+    at the located heel strike ``q4 = -2 q3``, with the stance foot rolling
+    (``q1_dot = -R q3_dot``, ``q2_dot = 0``). Returns ``(T, T_c)`` (J); NaNs for a degenerate
+    walker.
     """
-    mH, m, l, b, R, inertia = p[0], p[1], p[2], p[3], p[4], p[5]
-    s = l - R
-    q3, q34 = y[0], y[0] + y[1]
-    c3, s3 = math.cos(q3), math.sin(q3)
-    c34, s34 = math.cos(q34), math.sin(q34)
-    # columns 3, 4 of the point Jacobians (columns 1, 2 are the identity)
-    hx3, hy3 = -s * c3, -s * s3
-    rx3, ry3 = -(s - b) * c3, -(s - b) * s3
-    lx3, ly3 = hx3 + b * c34, hy3 + b * s34
-    lx4, ly4 = b * c34, b * s34
-    mt = mH + 2.0 * m
-    M = np.zeros((4, 4))
-    M[0, 0] = mt
-    M[1, 1] = mt
-    M[0, 2] = mH * hx3 + m * (rx3 + lx3)
-    M[1, 2] = mH * hy3 + m * (ry3 + ly3)
-    M[0, 3] = m * lx4
-    M[1, 3] = m * ly4
-    M[2, 2] = mH * (hx3 * hx3 + hy3 * hy3) + m * (rx3 * rx3 + ry3 * ry3 + lx3 * lx3 + ly3 * ly3)
-    M[2, 3] = m * (lx3 * lx4 + ly3 * ly4)
-    M[3, 3] = m * (lx4 * lx4 + ly4 * ly4)
-    M[2, 2] += 2.0 * inertia
-    M[2, 3] += inertia
-    M[3, 3] += inertia
-    for i in range(4):
-        for j in range(i):
-            M[i, j] = M[j, i]
-    A = np.zeros((2, 4))
-    A[0, 0] = 1.0
-    A[1, 1] = 1.0
-    A[0, 2] = -s * c3 + s * c34 + R
-    A[0, 3] = s * c34 + R
-    A[1, 2] = -s * s3 + s * s34
-    A[1, 3] = s * s34
-    qd = np.empty(4)
-    qd[0] = -R * y[2]
-    qd[1] = 0.0
-    qd[2] = y[2]
-    qd[3] = y[3]
-    # Cholesky M = L L^T
-    L = np.zeros((4, 4))
-    for j in range(4):
-        d = M[j, j]
-        for r in range(j):
-            d -= L[j, r] * L[j, r]
-        L[j, j] = math.sqrt(d)
-        for i in range(j + 1, 4):
-            acc = M[i, j]
-            for r in range(j):
-                acc -= L[i, r] * L[j, r]
-            L[i, j] = acc / L[j, j]
-    # X = M^-1 A^T (4 x 2)
-    X = np.empty((4, 2))
-    z = np.empty(4)
-    for c in range(2):
-        for i in range(4):
-            acc = A[c, i]
-            for r in range(i):
-                acc -= L[i, r] * z[r]
-            z[i] = acc / L[i, i]
-        for i in range(3, -1, -1):
-            acc = z[i]
-            for r in range(i + 1, 4):
-                acc -= L[r, i] * X[r, c]
-            X[i, c] = acc / L[i, i]
-    W00 = A[0, 0] * X[0, 0] + A[0, 1] * X[1, 0] + A[0, 2] * X[2, 0] + A[0, 3] * X[3, 0]
-    W01 = A[0, 0] * X[0, 1] + A[0, 1] * X[1, 1] + A[0, 2] * X[2, 1] + A[0, 3] * X[3, 1]
-    W11 = A[1, 0] * X[0, 1] + A[1, 1] * X[1, 1] + A[1, 2] * X[2, 1] + A[1, 3] * X[3, 1]
-    b0 = A[0, 0] * qd[0] + A[0, 1] * qd[1] + A[0, 2] * qd[2] + A[0, 3] * qd[3]
-    b1 = A[1, 0] * qd[0] + A[1, 1] * qd[1] + A[1, 2] * qd[2] + A[1, 3] * qd[3]
-    det = W00 * W11 - W01 * W01
-    mu0 = (W11 * b0 - W01 * b1) / det
-    mu1 = (W00 * b1 - W01 * b0) / det
-    for i in range(4):
-        qp[i] = qd[i] - (X[i, 0] * mu0 + X[i, 1] * mu1)
-    T = 0.0
-    for i in range(4):
-        for j in range(4):
-            T += 0.5 * qd[i] * M[i, j] * qd[j]
-    Tc = 0.5 * (mu0 * (W00 * mu0 + W01 * mu1) + mu1 * (W01 * mu0 + W11 * mu1))
+    _, T, Tc, _, qp[0], qp[1], qp[2], qp[3], _, _ = strike(
+        y[0], p[4], -p[4] * y[2], 0.0, y[2], y[3], p[0], p[1], p[2], p[3], p[5], 0.0)
     return T, Tc
 
 
@@ -547,9 +396,6 @@ def _walk_one(
     for n in range(steps):
         t_step = t
         q3_start = y[0]
-        _, _, _, lam_n = _dynamics(p, y)
-        if lam_n <= 0.0:
-            return LOST_CONTACT, n, t
         t_limit = t_step + max_duration
         if y[0] < 0.0:
             ev, t, h = _integrate_phase(p, y, t, t_limit, 1, h, rtol, atol, k)
@@ -564,10 +410,14 @@ def _walk_one(
             rec_angle[n] = y[0]
             rec_time[n] = t - t_step
             rec_tc[n] = Tc
-            rec_length[n] = p[4] * (y[0] - q3_start) + s * math.sin(y[0]) - s * math.sin(
-                y[0] + y[1]
+            # contact points along the ground relative to the step's first stance contact:
+            # the stance foot rolled by -R (q3 - q3_start), the striking foot is at
+            # x_stance - s sin q3 + s sin(q3 + q4) (CompassGait.positions)
+            x_stance = -p[4] * (y[0] - q3_start)
+            rec_length[n] = _step_length(
+                0.0, x_stance - s * math.sin(y[0]) + s * math.sin(y[0] + y[1])
             )
-        if not qp[1] > 1e-12:
+        if not _lifts(qp[1], _lift_scale(p[2], y[2:4])):
             y[2] = qp[2]
             y[3] = qp[3]
             return TRAILING_FOOT_STAYS, n + 1, t
@@ -692,7 +542,7 @@ def _integrate_plain(
     while t < t_end and n < out.shape[0]:
         hh = min(h, t_end - t)
         _dp5(p, y, hh, k, tmp, ynew, True)
-        en = _error_norm(y, ynew, tmp, rtol, atol)
+        en = dp5.error_norm(y, ynew, tmp, rtol, atol)
         if en <= 1.0:
             t += hh
             for r in range(4):
@@ -700,33 +550,41 @@ def _integrate_plain(
                 k[0, r] = k[6, r]
                 out[n, r] = y[r]
             n += 1
-            h = hh * (10.0 if en == 0.0 else min(10.0, 0.9 * en ** -0.2))
+            h = hh * dp5.grow_factor(en)
         else:
-            h = hh * max(0.2, 0.9 * en ** -0.2)
+            h = hh * dp5.shrink_factor(en)
     return n
 
 
 # ---------------------------------------------------------------------------------------------
 # Python API
 # ---------------------------------------------------------------------------------------------
-def walker_parameters(walker: CompassGait, slope: ArrayLike = 0.0) -> FloatArray:
+def walker_parameters(walker: PlanarWalker, slope: ArrayLike = 0.0) -> FloatArray:
     """Parameter rows ``(mH, m, l, b, R, I, g, slope)`` broadcast over array-valued fields.
 
     Parameters
     ----------
-    walker : CompassGait
-        The walker; any field may be an array (e.g. a grid of foot radii).
+    walker : PlanarWalker
+        A walker simulated by this module's kernel (``walker.compiled_kernel == "compass"``:
+        the :class:`~heelstrike.models.CompassGait`); any parameter may be an array (e.g. a
+        grid of foot radii).
     slope : array_like
-        Slope (rad), broadcast with the walker's fields.
+        Slope (rad), broadcast with the walker's parameters.
 
     Returns
     -------
     ndarray, shape (..., 8)
         SI units (kg, kg, m, m, m, kg m^2, m/s^2, rad).
+
+    Raises
+    ------
+    TypeError
+        If ``walker`` is not a walker or its compiled kernel is not the compass-gait one.
     """
-    if not isinstance(walker, CompassGait):
+    if not isinstance(walker, PlanarWalker) or walker.compiled_kernel != "compass":
         raise TypeError("the compiled path supports the CompassGait walker only")
-    vals = [np.asarray(getattr(walker, n), dtype=float) for n in PARAMETER_NAMES[:-1]]
+    params = walker.parameters
+    vals = [np.asarray(params[n], dtype=float) for n in PARAMETER_NAMES[:-1]]
     vals.append(np.asarray(slope, dtype=float))
     b = np.broadcast_arrays(*vals)
     return np.ascontiguousarray(np.stack(b, axis=-1))
@@ -739,7 +597,7 @@ def _use_parallel(parallel: bool | None) -> bool:
 
 
 @dataclass(frozen=True, kw_only=True)
-class EnsembleResult:
+class EnsembleResult(ResultDictMixin):
     """Outcome of :func:`ensemble_walk` for ``N`` walkers and up to ``S`` steps.
 
     Attributes
@@ -849,7 +707,7 @@ def ensemble_walk(
     if P.ndim > 2:
         raise ValueError("walker parameters and slope must be scalars or 1-D arrays")
     n = max(Y0.shape[0], P.shape[0] if P.ndim == 2 else 1)
-    P = np.ascontiguousarray(np.broadcast_to(P, (n, 8)))
+    P = np.array(np.broadcast_to(P, (n, 8)))  # a writable copy: one numba specialisation
     Y = np.ascontiguousarray(np.broadcast_to(Y0, (n, 4))).copy()
     if not (np.all(np.isfinite(P)) and np.all(np.isfinite(Y))):
         raise ValueError("initial states and parameters must be finite")
@@ -1032,3 +890,183 @@ def single_support_compiled(
     out = np.empty((max_samples, 4))
     n = _integrate_plain(p, y, float(duration), float(rtol), float(atol), out)
     return out[:n].copy()
+
+
+def check_compiled_compass(
+    torque: Any = None, push_off: Any = None, friction: float | None = None,
+    restitution: float = 0.0,
+) -> None:
+    """Raise ``ValueError`` unless the compass kernel supports this actuation and contact.
+
+    The kernel walks the *passive* compass gait with an inert heel strike: no torque law, no
+    push-off, no friction limit (``slipped``) and ``restitution = 0``.
+    """
+    unsupported = [
+        name
+        for name, given in (
+            ("torque", torque is not None),
+            ("push_off", push_off is not None),
+            ("friction", friction is not None),
+            ("restitution", float(restitution) != 0.0),
+        )
+        if given
+    ]
+    if unsupported:
+        raise ValueError(
+            "the compiled compass-gait kernel walks the passive walker with an inert impact "
+            f"only ({', '.join(unsupported)} given); use backend='scipy'"
+        )
+
+
+def simulate_compiled(
+    walker: PlanarWalker,
+    q0: ArrayLike,
+    q_dot0: ArrayLike,
+    *,
+    slope: float = 0.0,
+    steps: int = 1,
+    torque: None = None,
+    push_off: None = None,
+    friction: None = None,
+    restitution: float = 0.0,
+    max_step_duration: float = 5.0,
+    rtol: float = 1e-10,
+    atol: float = 1e-10,
+) -> WalkResult:
+    """Compiled :func:`~heelstrike.dynamics.hybrid.simulate` of one passive compass gait.
+
+    The steps are this module's kernel, phase by phase (the integrator, events, impact and
+    swap of :func:`ensemble_walk`, so impacts equal :func:`step_map_compiled`'s); the impact
+    records are completed from the walker contract (impulse, trailing-foot velocity, energies,
+    :meth:`~heelstrike.models.base.PlanarWalker.step_length`).
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+        A scalar-parameter walker with ``compiled_kernel == "compass"``.
+    q0, q_dot0 : array_like, shape (4,)
+        Initial state, stance foot on the ground (``q2 = R``) and rolling.
+    slope : float
+        Ground slope (rad).
+    steps : int
+        Number of heel strikes to simulate.
+    torque, push_off, friction : None
+        Not supported (passive walking only; :func:`check_compiled_compass`).
+    restitution : float
+        Must be 0 (the inert impact).
+    max_step_duration : float
+        Time bound of one step (s).
+    rtol, atol : float
+        Integrator (DP5) tolerances.
+
+    Returns
+    -------
+    WalkResult
+        Samples are the phase boundaries only: the start of every step, mid-stance and the
+        state just before heel strike (use the scipy backend for dense trajectories).
+
+    Raises
+    ------
+    ValueError
+        On an invalid initial state, batched parameters or unsupported actuation.
+    """
+    check_compiled_compass(torque, push_off, friction, restitution)
+    if steps < 1:
+        raise ValueError("steps must be >= 1")
+    p = walker_parameters(walker, slope)
+    if p.shape != (8,):
+        raise ValueError("the compiled compass kernel walks one walker (scalar parameters)")
+    q = np.array(q0, dtype=float)
+    qd = np.array(q_dot0, dtype=float)
+    if q.shape != (4,) or qd.shape != (4,):
+        raise ValueError("q0 and q_dot0 must have shape (4,)")
+    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
+        raise ValueError("initial state must be finite")
+    R = float(p[4])
+    if abs(q[1] - R) > 1e-9 or np.max(np.abs(walker.contact_jacobian(q, "right") @ qd)) > 1e-9:
+        raise ValueError(
+            "initial state must have the stance foot on the ground (q2 = R) and rolling "
+            "without slip (q1_dot = -R q3_dot, q2_dot = 0)"
+        )
+    leg_length = float(walker.scale.leg_length)
+    k = np.empty((7, 4))
+    qp = np.empty(4)
+    y = np.array([q[2], q[3], qd[2], qd[3]])
+    t, h = 0.0, 0.0
+    ts: list[float] = []
+    qs: list[FloatArray] = []
+    qds: list[FloatArray] = []
+    legs: list[int] = []
+    step_ids: list[int] = []
+    impacts: list[ImpactRecord] = []
+    stance = 0
+    status = WalkStatus.COMPLETED
+
+    def full(x_start: float, q3_start: float) -> tuple[FloatArray, FloatArray]:
+        """Floating-base state of the reduced ``y`` (stance foot rolled from the start)."""
+        qq = np.array([x_start - R * (y[0] - q3_start), R, y[0], y[1]])
+        return qq, np.array([-R * y[2], 0.0, y[2], y[3]])
+
+    def sample(tt: float, qq: FloatArray, vv: FloatArray, step: int) -> None:
+        ts.append(tt)
+        qs.append(qq)
+        qds.append(vv)
+        legs.append(stance)
+        step_ids.append(step)
+
+    for n in range(steps):
+        t_step, q_start, q3_start = t, q.copy(), float(y[0])
+        sample(t, q, qd, n)
+        t_limit = t_step + max_step_duration
+        ev = _EV_MID
+        if y[0] < 0.0:
+            ev, t, h = _integrate_phase(p, y, t, t_limit, 1, h, rtol, atol, k)
+            q, qd = full(q_start[0], q3_start)
+            sample(t, q, qd, n)
+        if ev == _EV_MID:
+            ev, t, h = _integrate_phase(p, y, t, t_limit, 2, h, rtol, atol, k)
+            q, qd = full(q_start[0], q3_start)
+            sample(t, q, qd, n)
+        if ev != _EV_STRIKE:
+            status = WalkStatus.from_code(_phase_status(ev))
+            break
+        T, Tc = _impact(p, y, qp)
+        qd_plus = qp.copy()
+        M = walker.mass_matrix(q)
+        A_L = walker.contact_jacobian(q, "left")
+        impulse = np.linalg.solve(A_L @ A_L.T, A_L @ (M @ (qd_plus - qd)))
+        v_trailing = float((walker.contact_jacobian(q, "right") @ qd_plus)[1])
+        impacts.append(
+            ImpactRecord(
+                step=n, time=t, q=q.copy(), q_dot_minus=qd.copy(), q_dot_plus=qd_plus.copy(),
+                impact_angle=float(q[2]), kinetic_energy=float(T),
+                kinetic_energy_constrained=float(Tc), kinetic_energy_admissible=float(T - Tc),
+                energy_lost=float(Tc), impulse=impulse,
+                step_length=float(walker.step_length(q_start, q)),
+                trailing_normal_velocity=v_trailing,
+                potential_energy_released=float(walker.potential_energy(q_start, slope))
+                - float(walker.potential_energy(q, slope)),
+                actuator_work=0.0, push_off_work=0.0, step_duration=t - t_step,
+            )
+        )
+        if not _contact.lifts(v_trailing, _contact.lift_velocity_scale(leg_length, qd[2:])):
+            status = WalkStatus.TRAILING_FOOT_STAYS
+            qd = qd_plus
+            break
+        q, qd = (np.asarray(a, dtype=float) for a in walker.swap_legs(q, qd_plus))
+        y[:] = q[2], q[3], qd[2], qd[3]
+        stance = 1 - stance
+    return WalkResult(
+        status=status,
+        message=status.message,
+        t=np.asarray(ts),
+        q=np.asarray(qs),
+        q_dot=np.asarray(qds),
+        stance_leg=np.asarray(legs, dtype=np.int_),
+        step=np.asarray(step_ids, dtype=np.int_),
+        actuator_work=np.zeros(len(ts)),
+        impacts=tuple(impacts),
+        final_q=np.asarray(q),
+        final_q_dot=np.asarray(qd),
+        slope=float(slope),
+    )

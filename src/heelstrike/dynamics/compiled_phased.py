@@ -11,17 +11,20 @@ The same hybrid model as :func:`heelstrike.dynamics.phased.simulate_phased`, ste
 - **heel strike**: bilateral rows ``[A_L; lock rows]``, the trailing foot a unilateral
   candidate whose mode (separate, stick, slip fallback) is decided by enumerating the active
   sets in the order of :func:`heelstrike.core.complementarity.resolve_impact`; the walk ends
-  with ``trailing_foot_stays`` unless it separates with ``v_n > 1e-12 m/s``; then the legs are
+  with ``trailing_foot_stays`` unless it separates with ``v_n > LIFT_TOLERANCE l sum |q_dot-|``
+  (the rule of :mod:`heelstrike.models._contact`, compiled); then the legs are
   relabelled (``swap``) and the locks reset exactly.
 
 Each continuous stretch uses the terminal events of ``simulate_phased`` (``lost_contact``,
 ``fell_forward``, ``fell_backward`` and, with a friction coefficient, ``slipped``) with
-``solve_ivp``'s crossing rules. The right-hand side is the reduced single-support dynamics
-``J^T M J theta_dd = J^T (B u - h)`` with ``M``, ``h``, the contact Jacobians and the swap
-generated from the walker's sympy expressions (:mod:`heelstrike.models._codegen_numba`). The
-integrator is the Dormand-Prince 5(4) design of :mod:`heelstrike.dynamics.compiled` (scipy's
-error norm and step control; an event's time is located by the Illinois method on the exact
-Runge-Kutta step, to ``1e-13 s``) generalised to any number of free coordinates.
+``solve_ivp``'s crossing rules; a stretch that starts with the contact already lost (normal
+force or friction margin ``<= 0``) ends at once with that status. The right-hand side is the
+reduced single-support dynamics ``J^T M J theta_dd = J^T (B u - h)`` with ``M``, ``h``, the
+contact Jacobians and the swap generated from the walker's sympy expressions
+(:mod:`heelstrike.models._codegen_numba`). The integrator is the Dormand-Prince 5(4) scheme of
+:mod:`heelstrike.dynamics._dp5`, shared with :mod:`heelstrike.dynamics.compiled` (scipy's error
+norm and step control; an event's time is located by the Illinois method on the exact
+Runge-Kutta step, to ``1e-13 s``), for any number of free coordinates.
 
 Actuation: passive or :class:`~heelstrike.dynamics.phased.TorsoPD` torques and the
 :class:`~heelstrike.dynamics.actuation.PushOff` impulse (all evaluated in the kernel); other
@@ -50,8 +53,12 @@ from numba import njit
 from numba import types as nbt
 from numpy.typing import ArrayLike, NDArray
 
+from heelstrike._results import ResultDictMixin
+from heelstrike._typing import FloatArray, IntArray
 from heelstrike.core.impact import ImpactInputError
+from heelstrike.dynamics import _dp5 as dp5
 from heelstrike.dynamics.actuation import PushOff
+from heelstrike.dynamics.compiled import lift_velocity_scale_jit, lifts_jit
 from heelstrike.dynamics.hybrid import ImpactRecord, WalkStatus
 from heelstrike.dynamics.phased import (
     ImpactKind,
@@ -70,9 +77,6 @@ from heelstrike.models._codegen_numba import (
     build_numba,
 )
 from heelstrike.models.builder import BuiltWalker
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 
 __all__ = [
     "STATUS_NAMES",
@@ -104,29 +108,14 @@ _EV_FAIL = -2  # integrator failure
 
 # float configuration: slope, stance foot radius, swing foot radius, knee flex threshold,
 # friction coefficient (nan: none), torso joint (-1: passive), torso angle, kp, kd, push-off
-# impulse (nan: none)
-_C_SLOPE, _C_RST, _C_RSW, _C_THR, _C_MU, _C_TJ, _C_TANG, _C_KP, _C_KD, _C_PUSH = range(10)
+# impulse (nan: none), leg length of the walker's scale (the lift rule's velocity scale)
+_C_SLOPE, _C_RST, _C_RSW, _C_THR, _C_MU, _C_TJ, _C_TANG, _C_KP, _C_KD, _C_PUSH, _C_LEG = range(11)
 
 # impact row layout: kind, step, time, T, T_c, T_a, v_trail, mode, rows, work, push-off work,
 # then q, q_dot-, q_dot+ and the impulses (n each)
 _I_HEAD = 11
 _KIND_KNEE, _KIND_HEEL = 0.0, 1.0
 _MODES = ("separate", "stick", "slip")
-
-# Dormand-Prince 5(4) tableau (as heelstrike.dynamics.compiled).
-_C2, _C3, _C4, _C5 = 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0
-_A21 = 1.0 / 5.0
-_A31, _A32 = 3.0 / 40.0, 9.0 / 40.0
-_A41, _A42, _A43 = 44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0
-_A51, _A52, _A53, _A54 = 19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0
-_A61, _A62, _A63, _A64, _A65 = (
-    9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0, -5103.0 / 18656.0,
-)
-_B1, _B3, _B4, _B5, _B6 = 35.0 / 384.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0
-_E1, _E3, _E4, _E5, _E6, _E7 = (
-    71.0 / 57600.0, -71.0 / 16695.0, 71.0 / 1920.0, -17253.0 / 339200.0, 22.0 / 525.0,
-    -1.0 / 40.0,
-)
 
 _DYN_T = nbt.FunctionType(DYNAMICS_SIG)
 _CON_T = nbt.FunctionType(CONTACTS_SIG)
@@ -360,14 +349,6 @@ def _event_value(
     return cfg[_C_MU] * lam_n - abs(lam_t)
 
 
-@njit(cache=True, nogil=True)
-def _crossed(g0: float, g1: float, direction: int) -> bool:
-    """``solve_ivp``'s rule: up ``g0 <= 0 <= g1``, down ``g0 >= 0 >= g1``."""
-    if direction > 0:
-        return g0 <= 0.0 and g1 >= 0.0
-    return g0 >= 0.0 and g1 <= 0.0
-
-
 # ---------------------------------------------------------------------------------------------
 # integrator
 # ---------------------------------------------------------------------------------------------
@@ -377,36 +358,22 @@ def _dp5(
     hh: float, k: FloatArray, tmp: FloatArray, ynew: FloatArray, full: bool, q: FloatArray,
     qd: FloatArray, M: FloatArray, h: FloatArray, Mr: FloatArray, Fr: FloatArray,
 ) -> None:
-    """One DP5 step from ``y`` with ``k[0] = f(y)`` (see ``compiled._dp5``)."""
-    d = y.shape[0]
-    for i in range(d):
-        tmp[i] = y[i] + hh * _A21 * k[0, i]
+    """One DP5 step (:mod:`heelstrike.dynamics._dp5`) from ``y`` with ``k[0] = f(y)``; writes
+    ``ynew`` and, with ``full``, ``k[6] = f(ynew)`` and the error estimate in ``tmp``."""
+    dp5.stage(y, hh, k, 1, tmp)  # stage numbers as literals: numba folds the stage's branch
     _rhs(dyn, p, cfg, free, qref, tmp, k[1], q, qd, M, h, Mr, Fr)
-    for i in range(d):
-        tmp[i] = y[i] + hh * (_A31 * k[0, i] + _A32 * k[1, i])
+    dp5.stage(y, hh, k, 2, tmp)
     _rhs(dyn, p, cfg, free, qref, tmp, k[2], q, qd, M, h, Mr, Fr)
-    for i in range(d):
-        tmp[i] = y[i] + hh * (_A41 * k[0, i] + _A42 * k[1, i] + _A43 * k[2, i])
+    dp5.stage(y, hh, k, 3, tmp)
     _rhs(dyn, p, cfg, free, qref, tmp, k[3], q, qd, M, h, Mr, Fr)
-    for i in range(d):
-        tmp[i] = y[i] + hh * (_A51 * k[0, i] + _A52 * k[1, i] + _A53 * k[2, i] + _A54 * k[3, i])
+    dp5.stage(y, hh, k, 4, tmp)
     _rhs(dyn, p, cfg, free, qref, tmp, k[4], q, qd, M, h, Mr, Fr)
-    for i in range(d):
-        tmp[i] = y[i] + hh * (
-            _A61 * k[0, i] + _A62 * k[1, i] + _A63 * k[2, i] + _A64 * k[3, i] + _A65 * k[4, i]
-        )
+    dp5.stage(y, hh, k, 5, tmp)
     _rhs(dyn, p, cfg, free, qref, tmp, k[5], q, qd, M, h, Mr, Fr)
-    for i in range(d):
-        ynew[i] = y[i] + hh * (
-            _B1 * k[0, i] + _B3 * k[2, i] + _B4 * k[3, i] + _B5 * k[4, i] + _B6 * k[5, i]
-        )
+    dp5.solution(y, hh, k, ynew)
     if full:
         _rhs(dyn, p, cfg, free, qref, ynew, k[6], q, qd, M, h, Mr, Fr)
-        for i in range(d):
-            tmp[i] = hh * (
-                _E1 * k[0, i] + _E3 * k[2, i] + _E4 * k[3, i] + _E5 * k[4, i]
-                + _E6 * k[5, i] + _E7 * k[6, i]
-            )
+        dp5.error_estimate(hh, k, tmp)
 
 
 @njit(cache=True, nogil=True)
@@ -470,30 +437,17 @@ def _segment(
     _rhs(dyn, p, cfg, free, qref, y, k[0], q, qd, M, hv, Mr, Fr)
     for j in range(n_ev):
         g_old[j] = _event_value(kinds[j], dyn, con, p, cfg, free, qref, swing_idx, lockv, y)
-    # Hairer's starting step (as solve_ivp)
-    d0 = 0.0
-    d1 = 0.0
-    for i in range(d):
-        sc = atol + abs(y[i]) * rtol
-        d0 += (y[i] / sc) ** 2
-        d1 += (k[0, i] / sc) ** 2
-    d0 = math.sqrt(d0 / d)
-    d1 = math.sqrt(d1 / d)
-    h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
+    for j in range(n_ev):
+        # contact already lost at the start: no sign change to detect (hybrid.CONTACT_EVENTS)
+        if (kinds[j] == _EV_LOST or kinds[j] == _EV_SLIP) and g_old[j] <= 0.0:
+            return kinds[j], t, S, ns
+    # Hairer's starting step (as solve_ivp), its first trial clamped to max_step
+    h0, d1 = dp5.initial_step_first(y, k[0], rtol, atol)
     h0 = min(h0, max_step)
     for i in range(d):
         tmp[i] = y[i] + h0 * k[0, i]
     _rhs(dyn, p, cfg, free, qref, tmp, ktry[0], q, qd, M, hv, Mr, Fr)
-    d2 = 0.0
-    for i in range(d):
-        sc = atol + abs(y[i]) * rtol
-        d2 += ((ktry[0, i] - k[0, i]) / sc) ** 2
-    d2 = math.sqrt(d2 / d) / h0
-    if d1 <= 1e-15 and d2 <= 1e-15:
-        h1 = max(1e-6, h0 * 1e-3)
-    else:
-        h1 = (0.01 / max(d1, d2)) ** (1.0 / 5.0)
-    hstep = min(100.0 * h0, h1, max_step)
+    hstep = min(dp5.initial_step(y, k[0], ktry[0], h0, d1, rtol, atol), max_step)
     n_steps = 0
     while True:
         if t >= t_limit:
@@ -501,33 +455,26 @@ def _segment(
         n_steps += 1
         if n_steps > 2_000_000:
             return _EV_FAIL, t, S, ns
-        h_min = 1e-14 * max(1.0, abs(t))
+        h_min = dp5.min_step(t)
         if hstep < h_min:
             return _EV_FAIL, t, S, ns
         hh = min(hstep, t_limit - t, max_step)
         while True:
             _dp5(dyn, p, cfg, free, qref, y, hh, k, tmp, ynew, True, q, qd, M, hv, Mr, Fr)
-            acc = 0.0
-            for i in range(d):
-                sc = atol + rtol * max(abs(y[i]), abs(ynew[i]))
-                acc += (tmp[i] / sc) ** 2
-            en = math.sqrt(acc / d)
-            if not math.isfinite(en):
-                en = 1e10
+            en = dp5.error_norm(y, ynew, tmp, rtol, atol)
             if en <= 1.0:
-                fac = 10.0 if en == 0.0 else min(10.0, 0.9 * en**-0.2)
                 break
-            hh *= max(0.2, 0.9 * en**-0.2)
+            hh *= dp5.shrink_factor(en)
             if hh < h_min:
                 return _EV_FAIL, t, S, ns
-        h_next = min(hh * fac, max_step)
+        h_next = min(hh * dp5.grow_factor(en), max_step)
         best = -1
         best_tau = hh
         for j in range(n_ev):
             g_new[j] = _event_value(kinds[j], dyn, con, p, cfg, free, qref, swing_idx, lockv,
                                     ynew)
         for j in range(n_ev):
-            if not _crossed(g_old[j], g_new[j], dirs[j]):
+            if not dp5.crossed(g_old[j], g_new[j], dirs[j]):
                 continue
             lo, flo = 0.0, g_old[j]
             hi, fhi = hh, g_new[j]
@@ -537,9 +484,7 @@ def _segment(
             elif fhi != 0.0:
                 side = 0
                 for _ in range(200):
-                    c = (lo * fhi - hi * flo) / (fhi - flo)
-                    if not (lo < c < hi):
-                        c = 0.5 * (lo + hi)
+                    c = dp5.secant_point(lo, flo, hi, fhi)
                     for r in range(d):
                         ktry[0, r] = k[0, r]
                     _dp5(dyn, p, cfg, free, qref, y, c, ktry, tmp, ytry, False, q, qd, M, hv,
@@ -549,17 +494,8 @@ def _segment(
                     root = c
                     if fc == 0.0:
                         break
-                    if (fc > 0.0) == (fhi > 0.0):
-                        hi, fhi = c, fc
-                        if side == -1:
-                            flo *= 0.5
-                        side = -1
-                    else:
-                        lo, flo = c, fc
-                        if side == 1:
-                            fhi *= 0.5
-                        side = 1
-                    if hi - lo <= 1e-13 + 4e-16 * abs(t):
+                    lo, flo, hi, fhi, side = dp5.illinois_update(lo, flo, hi, fhi, side, c, fc)
+                    if dp5.bracket_closed(lo, hi, t):
                         root = hi if abs(fhi) < abs(flo) else lo
                         break
             if best < 0 or root < best_tau:
@@ -845,7 +781,7 @@ def _walk_py(
             vn += Ac[0, 1, i] * v_post[i]
         ni = _record_impact(Imp, ni, _KIND_HEEL, kstep, t, M, q, qd, v_c, lam, k_rows, vn, mode,
                             work, push_work)
-        if mode != 0 or not vn > 1e-12:
+        if mode != 0 or not lifts_jit(vn, lift_velocity_scale_jit(cfg[_C_LEG], qd[2:])):
             status = TRAILING_FOOT_STAYS
             qd = v_post
             break
@@ -998,7 +934,8 @@ def simulate_phased_compiled(
     mu = math.nan if friction is None else float(friction)
     cfg = np.array(
         [slope, R, R_sw, knee_flex_threshold, mu, tj, tang, kp, kd,
-         math.nan if push_off is None else float(push_off.impulse)],
+         math.nan if push_off is None else float(push_off.impulse),
+         float(walker.scale.leg_length)],
         dtype=float,
     )
     status, S, ns, Imp, ni, starts, qf, qdf = _walk_kernel()(
@@ -1060,8 +997,7 @@ def _result(
                     impact_angle=float(q[2]), kinetic_energy=T,
                     kinetic_energy_constrained=T_c, kinetic_energy_admissible=T_a,
                     energy_lost=T_c, impulse=lam[:2].copy(),
-                    step_length=float(walker.contact_point(q_start, "right")[0])
-                    - float(walker.contact_point(q, "left")[0]),
+                    step_length=float(walker.step_length(q_start, q)),
                     trailing_normal_velocity=v_trail,
                     potential_energy_released=float(walker.potential_energy(q_start, slope))
                     - float(walker.potential_energy(q, slope)),
@@ -1161,7 +1097,7 @@ def _ensemble_kernel() -> Any:
 
 
 @dataclass(frozen=True, kw_only=True)
-class PhasedEnsembleResult:
+class PhasedEnsembleResult(ResultDictMixin):
     """Outcome of :func:`ensemble_walk_phased` for ``N`` walkers (initial states).
 
     Attributes
@@ -1333,7 +1269,8 @@ def ensemble_walk_phased(
     tj, tang, kp, kd = _torque_config(w, torque)
     cfg = np.array(
         [slope, R, R_sw, knee_flex_threshold, math.nan if friction is None else float(friction),
-         tj, tang, kp, kd, math.nan if push_off is None else float(push_off.impulse)],
+         tj, tang, kp, kd, math.nan if push_off is None else float(push_off.impulse),
+         float(w.scale.leg_length)],
         dtype=float,
     )
     model = numba_model(w)

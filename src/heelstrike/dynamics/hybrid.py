@@ -15,7 +15,8 @@ scuffing configuration ``q4 = 0``.
 
 At heel strike the impact is resolved with :func:`heel_strike` (``q_dot+ = P_a q_dot-`` with the
 striking foot's Jacobian, eq. 13), the trailing foot must lift (its contact point's normal
-velocity after impact must be positive), and the legs are relabelled.
+velocity after impact must be positive: :func:`heelstrike.models._contact.lifts`, relative to
+``l sum |q_dot-|``), and the legs are relabelled.
 
 Failures are reported in :attr:`WalkResult.status`, never raised from inside the integrator.
 """
@@ -30,12 +31,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from heelstrike._results import ResultDictMixin
+from heelstrike._typing import FloatArray
 from heelstrike.core.impact import ImpactResult, impact
 from heelstrike.dynamics.events import Event, to_scipy
 from heelstrike.dynamics.single_support import SingleSupport, TorqueLaw
+from heelstrike.models._contact import lift_velocity_scale, lifts
 from heelstrike.models.base import PlanarWalker
-
-FloatArray = NDArray[np.float64]
 
 __all__ = [
     "GroundReaction",
@@ -56,7 +58,7 @@ class WalkStatus(StrEnum):
     """How a simulation ended: the one status vocabulary of every backend.
 
     Each member is its string name (a :class:`~enum.StrEnum`, so ``status == "completed"``
-    holds), carries a human-readable :attr:`message` and a stable integer :attr:`code`: the
+    holds), carries a human-readable ``message`` and a stable integer ``code``: the
     code the compiled (numba) kernels write and ensemble results store (:meth:`from_code`
     converts back). Codes never change meaning; new statuses get new codes.
 
@@ -131,7 +133,7 @@ if sorted(_BY_CODE) != list(range(len(WalkStatus))):  # pragma: no cover - defin
 
 
 @dataclass(frozen=True, kw_only=True)
-class ImpactRecord:
+class ImpactRecord(ResultDictMixin):
     """One heel strike of a simulation (pre-swap labels: the "left" foot strikes).
 
     Attributes
@@ -186,7 +188,7 @@ class ImpactRecord:
 
 
 @dataclass(frozen=True, kw_only=True)
-class WalkResult:
+class WalkResult(ResultDictMixin):
     """Outcome of :func:`simulate`.
 
     Attributes
@@ -242,7 +244,7 @@ class WalkResult:
 
 
 @dataclass(frozen=True, kw_only=True)
-class GroundReaction:
+class GroundReaction(ResultDictMixin):
     """Contact force on the stance foot along a walk.
 
     Attributes
@@ -320,8 +322,13 @@ def heel_strike(
     return res, np.asarray(v_trailing)
 
 
+#: Events of the stance foot's contact (normal force, friction cone), checked at the start of
+#: every integrated segment as well as for sign changes.
+CONTACT_EVENTS: tuple[str, ...] = (WalkStatus.LOST_CONTACT.value, WalkStatus.SLIPPED.value)
+
+
 @dataclass(frozen=True, kw_only=True)
-class Segment:
+class Segment(ResultDictMixin):
     """One integrated stretch of single support: samples ``t`` (N,), states ``x`` (N, 2m + 1),
     the terminal event that ended it (None: time bound reached) and whether the solver failed."""
 
@@ -344,10 +351,16 @@ def integrate_segment(
 ) -> Segment:
     """Integrate ``support.rhs`` from ``t0`` until a terminal event or ``t_end`` (DOP853).
 
-    The last sample is placed exactly at the terminal event's state.
+    The last sample is placed exactly at the terminal event's state. A contact event
+    (:data:`CONTACT_EVENTS`) whose function is already ``<= 0`` at the start ends the segment
+    at once: a sign change cannot be detected from there, and the stance foot's contact is
+    already lost (e.g. a launch so fast that the ground would have to pull the foot down).
     """
     if t_end <= t0:
         return Segment(t=np.array([t0]), x=x0[None, :], event=None, failed=False)
+    for ev in events:
+        if ev.name in CONTACT_EVENTS and ev.function(t0, x0) <= 0.0:
+            return Segment(t=np.array([t0]), x=x0[None, :], event=ev.name, failed=False)
     from scipy.integrate import solve_ivp  # lazy: ~0.7 s per process otherwise
 
     sol: Any = solve_ivp(
@@ -391,8 +404,9 @@ def _step_events(
     friction: float | None,
     *,
     before: bool,
-) -> tuple[list[Event], list[list[Event]]]:
-    """Events of one step: contact checks common to both phases, and the phases' own."""
+) -> list[list[Event]]:
+    """Events of each phase of one step: the phase's own, then the contact checks common to
+    both phases (:data:`CONTACT_EVENTS`)."""
     m = len(support.free_coordinates)
 
     def state(x: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -431,7 +445,7 @@ def _step_events(
             *common,
         ]
     )
-    return common, phases
+    return phases
 
 
 def simulate(
@@ -496,6 +510,7 @@ def simulate(
     support = SingleSupport(walker=walker, slope=slope, torque=torque)
     m = len(support.free_coordinates)
     R = float(np.asarray(walker.foot_radii[0]))
+    leg_length = float(walker.scale.leg_length)  # velocity scale of the lift rule
     if abs(q[1] - R) > 1e-9 or np.max(np.abs(walker.contact_jacobian(q, "right") @ qd)) > 1e-9:
         raise ValueError(
             "initial state must have the stance foot on the ground (q2 = R) and rolling "
@@ -518,27 +533,15 @@ def simulate(
         t_step = t
         x = np.concatenate((support.pack(q, qd), [work]))
         V_start = float(walker.potential_energy(q, slope))
-        contact_start = float(walker.contact_point(q, "right")[0])
         work_start = work
         step_support = support
         if torque is not None and torque_resets_each_step:
             step_support = SingleSupport(
                 walker=walker, slope=slope, torque=_ShiftedTorque(law=torque, t0=t_step)
             )
-        common, phases = _step_events(walker, step_support, q_ref, friction, before=x[0] < 0.0)
+        phases = _step_events(walker, step_support, q_ref, friction, before=x[0] < 0.0)
         t_limit = t_step + max_step_duration
         ended: WalkStatus | None = None
-        # A crossing cannot be detected if the step already starts past it.
-        for ev in common:
-            if ev.function(t, x) <= 0.0:
-                ended = WalkStatus(ev.name)
-                phases = []
-                ts.append(np.array([t]))
-                xs.append(x[None, :])
-                qrefs.append(q_ref[None, :])
-                legs.append(np.array([stance]))
-                step_ids.append(np.array([k]))
-                break
         for events in phases:
             seg = integrate_segment(
                 step_support, q_ref, x, t, t_limit, events, rtol, atol, max_step
@@ -586,7 +589,7 @@ def simulate(
                 kinetic_energy_admissible=float(res.kinetic_energy_admissible),
                 energy_lost=float(res.energy_lost),
                 impulse=np.asarray(res.constraint_impulse, dtype=float).copy(),
-                step_length=contact_start - float(walker.contact_point(q, "left")[0]),
+                step_length=float(walker.step_length(q_ref, q)),
                 trailing_normal_velocity=float(v_trailing),
                 potential_energy_released=V_start - float(walker.potential_energy(q, slope)),
                 actuator_work=work - work_start,
@@ -594,7 +597,7 @@ def simulate(
                 step_duration=t - t_step,
             )
         )
-        if not float(v_trailing) > 1e-12:
+        if not lifts(float(v_trailing), lift_velocity_scale(leg_length, qd[2:])):
             status = WalkStatus.TRAILING_FOOT_STAYS
             qd = qd_plus
             break

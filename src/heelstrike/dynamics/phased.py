@@ -24,7 +24,8 @@ penetration of the swing foot is ignored too). For the compass gait this is the 
 The **heel strike** is resolved with :func:`heelstrike.core.complementarity.resolve_impact`:
 bilateral rows ``[A_L; lock rows]`` (the leading foot lands without slip, the knees stay
 locked) and the trailing foot ``A_R`` as a unilateral candidate contact. Whether the trailing
-foot lifts is *decided* by the complementarity conditions; if it does not, the walk ends with
+foot lifts is *decided* by the complementarity conditions (and its separation velocity must pass
+:func:`heelstrike.models._contact.lifts`); if it does not, the walk ends with
 :attr:`~heelstrike.dynamics.hybrid.WalkStatus.TRAILING_FOOT_STAYS`. Otherwise the legs are
 relabelled (:meth:`~heelstrike.models.base.PlanarWalker.swap_legs`) and the new swing knee is
 unlocked.
@@ -50,11 +51,13 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any, Literal, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from heelstrike._results import ResultDictMixin
+from heelstrike._typing import FloatArray
 from heelstrike.core.complementarity import CandidateContact, resolve_impact
 from heelstrike.core.impact import impact
 from heelstrike.dynamics.events import Event
@@ -66,10 +69,9 @@ from heelstrike.dynamics.hybrid import (
     integrate_segment,
 )
 from heelstrike.dynamics.single_support import SingleSupport, TorqueLaw
+from heelstrike.models._contact import lift_velocity_scale, lifts
 from heelstrike.models.builder import BuiltWalker, load_walker
 from heelstrike.models.description import WalkerDescription
-
-FloatArray = NDArray[np.float64]
 
 __all__ = [
     "PhasedImpact",
@@ -113,9 +115,13 @@ class PhasedWalker(BuiltWalker):
 
     @classmethod
     def from_built(cls, walker: BuiltWalker) -> PhasedWalker:
-        """The same walker (description and parameter values) with section hooks."""
-        if isinstance(walker, PhasedWalker):
-            return walker
+        """The same walker (description and parameter values) with section hooks.
+
+        A described walker that already defines its Poincare section (the walker contract's
+        ``description`` and ``has_poincare_section``: a phased walker) is returned as it is.
+        """
+        if walker.description is not None and walker.has_poincare_section:
+            return cast(PhasedWalker, walker)
         return cls(walker.description, **walker.params)
 
     def replace(self, **params: ArrayLike) -> PhasedWalker:
@@ -321,7 +327,7 @@ class TorsoPD:
 
 # -- results -----------------------------------------------------------------------------------
 @dataclass(frozen=True, kw_only=True)
-class PhasedImpact:
+class PhasedImpact(ResultDictMixin):
     """One impact (knee strike or heel strike) of a phased simulation.
 
     Attributes
@@ -497,6 +503,7 @@ def simulate_phased(
     """
     q, qd = check_initial_state(walker, q0, q_dot0, steps)
     n = walker.n_coordinates
+    leg_length = float(walker.scale.leg_length)  # velocity scale of the lift rule
     stance_locks, swing_locks = stance_and_swing_locks(walker)
     all_locks = stance_locks + swing_locks
     A_lock = walker.lock_jacobian(all_locks) if all_locks else np.zeros((0, n))
@@ -519,7 +526,7 @@ def simulate_phased(
     for k in range(steps):
         t_step, work_start = t, work
         V_start = float(walker.potential_energy(q, slope))
-        contact_start = float(walker.contact_point(q, "right")[0])
+        q_start = q.copy()
         law = None if torque is None else _Shifted(law=torque, t0=t_step)
         t_limit = t_step + max_step_duration
 
@@ -692,7 +699,7 @@ def simulate_phased(
                 kinetic_energy_admissible=float(res.kinetic_energy_admissible),
                 energy_lost=float(res.energy_lost),
                 impulse=np.asarray(mc.bilateral_impulse[:2], dtype=float),
-                step_length=contact_start - float(walker.contact_point(q, "left")[0]),
+                step_length=float(walker.step_length(q_start, q)),
                 trailing_normal_velocity=v_trail,
                 potential_energy_released=V_start - float(walker.potential_energy(q, slope)),
                 actuator_work=work - work_start,
@@ -700,7 +707,8 @@ def simulate_phased(
                 step_duration=t - t_step,
             )
         )
-        if mc.modes[0] != "separate" or not v_trail > 1e-12:
+        lifted = lifts(v_trail, lift_velocity_scale(leg_length, qd[2:]))
+        if mc.modes[0] != "separate" or not lifted:
             status = WalkStatus.TRAILING_FOOT_STAYS
             qd = qd_plus
             break

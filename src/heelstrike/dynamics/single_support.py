@@ -20,11 +20,10 @@ from dataclasses import dataclass, field
 from typing import Protocol
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from heelstrike._typing import FloatArray
 from heelstrike.models.base import PlanarWalker
-
-FloatArray = NDArray[np.float64]
 
 __all__ = ["SingleSupport", "TorqueLaw", "solve_small"]
 

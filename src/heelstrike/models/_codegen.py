@@ -215,16 +215,52 @@ def _function(
     return "\n".join(lines) + "\n"
 
 
+def _joint_function(
+    name: str,
+    args: str,
+    unpack: list[str],
+    blocks: list[tuple[str, str, str, list[tuple[str, sp.Expr]]]],
+    printer: _Printer,
+    doc: str,
+) -> str:
+    """Source of one function returning several arrays with *one* CSE over all of them.
+
+    ``blocks`` are ``(array name, leading-shape argument, trailing shape, outputs)``; the
+    function allocates ``zeros(<leading shape> + <trailing shape>)`` for each, fills it and
+    returns the arrays as a tuple (pydy's idea: one generated function for all the matrices an
+    ODE right-hand side needs, so their common subexpressions are evaluated once).
+    """
+    exprs = [sp.sympify(ex) for *_, outputs in blocks for _, ex in outputs]
+    repl, reduced = sp.cse(exprs, symbols=sp.numbered_symbols("x"), optimizations="basic")
+    lines = [f"def {name}({args}):", f'    """{doc}"""', *(f"    {s}" for s in unpack)]
+    for sym, ex in repl:
+        lines.append(f"    {sym} = {printer.doprint(ex)}")
+    it = iter(reduced)
+    for var, lead, shape, outputs in blocks:
+        lines.append(f"    {var} = zeros({lead} + {shape})")
+        for idx, _ in outputs:
+            ex = next(it)
+            if ex != 0:
+                lines.append(f"    {var}[..., {idx}] = {printer.doprint(ex)}")
+    lines.append(f"    return {', '.join(var for var, *_ in blocks)}")
+    return "\n".join(lines) + "\n"
+
+
 def generate_source(desc: WalkerDescription, key: str) -> str:
     """Derive the walker's equations with sympy and return numpy source for them.
 
     The module defines ``mass_matrix(q, p)``, ``bias_forces(q, qd, p, slope)``,
-    ``potential_energy(q, p, slope)``, ``contact_jacobian_<foot>(q, p)``,
-    ``contact_jacobian_rate_<foot>(q, qd, p)``, ``foot_centre_<foot>(q, p)``,
+    ``dynamics_terms(q, qd, p, slope, lead_m, lead_h)`` (``M`` and ``h`` from one CSE: what a
+    right-hand side evaluation needs), ``potential_energy(q, p, slope)``,
+    ``contact_jacobian_<foot>(q, p)``, ``contact_jacobian_rate_<foot>(q, qd, p)``,
+    ``foot_centre_<foot>(q, p)``,
     ``points(q, p)`` and, for walkers with mirrors, ``swap_coordinates(q, p)`` and
     ``swap_jacobian(q, p)``; ``q``, ``qd`` have shape (..., n) and ``p`` is the tuple of
     parameter values in ``desc.param_names`` order (each scalar or broadcastable to the
-    batch). ``points`` returns ``desc.point_names`` in order.
+    batch). ``points`` returns ``desc.point_names`` in order. ``dynamics_terms`` alone takes
+    ``q`` and ``qd`` coordinate-first (shape (n, ...), e.g. ``numpy.moveaxis(q, -1, 0)``, or
+    a list of n floats: a single state unpacks into scalars rather than 0-d arrays) and the
+    leading shapes of ``M`` and ``h`` (tuples) from the caller.
 
     ``key`` must be a hexadecimal digest: it is the only text written into the module besides
     generated identifiers and numbers.
@@ -232,7 +268,7 @@ def generate_source(desc: WalkerDescription, key: str) -> str:
     if not key or any(c not in "0123456789abcdef" for c in key):
         raise ValueError("key must be a lowercase hexadecimal digest")
     n_bodies = len(desc.links) + len(desc.point_masses)
-    n_funcs = 4 + 3 * 2 + (2 if desc.root.mirror is not None else 0)
+    n_funcs = 5 + 3 * 2 + (2 if desc.root.mirror is not None else 0)
     with _progress(n_bodies + n_funcs, desc.name) as tick:
         return _generate(desc, key, tick)
 
@@ -300,6 +336,24 @@ def _generate(desc: WalkerDescription, key: str, tick: Callable[[], None]) -> st
             f"({n},)",
             pr,
             "Coriolis, centrifugal and gravity terms h, shape (..., n).",
+        )
+    )
+    add(
+        _joint_function(
+            "dynamics_terms",
+            "q, qd, p, slope, lead_m, lead_h",
+            [
+                f"{', '.join(f'q{i}' for i in range(n))}, = q",
+                f"{', '.join(f'u{i}' for i in range(n))}, = qd",
+                *up,
+            ],
+            [
+                ("M", "lead_m", f"({n}, {n})", mat(d["M"])),
+                ("h", "lead_h", f"({n},)", vec(d["h"])),
+            ],
+            pr,
+            "Mass matrix (..., n, n) and h (..., n) sharing their subexpressions; q and qd "
+            "coordinate-first (n, ...).",
         )
     )
     add(

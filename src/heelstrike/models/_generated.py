@@ -5,8 +5,9 @@ string from a walker file into code: parameters appear as ``p_0, p_1, ...``, poi
 by index. Whatever sits in the cache is still treated as untrusted until checked:
 
 - :func:`verify_source` parses the module and accepts only what the generators emit: function
-  definitions whose bodies assign arithmetic of local names, numbers, whitelisted ``numpy`` /
-  ``math`` functions and a few injected helpers, subscripted stores into ``out``, and a return.
+  definitions (each name once) whose bodies assign arithmetic of local names, numbers,
+  whitelisted ``numpy`` / ``math`` functions and a few injected helpers, tuple unpacking of
+  arguments, subscripted stores into local arrays, and a return.
   No import, attribute other than the whitelisted ones, dunder name, builtin, comprehension,
   lambda, string (except docstrings) or any other statement passes.
 - :func:`load_source` runs verified source in a namespace whose ``__builtins__`` is empty and
@@ -177,6 +178,8 @@ class _Verifier:
     def function(self, fn: ast.FunctionDef) -> None:
         if self.functions is not None and fn.name not in self.functions:
             raise _fail(fn, f"function {fn.name!r}")
+        if fn.name in self.defined:  # a second definition would shadow the generated one
+            raise _fail(fn, f"a second definition of {fn.name!r}")
         if (
             fn.name.startswith("__")
             or fn.decorator_list

@@ -13,21 +13,55 @@ The equations of motion have the form (PyDy/sympy.physics.mechanics naming)
 .. math:: M(q) \\ddot q + h(q, \\dot q) = B u + A^T \\lambda,
 
 with ``h`` the Coriolis, centrifugal and gravity terms (:meth:`PlanarWalker.bias_forces`).
+
+The walker contract
+-------------------
+Code above :mod:`heelstrike.models` asks a walker what it is through this interface only (never
+by its class): :attr:`PlanarWalker.parameters` (the named parameter vector, with
+:meth:`PlanarWalker.replace`), :attr:`PlanarWalker.parameter_shape` and
+:attr:`PlanarWalker.is_batched`, :attr:`PlanarWalker.scale`, :attr:`PlanarWalker.description`,
+the Poincare section (:attr:`PlanarWalker.has_poincare_section`,
+:meth:`PlanarWalker.section_to_state`, ...) and the simulation backends it runs on
+(:attr:`PlanarWalker.compiled_kernel`, :attr:`PlanarWalker.backends`,
+:meth:`PlanarWalker.supports`).
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, Literal
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
-FloatArray = NDArray[np.float64]
+from heelstrike._typing import FloatArray
+from heelstrike.models._contact import step_length as _step_length
+
+if TYPE_CHECKING:
+    from heelstrike.models.description import WalkerDescription
+
 Foot = Literal["right", "left"]
+#: A simulation backend: ``"scipy"`` (the reference integrator, every walker) or ``"compiled"``.
+Backend = Literal["scipy", "compiled"]
+#: Which compiled kernel simulates a walker: ``"compass"`` (the hand-written compass-gait kernel
+#: of :mod:`heelstrike.dynamics.compiled`) or ``"generated"`` (the kernel generated from a
+#: walker description, :mod:`heelstrike.dynamics.compiled_phased`).
+CompiledKernel = Literal["compass", "generated"]
+#: A parameter value: a float, or an array for a batch of walkers (broadcast with states).
+ParameterValue = float | FloatArray
 
-__all__ = ["Foot", "PlanarWalker", "WalkerScale", "gravity_vector"]
+__all__ = [
+    "Backend",
+    "CompiledKernel",
+    "Foot",
+    "ParameterValue",
+    "PlanarWalker",
+    "WalkerScale",
+    "gravity_vector",
+]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -148,6 +182,89 @@ class PlanarWalker(ABC):
         """A copy with some named parameters changed (validated again)."""
         raise NotImplementedError(f"{type(self).__name__} has no named parameters to replace")
 
+    # -- the walker contract: what analyses may ask ------------------------------------------
+    @property
+    def parameters(self) -> Mapping[str, ParameterValue]:
+        """The named parameter vector: a read-only mapping ``name -> value`` (SI units).
+
+        Values are floats, or arrays for a batch of walkers (see :attr:`parameter_shape`);
+        :meth:`replace` takes the same names. The default is empty (no named parameters).
+        """
+        return MappingProxyType({})
+
+    @property
+    def parameter_shape(self) -> tuple[int, ...]:
+        """Broadcast shape of the parameter values: ``()`` for one walker, else the batch's."""
+        return tuple(np.broadcast_shapes(*(np.shape(v) for v in self.parameters.values())))
+
+    @property
+    def is_batched(self) -> bool:
+        """True if some parameter is an array (a batch of walkers), False for one walker."""
+        return self.parameter_shape != ()
+
+    @property
+    def description(self) -> WalkerDescription | None:
+        """The description the walker was built from, or None (a hand-written model)."""
+        return None
+
+    @property
+    def compiled_kernel(self) -> CompiledKernel | None:
+        """Which compiled kernel simulates this walker (:data:`CompiledKernel`), or None.
+
+        The default is None: only the scipy reference backend.
+        """
+        return None
+
+    @property
+    def backends(self) -> tuple[Backend, ...]:
+        """The simulation backends this walker runs on: ``"scipy"`` always, then
+        ``"compiled"`` if it has a :attr:`compiled_kernel`."""
+        return ("scipy", "compiled") if self.compiled_kernel is not None else ("scipy",)
+
+    def supports(self, backend: str) -> bool:
+        """Whether the walker runs on a simulation backend (``"scipy"`` or ``"compiled"``)."""
+        return backend in self.backends
+
+    def step_length(self, q_start: ArrayLike, q_impact: ArrayLike) -> FloatArray:
+        """The length of a step (m): the one definition every simulation backend reports.
+
+        :func:`heelstrike.models._contact.step_length` of the stance ("right") foot's contact
+        point at the start of the step and the striking ("left") foot's at heel strike (the
+        stance foot's rolled arc included; pre-swap labels).
+
+        Parameters
+        ----------
+        q_start : array_like, shape (..., n)
+            Configuration at the start of the step (stance foot labelled "right").
+        q_impact : array_like, shape (..., n)
+            Configuration at heel strike, same labels.
+
+        Returns
+        -------
+        ndarray, shape (...)
+            Step length along the ground (m), positive walking towards ``-x``.
+        """
+        x_start = np.asarray(self.contact_point(q_start, "right")[..., 0], dtype=float)
+        x_impact = np.asarray(self.contact_point(q_impact, "left")[..., 0], dtype=float)
+        return np.asarray(_step_length(x_start, x_impact))  # type: ignore[arg-type]
+
+    @property
+    def has_poincare_section(self) -> bool:
+        """Whether the walker defines a Poincare section (:meth:`section_to_state`,
+        :meth:`state_to_section`, :attr:`section_names`): True when it overrides them."""
+        return type(self).section_to_state is not PlanarWalker.section_to_state
+
+    @property
+    def n_section_angles(self) -> int:
+        """Number of leading angle coordinates (rad) of the Poincare section.
+
+        :attr:`section_names` lists the angles first, then the rates (rad/s), named
+        ``"<coordinate>_dot"``; every angle's rate is in the section (e.g. the compass gait's
+        ``("q3", "q3_dot", "q4_dot")`` has one angle).
+        """
+        names = self.section_names
+        return sum(f"{name}_dot" in names for name in names)
+
     @property
     def scale(self) -> WalkerScale:
         """``(total mass, gravity, leg length)`` of the walker (kg, m/s^2, m).
@@ -198,7 +315,8 @@ class PlanarWalker(ABC):
 
     @property
     def section_names(self) -> tuple[str, ...]:
-        """Names of the Poincare-section coordinates."""
+        """Names of the Poincare-section coordinates: angles (rad), then rates named
+        ``"<coordinate>_dot"`` (rad/s)."""
         raise NotImplementedError(f"{type(self).__name__} defines no Poincare section")
 
     def kinetic_energy(self, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:

@@ -34,16 +34,18 @@ import hashlib
 import importlib.resources
 import os
 import warnings
+from abc import ABCMeta
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import FrozenInstanceError, dataclass
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from heelstrike._typing import FloatArray
 from heelstrike.models._generated import (
     CacheWarning,
     UnsafeGeneratedCode,
@@ -53,15 +55,19 @@ from heelstrike.models._generated import (
     read_cached,
     write_cached,
 )
-from heelstrike.models.base import Foot, PlanarWalker, WalkerScale
+from heelstrike.models.base import (
+    CompiledKernel,
+    Foot,
+    ParameterValue,
+    PlanarWalker,
+    WalkerScale,
+)
 from heelstrike.models.description import (
     ModelDescriptionError,
     WalkerDescription,
     evaluate_expression,
     read_description,
 )
-
-FloatArray = NDArray[np.float64]
 
 __all__ = [
     "CODEGEN_VERSION",
@@ -75,13 +81,14 @@ __all__ = [
 ]
 
 #: Bumped whenever the generated code changes meaning; part of the cache key.
-CODEGEN_VERSION = "2"
+CODEGEN_VERSION = "3"
 
 #: Functions a generated walker module may define.
 GENERATED_FUNCTIONS = frozenset(
     {
         "mass_matrix",
         "bias_forces",
+        "dynamics_terms",
         "potential_energy",
         "points",
         "swap_coordinates",
@@ -97,7 +104,11 @@ GENERATED_FUNCTIONS = frozenset(
 
 def _lead(q: Any, *args: Any) -> tuple[int, ...]:
     """Broadcast leading shape of a state batch ``q`` (..., n) and parameter arrays."""
-    return np.broadcast_shapes(np.shape(q)[:-1], *(np.shape(a) for a in args))
+    lead: tuple[int, ...] = np.shape(q)[:-1]
+    # scalars (Python floats, the usual parameter values) never change the shape: skip them,
+    # numpy.broadcast_shapes costs ~1 us per argument
+    shapes = [s for a in args if type(a) is not float and (s := np.shape(a))]
+    return np.broadcast_shapes(lead, *shapes) if shapes else lead
 
 
 #: What generated walker modules may use by name (see :data:`HELPER_NAMES` of the generator).
@@ -234,8 +245,25 @@ def _arr(x: ArrayLike, n: int, name: str) -> FloatArray:
     return a
 
 
-class BuiltWalker(PlanarWalker):
+def _first(a: FloatArray) -> FloatArray:
+    """View of a state batch (..., n) with the coordinate axis first, shape (n, ...)."""
+    return a if a.ndim == 1 else a.transpose(a.ndim - 1, *range(a.ndim - 1))
+
+
+class _FrozenAfterInit(ABCMeta):
+    """Metaclass freezing an instance once its (sub)class ``__init__`` has returned."""
+
+    def __call__(cls, *args: Any, **kwargs: Any) -> Any:
+        obj = super().__call__(*args, **kwargs)
+        object.__setattr__(obj, "_frozen", True)
+        return obj
+
+
+class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
     """A walker whose equations were derived from a :class:`WalkerDescription`.
+
+    Frozen like :class:`~heelstrike.models.CompassGait`: attributes cannot be set once the walker
+    is constructed (:class:`dataclasses.FrozenInstanceError`); :meth:`replace` makes a new one.
 
     Parameters
     ----------
@@ -266,11 +294,12 @@ class BuiltWalker(PlanarWalker):
             a = np.asarray(v, dtype=float)
             values[k] = float(a) if a.ndim == 0 else a
         description.check_values(values)
-        self.description = description
+        self._description = description
         self.coordinate_names = description.coordinate_names
         self.model = build(description, use_cache=use_cache)
         self._values: dict[str, Any] = values
         self._p = tuple(values[k] for k in description.param_names)
+        self._dynamics_terms = self.model.fn("dynamics_terms")
         n = len(self.coordinate_names)
         self._n = n
         links = description.links
@@ -290,14 +319,40 @@ class BuiltWalker(PlanarWalker):
         ):
             self.check_swap_symmetry()
 
+    def __setattr__(self, name: str, value: Any) -> None:
+        if self.__dict__.get("_frozen", False):
+            raise FrozenInstanceError(f"cannot assign to field {name!r} of a frozen walker")
+        super().__setattr__(name, value)
+
+    def __delattr__(self, name: str) -> None:
+        if self.__dict__.get("_frozen", False):
+            raise FrozenInstanceError(f"cannot delete field {name!r} of a frozen walker")
+        super().__delattr__(name)
+
     # -- parameters ---------------------------------------------------------------------------
     def _eval(self, v: Any) -> Any:
         return evaluate_expression(v, self._values)
 
     @property
+    def description(self) -> WalkerDescription:
+        """The description the walker was built from."""
+        return self._description
+
+    @property
     def params(self) -> dict[str, Any]:
-        """Current parameter values."""
+        """Current parameter values (a copy; see :attr:`parameters`)."""
         return dict(self._values)
+
+    @property
+    def parameters(self) -> Mapping[str, ParameterValue]:
+        """The named parameter vector (read-only), in the description's parameter order."""
+        return MappingProxyType({k: self._values[k] for k in self.description.param_names})
+
+    @property
+    def compiled_kernel(self) -> CompiledKernel:
+        """``"generated"``: the kernel generated from the description
+        (:mod:`heelstrike.dynamics.compiled_phased`)."""
+        return "generated"
 
     def replace(self, **params: ArrayLike) -> BuiltWalker:
         """A copy with some parameter values changed (no re-derivation)."""
@@ -355,6 +410,37 @@ class BuiltWalker(PlanarWalker):
                 np.asarray(slope, dtype=float),
             )
         )
+
+    def dynamics_terms(
+        self, q: ArrayLike, q_dot: ArrayLike, slope: ArrayLike = 0.0
+    ) -> tuple[FloatArray, FloatArray]:
+        """``(M(q), h(q, q_dot))`` from one generated function, shapes (..., n, n), (..., n).
+
+        Equal to ``(mass_matrix(q), bias_forces(q, q_dot, slope))`` (to rounding), but the
+        trigonometry and the subexpressions the two share are evaluated once (one ``sympy.cse``
+        over both), and a single state is evaluated on Python floats (numpy scalars where
+        Python would raise, e.g. on overflow): what the scipy backend's right-hand side calls
+        once per evaluation. ``M`` has the leading shape of ``q`` and the
+        parameters, ``h`` that broadcast with ``q_dot`` and ``slope``.
+        """
+        q_ = _arr(q, self._n, "q")
+        qd = _arr(q_dot, self._n, "q_dot")
+        s = np.asarray(slope, dtype=float)
+        lead_m = _lead(q_, *self._p)
+        if q_.ndim == 1 and qd.ndim == 1 and s.ndim == 0:
+            # one state (the integrator's case): Python floats, several times faster than
+            # numpy scalars; where Python raises instead of returning inf, numpy scalars below
+            try:
+                return self._dynamics_terms(
+                    q_.tolist(), qd.tolist(), self._p, float(s), lead_m, lead_m
+                )
+            except (OverflowError, ZeroDivisionError):
+                pass
+        lead_h = lead_m
+        if qd.ndim > 1 or s.ndim:
+            lead_h = np.broadcast_shapes(lead_m, qd.shape[:-1], s.shape)
+        # the generated function takes the states coordinate-first, shape (n, ...)
+        return self._dynamics_terms(_first(q_), _first(qd), self._p, s[()], lead_m, lead_h)
 
     def potential_energy(self, q: ArrayLike, slope: ArrayLike = 0.0) -> FloatArray:
         """Gravitational potential energy (J), zero at the frame origin, shape (...)."""

@@ -40,13 +40,13 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import ArrayLike, NDArray
 
+from heelstrike._typing import FloatArray
 from heelstrike.core.fast import raise_for_status, use_parallel
 from heelstrike.core.impact import ImpactInputError
 from heelstrike.models.compass import CompassGait
 
 __all__ = ["HeelStrikeImpact", "heel_strike_impact"]
 
-FloatArray = NDArray[np.float64]
 
 _OK = 0
 _NOT_FINITE = 1
@@ -123,6 +123,152 @@ def _at(a: FloatArray, i: int) -> float:
 _at_nb = njit(inline="always", cache=True)(_at)
 
 
+#: What :func:`strike` returns: ``(status, T, T_c, T_a, q_dot+ (4), lambda (2))``.
+_StrikeTuple = tuple[int, float, float, float, float, float, float, float, float, float]
+
+
+def _failed(status: int) -> _StrikeTuple:
+    nan = math.nan
+    return (status, nan, nan, nan, nan, nan, nan, nan, nan, nan)
+
+
+_failed_nb = njit(inline="always", cache=True)(_failed)
+
+
+def _strike(
+    q3: float, R: float, w1: float, w2: float, w3: float, w4: float, mH: float, m: float,
+    ll: float, b: float, inertia: float, e: float,
+) -> _StrikeTuple:
+    """One heel strike of the compass gait with circular feet at the symmetric configuration
+    ``q4 = -2 q3`` (eqs. 5-13), written out: the one compass impact of the compiled code.
+
+    Returns ``(status, T, T_c, T_a, q1_dot+, q2_dot+, q3_dot+, q4_dot+, lambda_t, lambda_n)``
+    (J, m/s, rad/s, N s); a status other than ``_OK`` comes with NaNs.
+    """
+    if not (
+        math.isfinite(q3)
+        and math.isfinite(R)
+        and math.isfinite(w1)
+        and math.isfinite(w2)
+        and math.isfinite(w3)
+        and math.isfinite(w4)
+        and math.isfinite(mH)
+        and math.isfinite(m)
+        and math.isfinite(ll)
+        and math.isfinite(b)
+        and math.isfinite(inertia)
+    ):
+        return _failed_nb(_NOT_FINITE)
+    if not (mH > 0.0 and m > 0.0):
+        return _failed_nb(_BAD_MASS)
+    if not ll > 0.0:
+        return _failed_nb(_BAD_LENGTH)
+    if not (b > 0.0 and b < ll):
+        return _failed_nb(_BAD_COM)
+    if not (R >= 0.0 and R <= ll):
+        return _failed_nb(_BAD_RADIUS)
+    if not inertia >= 0.0:
+        return _failed_nb(_BAD_INERTIA)
+    s = ll - R
+    c = math.cos(q3)
+    sn = math.sin(q3)
+    c4 = c * c - sn * sn
+    mt = mH + 2.0 * m
+    k = mH * s + m * (2.0 * s - b)
+    mb = m * b
+    # Mass matrix (symmetric; M01 = 0, M00 = M11 = mt).
+    m02 = -c * (k - mb)
+    m12 = -sn * (k + mb)
+    m03 = mb * c
+    m13 = -mb * sn
+    m22 = (
+        mH * s * s
+        + m * (s - b) * (s - b)
+        + m * (s * s + b * b - 2.0 * s * b * c4)
+        + 2.0 * inertia
+    )
+    m23 = m * (b * b - s * b * c4) + inertia
+    m33 = m * b * b + inertia
+    # Striking foot's Jacobian A = [I | C] (eq. 5).
+    a02 = R
+    a03 = s * c + R
+    a12 = -2.0 * s * sn
+    a13 = -s * sn
+    # Cholesky M = L L^T, written out (M10 = 0).
+    L00 = math.sqrt(mt)
+    L11 = math.sqrt(mt)
+    L20 = m02 / L00
+    L30 = m03 / L00
+    L21 = m12 / L11
+    L31 = m13 / L11
+    d2 = m22 - L20 * L20 - L21 * L21
+    if not d2 > 0.0:
+        return _failed_nb(_SINGULAR)
+    L22 = math.sqrt(d2)
+    L32 = (m23 - L30 * L20 - L31 * L21) / L22
+    d3 = m33 - L30 * L30 - L31 * L31 - L32 * L32
+    if not d3 > 0.0:
+        return _failed_nb(_SINGULAR)
+    L33 = math.sqrt(d3)
+    # Y = L^-1 A^T: column 0 from A's row (1, 0, a02, a03), column 1 from (0, 1, a12, a13).
+    y00 = 1.0 / L00
+    y10 = 0.0
+    y20 = (a02 - L20 * y00) / L22
+    y30 = (a03 - L30 * y00 - L32 * y20) / L33
+    y01 = 0.0
+    y11 = 1.0 / L11
+    y21 = (a12 - L21 * y11) / L22
+    y31 = (a13 - L31 * y11 - L32 * y21) / L33
+    W00 = y00 * y00 + y20 * y20 + y30 * y30
+    W01 = y20 * y21 + y30 * y31
+    W11 = y11 * y11 + y21 * y21 + y31 * y31
+    det = W00 * W11 - W01 * W01
+    if not det > 1e-24 * W00 * W11:
+        return _failed_nb(_SINGULAR)
+    # mu = W^-1 A q_dot-.
+    b0 = w1 + a02 * w3 + a03 * w4
+    b1 = w2 + a12 * w3 + a13 * w4
+    mu0 = (W11 * b0 - W01 * b1) / det
+    mu1 = (W00 * b1 - W01 * b0) / det
+    # z = Y mu = L^T v_c; back substitution for v_c = P_c q_dot-.
+    z0 = y00 * mu0 + y01 * mu1
+    z1 = y10 * mu0 + y11 * mu1
+    z2 = y20 * mu0 + y21 * mu1
+    z3 = y30 * mu0 + y31 * mu1
+    v3 = z3 / L33
+    v2 = (z2 - L32 * v3) / L22
+    v1 = (z1 - L21 * v2 - L31 * v3) / L11
+    v0 = (z0 - L20 * v2 - L30 * v3) / L00
+    # Energies from L^T q_dot- and L^T (q_dot- - v_c).
+    t0 = L00 * w1 + L20 * w3 + L30 * w4
+    t1 = L11 * w2 + L21 * w3 + L31 * w4
+    t2 = L22 * w3 + L32 * w4
+    t3 = L33 * w4
+    u0 = t0 - z0
+    u1 = t1 - z1
+    u2 = t2 - z2
+    u3 = t3 - z3
+    g = 1.0 + e
+    return (
+        _OK,
+        0.5 * (t0 * t0 + t1 * t1 + t2 * t2 + t3 * t3),
+        0.5 * (z0 * z0 + z1 * z1 + z2 * z2 + z3 * z3),
+        0.5 * (u0 * u0 + u1 * u1 + u2 * u2 + u3 * u3),
+        w1 - g * v0,
+        w2 - g * v1,
+        w3 - g * v2,
+        w4 - g * v3,
+        -g * mu0,
+        -g * mu1,
+    )
+
+
+
+
+#: :func:`_strike` compiled (inlined into its callers); also what the compiled walk uses.
+strike = njit(inline="always", cache=True)(_strike)
+
+
 def _heel_strike_body(
     q3a: FloatArray,
     Ra: FloatArray,
@@ -158,129 +304,14 @@ def _heel_strike_body(
     ll = _at_nb(la, i)
     b = _at_nb(ba, i)
     inertia = _at_nb(Ia, i)
-    if not (
-        math.isfinite(q3)
-        and math.isfinite(R)
-        and math.isfinite(w1)
-        and math.isfinite(w2)
-        and math.isfinite(w3)
-        and math.isfinite(w4)
-        and math.isfinite(mH)
-        and math.isfinite(m)
-        and math.isfinite(ll)
-        and math.isfinite(b)
-        and math.isfinite(inertia)
-    ):
-        status[i] = _NOT_FINITE
+    st, t, tc, ta, p0, p1, p2, p3, l0, l1 = strike(q3, R, w1, w2, w3, w4, mH, m, ll, b,
+                                                   inertia, e)
+    status[i] = st
+    if st != _OK:
         return
-    if not (mH > 0.0 and m > 0.0):
-        status[i] = _BAD_MASS
-        return
-    if not ll > 0.0:
-        status[i] = _BAD_LENGTH
-        return
-    if not (b > 0.0 and b < ll):
-        status[i] = _BAD_COM
-        return
-    if not (R >= 0.0 and R <= ll):
-        status[i] = _BAD_RADIUS
-        return
-    if not inertia >= 0.0:
-        status[i] = _BAD_INERTIA
-        return
-    s = ll - R
-    c = math.cos(q3)
-    sn = math.sin(q3)
-    c4 = c * c - sn * sn
-    mt = mH + 2.0 * m
-    k = mH * s + m * (2.0 * s - b)
-    mb = m * b
-    # Mass matrix (symmetric; M01 = 0, M00 = M11 = mt).
-    m02 = -c * (k - mb)
-    m12 = -sn * (k + mb)
-    m03 = mb * c
-    m13 = -mb * sn
-    m22 = (
-        mH * s * s
-        + m * (s - b) * (s - b)
-        + m * (s * s + b * b - 2.0 * s * b * c4)
-        + 2.0 * inertia
-    )
-    m23 = m * (b * b - s * b * c4) + inertia
-    m33 = m * b * b + inertia
-    # Striking foot's Jacobian A = [I | C] (eq. 5).
-    a02 = R
-    a03 = s * c + R
-    a12 = -2.0 * s * sn
-    a13 = -s * sn
-    # Cholesky M = L L^T, written out (M10 = 0).
-    L00 = math.sqrt(mt)
-    L11 = math.sqrt(mt)
-    L20 = m02 / L00
-    L30 = m03 / L00
-    L21 = m12 / L11
-    L31 = m13 / L11
-    d2 = m22 - L20 * L20 - L21 * L21
-    if not d2 > 0.0:
-        status[i] = _SINGULAR
-        return
-    L22 = math.sqrt(d2)
-    L32 = (m23 - L30 * L20 - L31 * L21) / L22
-    d3 = m33 - L30 * L30 - L31 * L31 - L32 * L32
-    if not d3 > 0.0:
-        status[i] = _SINGULAR
-        return
-    L33 = math.sqrt(d3)
-    # Y = L^-1 A^T: column 0 from A's row (1, 0, a02, a03), column 1 from (0, 1, a12, a13).
-    y00 = 1.0 / L00
-    y10 = 0.0
-    y20 = (a02 - L20 * y00) / L22
-    y30 = (a03 - L30 * y00 - L32 * y20) / L33
-    y01 = 0.0
-    y11 = 1.0 / L11
-    y21 = (a12 - L21 * y11) / L22
-    y31 = (a13 - L31 * y11 - L32 * y21) / L33
-    W00 = y00 * y00 + y20 * y20 + y30 * y30
-    W01 = y20 * y21 + y30 * y31
-    W11 = y11 * y11 + y21 * y21 + y31 * y31
-    det = W00 * W11 - W01 * W01
-    if not det > 1e-24 * W00 * W11:
-        status[i] = _SINGULAR
-        return
-    # mu = W^-1 A q_dot-.
-    b0 = w1 + a02 * w3 + a03 * w4
-    b1 = w2 + a12 * w3 + a13 * w4
-    mu0 = (W11 * b0 - W01 * b1) / det
-    mu1 = (W00 * b1 - W01 * b0) / det
-    # z = Y mu = L^T v_c; back substitution for v_c = P_c q_dot-.
-    z0 = y00 * mu0 + y01 * mu1
-    z1 = y10 * mu0 + y11 * mu1
-    z2 = y20 * mu0 + y21 * mu1
-    z3 = y30 * mu0 + y31 * mu1
-    v3 = z3 / L33
-    v2 = (z2 - L32 * v3) / L22
-    v1 = (z1 - L21 * v2 - L31 * v3) / L11
-    v0 = (z0 - L20 * v2 - L30 * v3) / L00
-    # Energies from L^T q_dot- and L^T (q_dot- - v_c).
-    t0 = L00 * w1 + L20 * w3 + L30 * w4
-    t1 = L11 * w2 + L21 * w3 + L31 * w4
-    t2 = L22 * w3 + L32 * w4
-    t3 = L33 * w4
-    u0 = t0 - z0
-    u1 = t1 - z1
-    u2 = t2 - z2
-    u3 = t3 - z3
-    T[i] = 0.5 * (t0 * t0 + t1 * t1 + t2 * t2 + t3 * t3)
-    Ta[i] = 0.5 * (u0 * u0 + u1 * u1 + u2 * u2 + u3 * u3)
-    Tc[i] = 0.5 * (z0 * z0 + z1 * z1 + z2 * z2 + z3 * z3)
-    g = 1.0 + e
-    qp[i, 0] = w1 - g * v0
-    qp[i, 1] = w2 - g * v1
-    qp[i, 2] = w3 - g * v2
-    qp[i, 3] = w4 - g * v3
-    lam[i, 0] = -g * mu0
-    lam[i, 1] = -g * mu1
-    status[i] = _OK
+    T[i], Tc[i], Ta[i] = t, tc, ta
+    qp[i, 0], qp[i, 1], qp[i, 2], qp[i, 3] = p0, p1, p2, p3
+    lam[i, 0], lam[i, 1] = l0, l1
 
 
 _body = njit(inline="always", fastmath=False, cache=True)(_heel_strike_body)

@@ -1,11 +1,14 @@
 """Figures: results in, :class:`~matplotlib.figure.Figure` out (matplotlib object API, Agg canvas).
 
-- :mod:`heelstrike.plots.paper`: the paper's Figs. 2, 3a and 3b
-  (:func:`~heelstrike.plots.paper.reproduce_paper` writes them);
+- :mod:`heelstrike.plots.paper`: the paper's Figs. 2, 3a and 3b;
 - :mod:`heelstrike.plots.gait`: passive gaits (walks, animations, phase portraits, bifurcation
   diagrams, basins, gait maps);
 - :mod:`heelstrike.plots.models`: impact maps of described walkers;
 - :mod:`heelstrike.plots.powered`: cost-of-transport figures of powered gaits.
+
+Drawing only: no computing (the data come from :mod:`heelstrike.analysis`), no file writing
+(:mod:`heelstrike.outputs` writes figures and data, :mod:`heelstrike.io` the data files; the
+animations alone render to the file they are given).
 
 The paper's figure functions are re-exported here (``from heelstrike.plots import figure3b``).
 They are loaded on first use, so ``import heelstrike.plots`` does not import matplotlib.
@@ -17,9 +20,9 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from heelstrike.plots.paper import figure2, figure3a, figure3b, reproduce_paper
+    from heelstrike.plots.paper import figure2, figure3a, figure3b
 
-__all__ = ["figure2", "figure3a", "figure3b", "reproduce_paper"]
+__all__ = ["figure2", "figure3a", "figure3b"]
 
 
 def __getattr__(name: str) -> Any:

@@ -1,7 +1,11 @@
-"""Figures and animations of gaits: walking animation, bifurcation diagram, the walk seen.
+"""Figures and animations of gaits: walking animation, bifurcation diagram, basins, gait maps
+and the walk seen (strobe, phase portrait, one step, energy).
 
-Drawing only: the data come from :mod:`heelstrike.dynamics` and :mod:`heelstrike.analysis`.
-Uses matplotlib's object API with the Agg canvas (no global pyplot state).
+Drawing only: results in, :class:`~matplotlib.figure.Figure` out. The data come from
+:mod:`heelstrike.analysis` (the walk's tables from :mod:`heelstrike.analysis.walk_tables`);
+:mod:`heelstrike.outputs` writes figures and data to files. The animations are the one
+exception: they render their frames to the file they are given. Uses matplotlib's object API
+with the Agg canvas (no global pyplot state).
 """
 
 from __future__ import annotations
@@ -17,21 +21,15 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
-from heelstrike._optional import write_netcdf
+from heelstrike._frames import slope_to_world as _to_world
 from heelstrike.analysis.basin import OUTCOMES, Basin
 from heelstrike.analysis.gait_map import GaitMap
-from heelstrike.analysis.limit_cycle import (
-    BifurcationDiagram,
-    Continuation,
-    bifurcation_diagram,
-    continue_limit_cycle,
-    find_limit_cycle,
-)
-from heelstrike.dynamics.hybrid import WalkResult
+from heelstrike.analysis.limit_cycle import BifurcationDiagram, Continuation
+from heelstrike.analysis.walk_tables import WalkResult
 from heelstrike.models.compass import CompassGait
 
 __all__ = [
-    "COMPASS_ONLY_WALK_FIGURES",
+    "LEG_COLOURS",
     "animate_model_walk",
     "animate_walk",
     "basin_figure",
@@ -39,22 +37,10 @@ __all__ = [
     "energy_figure",
     "gait_map_figure",
     "model_diagram",
-    "model_phase_portrait_table",
     "phase_portrait_figure",
-    "phase_portrait_table",
     "resample_walk",
     "step_figure",
-    "step_table",
     "strobe_figure",
-    "strobe_table",
-    "walk_energy_table",
-    "walk_impact_table",
-    "write_basin",
-    "write_bifurcation",
-    "write_gait_map",
-    "write_model_bifurcation",
-    "write_model_walk_figures",
-    "write_walk_figures",
 ]
 
 LEG_COLOURS = ("tab:blue", "tab:red")
@@ -70,13 +56,6 @@ def resample_walk(walk: WalkResult, fps: float) -> tuple[NDArray[np.float64], ND
     times = np.arange(walk.t[0], walk.t[-1] + 0.5 / fps, 1.0 / fps)
     idx = np.clip(np.searchsorted(walk.t, times), 0, walk.t.size - 1)
     return times, idx
-
-
-def _to_world(points: NDArray[np.float64], slope: float) -> NDArray[np.float64]:
-    """Slope frame (ground along x, rising towards +x) to the world frame, shape (..., 2)."""
-    c, s = np.cos(slope), np.sin(slope)
-    x, y = points[..., 0], points[..., 1]
-    return np.stack((c * x - s * y, s * x + c * y), axis=-1)
 
 
 def _walk_scene(
@@ -208,103 +187,6 @@ def bifurcation_figure(
     return fig
 
 
-def write_bifurcation(
-    walker: CompassGait,
-    slope_start: float,
-    slope_stop: float,
-    count: int,
-    out_dir: Path,
-    *,
-    transient: int = 50,
-    record: int = 16,
-    continuation_points: int = 12,
-    progress: bool = False,
-) -> list[Path]:
-    """Compute and write the slope bifurcation diagram (PNG, PDF and CSV).
-
-    Slopes in rad. Writes ``bifurcation.png``, ``bifurcation.pdf``, ``bifurcation.csv`` (one row
-    per recorded step: slope, impact angle, period) and ``period_one_branch.csv`` (the continued
-    period-one gait with its spectral radius and stability).
-    """
-    slopes = np.linspace(slope_start, slope_stop, count)
-    first = find_limit_cycle(walker, slope=float(slopes[0]), progress=progress)
-    diagram = bifurcation_diagram(
-        walker, slopes, guess=first.fixed_point, transient=transient, record=record,
-        progress=progress,
-    )
-    branch = continue_limit_cycle(
-        walker, "slope", np.linspace(slope_start, slope_stop, continuation_points),
-        guess=first.fixed_point, progress=progress, rtol=1e-10, atol=1e-10,
-    )
-    return _write_bifurcation_files(
-        diagram, branch, out_dir,
-        f"compass gait, R = {float(walker.foot_radius):g} m: bifurcation diagram",
-    )
-
-
-def write_model_bifurcation(
-    walker: Any,
-    slope_start: float,
-    slope_stop: float,
-    count: int,
-    out_dir: Path,
-    *,
-    transient: int = 50,
-    record: int = 16,
-    continuation_points: int = 12,
-    backend: str = "compiled",
-) -> list[Path]:
-    """:func:`write_bifurcation` for a described walker (a ``BuiltWalker``; same files).
-
-    Computed by :func:`heelstrike.analysis.gait_map.model_bifurcation` with ``backend``.
-    """
-    from heelstrike.analysis.gait_map import model_bifurcation
-
-    slopes = np.linspace(slope_start, slope_stop, count)
-    diagram, branch = model_bifurcation(
-        walker, slopes, transient=transient, record=record,
-        continuation_points=continuation_points, backend=backend,
-    )
-    return _write_bifurcation_files(
-        diagram, branch, out_dir, f"{walker.description.name}: bifurcation diagram"
-    )
-
-
-def _write_bifurcation_files(
-    diagram: BifurcationDiagram, branch: Continuation, out_dir: Path, title: str
-) -> list[Path]:
-    """Write ``bifurcation.png/.pdf/.csv`` and ``period_one_branch.csv``; returns the paths."""
-    import pandas as pd
-
-    slopes = diagram.slopes
-    record = diagram.impact_angles.shape[1]
-    out_dir.mkdir(parents=True, exist_ok=True)
-    fig = bifurcation_figure(diagram, branch, title=title)
-    paths = [out_dir / "bifurcation.png", out_dir / "bifurcation.pdf"]
-    for p in paths:
-        fig.savefig(p)
-    rows = pd.DataFrame(
-        {
-            "slope_deg": np.repeat(np.rad2deg(slopes), record),
-            "impact_angle_rad": diagram.impact_angles.ravel(),
-            "period_s": diagram.periods.ravel(),
-        }
-    )
-    csv = out_dir / "bifurcation.csv"
-    rows.to_csv(csv, index=False)
-    bcsv = out_dir / "period_one_branch.csv"
-    pd.DataFrame(
-        {
-            "slope_deg": np.rad2deg(branch.values),
-            "impact_angle_rad": [c.impact_angle for c in branch.cycles],
-            "period_s": [c.period for c in branch.cycles],
-            "spectral_radius": [c.spectral_radius for c in branch.cycles],
-            "stable": [c.stable for c in branch.cycles],
-        }
-    ).to_csv(bcsv, index=False)
-    return [*paths, csv, bcsv]
-
-
 # -- basin of attraction and stable-gait map ----------------------------------------------------
 _COLOURS = (
     "#1a9850",  # converged
@@ -318,14 +200,12 @@ _COLOURS = (
 )
 
 
-def basin_figure(basin: Basin) -> Any:
+def basin_figure(basin: Basin) -> Figure:
     """Image of the basin: outcome per initial state, the fixed point marked.
 
     Returns a :class:`matplotlib.figure.Figure` (Agg canvas attached).
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.colors import BoundaryNorm, ListedColormap
-    from matplotlib.figure import Figure
     from matplotlib.patches import Patch
 
     ds = basin.dataset
@@ -373,25 +253,12 @@ def basin_figure(basin: Basin) -> Any:
     return fig
 
 
-def write_basin(basin: Basin, out_dir: str | Path, stem: str = "basin") -> tuple[Path, Path]:
-    """Write the figure (PNG) and the dataset (netCDF) into ``out_dir``; returns the paths."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    png = out / f"{stem}.png"
-    nc = out / f"{stem}.nc"
-    basin_figure(basin).savefig(png, dpi=130)
-    write_netcdf(basin.dataset, nc)
-    return png, nc
-
-
-def gait_map_figure(gmap: GaitMap) -> Any:
+def gait_map_figure(gmap: GaitMap) -> Figure:
     """Spectral radius over (slope, radius), the stable region outlined, period doubling marked.
 
     Returns a :class:`matplotlib.figure.Figure` (Agg canvas attached).
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.colors import TwoSlopeNorm
-    from matplotlib.figure import Figure
 
     ds = gmap.dataset
     pname = ds["spectral_radius"].dims[0]  # foot_radius, or a described walker's parameter
@@ -429,208 +296,8 @@ def gait_map_figure(gmap: GaitMap) -> Any:
     return fig
 
 
-def write_gait_map(gmap: GaitMap, out_dir: str | Path, stem: str = "gait_map") -> tuple[Path, Path]:
-    """Write the figure (PNG) and the dataset (netCDF) into ``out_dir``; returns the paths."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    png, nc = out / f"{stem}.png", out / f"{stem}.nc"
-    gait_map_figure(gmap).savefig(png, dpi=130)
-    ds = gmap.dataset.copy()
-    ds["stable"] = ds["stable"].astype(np.int8)
-    write_netcdf(ds, nc)
-    return png, nc
-
-
 # -- the walk, seen: strobe, phase portrait, step kinematics and ground reaction, energy --------
-# Data functions turn a simulated walk into tables (pandas DataFrames, SI units, one column per
-# quantity with its unit in the name); figure functions draw such tables and return a Figure.
-
-
-def _pandas() -> Any:
-    import pandas as pd
-
-    return pd
-
-
-def _check_walk(walk: WalkResult, step: int | None = None) -> None:
-    if walk.t.size == 0:
-        raise ValueError("the walk has no samples")
-    if step is not None and not np.any(walk.step == step):
-        raise ValueError(f"the walk has no samples in step {step} (steps 0..{walk.step.max()})")
-
-
-def walk_energy_table(walker: CompassGait, walk: WalkResult) -> Any:
-    """Kinetic, potential and total mechanical energy at every sample of a walk.
-
-    Parameters
-    ----------
-    walker : CompassGait
-        The walker the walk was simulated with.
-    walk : WalkResult
-        A passive walk (:func:`heelstrike.dynamics.simulate`).
-
-    Returns
-    -------
-    pandas.DataFrame
-        One row per sample, columns ``t_s`` (s), ``step``, ``kinetic_J``, ``potential_J``,
-        ``total_J`` (J). The potential energy is the walker's
-        :meth:`~heelstrike.models.CompassGait.potential_energy` on the walk's slope. At a heel
-        strike two rows share the impact time: the last sample of a step (just before the
-        impact) and the first of the next (just after it, legs relabelled).
-    """
-    _check_walk(walk)
-    T = np.asarray(walker.kinetic_energy(walk.q, walk.q_dot), dtype=float)
-    U = np.asarray(walker.potential_energy(walk.q, walk.slope), dtype=float)
-    return _pandas().DataFrame(
-        {"t_s": walk.t, "step": walk.step, "kinetic_J": T, "potential_J": U, "total_J": T + U}
-    )
-
-
-def walk_impact_table(walker: CompassGait, walk: WalkResult) -> Any:
-    """Mechanical energy just before and just after every heel strike of a walk.
-
-    Returns
-    -------
-    pandas.DataFrame
-        One row per impact: ``step`` (the step it ends), ``time_s`` (s), ``impact_angle_rad``,
-        ``total_before_J`` and ``total_after_J`` (J, from the walk's samples on either side of
-        the impact; after the last impact from the walk's final state), ``drop_J`` (their
-        difference) and ``T_c_J``, the constrained kinetic energy of the impact (paper eq. 10),
-        which an inert impact destroys: ``drop_J`` equals it.
-    """
-    _check_walk(walk)
-    E = np.asarray(
-        walker.kinetic_energy(walk.q, walk.q_dot) + walker.potential_energy(walk.q, walk.slope),
-        dtype=float,
-    )
-    rows = []
-    for r in walk.impacts:
-        before = E[np.nonzero(walk.step == r.step)[0][-1]]
-        nxt = np.nonzero(walk.step == r.step + 1)[0]
-        if nxt.size:
-            after = float(E[nxt[0]])
-        else:
-            after = float(
-                walker.kinetic_energy(walk.final_q, walk.final_q_dot)
-                + walker.potential_energy(walk.final_q, walk.slope)
-            )
-        rows.append(
-            {
-                "step": r.step,
-                "time_s": r.time,
-                "impact_angle_rad": r.impact_angle,
-                "total_before_J": float(before),
-                "total_after_J": after,
-                "drop_J": float(before) - after,
-                "T_c_J": r.kinetic_energy_constrained,
-            }
-        )
-    cols = ["step", "time_s", "impact_angle_rad", "total_before_J", "total_after_J", "drop_J",
-            "T_c_J"]
-    return _pandas().DataFrame(rows, columns=cols)
-
-
-def step_table(walker: CompassGait, walk: WalkResult, step: int = 0) -> Any:
-    """Joint angles, rates and the stance foot's ground reaction over one step of a walk.
-
-    Parameters
-    ----------
-    walker : CompassGait
-    walk : WalkResult
-        A passive walk.
-    step : int
-        Which step (0-based).
-
-    Returns
-    -------
-    pandas.DataFrame
-        One row per sample of the step: ``t_s`` (time since the step began, s), ``q3_rad``
-        (stance leg from the vertical), ``q4_rad`` (hip angle, swing relative to stance),
-        ``swing_rad`` (swing leg from the vertical, ``q3 + q4``), ``q3_dot_rad_s``,
-        ``q4_dot_rad_s`` (rad/s), ``tangential_N`` and ``normal_N`` (force of the ground on the
-        stance foot along and normal to the slope, N) and ``required_friction`` (``|tangential|
-        / normal``, the smallest Coulomb coefficient that prevents slipping) from
-        :func:`heelstrike.dynamics.hybrid.ground_reaction`.
-    """
-    from heelstrike.dynamics.hybrid import ground_reaction
-
-    _check_walk(walk, step)
-    sel = walk.step == step
-    gr = ground_reaction(walker, walk)
-    q, qd = walk.q[sel], walk.q_dot[sel]
-    t = walk.t[sel]
-    return _pandas().DataFrame(
-        {
-            "t_s": t - t[0],
-            "q3_rad": q[:, 2],
-            "q4_rad": q[:, 3],
-            "swing_rad": q[:, 2] + q[:, 3],
-            "q3_dot_rad_s": qd[:, 2],
-            "q4_dot_rad_s": qd[:, 3],
-            "tangential_N": gr.tangential[sel],
-            "normal_N": gr.normal[sel],
-            "required_friction": gr.required_friction[sel],
-        }
-    )
-
-
-def phase_portrait_table(walk: WalkResult) -> Any:
-    """Leg angles and angular rates at every sample of a walk (the phase portrait's data).
-
-    Returns
-    -------
-    pandas.DataFrame
-        Columns ``t_s`` (s), ``step``, ``q3_rad``, ``q3_dot_rad_s`` (stance leg) and
-        ``swing_rad``, ``swing_dot_rad_s`` (swing leg's absolute angle ``q3 + q4`` and its rate).
-    """
-    _check_walk(walk)
-    q, qd = walk.q, walk.q_dot
-    return _pandas().DataFrame(
-        {
-            "t_s": walk.t,
-            "step": walk.step,
-            "q3_rad": q[:, 2],
-            "q3_dot_rad_s": qd[:, 2],
-            "swing_rad": q[:, 2] + q[:, 3],
-            "swing_dot_rad_s": qd[:, 2] + qd[:, 3],
-        }
-    )
-
-
-def strobe_table(walker: CompassGait, walk: WalkResult, step: int = 0, frames: int = 7) -> Any:
-    """Positions of the walker at ``frames`` evenly spaced instants of one step.
-
-    Returns
-    -------
-    pandas.DataFrame
-        One row per frame, world frame (x along the horizontal, y up; m): ``t_s`` (time since
-        the step began, s), ``hip_x_m``, ``hip_y_m``, ``stance_foot_x_m``, ``stance_foot_y_m``,
-        ``swing_foot_x_m``, ``swing_foot_y_m`` (centres of the foot arcs), ``stance_rad`` and
-        ``swing_rad`` (leg angles from the slope's normal) and ``stance_leg`` (which physical
-        leg stands: 0 or 1). The last frame is the instant of heel strike.
-    """
-    if frames < 2:
-        raise ValueError(f"frames must be >= 2, got {frames}")
-    _check_walk(walk, step)
-    ids = np.nonzero(walk.step == step)[0]
-    t = walk.t[ids]
-    want = np.linspace(t[0], t[-1], frames)
-    pick = ids[np.clip(np.searchsorted(t, want), 0, ids.size - 1)]
-    q = walk.q[pick]
-    pos = walker.positions(q)
-    hip = _to_world(pos.hip, walk.slope)
-    st = _to_world(pos.right_foot_centre, walk.slope)
-    sw = _to_world(pos.left_foot_centre, walk.slope)
-    return _pandas().DataFrame(
-        {
-            "t_s": walk.t[pick] - t[0],
-            "hip_x_m": hip[:, 0], "hip_y_m": hip[:, 1],
-            "stance_foot_x_m": st[:, 0], "stance_foot_y_m": st[:, 1],
-            "swing_foot_x_m": sw[:, 0], "swing_foot_y_m": sw[:, 1],
-            "stance_rad": q[:, 2], "swing_rad": q[:, 2] + q[:, 3],
-            "stance_leg": walk.stance_leg[pick],
-        }
-    )
+# Each figure draws a table of heelstrike.analysis.walk_tables (pandas DataFrame, SI units).
 
 
 def _new_figure(width: float, height: float) -> Figure:
@@ -642,12 +309,12 @@ def _new_figure(width: float, height: float) -> Figure:
 def strobe_figure(
     strobe: Any, *, foot_radius: float, slope: float = 0.0, title: str = ""
 ) -> Figure:
-    """Stick-figure strobe of one step: the walker at every row of :func:`strobe_table`.
+    """Stick-figure strobe of one step: the walker at every row of a strobe table.
 
     Parameters
     ----------
     strobe : pandas.DataFrame
-        From :func:`strobe_table`.
+        From :func:`~heelstrike.analysis.walk_tables.strobe_table`.
     foot_radius : float
         Foot arc radius ``R`` (m), to draw the feet.
     slope : float
@@ -701,7 +368,7 @@ def phase_portrait_figure(
     Parameters
     ----------
     portrait : pandas.DataFrame
-        From :func:`phase_portrait_table`.
+        From :func:`~heelstrike.analysis.walk_tables.phase_portrait_table`.
     title : str
         Figure title.
     labels : (str, str), optional
@@ -751,7 +418,7 @@ def step_figure(step: Any, *, title: str = "") -> Figure:
     Parameters
     ----------
     step : pandas.DataFrame
-        From :func:`step_table`.
+        From :func:`~heelstrike.analysis.walk_tables.step_table`.
     title : str
         Figure title.
 
@@ -790,9 +457,9 @@ def energy_figure(energy: Any, impacts: Any, *, title: str = "") -> Figure:
     Parameters
     ----------
     energy : pandas.DataFrame
-        From :func:`walk_energy_table`.
+        From :func:`~heelstrike.analysis.walk_tables.walk_energy_table`.
     impacts : pandas.DataFrame
-        From :func:`walk_impact_table`.
+        From :func:`~heelstrike.analysis.walk_tables.walk_impact_table`.
     title : str
         Figure title.
 
@@ -826,50 +493,6 @@ def energy_figure(energy: Any, impacts: Any, *, title: str = "") -> Figure:
     ax.set_title(title or "energy over the walk: constant between impacts, "
                  "dropping by $T_c$ at heel strike", fontsize=10)
     return fig
-
-
-def write_walk_figures(walker: CompassGait, walk: WalkResult, out_dir: str | Path) -> list[Path]:
-    """Write the walk's figures (PNG) and their data (CSV) into ``out_dir``.
-
-    Files: ``strobe.png/.csv`` (stick figures over the first step), ``phase_portrait.png/.csv``,
-    ``step.png/.csv`` (joint angles and ground reaction over the first step),
-    ``energy.png/.csv`` (energy over the walk) and ``impacts.csv`` (the energy drops at heel
-    strikes). See :func:`strobe_table`, :func:`phase_portrait_table`, :func:`step_table`,
-    :func:`walk_energy_table` and :func:`walk_impact_table` for the columns.
-
-    Returns
-    -------
-    list of Path
-        The written files.
-    """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    R = float(walker.foot_radius)
-    what = f"R = {R:g} m, slope = {np.rad2deg(walk.slope):.2f} deg"
-    strobe = strobe_table(walker, walk, 0)
-    portrait = phase_portrait_table(walk)
-    step = step_table(walker, walk, 0)
-    energy = walk_energy_table(walker, walk)
-    impacts = walk_impact_table(walker, walk)
-    figures = {
-        "strobe": (strobe_figure(strobe, foot_radius=R, slope=walk.slope,
-                                 title=f"compass gait, {what}: one step, strobed"), strobe),
-        "phase_portrait": (phase_portrait_figure(
-            portrait, title=f"compass gait, {what}: phase portrait"), portrait),
-        "step": (step_figure(step, title=f"compass gait, {what}: one step"), step),
-        "energy": (energy_figure(energy, impacts, title=f"compass gait, {what}: energy"),
-                   energy),
-    }
-    paths: list[Path] = []
-    for stem, (fig, table) in figures.items():
-        png, csv = out / f"{stem}.png", out / f"{stem}.csv"
-        fig.savefig(png)
-        table.to_csv(csv, index=False)
-        paths += [png, csv]
-    impacts_csv = out / "impacts.csv"
-    impacts.to_csv(impacts_csv, index=False)
-    paths.append(impacts_csv)
-    return paths
 
 
 def model_diagram(
@@ -1000,35 +623,6 @@ def model_diagram(
 
 
 # -- walks of described walkers (TOML models) ----------------------------------------------------
-def model_phase_portrait_table(walker: Any, walk: WalkResult) -> Any:
-    """:func:`phase_portrait_table` of a described walker's walk.
-
-    ``q3_rad``, ``q3_dot_rad_s``: the stance (root) link's angle ``q[2]`` and rate;
-    ``swing_rad``, ``swing_dot_rad_s``: the absolute angle and rate of the link hanging from the
-    hip joint (the swing thigh or leg). Angles are linear in ``q``, so rates are the same map of
-    ``q_dot``.
-
-    Parameters
-    ----------
-    walker : BuiltWalker
-        With a joint named ``hip``.
-    walk : WalkResult
-        Its walk (``simulate_phased`` or ``simulate_phased_compiled``).
-    """
-    _check_walk(walk)
-    swing = walker.description.links[walker.joint_index("hip") - 2].name
-    return _pandas().DataFrame(
-        {
-            "t_s": walk.t,
-            "step": walk.step,
-            "q3_rad": walk.q[:, 2],
-            "q3_dot_rad_s": walk.q_dot[:, 2],
-            "swing_rad": walker.link_angles(walk.q)[swing],
-            "swing_dot_rad_s": walker.link_angles(walk.q_dot)[swing],
-        }
-    )
-
-
 def animate_model_walk(walker: Any, walk: WalkResult, path: str | Path, *,
                        fps: float = 30.0) -> Path:
     """Animate a described walker's walk to a GIF (or MP4 where ffmpeg exists).
@@ -1098,47 +692,3 @@ def animate_model_walk(walker: Any, walk: WalkResult, path: str | Path, *,
     out.parent.mkdir(parents=True, exist_ok=True)
     anim.save(str(out), writer=writer)
     return out
-
-
-#: Walk figures drawn for the compass gait only (``write_walk_figures``), not for described
-#: walkers: the strobe and the step figure use the compass gait's two-link geometry.
-COMPASS_ONLY_WALK_FIGURES: tuple[str, ...] = ("strobe", "step")
-
-
-def write_model_walk_figures(walker: Any, walk: WalkResult, out_dir: str | Path) -> list[Path]:
-    """Write a described walker's walk figures (PNG) and data (CSV) into ``out_dir``.
-
-    Files: ``phase_portrait.png/.csv`` (:func:`model_phase_portrait_table`),
-    ``energy.png/.csv`` (:func:`walk_energy_table`: every impact, knee strikes included, drops
-    the total) and ``impacts.csv`` (:func:`walk_impact_table`, the heel strikes). The figures of
-    :data:`COMPASS_ONLY_WALK_FIGURES` are not drawn.
-
-    Returns
-    -------
-    list of Path
-        The written files.
-    """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    what = f"{walker.description.name}, slope = {np.rad2deg(walk.slope):.2f} deg"
-    portrait = model_phase_portrait_table(walker, walk)
-    energy = walk_energy_table(walker, walk)
-    impacts = walk_impact_table(walker, walk)
-    swing = walker.description.links[walker.joint_index("hip") - 2].name
-    figures = {
-        "phase_portrait": (phase_portrait_figure(
-            portrait, title=f"{what}: phase portrait",
-            labels=(f"stance ({walker.coordinate_names[2]})", f"swing ({swing}, absolute)")),
-            portrait),
-        "energy": (energy_figure(energy, impacts, title=f"{what}: energy"), energy),
-    }
-    paths: list[Path] = []
-    for stem, (fig, table) in figures.items():
-        png, csv = out / f"{stem}.png", out / f"{stem}.csv"
-        fig.savefig(png)
-        table.to_csv(csv, index=False)
-        paths += [png, csv]
-    impacts_csv = out / "impacts.csv"
-    impacts.to_csv(impacts_csv, index=False)
-    paths.append(impacts_csv)
-    return paths

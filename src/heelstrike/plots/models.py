@@ -4,15 +4,13 @@ quantities.
 
 Only admissible impacts (the trailing foot lifts) are coloured; the other grid cells are grey,
 and the boundary between the two, drawn dashed, is taken from the same ``lifts`` decision that
-the CSV holds, so figure and data agree cell by cell. Drawn with matplotlib's object API (no
-pyplot state).
+the CSV holds (:func:`heelstrike.outputs.write_impact_map`), so figure and data agree cell by
+cell. Drawing only, with matplotlib's object API (no pyplot state).
 """
 
 from __future__ import annotations
 
-import csv
 from collections.abc import Mapping
-from pathlib import Path
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -24,7 +22,7 @@ from numpy.typing import NDArray
 
 from heelstrike.analysis.model_gaits import ANGLE, ImpactMap
 
-__all__ = ["LIFT_BOUNDARY_GID", "impact_map_figure", "write_impact_map"]
+__all__ = ["LIFT_BOUNDARY_GID", "impact_map_figure"]
 
 #: ``gid`` of the dashed lift-boundary contour in :func:`impact_map_figure`.
 LIFT_BOUNDARY_GID = "lift_boundary"
@@ -114,39 +112,3 @@ def impact_map_figure(m: ImpactMap, units: Mapping[str, str] | None = None) -> F
     fig.suptitle(f"heel strike of '{m.walker_name}' at stance rate {m.stance_rate:g} rad/s"
                  + "".join(f", {h}" for h in held))
     return fig
-
-
-def write_impact_map(
-    m: ImpactMap, out_dir: str | Path, *, units: Mapping[str, str] | None = None
-) -> list[Path]:
-    """Write ``impact_map.png`` (three panels) and ``impact_map.csv`` (one row per point).
-
-    Parameters
-    ----------
-    m : ImpactMap
-    out_dir : str or Path
-        Created if needed.
-    units : mapping of str to str, optional
-        Units of the swept parameters for the axis labels (see :func:`parameter_units`).
-
-    Returns
-    -------
-    list of Path
-        The files written.
-    """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    csv_path = out / "impact_map.csv"
-    with csv_path.open("w", newline="", encoding="utf-8") as fh:
-        wr = csv.writer(fh)
-        wr.writerow([m.x_name, m.y_name, "T_J", "T_c_J", "T_a_J", "eta_J_per_m",
-                     "step_length_m", "trailing_normal_velocity_m_per_s", "trailing_foot_lifts"])
-        for i, yy in enumerate(m.y):
-            for j, xx in enumerate(m.x):
-                wr.writerow([repr(float(xx)), repr(float(yy)), repr(float(m.T[i, j])),
-                             repr(float(m.T_c[i, j])), repr(float(m.T_a[i, j])),
-                             repr(float(m.eta[i, j])), repr(float(m.step_length[i, j])),
-                             repr(float(m.trailing_normal_velocity[i, j])), int(m.lifts[i, j])])
-    png = out / "impact_map.png"
-    impact_map_figure(m, units).savefig(png, dpi=120)
-    return [png, csv_path]

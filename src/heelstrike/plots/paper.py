@@ -2,13 +2,13 @@
 
 No :mod:`matplotlib.pyplot` is used: every function builds its own
 :class:`~matplotlib.figure.Figure` on a :class:`~matplotlib.backends.backend_agg.FigureCanvasAgg`,
-so nothing leaks into pyplot's global state and no display is needed. The data come from
-:mod:`heelstrike.analysis.paper`.
+so nothing leaks into pyplot's global state and no display is needed. Drawing only: each
+function takes the data that :mod:`heelstrike.analysis.paper` computes
+(:func:`~heelstrike.analysis.paper.paper_figure_data`); whoever wants a figure computes its data
+first. :func:`heelstrike.outputs.reproduce_paper` writes the figures and their CSVs.
 """
 
 from __future__ import annotations
-
-from pathlib import Path
 
 import matplotlib as mpl
 import numpy as np
@@ -19,17 +19,9 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
-from heelstrike.analysis.paper import (
-    Figure3bData,
-    figure2_data,
-    figure3a_data,
-    figure3b_data,
-    paper_figure_data,
-    write_figure_data,
-)
-from heelstrike.models.compass import CompassGait
+from heelstrike.analysis.paper import Figure3bData
 
-__all__ = ["figure2", "figure3a", "figure3b", "reproduce_paper"]
+__all__ = ["figure2", "figure3a", "figure3b"]
 
 
 def _new_figure(width: float, height: float) -> Figure:
@@ -48,22 +40,21 @@ def _radius_label(r: float, wheel: bool) -> str:
     return f"R = {r:g} m" + (" (wheel, degenerate)" if wheel else "")
 
 
-def figure2(data: pd.DataFrame | None = None, walker: CompassGait | None = None) -> Figure:
+def figure2(data: pd.DataFrame) -> Figure:
     """Fig. 2: pre-impact ``T_c`` (lost) and ``T_a`` (kept) against ``q3`` for several ``R``.
 
     Parameters
     ----------
-    data : pandas.DataFrame, optional
-        As returned by :func:`heelstrike.analysis.paper.figure2_data` (computed if omitted).
-    walker : CompassGait, optional
-        Walker for computing ``data`` (default: the paper's).
+    data : pandas.DataFrame
+        As returned by :func:`heelstrike.analysis.paper.figure2_data` (one row per ``(R, q3)``;
+        ``R_m`` in m, ``q3_deg`` in deg, ``T_c_J`` and ``T_a_J`` in J).
 
     Returns
     -------
     matplotlib.figure.Figure
         Two panels sharing the ``q3`` (deg) axis: ``T_c`` (J) and ``T_a`` (J).
     """
-    df = figure2_data(walker) if data is None else data
+    df = data
     fig = _new_figure(9.0, 3.8)
     ax_c, ax_a = fig.subplots(1, 2, sharex=True)
     radii = np.unique(df["R_m"].to_numpy())
@@ -93,17 +84,20 @@ def figure2(data: pd.DataFrame | None = None, walker: CompassGait | None = None)
     return fig
 
 
-def figure3a(data: pd.DataFrame | None = None, walker: CompassGait | None = None) -> Figure:
+def figure3a(data: pd.DataFrame) -> Figure:
     """Fig. 3a: energy lost per metre ``eta`` (J/m, eq. 16) against ``q3`` for several ``R``.
 
     Parameters
     ----------
-    data : pandas.DataFrame, optional
-        As returned by :func:`heelstrike.analysis.paper.figure3a_data` (computed if omitted).
-    walker : CompassGait, optional
-        Walker for computing ``data`` (default: the paper's).
+    data : pandas.DataFrame
+        As returned by :func:`heelstrike.analysis.paper.figure3a_data` (one row per
+        ``(R, q3)``; ``eta_J_per_m`` in J/m).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
-    df = figure3a_data(walker) if data is None else data
+    df = data
     fig = _new_figure(5.5, 4.2)
     ax = fig.subplots()
     radii = np.unique(df["R_m"].to_numpy())
@@ -122,7 +116,7 @@ def figure3a(data: pd.DataFrame | None = None, walker: CompassGait | None = None
     return fig
 
 
-def figure3b(data: Figure3bData | None = None, walker: CompassGait | None = None) -> Figure:
+def figure3b(data: Figure3bData) -> Figure:
     """Fig. 3b: filled contours of ``eta`` (J/m) over ``q3`` (deg) and ``R`` (m).
 
     Impacts after which the trailing foot does not lift are left white; their boundary
@@ -130,12 +124,14 @@ def figure3b(data: Figure3bData | None = None, walker: CompassGait | None = None
 
     Parameters
     ----------
-    data : Figure3bData, optional
-        As returned by :func:`heelstrike.analysis.paper.figure3b_data` (computed if omitted).
-    walker : CompassGait, optional
-        Walker for computing ``data`` (default: the paper's).
+    data : Figure3bData
+        As returned by :func:`heelstrike.analysis.paper.figure3b_data`.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
     """
-    d = figure3b_data(walker) if data is None else data
+    d = data
     fig = _new_figure(5.8, 4.4)
     ax = fig.subplots()
     q3_deg = np.rad2deg(d.impact_angle)
@@ -162,50 +158,3 @@ def figure3b(data: Figure3bData | None = None, walker: CompassGait | None = None
     ax.set_title(r"Fig. 3b: $\eta$ over ($q_3$, $R$); white: foot does not lift",
                  fontsize="medium")
     return fig
-
-
-def reproduce_paper(
-    out_dir: str | Path,
-    walker: CompassGait | None = None,
-    formats: tuple[str, ...] = ("png", "pdf"),
-) -> list[Path]:
-    """Write the paper's Figs. 2, 3a and 3b as images plus one CSV of data per figure.
-
-    Parameters
-    ----------
-    out_dir : str or Path
-        Output directory (created if needed).
-    walker : CompassGait, optional
-        Walker (default: the paper's, ``mH = 2 m = 10 kg``, ``a = b = 0.5 m``, ``l = 1 m``).
-    formats : tuple of str
-        Image formats understood by matplotlib.
-
-    Returns
-    -------
-    list of Path
-        ``fig2.png, fig2.pdf, fig2.csv, fig3a.png, ...`` in that order.
-    """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    data = paper_figure_data(walker)
-    csvs = dict(zip(("fig2", "fig3a", "fig3b"), write_figure_data(data, out), strict=True))
-    figures = {
-        "fig2": figure2(data.figure2),
-        "fig3a": figure3a(data.figure3a),
-        "fig3b": figure3b(data.figure3b),
-    }
-    paths: list[Path] = []
-    for name, fig in figures.items():
-        for ext in formats:
-            path = out / f"{name}.{ext}"
-            fig.savefig(path, dpi=150, metadata=_metadata(ext))
-            paths.append(path)
-        paths.append(csvs[name])
-    return paths
-
-
-def _metadata(ext: str) -> dict[str, str | None]:
-    """Reproducible files: no creation date in PDFs."""
-    if ext == "pdf":
-        return {"CreationDate": None, "Creator": "heelstrike"}
-    return {"Software": "heelstrike"} if ext == "png" else {}

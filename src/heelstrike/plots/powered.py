@@ -1,19 +1,17 @@
 """Figures of the powered-walking cost study (:mod:`heelstrike.analysis.cost_study`).
 
 Drawing only, from the study's :class:`xarray.Dataset`; matplotlib object API, Agg canvas.
+:func:`heelstrike.outputs.write_cost_figures` writes them.
 """
 
 from __future__ import annotations
 
-from pathlib import Path
-
-import numpy as np
 import xarray as xr
 from matplotlib import colormaps
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-__all__ = ["BRANCH_CAPTION", "cost_figure", "paper_comparison_figure", "write_cost_figures"]
+__all__ = ["BRANCH_CAPTION", "cost_figure", "paper_comparison_figure"]
 
 
 def _new_figure(width: float, height: float) -> Figure:
@@ -84,20 +82,3 @@ def paper_comparison_figure(ds: xr.Dataset) -> Figure:
     axes[0].legend(fontsize=7, loc="lower left")
     fig.suptitle(BRANCH_CAPTION, fontsize=7)
     return fig
-
-
-def write_cost_figures(ds: xr.Dataset, out: str | Path) -> list[Path]:
-    """Write the study's figures (PNG) into ``out``; return their paths."""
-    d = Path(out)
-    d.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for var in ("cost_of_transport", "eta", "actuator_work"):
-        if np.any(np.isfinite(ds[var].values)):
-            p = d / f"{var}.png"
-            cost_figure(ds, var).savefig(p, dpi=120)
-            paths.append(p)
-    if _target(ds) == "step_length":
-        p = d / "paper_vs_gait.png"
-        paper_comparison_figure(ds).savefig(p, dpi=120)
-        paths.append(p)
-    return paths

@@ -33,8 +33,10 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
+from heelstrike._results import ResultDictMixin
+from heelstrike._typing import FloatArray
 from heelstrike.core.contact_laws import (
     ContactImpact,
     ContactLaw,
@@ -62,7 +64,6 @@ __all__ = [
     "robot_matrices",
 ]
 
-FloatArray = NDArray[np.float64]
 ContactKind = Literal["point", "flat", "arc"]
 _ROWS = {"point": 3, "arc": 3, "flat": 6}
 
@@ -203,7 +204,7 @@ class _RowPlan:
 
 
 @dataclass(frozen=True, kw_only=True)
-class RobotImpact:
+class RobotImpact(ResultDictMixin):
     """Impact of a robot with per-contact laws.
 
     Attributes

@@ -29,6 +29,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from heelstrike._typing import FloatArray
+
 __all__ = [
     "SHIPPED_ROBOTS",
     "Robot",
@@ -41,7 +43,6 @@ __all__ = [
     "robot_data_dir",
 ]
 
-FloatArray = NDArray[np.float64]
 
 
 class RobotError(ValueError):

@@ -17,13 +17,12 @@ from __future__ import annotations
 from typing import Any, Literal
 
 import numpy as np
-from numpy.typing import NDArray
 
+from heelstrike._typing import FloatArray
 from heelstrike.robots.loading import Robot, RobotError, _pin
 
 __all__ = ["gait_configuration", "gait_state", "gait_velocity"]
 
-FloatArray = NDArray[np.float64]
 Leading = Literal["left", "right"]
 
 

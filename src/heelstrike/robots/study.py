@@ -18,6 +18,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from heelstrike._results import ResultDictMixin
+from heelstrike._typing import FloatArray
 from heelstrike.core.impact import impact
 from heelstrike.robots.contacts import ContactSpec, mass_matrices_and_jacobians
 from heelstrike.robots.loading import Robot, RobotError
@@ -25,11 +27,10 @@ from heelstrike.robots.states import Leading, gait_configuration, gait_velocity
 
 __all__ = ["RobotStudy", "plot_robot_study", "robot_heel_strike_study"]
 
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True, kw_only=True)
-class RobotStudy:
+class RobotStudy(ResultDictMixin):
     """Heel-strike energetics of a robot over step length x strike speed.
 
     Every array has shape ``(len(step_length), len(strike_speed))``.

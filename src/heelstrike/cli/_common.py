@@ -1,0 +1,340 @@
+"""Parsing shared by the commands: units and ranges, walker and model options, actuation
+options, output directories and resumable stores. It builds inputs; it computes nothing."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+from collections.abc import Callable
+from typing import Any, NoReturn
+
+
+class CliError(Exception):
+    """A user-facing error: printed as one line, exit status 2."""
+
+
+class Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> NoReturn:
+        raise CliError(message)
+
+
+def parse_angle(text: str) -> float:
+    """Parse ``'20deg'``, ``'0.3rad'`` or ``'0.3'`` (radians) into radians."""
+    t = str(text).strip().lower()
+    factor = 1.0
+    if t.endswith("deg"):
+        t, factor = t[:-3], math.pi / 180.0
+    elif t.endswith("rad"):
+        t = t[:-3]
+    try:
+        value = float(t) * factor
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"invalid angle {text!r}: use e.g. 20deg, 0.35rad or 0.35 (radians)"
+        ) from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"invalid angle {text!r}: must be finite")
+    return value
+
+
+def parse_range(
+    text: str, convert: Callable[[str], float] = float
+) -> tuple[float, float, int | None]:
+    """Parse ``'start:stop'`` or ``'start:stop:count'`` (count points, inclusive)."""
+    parts = str(text).split(":")
+    if len(parts) not in (2, 3):
+        raise argparse.ArgumentTypeError(
+            f"invalid range {text!r}: use START:STOP or START:STOP:COUNT"
+        )
+    try:
+        start, stop = convert(parts[0]), convert(parts[1])
+        count = int(parts[2]) if len(parts) == 3 else None
+    except (ValueError, argparse.ArgumentTypeError) as exc:
+        raise argparse.ArgumentTypeError(f"invalid range {text!r}: {exc}") from None
+    if count is not None and count < 1:
+        raise argparse.ArgumentTypeError(f"invalid range {text!r}: COUNT must be >= 1")
+    return start, stop, count
+
+
+def positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return v
+
+
+class Explicit(argparse.Action):
+    """Store the value and record the option's ``dest`` in ``namespace.explicit``: options given
+    on the command line are told from defaults, so that none is silently ignored."""
+
+    def __call__(
+        self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+        values: Any, option_string: str | None = None,
+    ) -> None:
+        setattr(namespace, self.dest, values)
+        namespace.explicit = {*vars(namespace).get("explicit", ()), self.dest}
+
+
+def explicit_options(args: argparse.Namespace) -> set[str]:
+    """``dest`` names of the :class:`Explicit` options given on the command line."""
+    return set(vars(args).get("explicit", ()))
+
+
+#: Compass-gait options (``dest``) and the description parameter each one sets with ``--model``
+#: (the names of the shipped compass and torso walkers).
+COMPASS_PARAMS = {"radius": "R", "hip_mass": "mH", "leg_mass": "m", "leg_length": "l",
+                   "com_from_hip": "b", "leg_inertia": "I", "gravity": "g"}
+
+
+#: Compass-gait options: ``dest``, the :class:`~heelstrike.models.compass.CompassGait` field it
+#: sets, and its help text. The defaults are the model's own (read from the dataclass).
+_COMPASS_OPTIONS = (
+    ("radius", "foot_radius", "foot radius R (m), 0 <= R <= l"),
+    ("hip_mass", "hip_mass", "hip mass mH (kg)"),
+    ("leg_mass", "leg_mass", "mass of each leg m (kg)"),
+    ("leg_length", "leg_length", "leg length l (m)"),
+    ("com_from_hip", "leg_com_from_hip", "hip to leg centre of mass b (m)"),
+    ("leg_inertia", "leg_inertia", "leg inertia about its COM (kg m^2)"),
+    ("gravity", "gravity", "gravity g (m/s^2)"),
+)
+
+
+def add_walker_options(p: argparse.ArgumentParser) -> None:
+    """Options for every parameter of the paper's compass gait (SI units, the model's defaults)."""
+    from dataclasses import fields
+
+    from heelstrike.models.compass import CompassGait
+
+    defaults = {f.name: f.default for f in fields(CompassGait)}
+    g = p.add_argument_group(
+        "walker parameters (paper defaults; with --model they set the model's R, mH, m, l, b, "
+        "I, g)"
+    )
+    for dest, field, text in _COMPASS_OPTIONS:
+        g.add_argument("--" + dest.replace("_", "-"), type=float, default=defaults[field],
+                       action=Explicit, help=f"{text}; default {defaults[field]:g}")
+
+
+def walker_from_args(args: argparse.Namespace) -> Any:
+    from heelstrike.models.compass import CompassGait
+
+    if vars(args).get("param"):
+        raise CliError("--param needs --model (the compass gait takes --radius, --hip-mass, ...)")
+    return CompassGait(**{field: getattr(args, dest) for dest, field, _ in _COMPASS_OPTIONS})
+
+
+def add_model_options(p: argparse.ArgumentParser) -> None:
+    """``--model`` (a TOML description or shipped name) and repeatable ``--param NAME=VALUE``."""
+    g = p.add_argument_group("described walker (overrides the compass-gait options)")
+    g.add_argument("--model", default=None, metavar="FILE_OR_NAME",
+                   help="walker description: a .toml file or a shipped name "
+                   "(compass, kneed, torso)")
+    g.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                   help="set a description parameter (SI units), repeatable, e.g. R=0.2")
+
+
+def model_from_args(args: argparse.Namespace) -> Any:
+    from heelstrike.dynamics.phased import load_phased_walker
+
+    params: dict[str, float] = {}
+    for item in args.param:
+        name, sep, value = item.partition("=")
+        try:
+            if not sep or not name.strip():
+                raise ValueError
+            params[name.strip()] = float(value)
+        except ValueError:
+            raise CliError(f"invalid --param {item!r}: use NAME=VALUE, e.g. R=0.2") from None
+    model = str(args.model)
+    if os.path.exists(model) and not os.path.isfile(model):
+        raise CliError(f"--model {model!r} is not a regular file")
+    try:
+        walker = load_phased_walker(model)
+    except OSError as exc:
+        raise CliError(f"cannot read model {model!r}: {exc.strerror or exc}") from exc
+    known = walker.params
+    for dest in sorted(explicit_options(args) & set(COMPASS_PARAMS)):
+        name, option = COMPASS_PARAMS[dest], "--" + dest.replace("_", "-")
+        if name not in known:
+            raise CliError(
+                f"{option} sets the compass parameter {name!r}, which model "
+                f"{walker.description.name!r} does not have (its parameters: "
+                f"{', '.join(sorted(known))}); use --param NAME=VALUE"
+            )
+        if name in params:
+            raise CliError(f"{option} and --param {name}=... both set {name!r}: give it once")
+        params[name] = float(getattr(args, dest))
+    return walker.replace(**params) if params else walker
+
+
+def parse_floats(text: str, option: str, n: int | None = None) -> list[float]:
+    try:
+        vals = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise CliError(f"invalid {option} {text!r}: use comma-separated numbers") from None
+    if not all(math.isfinite(v) for v in vals):
+        raise CliError(f"invalid {option} {text!r}: the numbers must be finite")
+    if n is not None and len(vals) != n:
+        raise CliError(f"invalid {option} {text!r}: expected {n} comma-separated numbers")
+    return vals
+
+
+
+def writable_dir(path: str | os.PathLike[str], option: str = "--out") -> Any:
+    """Create the directory ``path`` if needed and check that a file can be written in it,
+    before any computing; returns it as a :class:`~pathlib.Path`."""
+    import tempfile
+    from pathlib import Path
+
+    out = Path(path)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=out):
+            pass
+    except OSError as exc:
+        raise CliError(f"cannot write to {option} {str(path)!r}: {exc.strerror or exc}") from None
+    return out
+
+
+
+
+def parse_guess(text: str | None) -> list[float] | None:
+    if text is None:
+        return None
+    try:
+        vals = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise CliError(f"invalid --guess {text!r}: use Q3,Q3DOT,Q4DOT (rad, rad/s)") from None
+    if len(vals) != 3:
+        raise CliError(f"invalid --guess {text!r}: expected 3 comma-separated numbers")
+    return vals
+
+
+
+
+def add_store_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--store", metavar="DIR", default=None,
+                   help="keep every finished chunk in this Zarr directory as it is computed; "
+                   "after an interruption (Ctrl-C) the same command resumes from it")
+
+
+def run_with_store(store: str | None, compute: Callable[[], Any]) -> Any:
+    """Run ``compute()``; with a store, report its progress on stderr and map store errors."""
+    if store is None:
+        return compute()
+    import logging
+
+    from heelstrike.analysis.sweep import (
+        SweepError,
+        SweepStoreLockedError,
+        SweepStoreMismatchError,
+    )
+
+    logger = logging.getLogger("heelstrike.analysis.sweep")
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("heelstrike: %(message)s"))
+    level = logger.level
+    logger.addHandler(handler)
+    logger.setLevel(logging.INFO)
+    try:
+        return compute()
+    except SweepStoreMismatchError as exc:
+        raise CliError(
+            f"--store {store!r} holds results of a different computation (differs in: "
+            f"{', '.join(exc.differs)}); remove it or choose another directory"
+        ) from exc
+    except SweepStoreLockedError as exc:
+        raise CliError(
+            f"--store {store!r} is in use by another heelstrike run; wait for it to finish or "
+            "choose another directory"
+        ) from exc
+    except SweepError as exc:
+        raise CliError(str(exc)) from exc
+    except KeyboardInterrupt:
+        print(f"heelstrike: finished chunks are kept in {store!r}; run the same command "
+              "again to resume", file=sys.stderr)
+        raise
+    finally:
+        logger.removeHandler(handler)
+        logger.setLevel(level)
+
+
+# -- basin of attraction and stable-gait map (issue 6) ------------------------------------------
+def parse_grid(text: str) -> tuple[int, int]:
+    parts = str(text).lower().split("x")
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        n1, n2 = int(parts[0]), int(parts[1])
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"invalid grid {text!r}: use e.g. 400x400") from None
+    if n1 < 1 or n2 < 1:
+        raise argparse.ArgumentTypeError(f"invalid grid {text!r}: sizes must be >= 1")
+    return n1, n2
+
+
+
+
+def parse_sweep(text: str) -> tuple[str, float, float, int]:
+    name, sep, rest = text.partition(":")
+    if not sep or not name:
+        raise argparse.ArgumentTypeError(
+            f"invalid sweep {text!r}: use NAME:START:STOP:COUNT (NAME a parameter or 'angle')"
+        )
+    conv = parse_angle if name == "angle" else float
+    start, stop, count = parse_range(rest, conv)
+    if count is None:
+        raise argparse.ArgumentTypeError(f"invalid sweep {text!r}: COUNT is required")
+    return name, start, stop, count
+
+
+
+
+ACTUATIONS = ("pushoff", "hip-energy", "hip-pd")
+
+
+def add_actuation_options(p: argparse.ArgumentParser) -> None:
+    # defaults (None) come from heelstrike.dynamics.actuation.DEFAULT_*, which explain them
+    g = p.add_argument_group("actuation (defaults: heelstrike.dynamics.actuation)")
+    g.add_argument("--gain", type=float, default=None,
+                   help="energy-tracking gain k of hip-energy (s/rad, default 3)")
+    g.add_argument("--kp", type=float, default=None,
+                   help="hip-pd stiffness (N m/rad, default 50)")
+    g.add_argument("--kd", type=float, default=None,
+                   help="hip-pd damping (N m s/rad, default 5)")
+    g.add_argument("--max-torque", type=float, default=None,
+                   help="hip torque limit (N m, default 50)")
+
+
+def actuation_options(args: argparse.Namespace) -> dict[str, float]:
+    """The actuation options given on the command line (the library supplies the rest)."""
+    opts = {k: float(getattr(args, k)) for k in ("gain", "kp", "kd", "max_torque")
+            if getattr(args, k) is not None}
+    if "max_torque" in opts and not opts["max_torque"] > 0:
+        raise CliError("--max-torque must be > 0 (N m)")
+    if "gain" in opts and not opts["gain"] > 0:
+        raise CliError("--gain must be > 0 (s/rad)")
+    for k in ("kp", "kd"):
+        if k in opts and not opts[k] >= 0:
+            raise CliError(f"--{k} must be >= 0")
+    return opts
+
+
+def family_from_args(args: argparse.Namespace) -> Any:
+    from heelstrike.analysis.powered import actuation_family
+
+    return actuation_family(args.actuation, **actuation_options(args))
+
+
+
+
+def linspace_grid(r: tuple[float, float, int | None], default_count: int) -> list[float]:
+    import numpy as np
+
+    start, stop, count = r
+    return [float(v) for v in np.linspace(start, stop, count or default_count)]

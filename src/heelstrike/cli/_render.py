@@ -1,0 +1,63 @@
+"""Rendering shared by the commands: one JSON object on stdout, one-line errors on stderr."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+from typing import Any
+
+from heelstrike.cli._common import CliError
+
+
+def nonfinite_paths(obj: Any, path: str = "") -> list[str]:
+    """Paths of the non-finite numbers in a JSON-ready object (``T_c``, ``qdot_plus[1]``)."""
+    if isinstance(obj, float):
+        return [] if math.isfinite(obj) else [path or "value"]
+    if isinstance(obj, dict):
+        return [p for k, v in obj.items() for p in nonfinite_paths(v, f"{path}.{k}" if path else k)]
+    if isinstance(obj, list | tuple):
+        return [p for i, v in enumerate(obj) for p in nonfinite_paths(v, f"{path}[{i}]")]
+    return []
+
+
+def require_finite(obj: Any) -> None:
+    """Refuse a result holding inf or NaN (overflow or a degenerate input)."""
+    bad = nonfinite_paths(obj)
+    if bad:
+        shown = ", ".join(bad[:4]) + (f" and {len(bad) - 4} more" if len(bad) > 4 else "")
+        raise CliError(f"the result is not finite ({shown}): the input overflows or is "
+                       "degenerate; use smaller velocities or other parameters")
+
+
+def print_json(obj: Any) -> None:
+    """Print one whole JSON object on stdout, or nothing (the text is built before writing).
+
+    A ``units`` map for the object's keys is added (:func:`heelstrike._units.json_units`).
+    """
+    from heelstrike._units import json_units
+
+    require_finite(obj)
+    if isinstance(obj, dict) and "units" not in obj:
+        obj = {**obj, "units": json_units(obj)}
+    text = json.dumps(obj, allow_nan=False) + "\n"
+    sys.stdout.write(text)
+    sys.stdout.flush()
+
+
+
+
+def one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    return text or type(exc).__name__
+
+
+def fail(message: str) -> int:
+    """Print the one-line error (after the traceback when ``HEELSTRIKE_DEBUG=1``); status 2."""
+    if os.environ.get("HEELSTRIKE_DEBUG") == "1":
+        import traceback
+
+        traceback.print_exc()
+    print(f"heelstrike: error: {message}", file=sys.stderr)
+    return 2

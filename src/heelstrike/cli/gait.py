@@ -1,0 +1,613 @@
+"""``heelstrike gait``, ``walk``, ``bifurcation``, ``basin`` and ``map`` (issues 3 and 6)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from typing import Any
+
+from heelstrike.cli._common import (
+    CliError,
+    add_model_options,
+    add_store_option,
+    add_walker_options,
+    model_from_args,
+    parse_angle,
+    parse_floats,
+    parse_grid,
+    parse_guess,
+    parse_range,
+    parse_sweep,
+    positive_int,
+    run_with_store,
+    walker_from_args,
+    writable_dir,
+)
+from heelstrike.cli._render import print_json
+
+__all__ = ['add_basin', 'add_bifurcation', 'add_gait', 'add_map', 'add_walk']
+
+
+def add_gait(sub: Any) -> None:
+    p = sub.add_parser(
+        "gait",
+        help="find a passive limit cycle on a slope",
+        description="Find the passive period-one gait of the circular-feet compass gait on a "
+        "slope, its stability (Floquet multipliers) and energetics.",
+    )
+    add_walker_options(p)
+    add_model_options(p)
+    p.add_argument("--slope", type=parse_angle, default=parse_angle("3deg"),
+                   help="slope angle, e.g. 3deg (default 3deg)")
+    p.add_argument("--guess", default=None,
+                   help="post-impact Q3,Q3DOT,Q4DOT to start Newton from (rad, rad/s); "
+                   "write --guess=-0.27,1.09,-0.72 when Q3 is negative (with --model: the "
+                   "walker's section coordinates)")
+    p.add_argument("--backend", choices=("compiled", "scipy"), default="compiled",
+                   help="step simulator: compiled numba kernels (default; generated from "
+                   "the walker file with --model) or the scipy reference")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=_run_gait)
+
+
+def _run_gait_model(args: argparse.Namespace) -> int:
+    from heelstrike.analysis.limit_cycle import GaitNotFoundError
+    from heelstrike.analysis.model_gaits import find_model_gait
+
+    walker = model_from_args(args)
+    guess = None
+    if args.guess is not None:
+        guess = parse_floats(args.guess, "--guess", len(walker.section_names))
+    try:
+        gait = find_model_gait(walker, slope=args.slope, guess=guess, backend=args.backend)
+    except GaitNotFoundError as exc:
+        raise CliError(f"no gait found at slope {math.degrees(args.slope):g} deg: {exc}") from exc
+    d = gait.to_dict()
+    d["model"] = walker.description.name
+    if args.json:
+        print_json(d)
+        return 0
+    c = gait.cycle
+    fp = ", ".join(f"{k} = {v:.6f}" for k, v in d["fixed_point"].items())
+    print(f"passive gait of '{d['model']}', slope = {math.degrees(args.slope):g} deg")
+    print(f"  fixed point (just after heel strike): {fp}")
+    print(f"  period          {c.period:10.5f} s")
+    print(f"  step length     {c.step_length:10.5f} m")
+    print(f"  speed           {c.speed:10.5f} m/s")
+    print(f"  |multipliers|   {', '.join(f'{abs(m):.4f}' for m in c.multipliers)}")
+    print(f"  stable          {'yes' if c.stable else 'no'}")
+    for imp in d["impacts"]:
+        print(f"  {imp['kind']:<15} T_c = {imp['T_c']:.6f} J")
+    print(f"  collision loss  {gait.collision_loss:10.5f} J/step (sum of T_c)")
+    print(f"  energy released {gait.potential_energy_released:10.5f} J/step (gravity)")
+    print(f"  eta             {gait.eta:10.5f} J/m")
+    return 0
+
+
+def _gait_summary(c: Any) -> dict[str, Any]:
+    """One entry of ``gaits`` in ``gait --json``."""
+    return {
+        "q": [float(v) for v in c.q],
+        "q_dot": [float(v) for v in c.q_dot],
+        "fixed_point": {k: float(v) for k, v in zip(c.section_names, c.fixed_point, strict=True)},
+        "period": float(c.period),
+        "step_length": float(c.step_length),
+        "speed": float(c.speed),
+        "impact_angle": float(c.impact_angle),
+        "multipliers": [float(abs(m)) for m in c.multipliers],
+        "stable": bool(c.stable),
+        "collision_loss": float(c.collision_loss),
+    }
+
+
+def _run_gait(args: argparse.Namespace) -> int:
+    from heelstrike.analysis.limit_cycle import (
+        GaitNotFoundError,
+        find_limit_cycle,
+        find_limit_cycles,
+    )
+
+    if not args.slope > 0:
+        raise CliError(
+            f"no gait found at slope {math.degrees(args.slope):g} deg: a passive walker needs "
+            "a downhill slope > 0 (the energy lost at heel strike must come from gravity); "
+            "e.g. --slope 3deg, or see 'heelstrike powered' for level ground"
+        )
+    if args.model is not None:
+        return _run_gait_model(args)
+    walker = walker_from_args(args)
+    guess = parse_guess(args.guess)
+    try:
+        if guess is None:
+            gaits = find_limit_cycles(
+                walker, slope=args.slope, method=args.backend, progress=True
+            )
+        else:
+            gaits = (find_limit_cycle(walker, slope=args.slope, guess=guess,
+                                      method=args.backend),)
+    except GaitNotFoundError as exc:
+        raise CliError(f"no gait found at slope {math.degrees(args.slope):g} deg: {exc}") from exc
+    cycle = gaits[0]
+    d = cycle.to_dict()
+    d["gaits"] = [_gait_summary(c) for c in gaits]
+    if args.json:
+        print_json(d)
+        return 0
+    if len(gaits) > 1:
+        print(f"{len(gaits)} period-one gaits found (the first, "
+              f"{'the most attracting stable one' if cycle.stable else 'the least unstable'}, "
+              "is shown in detail):")
+        for i, c in enumerate(gaits):
+            print(f"  [{i}] step length {c.step_length:.5f} m, period {c.period:.5f} s, "
+                  f"|multipliers| {', '.join(f'{abs(m):.4f}' for m in c.multipliers)}, "
+                  f"{'stable' if c.stable else 'unstable'}")
+    fp = ", ".join(f"{k} = {v:.6f}" for k, v in d["fixed_point"].items())
+    mult = ", ".join(f"{abs(m):.4f}" for m in cycle.multipliers)
+    print(f"passive gait, R = {args.radius:g} m, slope = {math.degrees(args.slope):g} deg")
+    print(f"  fixed point (just after impact): {fp}")
+    print(f"  period          {cycle.period:10.5f} s")
+    print(f"  step length     {cycle.step_length:10.5f} m")
+    print(f"  speed           {cycle.speed:10.5f} m/s")
+    print(f"  impact angle    {cycle.impact_angle:10.5f} rad "
+          f"({math.degrees(cycle.impact_angle):.3f} deg)")
+    print(f"  |multipliers|   {mult}")
+    print(f"  stable          {'yes' if cycle.stable else 'no'}")
+    print(f"  collision loss  {cycle.collision_loss:10.5f} J/step (T_c)")
+    print(f"  energy released {cycle.potential_energy_released:10.5f} J/step (gravity)")
+    print(f"  eta             {cycle.eta:10.5f} J/m")
+    return 0
+
+
+def add_walk(sub: Any) -> None:
+    p = sub.add_parser(
+        "walk",
+        help="simulate steps and animate the walker",
+        description="Simulate the passive walker from its limit cycle (or --guess) and write "
+        "an animation (.gif, or .mp4 where ffmpeg exists). With --out DIR, also write figures "
+        "and their CSV data into DIR: a stick-figure strobe of one step, the phase portrait, "
+        "joint angles and ground reaction over a step, and the energy over the walk. With "
+        "--model: the animation, phase portrait, energy and impacts (the strobe and step "
+        "figures are drawn for the compass gait only).",
+    )
+    add_walker_options(p)
+    add_model_options(p)
+    p.add_argument("--backend", choices=("compiled", "scipy"), default=None,
+                   help="step simulator with --model: compiled (default; generated from the "
+                   "walker file) or the scipy reference; the compass gait without --model "
+                   "walks on the scipy reference")
+    p.add_argument("--slope", type=parse_angle, default=parse_angle("3deg"),
+                   help="slope angle (default 3deg)")
+    p.add_argument("--steps", type=positive_int, default=6, help="number of steps (default 6)")
+    p.add_argument("--guess", default=None,
+                   help="start from this post-impact Q3,Q3DOT,Q4DOT instead of the limit cycle "
+                   "(with --model: the walker's section coordinates)")
+    p.add_argument("--fps", type=float, default=30.0, help="frames per second (default 30)")
+    p.add_argument("--out", default="walk.gif",
+                   help="output file (.gif or .mp4), or a directory for walk.gif plus the "
+                   "figures (PNG) and their data (CSV)")
+    p.set_defaults(func=_run_walk)
+
+
+def _walk_model(args: argparse.Namespace, out: Any, to_dir: bool) -> int:
+    """``walk --model``: the walk from the gait (or --guess), animation and figures."""
+    from heelstrike.analysis.limit_cycle import GaitNotFoundError
+    from heelstrike.analysis.model_gaits import find_model_gait
+    from heelstrike.dynamics import simulate
+    from heelstrike.outputs import COMPASS_ONLY_WALK_FIGURES, write_model_walk_figures
+    from heelstrike.plots.gait import animate_model_walk
+
+    walker = model_from_args(args)
+    backend = args.backend or "compiled"
+    if args.guess is not None:
+        z = parse_floats(args.guess, "--guess", len(walker.section_names))
+    else:
+        try:
+            z = list(find_model_gait(walker, slope=args.slope, backend=backend)
+                     .cycle.fixed_point)
+        except GaitNotFoundError as exc:
+            raise CliError(f"no gait found to start from: {exc}") from exc
+    q, qd = walker.section_to_state(z)
+    walk = simulate(walker, q, qd, backend=backend, slope=args.slope, steps=args.steps,
+                    rtol=1e-9, atol=1e-9, max_step=0.5 / args.fps)
+    path = animate_model_walk(walker, walk, out / "walk.gif" if to_dir else out, fps=args.fps)
+    print(f"{walk.n_steps} steps, status: {walk.status.value} ({walk.message})")
+    print(path)
+    if to_dir:
+        for p in write_model_walk_figures(walker, walk, out):
+            print(p)
+        print(f"heelstrike: the {' and '.join(COMPASS_ONLY_WALK_FIGURES)} figures are drawn for "
+              "the compass gait only (without --model); not written", file=sys.stderr)
+    return 0 if walk.ok else 1
+
+
+def _run_walk(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from heelstrike.analysis.limit_cycle import GaitNotFoundError, PoincareMap, find_limit_cycle
+    from heelstrike.outputs import write_walk_figures
+    from heelstrike.plots.gait import animate_walk
+
+    if args.model is None and args.backend == "compiled":
+        raise CliError("the compass walk (without --model) runs on the scipy reference; for "
+                       "the compiled backend use --model compass")
+    walker = None if args.model is not None else walker_from_args(args)
+    if not (math.isfinite(args.fps) and 0 < args.fps <= 240):
+        raise CliError(f"--fps must satisfy 0 < fps <= 240 (frames per second), got {args.fps:g}")
+    out = Path(args.out)
+    to_dir = out.is_dir() or out.suffix == ""  # a directory: walk.gif, figures and CSVs
+    if not to_dir and out.suffix.lower() not in (".gif", ".mp4"):
+        raise CliError(f"--out must be a .gif or .mp4 file or a directory, got {args.out!r}")
+    if to_dir and out.exists() and not out.is_dir():
+        raise CliError(f"--out {args.out!r} exists and is not a directory")
+    if not to_dir and out.suffix.lower() == ".mp4":
+        import shutil
+
+        if shutil.which("ffmpeg") is None:
+            raise CliError("writing .mp4 needs ffmpeg on the PATH; use a .gif file instead")
+    if not to_dir and out.is_dir():
+        raise CliError(f"--out {args.out!r} is a directory")
+    writable_dir(out if to_dir else out.parent)
+    if walker is None:
+        return _walk_model(args, out, to_dir)
+    z = parse_guess(args.guess)
+    if z is None:
+        try:
+            z = list(find_limit_cycle(walker, slope=args.slope).fixed_point)
+        except GaitNotFoundError as exc:
+            raise CliError(f"no gait found to start from: {exc}") from exc
+    walk = PoincareMap(walker=walker, slope=args.slope, rtol=1e-9, atol=1e-9,
+                       max_step=0.5 / args.fps).walk(z, args.steps)
+    path = animate_walk(walker, walk, out / "walk.gif" if to_dir else out, fps=args.fps)
+    print(f"{walk.n_steps} steps, status: {walk.status.value} ({walk.message})")
+    print(path)
+    if to_dir:
+        for p in write_walk_figures(walker, walk, out):
+            print(p)
+    return 0 if walk.ok else 1
+
+
+def add_bifurcation(sub: Any) -> None:
+    p = sub.add_parser(
+        "bifurcation",
+        help="period-doubling diagram over the slope",
+        description="Steady-state impact angles and step periods against the slope (brute "
+        "force, as Goswami et al. 1998) with the period-one branch and its period doublings.",
+    )
+    add_walker_options(p)
+    add_model_options(p)
+    p.add_argument("--backend", choices=("compiled", "scipy"), default="compiled",
+                   help="step simulator with --model: compiled (default) or the scipy "
+                   "reference (the compass diagram's pipeline is fixed)")
+    p.add_argument("--slope-range", default="0.5deg:6deg",
+                   type=lambda t: parse_range(t, parse_angle),
+                   help="START:STOP[:COUNT] slopes, e.g. 0.5deg:6deg:56 (default count 45)")
+    p.add_argument("--transient", type=positive_int, default=50, help="steps discarded")
+    p.add_argument("--record", type=positive_int, default=16, help="steps recorded")
+    p.add_argument("--out", default="bifurcation", help="output directory")
+    p.set_defaults(func=_run_bifurcation)
+
+
+def _run_bifurcation(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from heelstrike.outputs import write_bifurcation
+
+    if args.model is None and args.backend != "compiled":
+        raise CliError("--backend scipy is not supported by the compass bifurcation diagram "
+                       "yet (its pipeline is fixed); use --model compass --backend scipy")
+    walker = walker_from_args(args) if args.model is None else model_from_args(args)
+    start, stop, count = args.slope_range
+    if not 0 < start < stop:
+        raise CliError("--slope-range needs 0 < START < STOP")
+    writable_dir(args.out)
+    if args.model is not None:
+        from heelstrike.analysis.limit_cycle import GaitNotFoundError
+        from heelstrike.outputs import write_model_bifurcation
+
+        try:
+            paths = write_model_bifurcation(
+                walker, start, stop, count or 45, Path(args.out), transient=args.transient,
+                record=args.record, backend=args.backend,
+            )
+        except GaitNotFoundError as exc:
+            raise CliError(f"no gait found at slope {math.degrees(start):g} deg: {exc}") from exc
+        for path in paths:
+            print(path)
+        return 0
+    paths = write_bifurcation(
+        walker, start, stop, count or 45, Path(args.out), transient=args.transient,
+        record=args.record, progress=True,
+    )
+    for path in paths:
+        print(path)
+    return 0
+
+
+
+
+def add_basin(sub: Any) -> None:
+    p = sub.add_parser(
+        "basin",
+        help="basin of attraction of the passive gait",
+        description="Basin of attraction (Schwab & Wisse 2001) of the passive period-one gait on "
+        "the post-impact (q3, q3_dot) slice through the fixed point (q4_dot at its fixed-point "
+        "value), computed with the compiled ensemble. With --model: the slice of the walker's "
+        "post-heel-strike section spanned by the stance angle and its rate, the other section "
+        "coordinates held at the fixed point. Writes basin.png and basin.nc.",
+    )
+    add_walker_options(p)
+    add_model_options(p)
+    p.add_argument("--backend", choices=("compiled", "scipy"), default="compiled",
+                   help="step simulator: the compiled ensemble (default) or, with --model, "
+                   "the scipy reference (slow)")
+    p.add_argument("--slope", type=parse_angle, default=parse_angle("3deg"),
+                   help="slope angle (default 3deg)")
+    p.add_argument("--grid", type=parse_grid, default=None,
+                   help="N_Q3xN_Q3DOT grid points (default 400x400; 100x100 with --model)")
+    p.add_argument("--q3-range", type=lambda t: parse_range(t, parse_angle),
+                   default=None, help="Q3MIN:Q3MAX post-impact stance angles (default "
+                   "-0.5:-0.05 rad; with --model the stance angle, default -0.25:+0.2 rad about "
+                   "the fixed point); write --q3-range=-0.5:-0.05")
+    p.add_argument("--q3dot-range", type=parse_range, default=None,
+                   help="MIN:MAX post-impact stance velocities in rad/s (default 0.3:2.3; with "
+                   "--model -0.9:+1.1 about the fixed point)")
+    p.add_argument("--steps", type=positive_int, default=60,
+                   help="largest number of steps per initial state (default 60)")
+    p.add_argument("--tol", type=float, default=1e-3,
+                   help="convergence radius around the fixed point (default 1e-3)")
+    p.add_argument("--out", default="basin", help="output directory (default ./basin)")
+    add_store_option(p)
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=_run_basin)
+
+
+def _run_basin_model(args: argparse.Namespace) -> int:
+    from heelstrike.analysis import basin as basin_module
+    from heelstrike.analysis.limit_cycle import GaitNotFoundError
+    from heelstrike.outputs import write_basin
+
+    walker = model_from_args(args)
+    grid = args.grid or (100, 100)
+    ranges = None
+    if args.q3_range is not None or args.q3dot_range is not None:
+        if args.q3_range is None or args.q3dot_range is None:
+            raise CliError("with --model give both --q3-range and --q3dot-range, or neither "
+                           "(default: a window about the fixed point)")
+        ranges = (args.q3_range[:2], args.q3dot_range[:2])
+        if not (ranges[0][0] < ranges[0][1] and ranges[1][0] < ranges[1][1]):
+            raise CliError("--q3-range and --q3dot-range need MIN < MAX")
+    if not args.tol > 0:
+        raise CliError("--tol must be > 0")
+    writable_dir(args.out)
+    try:
+        basin = run_with_store(args.store, lambda: basin_module.model_basin_of_attraction(
+            walker, args.slope, grid=grid, ranges=ranges, steps=args.steps, tol=args.tol,
+            backend=args.backend, progress=not args.json and sys.stderr.isatty(),
+            store=args.store,
+        ))
+    except GaitNotFoundError as exc:
+        raise CliError(f"no gait found at slope {math.degrees(args.slope):g} deg: {exc}") from exc
+    png, nc = write_basin(basin, args.out)
+    names = walker.section_names
+    ia, ib = basin.axes
+    if args.json:
+        print_json({
+            "model": walker.description.name,
+            "converging_fraction": basin.converging_fraction,
+            "fractions": basin.fractions(),
+            "fixed_point": dict(zip(names, map(float, basin.fixed_point), strict=True)),
+            "grid": list(grid),
+            "steps": args.steps,
+            "slope": args.slope,
+            "elapsed": basin.elapsed,
+            "figure": str(png),
+            "data": str(nc),
+        })
+        return 0
+    fp = ", ".join(f"{k} = {v:.6f}" for k, v in zip(names, basin.fixed_point, strict=True))
+    print(f"basin of attraction of '{walker.description.name}', slope = "
+          f"{math.degrees(args.slope):g} deg, grid {grid[0]}x{grid[1]} over ({names[ia]}, "
+          f"{names[ib]}), up to {args.steps} steps")
+    print(f"  {'fixed point':20s} {fp}")
+    print(f"  {'converging':20s} {100 * basin.converging_fraction:.3f} % of the grid")
+    for name, frac in basin.fractions().items():
+        if frac > 0 and name != "converged":
+            print(f"  {name.replace('_', ' '):20s} {100 * frac:.3f} %")
+    print(f"  {'ensemble time':20s} {basin.elapsed:.1f} s ({basin.walker_steps} walker-steps)")
+    print(png)
+    print(nc)
+    return 0
+
+
+def _run_basin(args: argparse.Namespace) -> int:
+    from heelstrike.analysis.basin import basin_of_attraction
+    from heelstrike.analysis.limit_cycle import GaitNotFoundError
+    from heelstrike.outputs import write_basin
+
+    if args.model is not None:
+        return _run_basin_model(args)
+    if args.backend != "compiled":
+        raise CliError("the compass basin runs on the compiled ensemble only; for the scipy "
+                       "reference use --model compass --backend scipy")
+    walker = walker_from_args(args)
+    a0, a1, _ = args.q3_range or (-0.5, -0.05, None)
+    b0, b1, _ = args.q3dot_range or (0.3, 2.3, None)
+    args.grid = args.grid or (400, 400)
+    if not (a0 < a1 and b0 < b1):
+        raise CliError("--q3-range and --q3dot-range need MIN < MAX")
+    if not args.tol > 0:
+        raise CliError("--tol must be > 0")
+    writable_dir(args.out)
+    try:
+        basin = run_with_store(args.store, lambda: basin_of_attraction(
+            walker, args.slope, grid=args.grid, ranges=((a0, a1), (b0, b1)), steps=args.steps,
+            tol=args.tol, progress=not args.json and sys.stderr.isatty(), store=args.store,
+        ))
+    except GaitNotFoundError as exc:
+        raise CliError(f"no gait found at slope {math.degrees(args.slope):g} deg: {exc}") from exc
+    png, nc = write_basin(basin, args.out)
+    if args.json:
+        print_json({
+            "converging_fraction": basin.converging_fraction,
+            "fractions": basin.fractions(),
+            "fixed_point": dict(zip(("q3", "q3_dot", "q4_dot"),
+                                    map(float, basin.fixed_point), strict=True)),
+            "grid": list(args.grid),
+            "steps": args.steps,
+            "slope": args.slope,
+            "elapsed": basin.elapsed,
+            "figure": str(png),
+            "data": str(nc),
+        })
+        return 0
+    print(f"basin of attraction, R = {args.radius:g} m, slope = {math.degrees(args.slope):g} deg, "
+          f"grid {args.grid[0]}x{args.grid[1]}, up to {args.steps} steps")
+    print(f"  {'fixed point':20s} q3 = {basin.fixed_point[0]:.6f} rad, q3_dot = "
+          f"{basin.fixed_point[1]:.6f} rad/s, q4_dot = {basin.fixed_point[2]:.6f} rad/s")
+    print(f"  {'converging':20s} {100 * basin.converging_fraction:.3f} % of the grid")
+    for name, frac in basin.fractions().items():
+        if frac > 0 and name != "converged":
+            print(f"  {name.replace('_', ' '):20s} {100 * frac:.3f} %")
+    print(f"  {'ensemble time':20s} {basin.elapsed:.1f} s")
+    print(png)
+    print(nc)
+    return 0
+
+
+def add_map(sub: Any) -> None:
+    p = sub.add_parser(
+        "map",
+        help="stable passive gaits over foot radius and slope",
+        description="Period-one passive gaits over (foot radius, slope): spectral radius, "
+        "stability and the period-doubling slope per radius (continuation along the slope with "
+        "the compiled step map). Writes gait_map.png and gait_map.nc.",
+        conflict_handler="resolve",  # --radius below replaces the walker option by a range
+    )
+    add_walker_options(p)
+    add_model_options(p)
+    p.add_argument("--backend", choices=("compiled", "scipy"), default="compiled",
+                   help="step simulator: compiled (default) or, with --model, the scipy "
+                   "reference")
+    p.add_argument("--radius", type=parse_range, default=None,
+                   help="START:STOP[:COUNT] foot radii in m (default 0:0.6:7; with --model "
+                   "the walker's parameter R)")
+    p.add_argument("--x", type=parse_sweep, default=None, metavar="NAME:START:STOP:COUNT",
+                   help="with --model: the swept walker parameter instead of --radius, e.g. "
+                   "R:0:0.2:5 (SI units)")
+    p.add_argument("--slope", type=lambda t: parse_range(t, parse_angle),
+                   default=(math.radians(1.0), math.radians(6.0), 21),
+                   help="START:STOP[:COUNT] slopes, e.g. 1deg:6deg:21 (default)")
+    p.add_argument("--out", default="gait_map", help="output directory (default ./gait_map)")
+    add_store_option(p)
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=_run_map)
+
+
+def _run_map_model(args: argparse.Namespace) -> int:
+
+    import numpy as np
+
+    from heelstrike.analysis.gait_map import model_gait_map
+
+    walker = model_from_args(args)
+    if args.store is not None:
+        raise CliError("--store is not supported with --model yet (the map is not chunked)")
+    if args.x is not None and args.radius is not None:
+        raise CliError("give --x NAME:START:STOP:COUNT or --radius, not both")
+    if args.x is not None:
+        name, x0, x1, nx = args.x
+    elif "R" in walker.params:
+        name, (x0, x1, nx) = "R", args.radius or (0.0, 0.6, 7)
+    else:
+        raise CliError(f"model {walker.description.name!r} has no parameter 'R': give the swept "
+                       f"parameter with --x NAME:START:STOP:COUNT (its parameters: "
+                       f"{', '.join(sorted(walker.params))})")
+    if name not in walker.params:
+        raise CliError(f"unknown parameter {name!r} of model {walker.description.name!r} (its "
+                       f"parameters: {', '.join(sorted(walker.params))})")
+    s0, s1, ns = args.slope
+    if not 0 < s0 < s1:
+        raise CliError("--slope needs 0 < START < STOP")
+    values = np.linspace(x0, x1, nx or 7)
+    slopes = np.linspace(s0, s1, ns or 21)
+    writable_dir(args.out)
+    gmap = model_gait_map(walker, name, values, slopes, backend=args.backend,
+                          progress=not args.json and sys.stderr.isatty())
+    return _render_gait_map(
+        gmap, args, {"model": walker.description.name, "parameter_name": name},
+        f"stable passive gaits of '{walker.description.name}'", f"({name}, slope)",
+        [f"{name} = {v:8.4g}" for v in values])
+
+
+def _run_map(args: argparse.Namespace) -> int:
+
+    import numpy as np
+
+    from heelstrike.analysis.gait_map import gait_map
+    from heelstrike.analysis.limit_cycle import GaitNotFoundError
+
+    if args.model is not None:
+        return _run_map_model(args)
+    if args.x is not None:
+        raise CliError("--x needs --model (the compass gait's map sweeps --radius)")
+    if args.backend != "compiled":
+        raise CliError("the compass map runs on the compiled step map only; for the scipy "
+                       "reference use --model compass --backend scipy")
+    r0, r1, nr = args.radius or (0.0, 0.6, 7)
+    s0, s1, ns = args.slope
+    if not 0 <= r0 <= r1 <= args.leg_length:
+        raise CliError("--radius needs 0 <= START <= STOP <= leg length")
+    if not 0 < s0 < s1:
+        raise CliError("--slope needs 0 < START < STOP")
+    radii = np.linspace(r0, r1, nr or 7)
+    slopes = np.linspace(s0, s1, ns or 21)
+    base = walker_from_args(argparse.Namespace(**{**vars(args), "radius": float(radii[0])}))
+    writable_dir(args.out)
+    try:
+        gmap = run_with_store(args.store, lambda: gait_map(
+            base, radii, slopes, progress=not args.json and sys.stderr.isatty(),
+            store=args.store))
+    except GaitNotFoundError as exc:
+        raise CliError(f"no starting gait found: {exc}") from exc
+    return _render_gait_map(gmap, args, {"foot_radius": radii.tolist()}, "stable passive gaits",
+                            "(R, slope)", [f"R = {R:6.3f} m" for R in radii])
+
+
+def _render_gait_map(gmap: Any, args: argparse.Namespace, head: dict[str, Any], title: str,
+                     points: str, rows: list[str]) -> int:
+    """Write the map's figure and data and report it (JSON ``head`` keys first)."""
+    import warnings
+
+    import numpy as np
+
+    from heelstrike.outputs import write_gait_map
+
+    with warnings.catch_warnings():  # all-NaN rows (values without a gait) are expected
+        warnings.simplefilter("ignore", RuntimeWarning)
+        png, nc = write_gait_map(gmap, args.out)
+    ds = gmap.dataset
+    pd = [None if not np.isfinite(v) else float(v) for v in gmap.period_doubling_slope]
+    stable = ds["stable"].values
+    found = ds["gait_found"].values
+    if args.json:
+        print_json({
+            **head,
+            "slope": ds["slope"].values.tolist(),
+            "stable_fraction": float(np.mean(stable)),
+            "period_doubling_slope": pd,
+            "gait_found_fraction": float(np.mean(found)),
+            "gait_found": found.tolist(),
+            "figure": str(png),
+            "data": str(nc),
+        })
+        return 0
+    print(f"{title}: {int(stable.sum())} of {stable.size} {points} points; no gait found at "
+          f"{int((~found).sum())} (NaN in the data, blank in the figure)")
+    for label, v, row, frow in zip(rows, pd, stable, found, strict=True):
+        pd_text = "none in range" if v is None else f"{math.degrees(v):.3f} deg"
+        print(f"  {label}: stable at {int(row.sum()):3d}/{row.size} slopes, "
+              f"no gait at {int((~frow).sum()):3d}, period doubling {pd_text}")
+    print(png)
+    print(nc)
+    return 0

@@ -1,0 +1,306 @@
+"""``heelstrike reproduce``, ``impact`` and ``impact-map``: the heel strike and the paper's figures
+(issues 2 and 5)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from typing import Any
+
+from heelstrike.cli import robot as cli_robot
+from heelstrike.cli._common import (
+    COMPASS_PARAMS,
+    CliError,
+    Explicit,
+    add_model_options,
+    add_walker_options,
+    explicit_options,
+    model_from_args,
+    parse_angle,
+    parse_floats,
+    parse_sweep,
+    walker_from_args,
+    writable_dir,
+)
+from heelstrike.cli._render import one_line, print_json, require_finite
+
+__all__ = ['add_impact', 'add_impact_map', 'add_reproduce']
+
+
+def add_reproduce(sub: Any) -> None:
+    p = sub.add_parser(
+        "reproduce",
+        help="reproduce the paper's Figs. 2, 3a and 3b",
+        description="Write Figs. 2, 3a and 3b of Font & Kövecses (2008) as PNG and PDF, with "
+        "one CSV of data per figure, and print the paths written (one per line).",
+    )
+    p.add_argument("--out", default="figures", help="output directory (default: figures)")
+    p.set_defaults(func=_run_reproduce)
+
+
+def _run_reproduce(args: argparse.Namespace) -> int:
+    from heelstrike.outputs import reproduce_paper
+
+    try:
+        paths = reproduce_paper(args.out)
+    except OSError as exc:
+        raise CliError(f"cannot write to {args.out!r}: {exc.strerror or exc}") from exc
+    for path in paths:
+        print(path)
+    return 0
+
+
+def add_impact(sub: Any) -> None:
+    p = sub.add_parser(
+        "impact",
+        help="energy decomposition of one heel strike",
+        description="Decompose the pre-impact kinetic energy of a heel strike of the "
+        "circular-feet compass gait into the constrained part T_c (lost) and the admissible "
+        "part T_a (kept), with the post-impact velocities, the ground impulse and the loss per "
+        "metre eta = T_c / L_S (Font & Kövecses 2008, eqs. 5-16).",
+    )
+    add_walker_options(p)
+    add_model_options(p)
+    p.add_argument("--angle", type=parse_angle, default=None,
+                   help="impact angle q3, 0 < q3 < 90deg, e.g. 20deg (required unless --state)")
+    p.add_argument("--state", default=None, metavar="Q1,...,QN",
+                   help="with --model: full pre-impact configuration (m, rad) instead of --angle; "
+                   "with --robot/--urdf/--mjcf: a STATE.json file {\"q\": [...], \"v\": [...]}")
+    p.add_argument("--velocity", default=None, metavar="QD1,...,QDN",
+                   help="with --model and --state: pre-impact velocities (m/s, rad/s); default: "
+                   "stance rate --q3dot, foot rolling, joints at rest")
+    p.add_argument("--q3dot", type=float, default=1.0, action=Explicit,
+                   help="pre-impact stance-leg rate q3_dot (rad/s, default 1)")
+    p.add_argument("--q4dot", type=float, default=0.0, action=Explicit,
+                   help="pre-impact inter-leg rate q4_dot (rad/s, default 0; with --model the "
+                   "rate of its 'hip' joint)")
+    p.add_argument("--restitution", type=float, default=0.0, action=Explicit,
+                   help="restitution e of the constrained velocity, 0 <= e <= 1 (default 0; "
+                   "compass gait, and robots' striking contacts (normal rows))")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    cli_robot.add_robot_impact_options(p)  # issue 10: --robot/--urdf/--mjcf, --strike, --keep
+    p.set_defaults(func=_run_impact)
+
+
+def _check_rates(args: argparse.Namespace) -> None:
+    for option, value in (("--q3dot", args.q3dot), ("--q4dot", args.q4dot)):
+        if not math.isfinite(value):
+            raise CliError(f"{option} must be finite, got {value:g}")
+
+
+def _run_impact_model(args: argparse.Namespace) -> int:
+    from heelstrike.analysis.heel_strike import check_heel_strike_state
+    from heelstrike.analysis.model_gaits import model_heel_strike, symmetric_heel_strike_state
+
+    given = explicit_options(args)
+    if args.state is not None and args.angle is not None:
+        raise CliError("give --angle (symmetric heel strike) or --state, not both")
+    if args.velocity is not None and given & {"q3dot", "q4dot"}:
+        raise CliError("--velocity sets every pre-impact rate: drop --q3dot/--q4dot")
+    if "restitution" in given and args.restitution != 0.0:
+        raise CliError("--restitution applies to the compass gait only (without --model); "
+                       "a described walker's heel strike is inert (e = 0)")
+    _check_rates(args)
+    walker = model_from_args(args)
+    n = walker.n_coordinates
+    if "q4dot" in given and "hip" not in walker.coordinate_names:
+        raise CliError(f"--q4dot is the rate of the 'hip' joint, which model "
+                       f"{walker.description.name!r} does not have; use --velocity")
+    if args.state is not None:
+        q = parse_floats(args.state, "--state", n)
+        try:
+            check_heel_strike_state(walker, q)
+        except ValueError as exc:
+            raise CliError(f"--state: {exc}") from None
+        if args.velocity is not None:
+            qd = parse_floats(args.velocity, "--velocity", n)
+        else:
+            R = float(walker.foot_radii[0])
+            qd = [0.0] * n
+            qd[2], qd[0] = args.q3dot, -R * args.q3dot
+    else:
+        if args.angle is None:
+            raise CliError("give --angle (symmetric heel strike) or --state with --model")
+        if not 0.0 < args.angle < math.pi / 2:
+            raise CliError(f"--angle must satisfy 0 < angle < 90deg, got "
+                           f"{math.degrees(args.angle):g} deg")
+        q_, qd_ = symmetric_heel_strike_state(walker, args.angle, stance_rate=args.q3dot)
+        q, qd = list(q_), list(qd_)
+        if args.velocity is not None:
+            qd = parse_floats(args.velocity, "--velocity", n)
+    if args.velocity is None and "q4dot" in given:
+        qd[walker.coordinate_names.index("hip")] = args.q4dot
+    s = model_heel_strike(walker, q, qd)
+    d = s.to_dict()
+    d["model"] = walker.description.name
+    d["coordinates"] = list(walker.coordinate_names)
+    require_finite(d)
+    if args.json:
+        print_json(d)
+        return 0
+    print(f"heel strike of '{d['model']}' ({', '.join(d['coordinates'])})")
+    for key, unit in (("T", "J"), ("T_c", "J"), ("T_a", "J"), ("T_plus", "J"),
+                      ("step_length", "m"), ("eta", "J/m")):
+        print(f"  {key:<12} {d[key]:12.6f} {unit}")
+    print(f"  trailing foot lifts  {'yes' if d['trailing_foot_lifts'] else 'no'}")
+    return 0
+
+
+def _run_impact(args: argparse.Namespace) -> int:
+    from heelstrike.analysis.heel_strike import heel_strike_study
+
+    given = explicit_options(args)
+    if cli_robot.robot_requested(args):
+        ignored = [f"--{d.replace('_', '-')}" for d in sorted(given & {*COMPASS_PARAMS,
+                                                                      "q3dot", "q4dot"})]
+        ignored += [o for o, v in (("--model", args.model), ("--param", args.param),
+                                   ("--angle", args.angle), ("--velocity", args.velocity)) if v]
+        if ignored:
+            raise CliError(f"a robot (--robot/--urdf/--mjcf) does not take {', '.join(ignored)}; "
+                           "it takes --state STATE.json, --strike, --keep, --friction and "
+                           "--restitution")
+        return cli_robot.run_robot_impact(args)
+    unused = [o for o, v in (("--strike", args.strike), ("--keep", args.keep)) if v]
+    unused += ["--friction"] if math.isfinite(args.friction) else []
+    if unused:
+        raise CliError(f"{', '.join(unused)}: only for a robot (--robot/--urdf/--mjcf)")
+    if args.model is not None:
+        return _run_impact_model(args)
+    for option, value in (("--state", args.state), ("--velocity", args.velocity)):
+        if value is not None:
+            raise CliError(f"{option} needs --model (e.g. --model compass) or a robot; the "
+                           "compass gait takes --angle, --q3dot and --q4dot")
+    _check_rates(args)
+    if args.angle is None:
+        raise CliError("--angle is required (e.g. --angle 20deg)")
+    if not 0.0 < args.angle < math.pi / 2:
+        raise CliError(
+            f"--angle must satisfy 0 < q3 < 90deg (leading foot ahead), got "
+            f"{math.degrees(args.angle):g} deg"
+        )
+    walker = walker_from_args(args)
+    s = heel_strike_study(walker, args.angle, q3_dot=args.q3dot, q4_dot=args.q4dot,
+                          restitution=args.restitution)
+    d: dict[str, Any] = {
+        "T": float(s.kinetic_energy),
+        "T_c": float(s.kinetic_energy_constrained),
+        "T_a": float(s.kinetic_energy_admissible),
+        "eta": float(s.eta),
+        "step_length": float(s.step_length),
+        "qdot_plus": [float(v) for v in s.velocity_post],
+        "impulse": [float(v) for v in s.constraint_impulse],
+        "trailing_foot_lifts": bool(s.trailing_foot_lifts),
+        "qdot_minus": [float(v) for v in s.velocity_pre],
+        "T_plus": float(s.kinetic_energy_post),
+        "energy_lost": float(s.energy_lost),
+        "radius": float(s.foot_radius),
+        "impact_angle": float(s.impact_angle),
+        "restitution": float(s.restitution),
+        "degenerate_wheel": bool(s.degenerate_wheel),
+    }
+    require_finite(d)
+    if args.json:
+        print_json(d)
+        return 0
+    T = d["T"]
+    share = (lambda x: f"({100.0 * x / T:5.1f} % of T)") if T > 0 else (lambda x: "")
+    print(f"heel strike: R = {d['radius']:g} m, q3 = {math.degrees(args.angle):g} deg, "
+          f"q3_dot- = {args.q3dot:g} rad/s, q4_dot- = {args.q4dot:g} rad/s, "
+          f"e = {args.restitution:g}")
+    print(f"  kinetic energy before   T      {T:12.6f} J")
+    print(f"  constrained part        T_c    {d['T_c']:12.6f} J  {share(d['T_c'])}")
+    print(f"  admissible part         T_a    {d['T_a']:12.6f} J  {share(d['T_a'])}")
+    print(f"  energy lost             |W|    {d['energy_lost']:12.6f} J")
+    print(f"  kinetic energy after    T+     {d['T_plus']:12.6f} J")
+    print(f"  step length             L_S    {d['step_length']:12.6f} m")
+    print(f"  loss per metre          eta    {d['eta']:12.6f} J/m")
+    print("  velocities                       before        after")
+    units = ("m/s", "m/s", "rad/s", "rad/s")
+    for i, unit in enumerate(units):
+        name = f"q{i + 1}_dot ({unit})"
+        print(f"    {name:<28}{d['qdot_minus'][i]:12.6f} {d['qdot_plus'][i]:12.6f}")
+    lx, ly = d["impulse"]
+    print(f"  ground impulse on the striking foot (x, y)  {lx:.6f}, {ly:.6f} N s")
+    if d["degenerate_wheel"]:
+        verdict = "no: R = l, McGeer's wheel (degenerate, q2_dot+ = 0)"
+    else:
+        verdict = "yes" if d["trailing_foot_lifts"] else "no (impact not admissible)"
+    print(f"  trailing foot lifts     {verdict}")
+    return 0
+
+
+
+
+def add_impact_map(sub: Any) -> None:
+    p = sub.add_parser(
+        "impact-map",
+        help="map T_c, T_a and eta at heel strike over two swept quantities",
+        description="For a described walker, sweep two description parameters (or one and "
+        "the impact angle, NAME 'angle') and map the constrained and admissible kinetic "
+        "energies and the loss per metre at a symmetric heel strike (stance rate --q3dot, "
+        "joints at rest). Writes impact_map.png and impact_map.csv and prints their paths.",
+    )
+    add_model_options(p)
+    p.add_argument("--x", type=parse_sweep, required=True, metavar="NAME:START:STOP:COUNT")
+    p.add_argument("--y", type=parse_sweep, required=True, metavar="NAME:START:STOP:COUNT")
+    p.add_argument("--angle", type=parse_angle, default=parse_angle("20deg"),
+                   help="impact angle when not swept (default 20deg)")
+    p.add_argument("--q3dot", type=float, default=1.0, help="stance rate (rad/s, default 1)")
+    p.add_argument("--out", default="impact_map", help="output directory")
+    p.set_defaults(func=_run_impact_map)
+
+
+def _run_impact_map(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from heelstrike.analysis.model_gaits import ANGLE, impact_map
+    from heelstrike.models.description import parameter_units
+    from heelstrike.outputs import write_impact_map
+
+    if args.model is None:
+        raise CliError("--model is required (a .toml file or compass, kneed, torso)")
+    if not math.isfinite(args.q3dot):
+        raise CliError(f"--q3dot must be finite, got {args.q3dot:g}")
+    walker = model_from_args(args)
+    axes = [(n, np.linspace(a, b, c)) for n, a, b, c in (args.x, args.y)]
+    if axes[0][0] == axes[1][0]:
+        raise CliError(f"--x and --y must sweep different quantities, both are {axes[0][0]!r}")
+    swept_angle = any(name == ANGLE for name, _ in axes)
+    for option, (name, values) in zip(("--x", "--y"), axes, strict=True):
+        if name == ANGLE:
+            if not np.all((values > 0) & (values < math.pi / 2)):
+                raise CliError(f"{option}: the impact angle must satisfy 0 < angle < 90deg")
+            continue
+        if name not in walker.params:
+            raise CliError(f"{option}: {name!r} is not a parameter of model "
+                           f"{walker.description.name!r} (its parameters: "
+                           f"{', '.join(sorted(walker.params))}; or {ANGLE!r})")
+        for v in values:
+            try:
+                walker.replace(**{name: float(v)})
+            except ValueError as exc:
+                raise CliError(f"{option}: {name} = {v:g} is not a valid "
+                               f"{walker.description.name!r} walker: {exc}") from None
+    if not swept_angle and not 0.0 < args.angle < math.pi / 2:
+        raise CliError(f"--angle must satisfy 0 < angle < 90deg, got "
+                       f"{math.degrees(args.angle):g} deg")
+    out = writable_dir(args.out)
+    m = impact_map(walker, axes[0], axes[1], angle=args.angle, stance_rate=args.q3dot)
+    bad = ~np.isfinite(m.T_c) | ~np.isfinite(m.T_a) | ~np.isfinite(m.eta)
+    if np.any(bad):
+        i, j = (int(k[0]) for k in np.nonzero(bad))
+        point = {m.x_name: float(m.x[j]), m.y_name: float(m.y[i])}
+        reason = "overflow or no symmetric heel strike"
+        try:
+            walker.replace(**{k: v for k, v in point.items() if k != ANGLE})
+        except ValueError as exc:
+            reason = one_line(exc)
+        raise CliError(
+            f"{int(bad.sum())} of {bad.size} grid points have no valid heel strike, e.g. "
+            f"{', '.join(f'{k} = {v:g}' for k, v in point.items())}: {reason}; "
+            "narrow --x/--y"
+        )
+    paths = write_impact_map(m, out, units=parameter_units(walker.description))
+    for path in paths:
+        print(path)
+    return 0

@@ -1,0 +1,261 @@
+"""``heelstrike powered`` and ``study cost``: powered walking on level ground (issue 4)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from collections.abc import Sequence
+from typing import Any
+
+from heelstrike.cli._common import (
+    ACTUATIONS,
+    CliError,
+    Parser,
+    actuation_options,
+    add_actuation_options,
+    add_model_options,
+    add_store_option,
+    add_walker_options,
+    family_from_args,
+    linspace_grid,
+    model_from_args,
+    parse_range,
+    run_with_store,
+    walker_from_args,
+    writable_dir,
+)
+from heelstrike.cli._render import print_json
+
+__all__ = ['add_powered', 'add_study']
+
+
+def refuse_model_actuation(actuations: Sequence[str]) -> None:
+    """With ``--model`` only push-off (with the walker file's posture law) is available."""
+    other = [a for a in actuations if a != "pushoff"]
+    if other:
+        raise CliError(f"--actuation {other[0]} is not supported with --model (only pushoff, "
+                       "with the posture law the walker file declares)")
+
+
+def refuse_hip_law_options(args: argparse.Namespace) -> None:
+    """The compass hip laws' gains mean nothing for a described walker: refuse them."""
+    given = [f"--{k.replace('_', '-')}" for k in ("gain", "kp", "kd", "max_torque")
+             if getattr(args, k) is not None]
+    if given:
+        raise CliError(f"{', '.join(given)} set(s) the compass hip laws, not used with "
+                       "--model (the posture law's gains are declared in the walker file)")
+
+
+def add_powered(sub: Any) -> None:
+    p = sub.add_parser(
+        "powered",
+        help="periodic powered gait on level ground and its energy books",
+        description="Find the level-ground periodic gait of a powered compass gait with a "
+        "target speed or step length: push-off impulse (pushoff), energy-tracking hip torque "
+        "(hip-energy) or swing-leg PD (hip-pd). Prints the energy books per step: on a "
+        "periodic gait the actuator work equals the collision loss T_c (paper eqs. 14-15). "
+        "With --model: push-off (the impulse is found) plus the posture law the walker file "
+        "declares ([control.torso], e.g. --model torso).",
+    )
+    add_walker_options(p)
+    add_model_options(p)
+    p.add_argument("--backend", choices=("compiled", "scipy"), default=None,
+                   help="step simulator with --model: compiled (default; generated from the "
+                   "walker file) or the scipy reference; the compass gait without --model "
+                   "runs on the scipy reference")
+    tgt = p.add_mutually_exclusive_group()
+    tgt.add_argument("--speed", type=float, default=None, help="target mean speed (m/s)")
+    tgt.add_argument("--step-length", type=float, default=None, help="target step length (m)")
+    p.add_argument("--actuation", choices=ACTUATIONS, default="pushoff",
+                   help="actuation model (default pushoff)")
+    add_actuation_options(p)
+    p.add_argument("--out", default=None, metavar="DIR",
+                   help="also write the period's energy books: DIR/powered_energy.png and "
+                   "its data DIR/powered_energy.csv")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=_run_powered)
+
+
+def _run_powered(args: argparse.Namespace) -> int:
+    from heelstrike.analysis.powered import (
+        DEFAULT_TIME_LIMIT,
+        PoweredGaitNotFoundError,
+        find_model_powered_gait,
+        find_powered_gait,
+    )
+
+    if args.model is None and args.backend == "compiled":
+        raise CliError("the compass powered search (without --model) runs on the scipy "
+                       "reference; for the compiled backend use --model compass")
+    if args.model is not None:
+        refuse_model_actuation([args.actuation])
+        refuse_hip_law_options(args)
+    walker = walker_from_args(args) if args.model is None else model_from_args(args)
+    if args.speed is None and args.step_length is None:
+        args.speed = 0.5
+    target, value = (
+        ("speed", args.speed) if args.speed is not None else ("step_length", args.step_length)
+    )
+    if not (math.isfinite(value) and value > 0):
+        raise CliError(f"--{target.replace('_', '-')} must be > 0, got {value:g}")
+    radius = float(walker.foot_radii[0]) if args.model is not None else args.radius
+    out = None if args.out is None else writable_dir(args.out)
+    try:
+        if args.model is None:
+            gait = find_powered_gait(walker, actuation=family_from_args(args), progress=True,
+                                     time_limit=DEFAULT_TIME_LIMIT, **{target: value})
+        else:
+            gait = find_model_powered_gait(walker, backend=args.backend or "compiled",
+                                           progress=True, time_limit=DEFAULT_TIME_LIMIT,
+                                           **{target: value})
+    except PoweredGaitNotFoundError as exc:
+        raise CliError(
+            f"no {args.actuation} gait found with {target.replace('_', ' ')} {value:g} "
+            f"at R = {radius:g} m: {exc}"
+        ) from exc
+    d = gait.to_dict()
+    if out is not None:
+        from heelstrike.analysis.powered import energy_book_tables
+        from heelstrike.outputs import write_powered_energy
+
+        energy, impacts = energy_book_tables(walker, gait)
+        png, csv = write_powered_energy(gait, energy, impacts, out)
+        print(f"{png}\n{csv}", file=sys.stderr if args.json else sys.stdout)
+    if args.json:
+        print_json(d)
+        return 0
+    fp = ", ".join(f"{k} = {v:.6f}" for k, v in d["fixed_point"].items())
+    mult = ", ".join(f"{abs(m):.4f}" for m in gait.multipliers)
+    label = args.actuation if gait.model is None else \
+        f"{args.actuation}, model {gait.model}, {args.backend or 'compiled'} backend"
+    print(f"powered gait ({label}), R = {radius:g} m, level ground")
+    print(f"  {gait.parameter_name:15s} {gait.parameter:10.5f} {gait.parameter_unit}")
+    print(f"  fixed point (just after impact): {fp}")
+    print(f"  period          {gait.period:10.5f} s")
+    print(f"  step length     {gait.step_length:10.5f} m")
+    print(f"  speed           {gait.speed:10.5f} m/s")
+    print(f"  |multipliers|   {mult}")
+    print(f"  stable          {'yes' if gait.stable else 'no'}")
+    print("  energy books per step")
+    print(f"    actuator work   {gait.actuator_work:12.6f} J (push-off "
+          f"{gait.push_off_work:.6f} J, {gait.torque_joint} {gait.torque_work:.6f} J)")
+    print(f"    collision loss  {gait.collision_loss:12.6f} J (T_c)")
+    print(f"    change of T + V {gait.energy_change:12.3e} J")
+    print(f"    imbalance       {gait.energy_balance_error:12.3e} J")
+    print(f"  cost of transport {gait.cost_of_transport:10.6f}")
+    print(f"  eta             {gait.eta:10.6f} J/m")
+    if gait.trailing_foot_grazes:
+        print("  note: R = l (McGeer's wheel): the trailing foot's lift velocity is exactly 0; "
+              "both contacts are the same point, so the step was accepted")
+    return 0
+
+
+def add_study(sub: Any) -> None:
+    p = sub.add_parser(
+        "study",
+        help="design studies (cost: cost of transport over foot radius x step length)",
+        description="Design studies of powered walkers on level ground.",
+    )
+    ssub = p.add_subparsers(dest="study", required=True, parser_class=Parser)
+    c = ssub.add_parser(
+        "cost",
+        help="cost of transport over foot radius x step length (or speed)",
+        description="Periodic level-ground gaits over foot radius x step length (or speed) "
+        "for each actuation model; writes cost_study.nc and figures, including the paper's "
+        "impact-only eta against the actuator work per metre of the real gaits. With --model "
+        "(a walker file with a foot radius parameter R, e.g. compass, kneed, torso): push-off "
+        "plus the posture law the file declares.",
+        conflict_handler="resolve",
+    )
+    add_walker_options(c)  # its --radius is replaced by the range below
+    add_model_options(c)
+    c.add_argument("--backend", choices=("compiled", "scipy"), default=None,
+                   help="step simulator with --model: compiled (default; generated from the "
+                   "walker file) or the scipy reference; the compass gait without --model "
+                   "runs on the scipy reference")
+    c.add_argument("--radius", dest="radii", type=parse_range, default=(0.0, 0.9, 4),
+                   help="foot radii START:STOP:COUNT (m), default 0:0.9:4")
+    tgt = c.add_mutually_exclusive_group()
+    tgt.add_argument("--step-length", dest="lengths", type=parse_range, default=None,
+                     help="step lengths START:STOP:COUNT (m), default 0.3:0.6:4")
+    tgt.add_argument("--speed", dest="speeds", type=parse_range, default=None,
+                     help="speeds START:STOP:COUNT (m/s)")
+    c.add_argument("--actuation", action="append", choices=ACTUATIONS, default=None,
+                   help="actuation model, repeatable (default pushoff)")
+    add_actuation_options(c)
+    c.add_argument("--out", default="cost_study", help="output directory")
+    add_store_option(c)
+    c.set_defaults(func=_run_study, radius=0.0)
+
+
+
+
+def _cost_figures(ds: Any, out: Any) -> list[Any]:
+    """The study's figures; without the paper's impact-only eta (described walkers) the cost
+    figures only."""
+    from heelstrike.outputs import write_cost_figures
+
+    return write_cost_figures(ds, out)
+
+
+def _run_study(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from heelstrike.analysis.cost_study import cost_study, save_study
+
+    model = None
+    if args.model is None:
+        if args.param:
+            raise CliError("--param sets a described walker's parameter: give --model too")
+        if args.backend == "compiled":
+            raise CliError("--backend compiled is not supported by the compass cost study "
+                           "without --model (it runs on the scipy reference); for the compiled "
+                           "backend use --model compass")
+        walker = walker_from_args(args)  # validates the other walker parameters
+        leg_length = float(args.leg_length)
+    else:
+        refuse_model_actuation(args.actuation or ())
+        refuse_hip_law_options(args)
+        if any(item.partition("=")[0].strip() == "R" for item in args.param):
+            raise CliError("--param R=... is swept by --radius START:STOP:COUNT: give it there")
+        model = model_from_args(args)
+        if "R" not in model.params:
+            raise CliError(f"model {model.description.name!r} has no foot radius parameter 'R' "
+                           f"(its parameters: {', '.join(sorted(model.params))})")
+        walker = None
+        leg_length = float(model.scale.leg_length)
+    radii = linspace_grid(args.radii, 4)
+    if min(radii) < 0 or max(radii) > leg_length:
+        raise CliError(f"--radius must lie in [0, {leg_length:g}] m")
+    if args.speeds is not None:
+        target, values = "speed", linspace_grid(args.speeds, 4)
+    else:
+        target, values = "step_length", linspace_grid(args.lengths or (0.3, 0.6, 4), 4)
+    if min(values) <= 0:
+        raise CliError(f"--{target.replace('_', '-')} values must be > 0")
+    acts = args.actuation or ["pushoff"]
+    options = actuation_options(args)
+    writable_dir(args.out)
+    try:
+        ds = run_with_store(args.store, lambda: cost_study(
+            radii, values, target=target, actuations=acts, walker=walker, model=model,
+            backend=args.backend or "compiled", actuation_options=options, progress=True,
+            store=args.store))
+    except ValueError as exc:  # e.g. a radius the walker file's constraints reject
+        raise CliError(str(exc)) from exc
+    out = Path(args.out)
+    try:
+        nc = save_study(ds, out / "cost_study.nc")
+        paths = [nc, *_cost_figures(ds, out)]
+    except OSError as exc:
+        raise CliError(f"cannot write to {args.out!r}: {exc.strerror or exc}") from exc
+    for path in paths:
+        print(path)
+    fresh = int((ds["branch"] == 1).sum())
+    print(f"gaits: the cheapest found at each point, by continuation from neighbours or by "
+          f"fresh searches from several seeds ({fresh} point(s) came from a fresh search; "
+          f"up to {int(ds['gaits_found'].max())} distinct gaits met at one point)")
+    found = int(ds["cost_of_transport"].notnull().sum())
+    print(f"{found} of {ds['cost_of_transport'].size} gaits found", file=sys.stderr)
+    return 0 if found else 1

@@ -1,0 +1,498 @@
+"""Output files: results in, figures and data files out.
+
+This module computes nothing: it takes the results of :mod:`heelstrike.analysis`, draws them
+with :mod:`heelstrike.plots` and writes the data with :mod:`heelstrike.io` (CSV and netCDF).
+The few writers that are given a walker rather than a result (:func:`write_bifurcation`,
+:func:`write_model_bifurcation`, :func:`write_walk_figures`, :func:`write_model_walk_figures`,
+:func:`reproduce_paper`) get their results from :mod:`heelstrike.analysis` first.
+
+Every function creates its output directory and returns the paths it wrote, in a fixed order.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from heelstrike.io import write_csv, write_netcdf
+
+if TYPE_CHECKING:
+    import pandas as pd
+    import xarray as xr
+
+    from heelstrike.analysis.basin import Basin
+    from heelstrike.analysis.gait_map import GaitMap
+    from heelstrike.analysis.limit_cycle import BifurcationDiagram, Continuation
+    from heelstrike.analysis.model_gaits import ImpactMap
+    from heelstrike.analysis.paper import PaperFigureData
+    from heelstrike.analysis.powered import PoweredGait
+    from heelstrike.dynamics.hybrid import WalkResult
+    from heelstrike.models.compass import CompassGait
+
+__all__ = [
+    "COMPASS_ONLY_WALK_FIGURES",
+    "reproduce_paper",
+    "write_basin",
+    "write_bifurcation",
+    "write_bifurcation_files",
+    "write_cost_figures",
+    "write_figure_data",
+    "write_gait_map",
+    "write_impact_map",
+    "write_model_bifurcation",
+    "write_model_walk_figures",
+    "write_powered_energy",
+    "write_walk_figures",
+]
+
+#: Walk figures drawn for the compass gait only (:func:`write_walk_figures`), not for described
+#: walkers: the strobe and the step figure use the compass gait's two-link geometry.
+COMPASS_ONLY_WALK_FIGURES: tuple[str, ...] = ("strobe", "step")
+
+
+def _directory(out_dir: str | Path) -> Path:
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    return out
+
+
+# -- the paper's figures -------------------------------------------------------------------------
+def write_figure_data(data: PaperFigureData, out_dir: str | Path) -> list[Path]:
+    """Write ``fig2.csv``, ``fig3a.csv`` and ``fig3b.csv`` into ``out_dir`` (created).
+
+    Parameters
+    ----------
+    data : PaperFigureData
+        From :func:`heelstrike.analysis.paper.paper_figure_data`.
+    out_dir : str or Path
+        Output directory.
+
+    Returns
+    -------
+    list of Path
+        The files written, in figure order. Columns carry their units: ``R_m`` (m), ``q3_deg``
+        (deg), ``q3_rad`` (rad), ``T_J``, ``T_c_J``, ``T_a_J``, ``energy_lost_J`` (J),
+        ``eta_J_per_m`` (J/m), ``step_length_m`` (m), ``q2_dot_plus_m_per_s`` (m/s) and the
+        flags ``trailing_foot_lifts`` and ``degenerate_wheel``.
+    """
+    out = _directory(out_dir)
+    fig2_cols = ["R_m", "q3_deg", "q3_rad", "T_J", "T_c_J", "T_a_J", "q2_dot_plus_m_per_s",
+                 "trailing_foot_lifts", "degenerate_wheel"]
+    fig3a_cols = ["R_m", "q3_deg", "q3_rad", "eta_J_per_m", "energy_lost_J", "step_length_m",
+                  "q2_dot_plus_m_per_s", "trailing_foot_lifts", "degenerate_wheel"]
+    frames = {
+        "fig2.csv": data.figure2[fig2_cols],
+        "fig3a.csv": data.figure3a[fig3a_cols],
+        "fig3b.csv": data.figure3b.to_frame(),
+    }
+    return [write_csv(frame, out / name) for name, frame in frames.items()]
+
+
+def reproduce_paper(
+    out_dir: str | Path,
+    walker: CompassGait | None = None,
+    formats: tuple[str, ...] = ("png", "pdf"),
+) -> list[Path]:
+    """Write the paper's Figs. 2, 3a and 3b as images plus one CSV of data per figure.
+
+    The data come from :func:`heelstrike.analysis.paper.paper_figure_data`, the drawings from
+    :mod:`heelstrike.plots.paper`.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+        Output directory (created if needed).
+    walker : CompassGait, optional
+        Walker (default: the paper's, ``mH = 2 m = 10 kg``, ``a = b = 0.5 m``, ``l = 1 m``).
+    formats : tuple of str
+        Image formats understood by matplotlib.
+
+    Returns
+    -------
+    list of Path
+        ``fig2.png, fig2.pdf, fig2.csv, fig3a.png, ...`` in that order.
+    """
+    from heelstrike.analysis.paper import paper_figure_data
+    from heelstrike.plots.paper import figure2, figure3a, figure3b
+
+    out = _directory(out_dir)
+    data = paper_figure_data(walker)
+    csvs = dict(zip(("fig2", "fig3a", "fig3b"), write_figure_data(data, out), strict=True))
+    figures = {
+        "fig2": figure2(data.figure2),
+        "fig3a": figure3a(data.figure3a),
+        "fig3b": figure3b(data.figure3b),
+    }
+    paths: list[Path] = []
+    for name, fig in figures.items():
+        for ext in formats:
+            path = out / f"{name}.{ext}"
+            fig.savefig(path, dpi=150, metadata=_metadata(ext))
+            paths.append(path)
+        paths.append(csvs[name])
+    return paths
+
+
+def _metadata(ext: str) -> dict[str, str | None]:
+    """Reproducible files: no creation date in PDFs."""
+    if ext == "pdf":
+        return {"CreationDate": None, "Creator": "heelstrike"}
+    return {"Software": "heelstrike"} if ext == "png" else {}
+
+
+# -- bifurcation diagrams ------------------------------------------------------------------------
+def write_bifurcation(
+    walker: CompassGait,
+    slope_start: float,
+    slope_stop: float,
+    count: int,
+    out_dir: Path,
+    *,
+    transient: int = 50,
+    record: int = 16,
+    continuation_points: int = 12,
+    progress: bool = False,
+) -> list[Path]:
+    """The compass gait's slope bifurcation diagram, written (PNG, PDF and CSV).
+
+    Computed by :func:`heelstrike.analysis.gait_map.compass_bifurcation` over ``count`` slopes
+    from ``slope_start`` to ``slope_stop`` (rad); written by :func:`write_bifurcation_files`.
+
+    Returns
+    -------
+    list of Path
+        ``bifurcation.png``, ``bifurcation.pdf``, ``bifurcation.csv``,
+        ``period_one_branch.csv``.
+    """
+    from heelstrike.analysis.gait_map import compass_bifurcation
+
+    diagram, branch = compass_bifurcation(
+        walker, np.linspace(slope_start, slope_stop, count), transient=transient,
+        record=record, continuation_points=continuation_points, progress=progress,
+    )
+    return write_bifurcation_files(
+        diagram, branch, out_dir,
+        f"compass gait, R = {float(walker.foot_radius):g} m: bifurcation diagram",
+    )
+
+
+def write_model_bifurcation(
+    walker: Any,
+    slope_start: float,
+    slope_stop: float,
+    count: int,
+    out_dir: Path,
+    *,
+    transient: int = 50,
+    record: int = 16,
+    continuation_points: int = 12,
+    backend: str = "compiled",
+) -> list[Path]:
+    """:func:`write_bifurcation` for a described walker (a ``BuiltWalker``; same files).
+
+    Computed by :func:`heelstrike.analysis.gait_map.model_bifurcation` with ``backend``.
+    """
+    from heelstrike.analysis.gait_map import model_bifurcation
+
+    diagram, branch = model_bifurcation(
+        walker, np.linspace(slope_start, slope_stop, count), transient=transient, record=record,
+        continuation_points=continuation_points, backend=backend,
+    )
+    return write_bifurcation_files(
+        diagram, branch, out_dir, f"{walker.description.name}: bifurcation diagram"
+    )
+
+
+def write_bifurcation_files(
+    diagram: BifurcationDiagram, branch: Continuation, out_dir: str | Path, title: str
+) -> list[Path]:
+    """Write a bifurcation diagram and its period-one branch into ``out_dir``.
+
+    Parameters
+    ----------
+    diagram : BifurcationDiagram
+        Slopes (rad), shape (K,); impact angles (rad) and periods (s), shape (K, record).
+    branch : Continuation
+        The period-one gait continued in the slope.
+    out_dir : str or Path
+        Output directory.
+    title : str
+        Title of the figure.
+
+    Returns
+    -------
+    list of Path
+        ``bifurcation.png`` and ``.pdf`` (:func:`heelstrike.plots.gait.bifurcation_figure`),
+        ``bifurcation.csv`` (one row per recorded step: ``slope_deg``, ``impact_angle_rad``,
+        ``period_s``) and ``period_one_branch.csv`` (``slope_deg``, ``impact_angle_rad``,
+        ``period_s``, ``spectral_radius``, ``stable``).
+    """
+    from heelstrike.plots.gait import bifurcation_figure
+
+    out = _directory(out_dir)
+    fig = bifurcation_figure(diagram, branch, title=title)
+    paths = [out / "bifurcation.png", out / "bifurcation.pdf"]
+    for p in paths:
+        fig.savefig(p)
+    record = diagram.impact_angles.shape[1]
+    csv = write_csv(
+        {
+            "slope_deg": np.repeat(np.rad2deg(diagram.slopes), record),
+            "impact_angle_rad": diagram.impact_angles.ravel(),
+            "period_s": diagram.periods.ravel(),
+        },
+        out / "bifurcation.csv",
+    )
+    bcsv = write_csv(
+        {
+            "slope_deg": np.rad2deg(branch.values),
+            "impact_angle_rad": [c.impact_angle for c in branch.cycles],
+            "period_s": [c.period for c in branch.cycles],
+            "spectral_radius": [c.spectral_radius for c in branch.cycles],
+            "stable": [c.stable for c in branch.cycles],
+        },
+        out / "period_one_branch.csv",
+    )
+    return [*paths, csv, bcsv]
+
+
+# -- basins and gait maps ------------------------------------------------------------------------
+def write_basin(basin: Basin, out_dir: str | Path, stem: str = "basin") -> tuple[Path, Path]:
+    """Write the basin's figure (``<stem>.png``) and dataset (``<stem>.nc``) into ``out_dir``.
+
+    Returns
+    -------
+    (Path, Path)
+        The PNG (:func:`heelstrike.plots.gait.basin_figure`) and the netCDF file
+        (:func:`heelstrike.io.write_netcdf` of ``basin.dataset``).
+    """
+    from heelstrike.plots.gait import basin_figure
+
+    out = _directory(out_dir)
+    png = out / f"{stem}.png"
+    basin_figure(basin).savefig(png, dpi=130)
+    return png, write_netcdf(basin.dataset, out / f"{stem}.nc")
+
+
+def write_gait_map(gmap: GaitMap, out_dir: str | Path, stem: str = "gait_map") -> tuple[Path, Path]:
+    """Write the gait map's figure (``<stem>.png``) and dataset (``<stem>.nc``) into ``out_dir``.
+
+    Returns
+    -------
+    (Path, Path)
+        The PNG (:func:`heelstrike.plots.gait.gait_map_figure`) and the netCDF file (the
+        dataset, with ``stable`` stored as ``int8``).
+    """
+    from heelstrike.plots.gait import gait_map_figure
+
+    out = _directory(out_dir)
+    png = out / f"{stem}.png"
+    gait_map_figure(gmap).savefig(png, dpi=130)
+    ds = gmap.dataset.copy()
+    ds["stable"] = ds["stable"].astype(np.int8)
+    return png, write_netcdf(ds, out / f"{stem}.nc")
+
+
+# -- the walk, seen ------------------------------------------------------------------------------
+def _write_figures_and_tables(
+    out: Path, figures: Mapping[str, tuple[Any, pd.DataFrame]], impacts: pd.DataFrame
+) -> list[Path]:
+    paths: list[Path] = []
+    for stem, (fig, table) in figures.items():
+        png = out / f"{stem}.png"
+        fig.savefig(png)
+        paths += [png, write_csv(table, out / f"{stem}.csv")]
+    paths.append(write_csv(impacts, out / "impacts.csv"))
+    return paths
+
+
+def write_walk_figures(walker: CompassGait, walk: WalkResult, out_dir: str | Path) -> list[Path]:
+    """Write a compass-gait walk's figures (PNG) and their data (CSV) into ``out_dir``.
+
+    Files: ``strobe.png/.csv`` (stick figures over the first step), ``phase_portrait.png/.csv``,
+    ``step.png/.csv`` (joint angles and ground reaction over the first step),
+    ``energy.png/.csv`` (energy over the walk) and ``impacts.csv`` (the energy drops at heel
+    strikes). The tables (and their columns) are those of :mod:`heelstrike.analysis.walk_tables`.
+
+    Returns
+    -------
+    list of Path
+        The written files.
+    """
+    from heelstrike.analysis.walk_tables import (
+        phase_portrait_table,
+        step_table,
+        strobe_table,
+        walk_energy_table,
+        walk_impact_table,
+    )
+    from heelstrike.plots.gait import (
+        energy_figure,
+        phase_portrait_figure,
+        step_figure,
+        strobe_figure,
+    )
+
+    out = _directory(out_dir)
+    R = float(walker.foot_radius)
+    what = f"R = {R:g} m, slope = {np.rad2deg(walk.slope):.2f} deg"
+    strobe = strobe_table(walker, walk, 0)
+    portrait = phase_portrait_table(walk)
+    step = step_table(walker, walk, 0)
+    energy = walk_energy_table(walker, walk)
+    impacts = walk_impact_table(walker, walk)
+    figures = {
+        "strobe": (strobe_figure(strobe, foot_radius=R, slope=walk.slope,
+                                 title=f"compass gait, {what}: one step, strobed"), strobe),
+        "phase_portrait": (phase_portrait_figure(
+            portrait, title=f"compass gait, {what}: phase portrait"), portrait),
+        "step": (step_figure(step, title=f"compass gait, {what}: one step"), step),
+        "energy": (energy_figure(energy, impacts, title=f"compass gait, {what}: energy"),
+                   energy),
+    }
+    return _write_figures_and_tables(out, figures, impacts)
+
+
+def write_model_walk_figures(walker: Any, walk: WalkResult, out_dir: str | Path) -> list[Path]:
+    """Write a described walker's walk figures (PNG) and data (CSV) into ``out_dir``.
+
+    Files: ``phase_portrait.png/.csv``
+    (:func:`~heelstrike.analysis.walk_tables.model_phase_portrait_table`), ``energy.png/.csv``
+    (:func:`~heelstrike.analysis.walk_tables.walk_energy_table`: every impact, knee strikes
+    included, drops the total) and ``impacts.csv``
+    (:func:`~heelstrike.analysis.walk_tables.walk_impact_table`, the heel strikes). The figures
+    of :data:`COMPASS_ONLY_WALK_FIGURES` are not drawn.
+
+    Returns
+    -------
+    list of Path
+        The written files.
+    """
+    from heelstrike.analysis.walk_tables import (
+        model_phase_portrait_table,
+        walk_energy_table,
+        walk_impact_table,
+    )
+    from heelstrike.plots.gait import energy_figure, phase_portrait_figure
+
+    out = _directory(out_dir)
+    what = f"{walker.description.name}, slope = {np.rad2deg(walk.slope):.2f} deg"
+    portrait = model_phase_portrait_table(walker, walk)
+    energy = walk_energy_table(walker, walk)
+    impacts = walk_impact_table(walker, walk)
+    swing = walker.description.links[walker.joint_index("hip") - 2].name
+    figures = {
+        "phase_portrait": (phase_portrait_figure(
+            portrait, title=f"{what}: phase portrait",
+            labels=(f"stance ({walker.coordinate_names[2]})", f"swing ({swing}, absolute)")),
+            portrait),
+        "energy": (energy_figure(energy, impacts, title=f"{what}: energy"), energy),
+    }
+    return _write_figures_and_tables(out, figures, impacts)
+
+
+# -- described walkers' impact maps --------------------------------------------------------------
+def write_impact_map(
+    m: ImpactMap, out_dir: str | Path, *, units: Mapping[str, str] | None = None
+) -> list[Path]:
+    """Write ``impact_map.png`` (three panels) and ``impact_map.csv`` (one row per point).
+
+    Parameters
+    ----------
+    m : ImpactMap
+    out_dir : str or Path
+        Created if needed.
+    units : mapping of str to str, optional
+        Units of the swept parameters for the axis labels (see
+        :func:`heelstrike.models.description.parameter_units`).
+
+    Returns
+    -------
+    list of Path
+        The PNG (:func:`heelstrike.plots.models.impact_map_figure`) and the CSV: the two swept
+        values (x varying fastest), ``T_J``, ``T_c_J``, ``T_a_J`` (J), ``eta_J_per_m`` (J/m),
+        ``step_length_m`` (m), ``trailing_normal_velocity_m_per_s`` (m/s) and
+        ``trailing_foot_lifts`` (0 or 1).
+    """
+    from heelstrike.plots.models import impact_map_figure
+
+    out = _directory(out_dir)
+    X, Y = np.meshgrid(np.asarray(m.x, dtype=float), np.asarray(m.y, dtype=float))
+    csv_path = write_csv(
+        {
+            m.x_name: X.ravel(),
+            m.y_name: Y.ravel(),
+            "T_J": np.asarray(m.T, dtype=float).ravel(),
+            "T_c_J": np.asarray(m.T_c, dtype=float).ravel(),
+            "T_a_J": np.asarray(m.T_a, dtype=float).ravel(),
+            "eta_J_per_m": np.asarray(m.eta, dtype=float).ravel(),
+            "step_length_m": np.asarray(m.step_length, dtype=float).ravel(),
+            "trailing_normal_velocity_m_per_s":
+                np.asarray(m.trailing_normal_velocity, dtype=float).ravel(),
+            "trailing_foot_lifts": np.asarray(m.lifts, dtype=bool).ravel().astype(int),
+        },
+        out / "impact_map.csv",
+    )
+    png = out / "impact_map.png"
+    impact_map_figure(m, units).savefig(png, dpi=120)
+    return [png, csv_path]
+
+
+# -- powered gaits and the cost study ------------------------------------------------------------
+def write_powered_energy(
+    gait: PoweredGait, energy: pd.DataFrame, impacts: pd.DataFrame, out_dir: str | Path
+) -> tuple[Path, Path]:
+    """Write the energy of one period of a powered gait: ``powered_energy.png`` and ``.csv``.
+
+    Parameters
+    ----------
+    gait : PoweredGait
+        The gait (its speed, works and ``T_c`` title the figure).
+    energy, impacts : pandas.DataFrame
+        From :func:`heelstrike.analysis.powered.energy_book_tables` (energies in J, times in s).
+    out_dir : str or Path
+        Output directory.
+
+    Returns
+    -------
+    (Path, Path)
+        The figure (:func:`heelstrike.plots.gait.energy_figure`) and the ``energy`` table.
+    """
+    from heelstrike.plots.gait import energy_figure
+
+    out = _directory(out_dir)
+    name = gait.model or "compass gait"
+    fig = energy_figure(energy, impacts, title=(
+        f"{name}, powered gait at {gait.speed:.3g} m/s: {gait.torque_joint} torque "
+        f"{gait.torque_work:+.4f} J over the step,\npush-off {gait.push_off_work:+.4f} J "
+        f"(jump at heel strike), heel strike -T_c = {-gait.collision_loss:.4f} J"))
+    png = out / "powered_energy.png"
+    fig.savefig(png)
+    return png, write_csv(energy, out / "powered_energy.csv")
+
+
+def write_cost_figures(ds: xr.Dataset, out: str | Path) -> list[Path]:
+    """Write the cost study's figures (PNG) into ``out``; return their paths.
+
+    ``cost_of_transport.png``, ``eta.png`` and ``actuator_work.png``
+    (:func:`heelstrike.plots.powered.cost_figure`, each only if the variable has a finite
+    value), then ``paper_vs_gait.png`` (:func:`heelstrike.plots.powered.paper_comparison_figure`)
+    for a study over step length that holds the paper's impact-only ``eta_paper``.
+    """
+    from heelstrike.plots.powered import cost_figure, paper_comparison_figure
+
+    d = _directory(out)
+    paths = []
+    for var in ("cost_of_transport", "eta", "actuator_work"):
+        if np.any(np.isfinite(ds[var].values)):
+            p = d / f"{var}.png"
+            cost_figure(ds, var).savefig(p, dpi=120)
+            paths.append(p)
+    if str(ds.attrs.get("target", "step_length")) == "step_length" and "eta_paper" in ds:
+        p = d / "paper_vs_gait.png"
+        paper_comparison_figure(ds).savefig(p, dpi=120)
+        paths.append(p)
+    return paths

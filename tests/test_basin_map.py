@@ -103,3 +103,23 @@ def test_basin_and_map_commands(tmp_path, capsys):
     assert main(["basin", "--grid", "0x3"]) == 2
     assert "invalid grid" in capsys.readouterr().err
     assert main(["map", "--slope", "3deg:1deg"]) == 2
+
+
+def test_gait_map_figure_axes_stay_on_the_computed_grid():
+    # The cells are centred on the grid points; their outer halves must not put a negative
+    # foot radius (or uncomputed slopes) on the axes: R >= 0 and the map spans 0-0.3 m, 2-4 deg.
+    from heelstrike.analysis.gait_map import GaitMap
+    from heelstrike.plots.gait import gait_map_figure
+
+    radii, slopes = np.array([0.0, 0.15, 0.3]), np.deg2rad([2.0, 3.0, 4.0])
+    rho = np.array([[0.6, 0.7, 1.2], [0.55, 0.6, 0.9], [0.5, 0.55, 0.6]])
+    ds = xr.Dataset(
+        {"spectral_radius": (("foot_radius", "slope"), rho),
+         "period_doubling_slope": ("foot_radius", np.array([np.deg2rad(3.6), np.nan, np.nan]))},
+        coords={"foot_radius": radii, "slope": slopes},
+    )
+    ax = gait_map_figure(GaitMap(dataset=ds)).axes[0]
+    r0, r1 = ax.get_ylim()
+    s0, s1 = ax.get_xlim()
+    assert r0 >= 0.0 and r1 <= 0.3 + 1e-12
+    assert s0 >= 2.0 - 1e-9 and s1 <= 4.0 + 1e-9

@@ -14,6 +14,7 @@ import pytest
 
 from heelstrike.analysis.heel_strike import heel_strike_study
 from heelstrike.cli import main
+from heelstrike.models import heel_strike_state
 from heelstrike.models.compass import CompassGait
 
 IMPACT_KEYS = {"T", "T_c", "T_a", "eta", "step_length", "qdot_plus", "impulse",
@@ -65,6 +66,44 @@ def test_impact_json_lift_flag_follows_the_physics(capsys):
     assert lifts["trailing_foot_lifts"] is True and lifts["qdot_plus"][1] > 0
     assert stays["trailing_foot_lifts"] is False and stays["qdot_plus"][1] < 0
     assert wheel["trailing_foot_lifts"] is False and wheel["T_c"] == pytest.approx(0, abs=1e-12)
+
+
+@pytest.mark.parametrize("argv", [
+    ["impact", "--radius", "0.25", "--angle", "20deg", "--q3dot", "-1"],
+    ["impact", "--radius", "0.25", "--angle", "20deg", "--q3dot", "0.5", "--q4dot", "-3",
+     "--json"],
+    ["impact", "--model", "compass", "--angle", "20deg", "--q3dot", "-1", "--json"],
+])
+def test_impact_refuses_a_striking_foot_that_leaves_the_ground(argv, capsys):
+    # Walking backwards (or closing the legs fast) lifts the leading foot: there is no heel
+    # strike, and the bilateral impact law would report a loss with a pulling (negative)
+    # normal impulse. The physics: the foot's pre-impact normal velocity is positive.
+    walker = CompassGait(foot_radius=0.25)
+    q3dot = float(argv[argv.index("--q3dot") + 1])
+    q4dot = float(argv[argv.index("--q4dot") + 1]) if "--q4dot" in argv else 0.0
+    q, qd = heel_strike_state(walker, np.deg2rad(20.0), q3_dot=q3dot, q4_dot=q4dot)
+    assert (walker.contact_jacobian(q, "left") @ qd)[1] > 0
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err.startswith("heelstrike: error: the striking foot moves away")
+    assert len(captured.err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize(("argv", "needle"), [
+    (["impact", "--angle", "-20deg"], "--angle must satisfy 0 < q3 < 90deg"),
+    (["gait", "--slope", "-3deg"], "downhill slope > 0"),
+    (["map", "--radius", "-0.1:0.3:3"], "--radius needs 0 <= START"),
+])
+def test_negative_value_with_a_unit_is_judged_as_a_value(argv, needle, capsys):
+    # "-20deg" is the value of --angle, not an option: the error must say what is wrong with
+    # it, not "expected one argument" (which is what argparse says on its own).
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("heelstrike: error:")
+    assert needle in lines[0] and "expected one argument" not in lines[0]
 
 
 def test_impact_table_is_readable(capsys):
@@ -157,3 +196,18 @@ def test_reproduce_into_unwritable_place_fails_cleanly(tmp_path, capsys):
     assert main(["reproduce", "--out", str(blocker / "sub")]) != 0
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("heelstrike: error:")
+
+
+@pytest.mark.parametrize("command", [["reproduce"], ["basin", "--grid", "3x3"]])
+def test_out_that_is_an_existing_file_is_named_as_such(command, tmp_path, capsys):
+    # mkdir on an existing file answers "File exists", which reads as if the directory were
+    # there: the message must say the path is not a directory.
+    blocker = tmp_path / "figures"
+    blocker.write_text("x")
+    assert main([*command, "--out", str(blocker)]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    lines = captured.err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("heelstrike: error: cannot write")
+    assert "not a directory" in lines[0]
+    assert blocker.read_text() == "x"

@@ -70,3 +70,36 @@ def test_walk_writes_animation(tmp_path, capsys):
     with Image.open(out) as im:
         assert im.n_frames >= 5
     assert str(out) in capsys.readouterr().out
+
+
+@pytest.mark.slow  # two gait searches and two short walks
+@pytest.mark.parametrize(("slope_deg", "warned"), [(4.5, True), (3.0, False)])
+def test_walk_says_when_it_starts_on_an_unstable_gait(slope_deg, warned, tmp_path, capsys):
+    # Beyond the period doubling (about 4.4 deg at R = 0) the period-one gait is unstable: a
+    # walk started exactly on it repeats it until round-off grows, which looks like periodic
+    # walking. The command must say so, and say nothing at 3 deg, where the gait is stable.
+    cycle = find_limit_cycle(CompassGait(foot_radius=0.0), slope=np.deg2rad(slope_deg))
+    assert cycle.stable is not warned
+    assert bool(np.max(np.abs(cycle.multipliers)) > 1.0) is warned
+    assert main(["walk", "--radius", "0", "--slope", f"{slope_deg}deg", "--steps", "1",
+                 "--fps", "8", "--out", str(tmp_path / "walk.gif")]) == 0
+    err = capsys.readouterr().err
+    assert ("unstable" in err) is warned
+    if warned:
+        assert f"{np.max(np.abs(cycle.multipliers)):.4g}" in err
+
+
+@pytest.mark.parametrize("slope", ["90deg", "200deg", "1.6rad"])
+def test_gait_refuses_a_slope_of_90_deg_or_more(slope, capsys, monkeypatch):
+    # No incline of 90 deg or more can be walked down: refused before any search (which would
+    # only end in "no period-one gait found from 864 seeds").
+    import heelstrike.analysis.limit_cycle as lc
+
+    def forbidden(*args, **kwargs):
+        raise AssertionError("searched for a gait")
+
+    monkeypatch.setattr(lc, "find_limit_cycles", forbidden)
+    monkeypatch.setattr(lc, "find_limit_cycle", forbidden)
+    assert main(["gait", "--slope", slope]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("heelstrike: error: --slope must be below 90deg")

@@ -435,3 +435,33 @@ def test_every_walker_has_one_scale() -> None:
 if os.name != "posix":  # pragma: no cover - the /dev/zero and rlimit test is POSIX only
     test_model_that_is_not_a_file_is_refused_before_reading = pytest.mark.skip(
         reason="POSIX only")(test_model_that_is_not_a_file_is_refused_before_reading)
+
+
+def test_impact_map_csv_names_the_swept_columns_with_their_units(tmp_path: Path) -> None:
+    # Every CSV column carries its unit: the swept foot radius is in metres and the impact
+    # angle in radians (0.1 ... 0.6 here, not degrees), like T_J or step_length_m.
+    from heelstrike.outputs import write_impact_map
+
+    m = _synthetic_map()
+    csv = next(p for p in write_impact_map(m, tmp_path, units={"R": "m"}) if p.suffix == ".csv")
+    header = csv.read_text().splitlines()[0].split(",")
+    assert header[:2] == ["R_m", "angle_rad"]
+    assert {"T_J", "T_c_J", "eta_J_per_m", "step_length_m"} <= set(header)
+    rows = np.loadtxt(csv, delimiter=",", skiprows=1)
+    np.testing.assert_allclose(np.unique(rows[:, 1]), m.y)
+
+
+def test_impact_map_refuses_a_backward_stance_rate(capsys: Capsys, tmp_path: Path) -> None:
+    # With --q3dot < 0 (joints at rest) the leading foot rises: no heel strike, yet the
+    # bilateral impact would report T_c = T (everything "lost") at every grid point.
+    from heelstrike.analysis.model_gaits import symmetric_heel_strike_state
+    from heelstrike.dynamics.phased import load_phased_walker
+
+    walker = load_phased_walker("compass")
+    q, qd = symmetric_heel_strike_state(walker, 0.2, stance_rate=-1.0)
+    assert (walker.contact_jacobian(np.asarray(q), "left") @ np.asarray(qd))[1] > 0
+    line = _one_line_error(*_run(capsys, "impact-map", "--model", "compass", "--x",
+                                 "R:0:0.3:2", "--y", "angle:10deg:20deg:2", "--q3dot", "-1",
+                                 "--out", str(tmp_path / "m")))
+    assert "--q3dot must be >= 0" in line and "no heel strike" in line
+    assert not (tmp_path / "m" / "impact_map.csv").exists()

@@ -260,3 +260,25 @@ def test_figure_data_follow_the_admissibility_rules():
     assert not white[d.foot_radius > 0.4].any()
     assert (white == ~d.admissible).all()
     np.testing.assert_allclose(d.eta[d.degenerate_wheel], 0.0, atol=1e-12)
+
+
+def test_a_striking_foot_moving_up_is_not_a_heel_strike() -> None:
+    """The paper's rates bring the leading foot down; reversed, it leaves the ground and the
+    bilateral impact law would need a pulling (negative) normal impulse."""
+    import math
+
+    from heelstrike.analysis.heel_strike import (
+        NotAHeelStrikeError,
+        check_striking_foot_approaches,
+    )
+    from heelstrike.core.impact import impact
+    from heelstrike.models import CompassGait, heel_strike_state
+
+    w = CompassGait(foot_radius=0.25)
+    q, qd = heel_strike_state(w, math.radians(20.0), q3_dot=1.0, q4_dot=0.0)
+    check_striking_foot_approaches(w, q, qd)
+    assert impact(w.mass_matrix(q), w.contact_jacobian(q, "left"), qd).constraint_impulse[1] > 0
+    q, qd = heel_strike_state(w, math.radians(20.0), q3_dot=-1.0, q4_dot=0.0)
+    with pytest.raises(NotAHeelStrikeError, match="moves away from the ground"):
+        check_striking_foot_approaches(w, q, qd)
+    assert impact(w.mass_matrix(q), w.contact_jacobian(q, "left"), qd).constraint_impulse[1] < 0

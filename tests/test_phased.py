@@ -152,6 +152,21 @@ def test_builder_compass_gait_equals_compass_gait() -> None:
     assert abs(g.energy_residual) < 1e-8
 
 
+@pytest.mark.slow
+def test_automatic_model_gait_is_the_stable_one_the_compass_path_finds() -> None:
+    """Without a guess, ``find_model_gait`` prefers a stable gait, as ``find_limit_cycles`` does:
+    the builder compass at 3 deg gave the unstable short-step gait (|m| 4.3) although the
+    stable one (|m| 0.58) exists, so ``basin``/``map --model compass`` reported no stable gait."""
+    from heelstrike.analysis.limit_cycle import find_limit_cycles
+
+    ref = find_limit_cycles(CompassGait(), slope=COMPASS_SLOPE)[0]
+    assert ref.stable
+    g = find_model_gait(load_phased_walker("compass"), slope=COMPASS_SLOPE)
+    assert g.cycle.stable
+    np.testing.assert_allclose(g.cycle.fixed_point, ref.fixed_point, atol=1e-8)
+    assert g.cycle.spectral_radius == pytest.approx(ref.spectral_radius, abs=1e-5)
+
+
 @pytest.mark.slow  # kneed gait: sympy + numba build on a cold cache (~90 s)
 def test_kneed_passive_gait_energy_book(kneed_gait: ModelGait) -> None:
     g = kneed_gait

@@ -245,6 +245,23 @@ def test_powered_without_gait_fails_cleanly(capsys):
     assert len(lines) == 1 and lines[0].startswith("heelstrike: error: no pushoff gait found")
 
 
+def test_study_cost_without_any_gait_fails_cleanly(tmp_path, capsys):
+    # A 3 m step is longer than the legs can span (2 l sin q3 < 2 m at R = 0): no gait at
+    # the only point of the grid. That is a failure with the one-line error and status 2,
+    # not a silent exit 1 after "the cheapest gait found at each point" on stdout.
+    import xarray as xr
+
+    out = tmp_path / "study"
+    assert main(["study", "cost", "--radius", "0:0:1", "--step-length", "3:3:1",
+                 "--out", str(out)]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    errors = [ln for ln in captured.err.splitlines() if ln.startswith("heelstrike:")]
+    assert len(errors) == 1 and errors[0].startswith("heelstrike: error: no gait found")
+    ds = xr.load_dataset(out / "cost_study.nc")
+    assert ds["cost_of_transport"].isnull().all()
+
+
 @pytest.mark.slow
 def test_study_cost_writes_netcdf_and_figures(tmp_path, capsys):
     import xarray as xr
@@ -261,3 +278,11 @@ def test_study_cost_writes_netcdf_and_figures(tmp_path, capsys):
     assert cot[1, 0] < cot[0, 0] and cot[0, 0] < cot[0, 1]
     for name in ("cost_of_transport.png", "paper_vs_gait.png"):
         assert (out / name).stat().st_size > 0
+
+
+@pytest.mark.parametrize("value", ["inf", "nan"])
+def test_powered_non_finite_target_is_called_non_finite(value, capsys):
+    # "must be > 0, got inf" would be false: inf is > 0; the message must name the real fault.
+    assert main(["powered", "--speed", value]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("heelstrike: error: --speed must be finite")

@@ -413,18 +413,30 @@ def write_impact_map(
     -------
     list of Path
         The PNG (:func:`heelstrike.plots.models.impact_map_figure`) and the CSV: the two swept
-        values (x varying fastest), ``T_J``, ``T_c_J``, ``T_a_J`` (J), ``eta_J_per_m`` (J/m),
-        ``step_length_m`` (m), ``trailing_normal_velocity_m_per_s`` (m/s) and
+        values (x varying fastest; columns named with their unit, e.g. ``R_m`` and
+        ``angle_rad``, when ``units`` knows it), ``T_J``, ``T_c_J``, ``T_a_J`` (J),
+        ``eta_J_per_m`` (J/m), ``step_length_m`` (m), ``trailing_normal_velocity_m_per_s`` (m/s) and
         ``trailing_foot_lifts`` (0 or 1).
     """
+    from heelstrike.analysis.model_gaits import ANGLE
     from heelstrike.plots.models import impact_map_figure
 
     out = _directory(out_dir)
     X, Y = np.meshgrid(np.asarray(m.x, dtype=float), np.asarray(m.y, dtype=float))
+    known = {**(units or {}), ANGLE: "rad"}
+
+    def column(name: str) -> str:
+        """``R`` -> ``R_m``, ``angle`` -> ``angle_rad``, ``Is`` -> ``Is_kg_m2``; bare if the
+        unit is not known."""
+        unit = known.get(name)
+        if not unit or unit == "1":
+            return name
+        return f"{name}_{unit.replace('/', '_per_').replace('^', '').replace(' ', '_')}"
+
     csv_path = write_csv(
         {
-            m.x_name: X.ravel(),
-            m.y_name: Y.ravel(),
+            column(m.x_name): X.ravel(),
+            column(m.y_name): Y.ravel(),
             "T_J": np.asarray(m.T, dtype=float).ravel(),
             "T_c_J": np.asarray(m.T_c, dtype=float).ravel(),
             "T_a_J": np.asarray(m.T_a, dtype=float).ravel(),

@@ -173,7 +173,9 @@ def _basin_variables(
             "units": "1",
         }),
         "distance": (dims, np.asarray(dist).reshape(shape), {
-            "long_name": "final distance to the fixed point in section coordinates",
+            "long_name": "final distance to the fixed point in section coordinates (Euclidean "
+                         "norm of rad and rad/s components, as the convergence test --tol)",
+            "units": "rad, rad s-1 (mixed)",
         }),
     }
 

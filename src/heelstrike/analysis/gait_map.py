@@ -469,7 +469,7 @@ def gait_map(
             "step_length": "m",
             "collision_loss": "J",
             "impact_angle": "rad",
-            "fixed_point": "1",
+            "fixed_point": "rad, rad s-1, rad s-1",
             "most_negative_real_multiplier": "1",
             "period_doubling_slope": "rad",
         },
@@ -631,6 +631,7 @@ def model_gait_map(
         },
     )
     ds["fixed_point"] = ((*dims, "section"), fixed, {
+        "units": ", ".join("rad s-1" if n.endswith("_dot") else "rad" for n in w0.section_names),
         "long_name": "post-heel-strike fixed point (section coordinates: rad, rad/s)"})
     ds["period_doubling_slope"] = ((parameter,), pd, {
         "units": "rad", "long_name": "slope where a multiplier crosses -1 (period doubling)"})

@@ -24,7 +24,7 @@ from heelstrike._typing import FloatArray
 from heelstrike.core._scalars import python_scalars
 from heelstrike.core.impact import ImpactResult, impact
 from heelstrike.models._contact import LIFT_TOLERANCE, trailing_foot_lifts
-from heelstrike.models.base import PlanarWalker
+from heelstrike.models.base import Foot, PlanarWalker
 from heelstrike.models.compass import CompassGait, heel_strike_state
 
 BoolArray = NDArray[np.bool_]
@@ -35,6 +35,7 @@ __all__ = [
     "HeelStrikeStudy",
     "NotAHeelStrikeError",
     "check_heel_strike_state",
+    "check_striking_foot_approaches",
     "heel_strike_study",
     "step_length",
     "trailing_foot_lifts",
@@ -48,6 +49,37 @@ CONTACT_TOLERANCE = 1e-6
 
 class NotAHeelStrikeError(ValueError):
     """A configuration given as a heel strike does not have both feet on the ground."""
+
+
+def check_striking_foot_approaches(
+    walker: PlanarWalker, q: ArrayLike, q_dot: ArrayLike, *, foot: Foot = "left"
+) -> None:
+    """Check that the striking foot moves towards the ground before the impact.
+
+    A foot leaving the ground does not strike it: the bilateral impact law (eqs. 2-13) would
+    pull it down with a negative normal impulse and report an energy loss that never happens.
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+        Scalar-parameter walker.
+    q, q_dot : array_like, shape (n,)
+        Pre-impact configuration (m, rad) and velocities (m/s, rad/s).
+    foot : {"left", "right"}
+        The striking foot.
+
+    Raises
+    ------
+    NotAHeelStrikeError
+        If the foot's pre-impact normal velocity is positive (away from the ground).
+    """
+    vn = float((walker.contact_jacobian(np.asarray(q, dtype=float), foot)
+                @ np.asarray(q_dot, dtype=float))[1])
+    if vn > 1e-12 * max(1.0, float(walker.scale.leg_length)):
+        raise NotAHeelStrikeError(
+            f"the striking foot moves away from the ground before the impact (normal velocity "
+            f"+{vn:.6g} m/s): no heel strike happens with these pre-impact rates (the paper's "
+            "rates q3_dot = 1 rad/s, q4_dot = 0 bring it down)")
 
 
 def check_heel_strike_state(

@@ -29,6 +29,7 @@ from heelstrike.analysis.limit_cycle import (
     GaitNotFoundError,
     LimitCycle,
     PoincareMap,
+    _preference,
     find_limit_cycle,
 )
 from heelstrike.core.complementarity import CandidateContact, resolve_impact
@@ -193,17 +194,23 @@ def find_model_gait(
             raise GaitNotFoundError("no step could be completed from any automatic guess")
         scored.sort(key=lambda s: s[0])
         starts = [z for _, z in scored[:5]]
+    # Newton from each start until a stable gait is found; without one, the most attracting
+    # gait found (as find_limit_cycles orders the compass's gaits: stable first)
     last: Exception | None = None
+    found: list[LimitCycle] = []
     for z0 in starts:
         try:
-            cycle = find_limit_cycle(
+            found.append(find_limit_cycle(
                 w, guess=z0, tol=tol, max_iter=max_iter, rtol=rtol, atol=atol, **kw
-            )
-            break
+            ))
         except GaitNotFoundError as exc:
             last = exc
-    else:
+            continue
+        if found[-1].stable:
+            break
+    if not found:
         raise GaitNotFoundError(str(last))
+    cycle = min(found, key=_preference)
     walk = cycle.walk
     assert isinstance(walk, PhasedWalkResult)
     impacts = walk.events

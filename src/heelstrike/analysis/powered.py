@@ -869,8 +869,9 @@ def _find(
     if first is None:
         why = f" (last: {last_error})" if last_error is not None else ""
         raise PoweredGaitNotFoundError(
-            f"the walker cannot walk periodically with any seed {prob.family.name} "
-            f"actuation{why}"
+            f"no periodic {prob.family.name} gait found: Newton converged from none of the "
+            f"{len(prob.family.seed(prob.walker))} seed {prob.family.parameter_name} values "
+            f"(other gains or a guess may find one){why}"
         )
     x, current, total_it, J = first
     unit = "m/s" if target == "speed" else "m"
@@ -912,11 +913,15 @@ def _find(
         except PoweredGaitNotFoundError as exc:
             dfrac = 0.5 * (f_try - frac)  # half the increment that failed
             if dfrac * abs(value - current) < CONTINUATION_RESOLUTION * max(abs(value), 1e-3):
+                lo, hi = min(current, reached), max(current, reached)
+                found = (f"span only {lo:.6g} {unit} (the seed gait; continuation could not "
+                         f"move it towards {value:g} {unit}: {exc})"
+                         if hi - lo < 1e-4 * max(abs(hi), 1e-3) else
+                         f"span {lo:.4g} to {hi:.4g} {unit} and end near {reached:.4g} {unit} "
+                         f"(continuation from {current:.4g} stopped there: {exc})")
                 raise PoweredGaitNotFoundError(
                     f"no gait with {target} {value:g} {unit}: the {prob.family.name} gaits "
-                    f"found span {min(current, reached):.4g} to {max(current, reached):.4g} "
-                    f"{unit} and end near {reached:.4g} {unit} (continuation from "
-                    f"{current:.4g} stopped there: {exc}); other gains may reach further"
+                    f"found {found}; other gains may reach further"
                 ) from exc
             continue
         total_it += it

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import re
 import sys
 from collections.abc import Callable
 from typing import Any, NoReturn
@@ -16,6 +17,14 @@ class CliError(Exception):
 
 
 class Parser(argparse.ArgumentParser):
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        # A negative value with a unit or a range (``--angle -20deg``, ``--slope -3deg``,
+        # ``--radius -0.1:0.3:3``) is a value, not an option: argparse's own pattern only
+        # knows bare numbers and would answer "expected one argument" instead of saying what
+        # is wrong with the value. No heelstrike option starts with "-" and a digit.
+        self._negative_number_matcher = re.compile(r"^-\.?\d")
+
     def error(self, message: str) -> NoReturn:
         raise CliError(message)
 
@@ -192,6 +201,9 @@ def writable_dir(path: str | os.PathLike[str], option: str = "--out") -> Any:
     from pathlib import Path
 
     out = Path(path)
+    if out.exists() and not out.is_dir():  # mkdir's own answer would be "File exists"
+        raise CliError(f"cannot write to {option} {str(path)!r}: it exists and is not a "
+                       "directory")
     try:
         out.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryFile(dir=out):

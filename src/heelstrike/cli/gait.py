@@ -114,6 +114,9 @@ def _run_gait(args: argparse.Namespace) -> int:
             "a downhill slope > 0 (the energy lost at heel strike must come from gravity); "
             "e.g. --slope 3deg, or see 'heelstrike powered' for level ground"
         )
+    if not args.slope < math.pi / 2:
+        raise CliError(f"--slope must be below 90deg (a walkable incline), got "
+                       f"{math.degrees(args.slope):g} deg")
     if args.model is not None:
         return _run_gait_model(args)
     walker = walker_from_args(args)
@@ -189,6 +192,20 @@ def add_walk(sub: Any) -> None:
     p.set_defaults(func=_run_walk)
 
 
+def _note_unstable_start(stable: bool, multipliers: Any) -> None:
+    """Say on stderr that the walk starts on an unstable period-one gait.
+
+    Started exactly on it, the walk follows it until round-off has grown (by the largest
+    ``|multiplier|`` per step): the steps look periodic, yet this is not how the walker walks.
+    """
+    if not stable:
+        rho = float(max(abs(complex(m)) for m in multipliers))
+        print(f"heelstrike: note: the walk starts on the period-one gait found, which is "
+              f"unstable (largest |multiplier| {rho:.4g}): it stays on it only until round-off "
+              "grows; a walk from any nearby state leaves it (see 'heelstrike bifurcation' "
+              "and 'heelstrike basin')", file=sys.stderr)
+
+
 def _walk_model(args: argparse.Namespace, out: Any, to_dir: bool) -> int:
     """``walk --model``: the walk from the gait (or --guess), animation and figures."""
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
@@ -203,10 +220,11 @@ def _walk_model(args: argparse.Namespace, out: Any, to_dir: bool) -> int:
         z = parse_floats(args.guess, "--guess", len(walker.section_names))
     else:
         try:
-            z = list(find_model_gait(walker, slope=args.slope, backend=backend)
-                     .cycle.fixed_point)
+            cycle = find_model_gait(walker, slope=args.slope, backend=backend).cycle
         except GaitNotFoundError as exc:
             raise CliError(f"no gait found to start from: {exc}") from exc
+        z = list(cycle.fixed_point)
+        _note_unstable_start(cycle.stable, cycle.multipliers)
     q, qd = walker.section_to_state(z)
     walk = simulate(walker, q, qd, backend=backend, slope=args.slope, steps=args.steps,
                     rtol=1e-9, atol=1e-9, max_step=0.5 / args.fps)
@@ -253,9 +271,11 @@ def _run_walk(args: argparse.Namespace) -> int:
     z = parse_guess(args.guess)
     if z is None:
         try:
-            z = list(find_limit_cycle(walker, slope=args.slope).fixed_point)
+            cycle = find_limit_cycle(walker, slope=args.slope)
         except GaitNotFoundError as exc:
             raise CliError(f"no gait found to start from: {exc}") from exc
+        z = list(cycle.fixed_point)
+        _note_unstable_start(cycle.stable, cycle.multipliers)
     walk = PoincareMap(walker=walker, slope=args.slope, rtol=1e-9, atol=1e-9,
                        max_step=0.5 / args.fps).walk(z, args.steps)
     path = animate_walk(walker, walk, out / "walk.gif" if to_dir else out, fps=args.fps)

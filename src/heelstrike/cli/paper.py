@@ -41,6 +41,7 @@ def add_reproduce(sub: Any) -> None:
 def _run_reproduce(args: argparse.Namespace) -> int:
     from heelstrike.outputs import reproduce_paper
 
+    writable_dir(args.out)
     try:
         paths = reproduce_paper(args.out)
     except OSError as exc:
@@ -89,7 +90,11 @@ def _check_rates(args: argparse.Namespace) -> None:
 
 
 def _run_impact_model(args: argparse.Namespace) -> int:
-    from heelstrike.analysis.heel_strike import check_heel_strike_state
+
+    from heelstrike.analysis.heel_strike import (
+        check_heel_strike_state,
+        check_striking_foot_approaches,
+    )
     from heelstrike.analysis.model_gaits import model_heel_strike, symmetric_heel_strike_state
 
     given = explicit_options(args)
@@ -130,6 +135,7 @@ def _run_impact_model(args: argparse.Namespace) -> int:
             qd = parse_floats(args.velocity, "--velocity", n)
     if args.velocity is None and "q4dot" in given:
         qd[walker.coordinate_names.index("hip")] = args.q4dot
+    check_striking_foot_approaches(walker, q, qd)
     s = model_heel_strike(walker, q, qd)
     d = s.to_dict()
     d["model"] = walker.description.name
@@ -147,7 +153,8 @@ def _run_impact_model(args: argparse.Namespace) -> int:
 
 
 def _run_impact(args: argparse.Namespace) -> int:
-    from heelstrike.analysis.heel_strike import heel_strike_study
+    from heelstrike.analysis.heel_strike import check_striking_foot_approaches, heel_strike_study
+    from heelstrike.models import heel_strike_state
 
     given = explicit_options(args)
     if cli_robot.robot_requested(args):
@@ -179,6 +186,8 @@ def _run_impact(args: argparse.Namespace) -> int:
             f"{math.degrees(args.angle):g} deg"
         )
     walker = walker_from_args(args)
+    q_pre, qd_pre = heel_strike_state(walker, args.angle, q3_dot=args.q3dot, q4_dot=args.q4dot)
+    check_striking_foot_approaches(walker, q_pre, qd_pre)
     s = heel_strike_study(walker, args.angle, q3_dot=args.q3dot, q4_dot=args.q4dot,
                           restitution=args.restitution)
     d: dict[str, Any] = {
@@ -261,6 +270,10 @@ def _run_impact_map(args: argparse.Namespace) -> int:
         raise CliError("--model is required (a .toml file or compass, kneed, torso)")
     if not math.isfinite(args.q3dot):
         raise CliError(f"--q3dot must be finite, got {args.q3dot:g}")
+    if args.q3dot < 0:  # joints at rest: the leading foot's normal velocity is -q3dot * L_S
+        raise CliError(f"--q3dot must be >= 0, got {args.q3dot:g}: with the stance leg rotating "
+                       "backwards the striking foot moves away from the ground and no heel "
+                       "strike happens")
     walker = model_from_args(args)
     axes = [(n, np.linspace(a, b, c)) for n, a, b, c in (args.x, args.y)]
     if axes[0][0] == axes[1][0]:

@@ -275,6 +275,10 @@ def gait_map_figure(gmap: GaitMap) -> Figure:
     mesh: Any
     if S.size > 1 and R.size > 1:
         mesh = ax.pcolormesh(S, R, rho, cmap="RdYlGn_r", norm=norm, shading="nearest")
+        # the axes span the computed grid only: the cells' outer halves would show slopes
+        # and radii (a negative foot radius at R = 0) that were never computed
+        ax.set_xlim(float(S.min()), float(S.max()))
+        ax.set_ylim(float(R.min()), float(R.max()))
         if np.nanmin(rho) < 1.0 < np.nanmax(rho):
             ax.contour(S, R, np.where(np.isfinite(rho), rho, 10.0), levels=[1.0],
                        colors="black", linewidths=1.2)
@@ -285,7 +289,8 @@ def gait_map_figure(gmap: GaitMap) -> Figure:
     pd = np.degrees(ds["period_doubling_slope"].values)
     ok = np.isfinite(pd)
     if np.any(ok):
-        ax.plot(pd[ok], R[ok], "o--", color="navy", mfc="white", label="period doubling")
+        ax.plot(pd[ok], R[ok], "o--", color="navy", mfc="white", label="period doubling",
+                clip_on=False)  # markers on the first or last radius stay whole
         ax.legend(loc="upper left", fontsize=9)
     ax.set_xlabel("slope (deg)")
     ax.set_ylabel(ds[pname].attrs.get("label", "foot radius R (m)"))

@@ -182,6 +182,27 @@ def test_period_doubling_at_steeper_slopes():
     assert np.deg2rad(4.2) < cont.period_doubling[0] < np.deg2rad(4.6)
 
 
+@pytest.mark.slow
+def test_period_doubling_slope_has_one_definition():
+    """Continuation (any walker, any parameter) and the stable-gait map locate the period
+    doubling of the point-foot compass gait by the same refinement: they agree to 1e-4 deg
+    although their brackets differ (0.5 deg here, 1 deg in the map), and at the slope found
+    the most negative real multiplier is -1 to 1e-3."""
+    from heelstrike.analysis.gait_map import gait_map, newton_gait
+
+    walker = CompassGait(foot_radius=0.0)
+    cont = continue_limit_cycle(
+        walker, "slope", np.deg2rad([4.0, 4.5, 5.0]), guess=[-0.33, 1.2, -0.9],
+        method="compiled", rtol=1e-11, atol=1e-11,
+    )
+    gm = gait_map(walker, [0.0], np.deg2rad([3.0, 4.0, 5.0]))
+    assert cont.period_doubling.size == 1
+    assert np.degrees(cont.period_doubling[0]) == pytest.approx(
+        np.degrees(gm.period_doubling_slope[0]), abs=1e-4)
+    g = newton_gait(walker, float(cont.period_doubling[0]), cont.cycles[0].fixed_point)
+    assert g.most_negative_real == pytest.approx(-1.0, abs=1e-3)
+
+
 # --------------------------------------------------------------------------------------------
 # Single support
 # --------------------------------------------------------------------------------------------

@@ -59,6 +59,7 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
     "limit_cycle": (
         "BifurcationDiagram", "Continuation", "GaitNotFoundError", "LimitCycle", "PoincareMap",
         "bifurcation_diagram", "continue_limit_cycle", "find_limit_cycle", "find_limit_cycles",
+        "refine_period_doubling",
     ),
     "model_gaits": (
         "ANGLE", "ImpactMap", "ModelGait", "ModelHeelStrike", "find_model_gait", "impact_map",

@@ -14,6 +14,7 @@ radius per chunk).
 from __future__ import annotations
 
 import functools
+import itertools
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -23,7 +24,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
-from heelstrike.analysis.limit_cycle import GaitNotFoundError, find_limit_cycle
+from heelstrike.analysis.limit_cycle import (
+    GaitNotFoundError,
+    _most_negative_real,
+    find_limit_cycle,
+    refine_period_doubling,
+)
 from heelstrike.dynamics.compiled import COMPLETED, ensemble_walk
 from heelstrike.models.compass import CompassGait
 
@@ -81,10 +87,10 @@ class NewtonGait(ResultDictMixin):
 
     @property
     def most_negative_real(self) -> float:
-        """Most negative real multiplier (NaN if none is real)."""
-        m = self.multipliers
-        real = m.real[np.abs(m.imag) < 1e-9 * np.maximum(1.0, np.abs(m))]
-        return float(real.min()) if real.size else float("nan")
+        """Most negative real multiplier (NaN if none is real; the rule of
+        :func:`~heelstrike.analysis.limit_cycle.refine_period_doubling`)."""
+        m = _most_negative_real(self.multipliers)
+        return float("nan") if m is None else float(m)
 
 
 def _map_many(
@@ -259,25 +265,14 @@ def _refine_period_doubling(
     m0: float,
     rtol: float,
     atol: float,
-    iterations: int = 12,
 ) -> float:
-    """Bisection on the slope for ``lambda_min = -1``, continuing the gait from ``g0``."""
-    lo, hi, flo = s0, s1, m0 + 1.0
-    z = g0.z
-    for _ in range(iterations):
-        mid = 0.5 * (lo + hi)
-        try:
-            g = newton_gait(walker, mid, z, rtol=rtol, atol=atol)
-        except GaitNotFoundError:
-            break
-        f = g.most_negative_real + 1.0
-        if not np.isfinite(f):
-            break
-        if f * flo > 0.0:
-            lo, flo, z = mid, f, g.z
-        else:
-            hi = mid
-    return 0.5 * (lo + hi)
+    """:func:`~heelstrike.analysis.limit_cycle.refine_period_doubling` on the compiled map."""
+
+    def solve(slope: float, z: FloatArray) -> tuple[float, FloatArray]:
+        g = newton_gait(walker, slope, z, rtol=rtol, atol=atol)
+        return g.most_negative_real, g.z
+
+    return refine_period_doubling(solve, s0, s1, m0, g0.z)
 
 
 def _walker_kwargs(walker: CompassGait) -> dict[str, float]:
@@ -722,8 +717,8 @@ def model_bifurcation(
     (stance angle ``q[2]`` at heel strike, rad) and step durations (s) are kept. The branch:
     :func:`~heelstrike.analysis.model_gaits.find_model_gait` continued over
     ``continuation_points`` slopes (each from the previous fixed point; it stops at the first
-    slope without a gait), with the slopes where a real multiplier crosses -1 (linear
-    interpolation).
+    slope without a gait), with the slopes where a real multiplier crosses -1
+    (:func:`~heelstrike.analysis.limit_cycle.refine_period_doubling`).
 
     Parameters
     ----------
@@ -787,13 +782,18 @@ def model_bifurcation(
         values.append(float(s))
         cycles.append(g.cycle)
         guess = np.asarray(g.cycle.fixed_point, dtype=float)
-    mnr = []
-    for c in cycles:
-        m = np.asarray(c.multipliers)
-        real = m[np.abs(m.imag) < 1e-9].real
-        mnr.append(float(real.min()) if real.size else np.nan)
-    pd = [values[k] + (values[k + 1] - values[k]) * (mnr[k] + 1.0) / (mnr[k] - mnr[k + 1])
-          for k in range(len(mnr) - 1) if mnr[k] > -1.0 >= mnr[k + 1]]
+    def solve(v: float, z0: FloatArray) -> tuple[float, FloatArray]:
+        c = find_model_gait(w, slope=v, guess=z0, backend=backend).cycle
+        m = _most_negative_real(c.multipliers)
+        return (np.nan if m is None else m), np.asarray(c.fixed_point, dtype=float)
+
+    mnr = [_most_negative_real(c.multipliers) for c in cycles]
+    pd = [
+        refine_period_doubling(solve, values[k], values[k + 1], ma,
+                               np.asarray(cycles[k].fixed_point, dtype=float))
+        for k, (ma, mb) in enumerate(itertools.pairwise(mnr))
+        if ma is not None and mb is not None and (ma + 1.0) * (mb + 1.0) < 0.0
+    ]
     return (
         BifurcationDiagram(slopes=sl, impact_angles=angles, periods=periods),
         Continuation(parameter="slope", values=np.asarray(values), cycles=tuple(cycles),

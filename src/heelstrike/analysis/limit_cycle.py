@@ -40,6 +40,7 @@ __all__ = [
     "continue_limit_cycle",
     "find_limit_cycle",
     "find_limit_cycles",
+    "refine_period_doubling",
 ]
 
 
@@ -805,7 +806,8 @@ def continue_limit_cycle(
     """Natural-parameter continuation of a period-one gait.
 
     Each gait is found by Newton's method started from the previous one. Period doubling is
-    detected where the most negative real multiplier crosses -1 between consecutive values.
+    detected where the most negative real multiplier crosses -1 between consecutive values,
+    and located by :func:`refine_period_doubling` (bisection, 12 halvings of the bracket).
 
     Parameters
     ----------
@@ -862,7 +864,15 @@ def continue_limit_cycle(
     for a, b, ca, cb in zip(found[:-1], found[1:], cycles[:-1], cycles[1:], strict=True):
         ma, mb = _most_negative_real(ca.multipliers), _most_negative_real(cb.multipliers)
         if ma is not None and mb is not None and (ma + 1.0) * (mb + 1.0) < 0:
-            pd.append(a + (b - a) * (ma + 1.0) / (ma - mb))
+
+            def solve(v: float, z0: FloatArray) -> tuple[float, FloatArray]:
+                w, s = (walker, v) if parameter == "slope" else \
+                    (walker.replace(**{parameter: v}), slope)
+                c = find_limit_cycle(w, slope=s, guess=z0, **kwargs)
+                m = _most_negative_real(c.multipliers)
+                return (np.nan if m is None else m), c.fixed_point
+
+            pd.append(refine_period_doubling(solve, a, b, ma, ca.fixed_point))
     return Continuation(
         parameter=parameter,
         values=np.asarray(found),
@@ -870,6 +880,52 @@ def continue_limit_cycle(
         period_doubling=np.asarray(pd),
         stopped=stopped,
     )
+
+
+def refine_period_doubling(
+    solve: Callable[[float, FloatArray], tuple[float, FloatArray]],
+    lo: float,
+    hi: float,
+    m_lo: float,
+    z_lo: FloatArray,
+    *,
+    iterations: int = 12,
+) -> float:
+    """The parameter value where the most negative real multiplier crosses -1 (period
+    doubling): the one definition, used by continuation and by the gait maps.
+
+    Bisection on ``[lo, hi]`` (the crossing is bracketed: ``m(lo) + 1`` and ``m(hi) + 1`` have
+    opposite signs), each gait found by ``solve(value, z)`` from the fixed point ``z`` of the
+    last gait on the ``lo`` side; ``iterations`` halvings (12: the bracket shrinks 4096-fold).
+    If a gait is not found the midpoint of the current bracket is returned.
+
+    Parameters
+    ----------
+    solve : callable
+        ``solve(value, z0) -> (most negative real multiplier, fixed point)``; may raise
+        :class:`GaitNotFoundError`.
+    lo, hi : float
+        The bracket (parameter units).
+    m_lo : float
+        Most negative real multiplier at ``lo``.
+    z_lo : ndarray
+        Fixed point at ``lo``.
+    """
+    f_lo, z = m_lo + 1.0, z_lo
+    for _ in range(iterations):
+        mid = 0.5 * (lo + hi)
+        try:
+            m, z_mid = solve(mid, z)
+        except GaitNotFoundError:
+            break
+        f = m + 1.0
+        if not np.isfinite(f):
+            break
+        if f * f_lo > 0.0:
+            lo, f_lo, z = mid, f, z_mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
 
 
 def _most_negative_real(mult: NDArray[np.complex128]) -> float | None:

@@ -178,8 +178,9 @@ def bifurcation_figure(
                         color="tab:blue", label="period-one gait, stable")
                 ax.plot(np.where(~stable, v, np.nan), np.where(~stable, y, np.nan), ":",
                         color="tab:blue", label="period-one gait, unstable")
-                for pd in np.rad2deg(continuation.period_doubling):
-                    ax.axvline(pd, color="tab:red", ls="--", lw=1)
+                for k, pd in enumerate(np.rad2deg(continuation.period_doubling)):
+                    ax.axvline(pd, color="tab:red", ls="--", lw=1,
+                               label=f"period doubling, {pd:.3f} deg" if k == 0 else None)
     ax1.legend(loc="upper left", fontsize=8)
     ax2.set_xlabel("slope (deg)")
     ax1.set_title(title or "compass gait: bifurcation diagram")

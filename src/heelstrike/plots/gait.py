@@ -86,6 +86,28 @@ def _foot_arc(centre: NDArray[np.float64], leg_angle: float, radius: float) -> N
     return centre + radius * np.stack((np.sin(phi), -np.cos(phi)), axis=-1)
 
 
+def _animation_file(path: str | Path) -> Path:
+    """``path`` as a Path, checked: a ``.gif``, or an ``.mp4`` with ffmpeg on the PATH."""
+    out = Path(path)
+    suffix = out.suffix.lower()
+    if suffix not in (".gif", ".mp4"):
+        raise ValueError(f"animation file must end in .gif or .mp4, got {out.name!r}")
+    if suffix == ".mp4" and shutil.which("ffmpeg") is None:
+        raise ValueError("writing .mp4 needs ffmpeg on the PATH; use a .gif file instead")
+    return out
+
+
+def _save_animation(fig: Figure, draw: Any, frames: int, fps: float, out: Path) -> Path:
+    """Render ``frames`` frames of ``draw`` at ``fps`` into ``out`` (GIF by Pillow, MP4 by
+    ffmpeg, after the suffix); returns ``out``."""
+    anim = FuncAnimation(fig, draw, frames=frames, interval=1000.0 / fps, blit=False)
+    suffix = out.suffix.lower()
+    writer = PillowWriter(fps=round(fps)) if suffix == ".gif" else FFMpegWriter(fps=round(fps))
+    out.parent.mkdir(parents=True, exist_ok=True)
+    anim.save(str(out), writer=writer)
+    return out
+
+
 def animate_walk(
     walker: CompassGait, walk: WalkResult, path: str | Path, *, fps: float = 30.0
 ) -> Path:
@@ -99,12 +121,7 @@ def animate_walk(
     Path
         The written file.
     """
-    out = Path(path)
-    suffix = out.suffix.lower()
-    if suffix not in (".gif", ".mp4"):
-        raise ValueError(f"animation file must end in .gif or .mp4, got {out.name!r}")
-    if suffix == ".mp4" and shutil.which("ffmpeg") is None:
-        raise ValueError("writing .mp4 needs ffmpeg on the PATH; use a .gif file instead")
+    out = _animation_file(path)
     times, idx = resample_walk(walk, fps)
     R = float(walker.foot_radius)
     pos = walker.positions(walk.q)
@@ -140,11 +157,7 @@ def animate_walk(
         label.set_text(f"step {int(walk.step[i]) + 1}   t = {walk.t[i]:.2f} s")
         return [*legs, *feet, hip_dot, label]
 
-    anim = FuncAnimation(fig, draw, frames=len(times), interval=1000.0 / fps, blit=False)
-    writer = PillowWriter(fps=round(fps)) if suffix == ".gif" else FFMpegWriter(fps=round(fps))
-    out.parent.mkdir(parents=True, exist_ok=True)
-    anim.save(str(out), writer=writer)
-    return out
+    return _save_animation(fig, draw, len(times), fps, out)
 
 
 def bifurcation_figure(
@@ -650,12 +663,7 @@ def animate_model_walk(walker: Any, walk: WalkResult, path: str | Path, *,
     Path
         The written file.
     """
-    out = Path(path)
-    suffix = out.suffix.lower()
-    if suffix not in (".gif", ".mp4"):
-        raise ValueError(f"animation file must end in .gif or .mp4, got {out.name!r}")
-    if suffix == ".mp4" and shutil.which("ffmpeg") is None:
-        raise ValueError("writing .mp4 needs ffmpeg on the PATH; use a .gif file instead")
+    out = _animation_file(path)
     times, idx = resample_walk(walk, fps)
     desc = walker.description
     pos = walker.positions(walk.q)
@@ -693,8 +701,4 @@ def animate_model_walk(walker: Any, walk: WalkResult, path: str | Path, *,
         label.set_text(f"step {int(walk.step[i]) + 1}   t = {walk.t[i]:.2f} s")
         return [*links, *feet, dots, label]
 
-    anim = FuncAnimation(fig, draw, frames=len(times), interval=1000.0 / fps, blit=False)
-    writer = PillowWriter(fps=round(fps)) if suffix == ".gif" else FFMpegWriter(fps=round(fps))
-    out.parent.mkdir(parents=True, exist_ok=True)
-    anim.save(str(out), writer=writer)
-    return out
+    return _save_animation(fig, draw, len(times), fps, out)

@@ -17,14 +17,15 @@ kind          backend     implementation
 ``planar``    ``scipy``   :func:`heelstrike.dynamics.hybrid.simulate` (any hand-written walker)
 ``compass``   ``scipy``   :func:`heelstrike.dynamics.hybrid.simulate`
 ``compass``   compiled    :func:`heelstrike.dynamics.compiled.simulate_compiled` (passive)
-described     ``scipy``   :func:`heelstrike.dynamics.phased.simulate_phased`
+described     ``scipy``   :func:`heelstrike.dynamics.hybrid.simulate`
 described     compiled    :func:`heelstrike.dynamics.compiled_phased.simulate_phased_compiled`
 ============  ==========  =================================================================
 
-The implementations are imported when first used (numba and scipy.integrate stay unloaded until
-a walk needs them). Results are the implementations' own:
-:class:`~heelstrike.dynamics.hybrid.WalkResult`, or its subclass
-:class:`~heelstrike.dynamics.phased.PhasedWalkResult` for described walkers.
+The scipy backend is one loop for every walker: it runs the hybrid schedule the walker declares
+(:meth:`~heelstrike.models.base.PlanarWalker.step_schedule`). The implementations are imported
+when first used (numba and scipy.integrate stay unloaded until a walk needs them). Results are
+:class:`~heelstrike.dynamics.hybrid.PhasedWalkResult` (scipy; every impact in ``events``) or
+its base :class:`~heelstrike.dynamics.hybrid.WalkResult` (the compiled compass kernel).
 """
 
 from __future__ import annotations
@@ -124,8 +125,8 @@ BACKENDS: Mapping[tuple[KernelKind, str], BackendEntry] = MappingProxyType(
             function="simulate_compiled",
             check=_check_compass_compiled,
         ),
-        ("described", "scipy"): BackendEntry(module="heelstrike.dynamics.phased",
-                                             function="simulate_phased"),
+        ("described", "scipy"): BackendEntry(module="heelstrike.dynamics.hybrid",
+                                             function="simulate"),
         ("described", "compiled"): BackendEntry(
             module="heelstrike.dynamics.compiled_phased",
             function="simulate_phased_compiled",

@@ -1,22 +1,34 @@
-"""Hybrid walking simulation: single support, heel strike by the paper's projector, leg swap.
+"""Hybrid walking simulation: the one loop that runs every walker's declared step schedule.
 
-One step is integrated in two phases with scipy's ``solve_ivp`` (DOP853):
+A walker declares the hybrid schedule of its step as data
+(:meth:`~heelstrike.models.base.PlanarWalker.step_schedule`, :mod:`heelstrike.models.schedule`:
+Drake's witness + reset idea): continuous phases with the joints they hold locked, each
+integrated stage by stage (scipy's ``solve_ivp``, DOP853) until a guard fires, and the resets
+between them. :func:`simulate` runs any schedule, so the paper's compass gait, the kneed
+walker's knee strike and the torso walker are the same loop:
 
-1. *before mid-stance* (stance angle ``q3 < 0``) until ``q3`` rises through 0; if the stance leg
-   stops and rolls back first, the walker has fallen backward;
-2. *after mid-stance* until the walker's heel-strike function rises through zero (the swing
-   foot lands ahead of the stance foot).
+- **the compass gait** (and any hand-written walker): one phase, first until the stance leg
+  passes the vertical (stopping before it is a fall backward), then until the walker's
+  heel-strike function rises through zero. *Scuffing convention*: a rigid straight-legged
+  compass gait's swing foot passes through the ground near mid-stance; as is classical
+  (Goswami et al. 1998; Garcia et al. 1998) this is ignored: the compass walker's event function
+  ``2 q3 + q4`` has no root at the scuffing configuration ``q4 = 0``. The heel strike is
+  :func:`heel_strike` (``q_dot+ = P_a q_dot-`` with the striking foot's Jacobian, eq. 13); the
+  trailing foot must then lift (:func:`heelstrike.models._contact.lifts`, relative to
+  ``l sum |q_dot-|``).
+- **described walkers with knees** (McGeer 1990, ``kneed.toml``): a knee-swing phase (stance
+  knee locked, swing knee free) ending in the **knee strike**, an inert impact with
+  ``A = [A_R; lock rows]`` (:func:`heelstrike.core.impact.impact`), then a locked-swing phase
+  (the walker is a compass gait) until the swing foot's clearance falls through zero once the
+  strike is armed (stance leg past the vertical, swing foot ahead and above the ground). The heel
+  strike has bilateral rows ``[A_L; lock rows]`` and the trailing foot ``A_R`` as a unilateral
+  candidate (:func:`heelstrike.core.complementarity.resolve_impact`); if it does not separate
+  and lift, the walk ends with ``trailing_foot_stays``.
 
-**Scuffing convention.** A rigid straight-legged compass gait's swing foot passes through the
-ground near mid-stance, when the legs are nearly parallel. As is classical for the compass gait
-(Goswami et al. 1998; Garcia et al. 1998), this is ignored: a heel strike is only looked for
-after mid-stance, and the compass walker's event function ``2 q3 + q4`` has no root at the
-scuffing configuration ``q4 = 0``.
-
-At heel strike the impact is resolved with :func:`heel_strike` (``q_dot+ = P_a q_dot-`` with the
-striking foot's Jacobian, eq. 13), the trailing foot must lift (its contact point's normal
-velocity after impact must be positive: :func:`heelstrike.models._contact.lifts`, relative to
-``l sum |q_dot-|``), and the legs are relabelled.
+After a heel strike the legs are relabelled (``swap_legs``) and the locks reset exactly. Every
+impact (knee strikes too) is reported with ``T``, ``T_c``, ``T_a`` (Font & Kovecses 2008,
+eq. 10) in :attr:`PhasedWalkResult.events`; :attr:`WalkResult.impacts` holds one
+:class:`ImpactRecord` per heel strike.
 
 Failures are reported in :attr:`WalkResult.status`, never raised from inside the integrator.
 """
@@ -24,30 +36,37 @@ Failures are reported in :attr:`WalkResult.status`, never raised from inside the
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import StrEnum
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
+from heelstrike.core.complementarity import CandidateContact, resolve_impact
 from heelstrike.core.impact import ImpactResult, impact
 from heelstrike.dynamics.events import Event, to_scipy
 from heelstrike.dynamics.single_support import SingleSupport, TorqueLaw
 from heelstrike.models._contact import lift_velocity_scale, lifts
 from heelstrike.models.base import PlanarWalker
+from heelstrike.models.schedule import Guard, Stage, StepSchedule
 
 __all__ = [
     "GroundReaction",
     "ImpactRecord",
+    "PhasedImpact",
+    "PhasedWalkResult",
     "PushOff",
     "WalkResult",
     "WalkStatus",
+    "check_initial_state",
     "heel_strike",
     "simulate",
 ]
+
+ImpactKind = Literal["knee_strike", "heel_strike"]
 
 #: An impulsive actuation applied just before heel strike: ``(walker, q, q_dot) ->
 #: (q_dot_after, work)``; the work (J) is what the actuator does on the walker.
@@ -296,8 +315,9 @@ def heel_strike(
     q_dot: ArrayLike,
     *,
     restitution: float = 0.0,
+    locks: tuple[int, ...] = (),
 ) -> tuple[ImpactResult, FloatArray]:
-    """Resolve the left foot's heel strike with the paper's projector.
+    """Resolve the left foot's heel strike with the paper's projector (eq. 13).
 
     Parameters
     ----------
@@ -306,16 +326,21 @@ def heel_strike(
         Pre-impact state (stance foot labelled "right").
     restitution : float
         Restitution of the constrained velocity (0: inert, the paper).
+    locks : tuple of int
+        Joint coordinates locked through the impact (their rows ``e_j`` join ``A_L``).
 
     Returns
     -------
     result : ImpactResult
-        The decomposition with ``A = A_L(q)``.
+        The decomposition with ``A = [A_L(q); lock rows]``.
     trailing_normal_velocity : ndarray, shape (...)
         Normal velocity of the trailing ("right") foot's contact point after impact (m/s).
     """
     M = walker.mass_matrix(q)
     A = walker.contact_jacobian(q, "left")
+    if locks:
+        rows = np.eye(walker.n_coordinates)[list(locks)]
+        A = np.concatenate((A, np.broadcast_to(rows, (*A.shape[:-2], *rows.shape))), axis=-2)
     res = impact(M, A, q_dot, restitution=restitution)
     A_R = walker.contact_jacobian(q, "right")
     v_trailing = np.einsum("...ij,...j->...i", A_R, res.velocity_post)[..., 1]
@@ -386,36 +411,137 @@ def integrate_segment(
     return Segment(t=ts, x=xs, event=hit, failed=sol.status < 0)
 
 
+# -- results -----------------------------------------------------------------------------------
+@dataclass(frozen=True, kw_only=True)
+class PhasedImpact(ResultDictMixin):
+    """One impact (knee strike or heel strike) of a phased simulation.
+
+    Attributes
+    ----------
+    kind : {"knee_strike", "heel_strike"}
+    step : int
+        Step index (0-based).
+    time : float
+        Time of impact (s).
+    q : ndarray, shape (n,)
+        Configuration (pre-swap labels).
+    q_dot_minus, q_dot_plus : ndarray, shape (n,)
+        Velocities before and after the impact.
+    rows : ndarray, shape (k, n)
+        Final active constraint rows ``A`` (``[A_R; locks]`` for a knee strike,
+        ``[A_L; locks]`` (+ trailing foot rows if it stays) for a heel strike).
+    kinetic_energy, kinetic_energy_constrained, kinetic_energy_admissible : float
+        ``T``, ``T_c``, ``T_a`` just before impact (J), eq. (10); ``T_c`` is lost.
+    energy_lost : float
+        ``T- - T+`` (J).
+    impulse : ndarray, shape (k,)
+        Constraint impulses of ``rows`` (N s, N m s).
+    lock_rows : ndarray, shape (k_l, n)
+        Jacobian of the knee locks engaged through the impact.
+    lock_velocity_post : ndarray, shape (k_l,)
+        ``A_lock q_dot+`` (rad/s), zero for an inert lock.
+    trailing_normal_velocity : float
+        Heel strike: normal velocity of the trailing foot's contact point after impact (m/s);
+        knee strike: that of the stance foot (0: it stays rolling).
+    trailing_mode : str
+        Heel strike: the complementarity decision for the trailing foot (``"separate"``: it
+        lifts). Knee strike: ``"stick"`` (the stance foot is bilateral).
+    """
+
+    kind: ImpactKind
+    step: int
+    time: float
+    q: FloatArray
+    q_dot_minus: FloatArray
+    q_dot_plus: FloatArray
+    rows: FloatArray
+    kinetic_energy: float
+    kinetic_energy_constrained: float
+    kinetic_energy_admissible: float
+    energy_lost: float
+    impulse: FloatArray
+    lock_rows: FloatArray
+    lock_velocity_post: FloatArray
+    trailing_normal_velocity: float
+    trailing_mode: str
+
+
+@dataclass(frozen=True, kw_only=True)
+class PhasedWalkResult(WalkResult):
+    """:class:`~heelstrike.dynamics.hybrid.WalkResult` plus every impact and phase label.
+
+    Attributes
+    ----------
+    events : tuple of PhasedImpact
+        Every impact in order (knee strikes and heel strikes).
+    phase : ndarray of str, shape (N,)
+        Phase of every sample (``"knee_swing"``, ``"locked_swing"``).
+    mechanical_energy : ndarray, shape (N,)
+        ``T + V`` (J) of every sample.
+    """
+
+    events: tuple[PhasedImpact, ...] = ()
+    phase: NDArray[np.str_] = field(default_factory=lambda: np.array([], dtype=str))
+    mechanical_energy: FloatArray = field(default_factory=lambda: np.array([]))
+
+    def step_losses(self, step: int) -> FloatArray:
+        """``T_c`` (J) of every impact of one step, in order."""
+        return np.asarray([e.kinetic_energy_constrained for e in self.events if e.step == step])
+
+
+# -- the one loop ------------------------------------------------------------------------------
 @dataclass(frozen=True, kw_only=True)
 class _ShiftedTorque:
     """A torque law whose clock restarts at ``t0`` (the start of a step)."""
 
-    law: TorqueLaw
+    law: TorqueLaw | Callable[[float, FloatArray, FloatArray], FloatArray]
     t0: float
 
     def __call__(self, t: float, q: FloatArray, q_dot: FloatArray) -> FloatArray:
-        return self.law(t - self.t0, q, q_dot)
+        return np.asarray(self.law(t - self.t0, q, q_dot))
 
 
-def _step_events(
-    walker: PlanarWalker,
-    support: SingleSupport,
-    q_ref: FloatArray,
-    friction: float | None,
-    *,
-    before: bool,
-) -> list[list[Event]]:
-    """Events of each phase of one step: the phase's own, then the contact checks common to
-    both phases (:data:`CONTACT_EVENTS`)."""
+@dataclass(frozen=True, kw_only=True)
+class _Seg:
+    t: FloatArray
+    q: FloatArray
+    qd: FloatArray
+    w: FloatArray
+    event: str | None
+    failed: bool
+
+
+def _segment_outcome(seg: _Seg, want: str) -> WalkStatus | None:
+    """Status that ends the walk after a segment, or None if it ended with the wanted event."""
+    if seg.failed:
+        return WalkStatus.INTEGRATION_FAILED
+    if seg.event is None:
+        return WalkStatus.NO_HEEL_STRIKE
+    if seg.event != want:
+        return WalkStatus(seg.event)
+    return None
+
+
+def _events(
+    support: SingleSupport, q_ref: FloatArray, stage: Stage, friction: float | None
+) -> list[Event]:
+    """A stage's guards as integrator events on the reduced state ``x``, then the stance
+    foot's contact checks (:data:`CONTACT_EVENTS`)."""
     m = len(support.free_coordinates)
 
     def state(x: FloatArray) -> tuple[FloatArray, FloatArray]:
         return support.unpack(x[: 2 * m], q_ref)
 
+    def event(guard: Guard) -> Event:
+        fn = guard.function
+        return Event(name=guard.name, function=lambda t, x: fn(*state(x)),
+                     direction=guard.direction)
+
     def normal(t: float, x: FloatArray) -> float:
         return float(support.ground_reaction(t, *state(x))[1])
 
-    common = [Event(name="lost_contact", function=normal, direction=-1)]
+    events = [event(stage.until), *(event(g) for g in stage.failures),
+              Event(name="lost_contact", function=normal, direction=-1)]
     if friction is not None:
         mu = float(friction)
 
@@ -423,29 +549,54 @@ def _step_events(
             lam = support.ground_reaction(t, *state(x))
             return float(mu * lam[1] - abs(lam[0]))
 
-        common.append(Event(name="slipped", function=slip, direction=-1))
+        events.append(Event(name="slipped", function=slip, direction=-1))
+    return events
 
-    def strike(t: float, x: FloatArray) -> float:
-        return float(walker.heel_strike_function(state(x)[0]))
 
-    phases: list[list[Event]] = []
-    if before:
-        phases.append(
-            [
-                Event(name="midstance", function=lambda t, x: x[0], direction=1),
-                Event(name="fell_backward", function=lambda t, x: x[m], direction=-1),
-                *common,
-            ]
+def check_initial_state(
+    walker: PlanarWalker, q0: ArrayLike, q_dot0: ArrayLike, steps: int,
+    schedule: StepSchedule | None = None,
+) -> tuple[FloatArray, FloatArray]:
+    """The one definition of a valid start of a walk: the state just after a heel strike.
+
+    The stance foot is on the ground (``y = R``) and rolls without slip (``A_R q_dot = 0``),
+    every lockable joint of the walker's :meth:`~heelstrike.models.base.PlanarWalker.step_schedule`
+    is locked at its angle with zero rate, the state is finite and of length ``n``, and at least
+    one step is asked for. Every backend checks it here.
+
+    Returns
+    -------
+    q, q_dot : ndarray, shape (n,)
+        Float copies of the state.
+
+    Raises
+    ------
+    ValueError
+        Naming what is wrong.
+    """
+    if steps < 1:
+        raise ValueError("steps must be >= 1")
+    n = walker.n_coordinates
+    q = np.array(q0, dtype=float)
+    qd = np.array(q_dot0, dtype=float)
+    if q.shape != (n,) or qd.shape != (n,):
+        raise ValueError(f"q0 and q_dot0 must have shape ({n},)")
+    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
+        raise ValueError("initial state must be finite")
+    R = float(np.asarray(walker.foot_radii[0]))
+    if abs(q[1] - R) > 1e-9 or np.max(np.abs(walker.contact_jacobian(q, "right") @ qd)) > 1e-9:
+        raise ValueError(
+            "initial state must have the stance foot on the ground (y = R) and rolling without "
+            "slip (A_R q_dot = 0)"
         )
-    phases.append(
-        [
-            Event(name="heel_strike", function=strike, direction=1),
-            Event(name="fell_backward", function=lambda t, x: x[0], direction=-1),
-            Event(name="fell_forward", function=lambda t, x: x[0] - 0.5 * np.pi, direction=1),
-            *common,
-        ]
-    )
-    return phases
+    sched = walker.step_schedule() if schedule is None else schedule
+    for j, a in sched.lock_angles:
+        if abs(q[j] - a) > 1e-9 or abs(qd[j]) > 1e-9:
+            raise ValueError(
+                f"initial state must have {walker.coordinate_names[j]} locked at {a} rad "
+                "with zero rate (the state just after a heel strike)"
+            )
+    return q, qd
 
 
 def simulate(
@@ -455,7 +606,7 @@ def simulate(
     *,
     slope: float = 0.0,
     steps: int = 1,
-    torque: TorqueLaw | None = None,
+    torque: TorqueLaw | Callable[[float, FloatArray, FloatArray], FloatArray] | None = None,
     push_off: PushOff | None = None,
     restitution: float = 0.0,
     friction: float | None = None,
@@ -464,25 +615,35 @@ def simulate(
     atol: float = 1e-10,
     max_step: float = np.inf,
     torque_resets_each_step: bool = True,
-) -> WalkResult:
-    """Simulate a walker for a number of steps.
+    knee_flex_threshold: float = 1e-6,
+) -> PhasedWalkResult:
+    """Simulate any walker for a number of steps: the one hybrid loop (scipy reference).
+
+    Runs the walker's declared :meth:`~heelstrike.models.base.PlanarWalker.step_schedule`
+    (:mod:`heelstrike.models.schedule`): its phases, each integrated with scipy's DOP853
+    stage by stage until the stage's guard fires, the knee strikes (an inert impact with
+    ``A = [A_R; lock rows]``) and the heel strike (``[A_L; lock rows]`` by the paper's
+    projector, eq. 13, with the trailing foot decided by the schedule's rule); then the legs
+    are relabelled and the locks reset exactly.
 
     Parameters
     ----------
     walker : PlanarWalker
         The walker model.
     q0, q_dot0 : array_like, shape (n,)
-        Initial state with the stance foot on the ground and rolling (``A_R q_dot0 = 0``).
+        Initial state just after a heel strike: stance foot on the ground and rolling
+        (``A_R q_dot0 = 0``), lockable joints at their lock angles with zero rate.
     slope : float
         Ground slope (rad), downhill towards ``-x``.
     steps : int
         Number of heel strikes to simulate.
     torque : TorqueLaw, optional
-        Actuator law in single support (time since the step's start, q, q_dot) -> u.
+        Actuator law in single support ``(time since the step's start, q, q_dot) -> u`` (N m).
     push_off : PushOff, optional
         Impulsive actuation applied just before each heel strike.
     restitution : float
-        Restitution of the heel strike's constrained velocity (0: the paper's inert impact).
+        Restitution of the heel strike's constrained velocity (0: the paper's inert impact);
+        only with the ``"lift_rule"`` trailing-foot rule.
     friction : float, optional
         Coulomb coefficient; if given, a stance foot needing more friction ends the walk.
     max_step_duration : float
@@ -493,132 +654,180 @@ def simulate(
         Largest integrator step (s).
     torque_resets_each_step : bool
         Whether the torque law's time restarts at 0 at every step (default) or runs on.
+    knee_flex_threshold : float
+        The swing knee must flex past this angle (rad) before its strike is looked for.
 
     Returns
     -------
-    WalkResult
+    PhasedWalkResult
+        Every heel strike in ``impacts``, every impact (knee strikes too) in ``events``.
     """
-    if steps < 1:
-        raise ValueError("steps must be >= 1")
-    q = np.array(q0, dtype=float)
-    qd = np.array(q_dot0, dtype=float)
-    n = walker.n_coordinates
-    if q.shape != (n,) or qd.shape != (n,):
-        raise ValueError(f"q0 and q_dot0 must have shape ({n},)")
-    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
-        raise ValueError("initial state must be finite")
-    support = SingleSupport(walker=walker, slope=slope, torque=torque)
-    m = len(support.free_coordinates)
-    R = float(np.asarray(walker.foot_radii[0]))
-    leg_length = float(walker.scale.leg_length)  # velocity scale of the lift rule
-    if abs(q[1] - R) > 1e-9 or np.max(np.abs(walker.contact_jacobian(q, "right") @ qd)) > 1e-9:
+    schedule = walker.step_schedule(knee_flex_threshold=knee_flex_threshold)
+    if restitution != 0.0 and schedule.trailing_foot != "lift_rule":
         raise ValueError(
-            "initial state must have the stance foot on the ground (q2 = R) and rolling "
-            "without slip (q1_dot = -R q3_dot, q2_dot = 0)"
+            "restitution is only supported with the lift rule for the trailing foot (walkers "
+            "whose heel strike resolves the trailing foot by complementarity are inert)"
         )
+    q, qd = check_initial_state(walker, q0, q_dot0, steps, schedule)
+    n = walker.n_coordinates
+    leg_length = float(walker.scale.leg_length)  # velocity scale of the lift rule
+    lock_angle = dict(schedule.lock_angles)
+    A_lock = np.eye(n)[list(schedule.locks)]
 
-    ts: list[FloatArray] = []
-    xs: list[FloatArray] = []
-    qrefs: list[FloatArray] = []
-    legs: list[NDArray[np.int_]] = []
-    step_ids: list[NDArray[np.int_]] = []
-    impacts: list[ImpactRecord] = []
-    t = 0.0
-    work = 0.0
-    stance = 0
+    t_s: list[FloatArray] = []
+    q_s: list[FloatArray] = []
+    qd_s: list[FloatArray] = []
+    w_s: list[FloatArray] = []
+    leg_s: list[NDArray[np.int_]] = []
+    step_s: list[NDArray[np.int_]] = []
+    phase_s: list[NDArray[np.str_]] = []
+    records: list[ImpactRecord] = []
+    events_out: list[PhasedImpact] = []
+    t, work, stance = 0.0, 0.0, 0
     status = WalkStatus.COMPLETED
 
     for k in range(steps):
-        q_ref = q.copy()
-        t_step = t
-        x = np.concatenate((support.pack(q, qd), [work]))
+        t_step, work_start = t, work
         V_start = float(walker.potential_energy(q, slope))
-        work_start = work
-        step_support = support
+        q_start = q.copy()
+        law = torque
         if torque is not None and torque_resets_each_step:
-            step_support = SingleSupport(
-                walker=walker, slope=slope, torque=_ShiftedTorque(law=torque, t0=t_step)
-            )
-        phases = _step_events(walker, step_support, q_ref, friction, before=x[0] < 0.0)
+            law = _ShiftedTorque(law=torque, t0=t_step)
         t_limit = t_step + max_step_duration
         ended: WalkStatus | None = None
-        for events in phases:
-            seg = integrate_segment(
-                step_support, q_ref, x, t, t_limit, events, rtol, atol, max_step
+        for phase in schedule.phases:
+            sup = SingleSupport(walker=walker, slope=slope, torque=law, locked=phase.locked)
+            m = len(sup.free_coordinates)
+            for stage in phase.stages:
+                if stage.skip is not None and stage.skip(q, qd):
+                    continue
+                q_ref = q.copy()
+                x0 = np.concatenate((sup.pack(q, qd), [work]))
+                raw = integrate_segment(sup, q_ref, x0, t, t_limit,
+                                        _events(sup, q_ref, stage, friction), rtol, atol,
+                                        max_step)
+                qs, qds = sup.unpack(raw.x[:, : 2 * m], q_ref)
+                seg = _Seg(t=raw.t, q=qs, qd=qds, w=raw.x[:, -1], event=raw.event,
+                           failed=raw.failed)
+                t_s.append(seg.t)
+                q_s.append(seg.q)
+                qd_s.append(seg.qd)
+                w_s.append(seg.w)
+                leg_s.append(np.full(len(seg.t), stance))
+                step_s.append(np.full(len(seg.t), k))
+                phase_s.append(np.full(len(seg.t), phase.name))
+                t, q, qd = float(seg.t[-1]), seg.q[-1].copy(), seg.qd[-1].copy()
+                work = float(seg.w[-1])
+                ended = _segment_outcome(seg, stage.until.name)
+                if ended is not None:
+                    break
+            if ended is not None or phase.reset == "heel_strike":
+                break
+            # -- knee strike: inert impact, stance foot rolling, the strike joints lock --------
+            for j in phase.strike_joints:
+                q[j] = lock_angle[j]  # remove the event-location round-off
+            A_R = walker.contact_jacobian(q, "right")
+            A = np.vstack((A_R, A_lock))
+            res = impact(walker.mass_matrix(q), A, qd)
+            qd_plus = np.asarray(res.velocity_post)
+            events_out.append(
+                PhasedImpact(
+                    kind="knee_strike", step=k, time=t, q=q.copy(), q_dot_minus=qd.copy(),
+                    q_dot_plus=qd_plus.copy(), rows=A,
+                    kinetic_energy=float(res.kinetic_energy),
+                    kinetic_energy_constrained=float(res.kinetic_energy_constrained),
+                    kinetic_energy_admissible=float(res.kinetic_energy_admissible),
+                    energy_lost=float(res.energy_lost),
+                    impulse=np.asarray(res.constraint_impulse, dtype=float),
+                    lock_rows=A_lock.copy(), lock_velocity_post=A_lock @ qd_plus,
+                    trailing_normal_velocity=float((A_R @ qd_plus)[1]),
+                    trailing_mode="stick",
+                )
             )
-            ts.append(seg.t)
-            xs.append(seg.x)
-            qrefs.append(np.broadcast_to(q_ref, (len(seg.t), n)))
-            legs.append(np.full(len(seg.t), stance))
-            step_ids.append(np.full(len(seg.t), k))
-            t, x = float(seg.t[-1]), seg.x[-1].copy()
-            if seg.failed:
-                ended = WalkStatus.INTEGRATION_FAILED
-                break
-            if seg.event is None:
-                ended = WalkStatus.NO_HEEL_STRIKE
-                break
-            if seg.event not in ("midstance", "heel_strike"):
-                ended = WalkStatus(seg.event)
-                break
-        work = float(x[-1])
+            qd = qd_plus
         if ended is not None:
             status = ended
-            q, qd = step_support.unpack(x[: 2 * m], q_ref)
             break
 
-        # -- heel strike -----------------------------------------------------------------------
-        q, qd = step_support.unpack(x[: 2 * m], q_ref)
+        # -- heel strike: the leading foot lands, the trailing foot by the schedule's rule -----
         push_work = 0.0
         if push_off is not None:
-            qd, push_work = push_off(walker, q, qd)
-            qd = np.asarray(qd, dtype=float)
-            work += float(push_work)
-        res, v_trailing = heel_strike(walker, q, qd, restitution=restitution)
+            qd_p, pw = push_off(walker, q, qd)
+            qd, push_work = np.asarray(qd_p, dtype=float), float(pw)
+            work += push_work
+        mode: str
+        if schedule.trailing_foot == "complementarity":
+            A_R = walker.contact_jacobian(q, "right")
+            bilateral = np.vstack((walker.contact_jacobian(q, "left"), A_lock))
+            mc = resolve_impact(walker.mass_matrix(q), qd, bilateral,
+                                [CandidateContact.from_jacobian(A_R, name="trailing")])
+            res, rows, mode = mc.impact, mc.active_rows, mc.modes[0]
+            v_trail = float(mc.normal_velocity[0])
+            foot_impulse = np.asarray(mc.bilateral_impulse[:2], dtype=float)
+        else:
+            res, v = heel_strike(walker, q, qd, restitution=restitution, locks=schedule.locks)
+            rows = np.vstack((walker.contact_jacobian(q, "left"), A_lock))
+            v_trail = float(v)
+            mode = "separate" if v_trail >= 0.0 else "penetrating"
+            foot_impulse = np.asarray(res.constraint_impulse, dtype=float)[:2].copy()
         qd_plus = np.asarray(res.velocity_post)
-        impacts.append(
+        events_out.append(
+            PhasedImpact(
+                kind="heel_strike", step=k, time=t, q=q.copy(), q_dot_minus=qd.copy(),
+                q_dot_plus=qd_plus.copy(), rows=rows,
+                kinetic_energy=float(res.kinetic_energy),
+                kinetic_energy_constrained=float(res.kinetic_energy_constrained),
+                kinetic_energy_admissible=float(res.kinetic_energy_admissible),
+                energy_lost=float(res.energy_lost),
+                impulse=np.asarray(res.constraint_impulse, dtype=float),
+                lock_rows=A_lock.copy(), lock_velocity_post=A_lock @ qd_plus,
+                trailing_normal_velocity=v_trail, trailing_mode=mode,
+            )
+        )
+        records.append(
             ImpactRecord(
-                step=k,
-                time=t,
-                q=q.copy(),
-                q_dot_minus=qd.copy(),
-                q_dot_plus=qd_plus.copy(),
+                step=k, time=t, q=q.copy(), q_dot_minus=qd.copy(), q_dot_plus=qd_plus.copy(),
                 impact_angle=float(q[2]),
                 kinetic_energy=float(res.kinetic_energy),
                 kinetic_energy_constrained=float(res.kinetic_energy_constrained),
                 kinetic_energy_admissible=float(res.kinetic_energy_admissible),
                 energy_lost=float(res.energy_lost),
-                impulse=np.asarray(res.constraint_impulse, dtype=float).copy(),
-                step_length=float(walker.step_length(q_ref, q)),
-                trailing_normal_velocity=float(v_trailing),
+                impulse=foot_impulse,
+                step_length=float(walker.step_length(q_start, q)),
+                trailing_normal_velocity=v_trail,
                 potential_energy_released=V_start - float(walker.potential_energy(q, slope)),
                 actuator_work=work - work_start,
-                push_off_work=float(push_work),
+                push_off_work=push_work,
                 step_duration=t - t_step,
             )
         )
-        if not lifts(float(v_trailing), lift_velocity_scale(leg_length, qd[2:])):
+        lifted = lifts(v_trail, lift_velocity_scale(leg_length, qd[2:]))
+        if mode != "separate" or not lifted:
             status = WalkStatus.TRAILING_FOOT_STAYS
             qd = qd_plus
             break
         q, qd = walker.swap_legs(q, qd_plus)
+        for j, a in schedule.lock_angles:  # exact lock angles after relabelling (swap round-off)
+            q[j] = a
+            qd[j] = 0.0
         stance = 1 - stance
 
-    t_all = np.concatenate(ts)
-    x_all = np.concatenate(xs)
-    ref_all = np.concatenate(qrefs)
-    q_all, qd_all = support.unpack(x_all[:, : 2 * m], ref_all)
-    return WalkResult(
+    q_all = np.concatenate(q_s)
+    qd_all = np.concatenate(qd_s)
+    return PhasedWalkResult(
         status=status,
         message=status.message,
-        t=t_all,
+        t=np.concatenate(t_s),
         q=q_all,
         q_dot=qd_all,
-        stance_leg=np.concatenate(legs),
-        step=np.concatenate(step_ids),
-        actuator_work=x_all[:, -1],
-        impacts=tuple(impacts),
+        stance_leg=np.concatenate(leg_s),
+        step=np.concatenate(step_s),
+        actuator_work=np.concatenate(w_s),
+        impacts=tuple(records),
         final_q=np.asarray(q),
         final_q_dot=np.asarray(qd),
         slope=float(slope),
+        events=tuple(events_out),
+        phase=np.concatenate(phase_s),
+        mechanical_energy=np.asarray(walker.mechanical_energy(q_all, qd_all, slope)),
     )

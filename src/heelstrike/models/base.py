@@ -20,7 +20,9 @@ Code above :mod:`heelstrike.models` asks a walker what it is through this interf
 by its class): :attr:`PlanarWalker.parameters` (the named parameter vector, with
 :meth:`PlanarWalker.replace`), :attr:`PlanarWalker.parameter_shape` and
 :attr:`PlanarWalker.is_batched`, :attr:`PlanarWalker.scale`, :attr:`PlanarWalker.description`,
-the Poincare section (:attr:`PlanarWalker.has_poincare_section`,
+the hybrid schedule of a step (:meth:`PlanarWalker.step_schedule`: phases, guards and resets
+as data, run by the one loop :func:`heelstrike.dynamics.hybrid.simulate`), the Poincare section
+(:attr:`PlanarWalker.has_poincare_section`,
 :meth:`PlanarWalker.section_to_state`, ...) and the simulation backends it runs on
 (:attr:`PlanarWalker.compiled_kernel`, :attr:`PlanarWalker.backends`,
 :meth:`PlanarWalker.supports`).
@@ -39,6 +41,14 @@ from numpy.typing import ArrayLike
 
 from heelstrike._typing import FloatArray
 from heelstrike.models._contact import step_length as _step_length
+from heelstrike.models.schedule import (
+    Guard,
+    Phase,
+    Stage,
+    StepSchedule,
+    fell_backward_rate,
+    fell_forward,
+)
 
 if TYPE_CHECKING:
     from heelstrike.models.description import WalkerDescription
@@ -301,6 +311,44 @@ class PlanarWalker(ABC):
         form free of the mid-stance scuffing root (see :class:`~heelstrike.models.CompassGait`).
         """
         return np.asarray(-self.foot_clearance(q, "left"))
+
+    def step_schedule(self, *, knee_flex_threshold: float = 1e-6) -> StepSchedule:
+        """The hybrid schedule of one step (:mod:`heelstrike.models.schedule`).
+
+        The default, the classical compass-gait step (Goswami et al. 1998; Garcia et al. 1998):
+        one phase, first until the stance leg passes the vertical (``q3`` rising through 0;
+        skipped if ``q3 >= 0`` at the start; ``q3_dot`` falling through 0 first is a fall
+        backward), then until :meth:`heel_strike_function` rises through zero (``q3`` falling
+        through 0 is a fall backward, ``q3`` reaching ``pi/2`` a fall forward). The heel strike
+        is the paper's projector with the striking foot's rows (eq. 13), then the trailing foot
+        must lift. Scuffing of the swing foot near mid-stance is ignored.
+
+        Parameters
+        ----------
+        knee_flex_threshold : float
+            Unused here (no lockable joints); see :class:`~heelstrike.models.BuiltWalker`.
+        """
+        midstance = Stage(
+            until=Guard(name="midstance", function=lambda q, qd: float(q[2]), direction=1),
+            failures=(fell_backward_rate(),),
+            skip=lambda q, qd: bool(q[2] >= 0.0),
+        )
+        strike = Stage(
+            until=Guard(
+                name="heel_strike",
+                function=lambda q, qd: float(self.heel_strike_function(q)),
+                direction=1,
+            ),
+            failures=(
+                Guard(name="fell_backward", function=lambda q, qd: float(q[2]), direction=-1),
+                fell_forward(),
+            ),
+        )
+        return StepSchedule(
+            phases=(Phase(name="locked_swing", locked=(), stages=(midstance, strike),
+                          reset="heel_strike"),),
+            trailing_foot="lift_rule",
+        )
 
     def section_to_state(self, z: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Map Poincare-section coordinates ``z`` (just after heel strike) to ``(q, q_dot)``.

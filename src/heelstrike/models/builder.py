@@ -68,6 +68,13 @@ from heelstrike.models.description import (
     evaluate_expression,
     read_description,
 )
+from heelstrike.models.schedule import (
+    Guard,
+    Phase,
+    Stage,
+    StepSchedule,
+    fell_forward,
+)
 
 __all__ = [
     "CODEGEN_VERSION",
@@ -534,6 +541,106 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         for r, j in enumerate(js):
             A[r, j] = 1.0
         return A
+
+    def stance_and_swing_locks(self) -> tuple[tuple[int, ...], tuple[int, ...]]:
+        """Split the lockable joints into stance-leg and swing-leg ones.
+
+        Along the kinematic chain from the stance foot's link to the swing foot's link, a joint
+        is on the stance side if its link's mirror comes later in the chain (e.g. the stance
+        knee's ``stance_thigh`` before ``swing_thigh``), else on the swing side. Lockable joints
+        off that chain count as swing-side.
+
+        Returns
+        -------
+        stance, swing : tuple of int
+            Coordinate indices.
+        """
+        desc = self.description
+        links = {lk.name: lk for lk in desc.links}
+        chain: list[str] = []
+        name: str | None = desc.feet[1].link
+        while name is not None:
+            chain.append(name)
+            name = links[name].parent
+        chain.reverse()
+        index = {lk.name: 3 + k for k, lk in enumerate(desc.links[1:])}
+        stance: list[int] = []
+        swing: list[int] = []
+        for j in self.lockable_joints:
+            lk = next(lk for lk in desc.links[1:] if index[lk.name] == j)
+            if (
+                lk.name in chain
+                and lk.mirror in chain
+                and chain.index(lk.mirror) > chain.index(lk.name)
+            ):
+                stance.append(j)
+            else:
+                swing.append(j)
+        return tuple(stance), tuple(swing)
+
+    def step_schedule(self, *, knee_flex_threshold: float = 1e-6) -> StepSchedule:
+        """The hybrid schedule of one step of a described walker.
+
+        *Knee swing* (only with lockable joints; McGeer 1990): the stance-side locks held, the
+        swing knee free; first until it has flexed past ``knee_flex_threshold`` (rad) beyond
+        its lock angle, then until it straightens back to it: the **knee strike** (an inert
+        impact with ``A = [A_R; lock rows]``). *Locked swing*: every lock held; first until the
+        heel strike is *armed* (stance angle > 0, swing foot ahead of the stance foot and above
+        the ground; skipped if armed at its start), then until the swing foot's clearance falls
+        through zero. This excludes the mid-stance scuffing root of the clearance (during the
+        knee swing, ground penetration of the swing foot is ignored too); for the compass gait
+        it is the same event as :meth:`heelstrike.models.CompassGait.heel_strike_function`.
+        Every stage can end in a fall: forward (stance angle reaching ``pi/2``) or backward
+        (the stance leg stopping before the vertical, or rolling back through it). The heel
+        strike decides the trailing foot by complementarity.
+
+        Parameters
+        ----------
+        knee_flex_threshold : float
+            How far (rad) the swing knee must flex before its strike is looked for.
+        """
+        stance_locks, swing_locks = self.stance_and_swing_locks()
+        angle = {j: float(a) for j, a in zip(self.lockable_joints, self.lock_angles,
+                                              strict=True)}
+        falls = (
+            fell_forward(),
+            Guard(
+                name="fell_backward",
+                function=lambda q, qd: float(qd[2]) if q[2] < 0.0 else 1.0 + float(q[2]),
+                direction=-1,
+            ),
+        )
+
+        def flex(q: FloatArray, qd: FloatArray) -> float:
+            return float(min(q[j] - angle[j] for j in swing_locks))
+
+        def armed(q: FloatArray, qd: FloatArray) -> float:
+            ahead = float(self.contact_point(q, "right")[0] - self.contact_point(q, "left")[0])
+            return float(min(q[2], ahead, float(self.foot_clearance(q, "left"))))
+
+        threshold = float(knee_flex_threshold)
+        phases: list[Phase] = []
+        if swing_locks:
+            flexed = Guard(name="knee_flexed", function=lambda q, qd: flex(q, qd) - threshold,
+                           direction=1)
+            knee = Guard(name="knee_strike", function=flex, direction=-1)
+            phases.append(Phase(
+                name="knee_swing", locked=stance_locks, reset="knee_strike",
+                strike_joints=swing_locks,
+                stages=(Stage(until=flexed, failures=falls), Stage(until=knee, failures=falls)),
+            ))
+        strike = Guard(name="heel_strike",
+                       function=lambda q, qd: float(-self.foot_clearance(q, "left")), direction=1)
+        phases.append(Phase(
+            name="locked_swing", locked=stance_locks + swing_locks, reset="heel_strike",
+            stages=(
+                Stage(until=Guard(name="armed", function=armed, direction=1), failures=falls,
+                      skip=lambda q, qd: armed(q, qd) > 0.0),
+                Stage(until=strike, failures=falls),
+            ),
+        ))
+        return StepSchedule(phases=tuple(phases), lock_angles=tuple(angle.items()),
+                            trailing_foot="complementarity")
 
     def joint_index(self, name: str) -> int:
         """Coordinate index of a coordinate/joint name."""

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from heelstrike.dynamics import BACKENDS
+from heelstrike.dynamics import simulate as simulate_entry
 from heelstrike.dynamics.hybrid import simulate
 from heelstrike.dynamics.phased import simulate_phased
 from heelstrike.models import CompassGait, load_walker
@@ -54,6 +55,14 @@ def test_declared_schedules() -> None:
     assert sched.phases[0].locked == stance and sched.phases[0].strike_joints == swing
     assert set(sched.phases[1].locked) == set(stance + swing) == set(sched.locks)
     assert sched.trailing_foot == "complementarity"
+    assert kneed.compiled_kernel == "generated"
+
+    class _OwnStep(type(kneed)):  # type: ignore[misc]
+        def step_schedule(self, *, knee_flex_threshold: float = 1e-6) -> StepSchedule:
+            return sched
+
+    own = _OwnStep(kneed.description)
+    assert own.compiled_kernel is None and own.backends == ("scipy",)
     assert [p.name for p in load_walker("torso").step_schedule().phases] == ["locked_swing"]
     with pytest.raises(ValueError, match="heel-strike"):
         StepSchedule(phases=(dataclasses.replace(sched.phases[0]),))
@@ -131,6 +140,11 @@ def test_the_loop_runs_what_the_walker_declares() -> None:
     assert walk.status == "fell_forward"
     assert walk.final_q[2] == pytest.approx(0.05, abs=1e-9)
     assert walk.n_steps == 0
+    # the compiled compass kernel runs the compass gait's own schedule only: a walker that
+    # declares another one runs on the scipy reference only (never silently the wrong step)
+    assert w.backends == ("scipy", "compiled") and stop.backends == ("scipy",)
+    with pytest.raises(ValueError, match="unsupported backend 'compiled'"):
+        simulate_entry(stop, q, qd, slope=SLOPE, backend="compiled")
     # the same physics by complementarity: the trailing foot separates, so the impact is the
     # projector's (same states to round-off)
     ref = simulate(w, q, qd, slope=SLOPE, steps=3)

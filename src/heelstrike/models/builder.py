@@ -356,10 +356,14 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         return MappingProxyType({k: self._values[k] for k in self.description.param_names})
 
     @property
-    def compiled_kernel(self) -> CompiledKernel:
+    def compiled_kernel(self) -> CompiledKernel | None:
         """``"generated"``: the kernel generated from the description
-        (:mod:`heelstrike.dynamics.compiled_phased`)."""
-        return "generated"
+        (:mod:`heelstrike.dynamics.compiled_phased`).
+
+        None for a subclass that declares another :meth:`step_schedule`: the kernel runs the
+        described walkers' schedule only, so such a walker runs on the scipy reference only.
+        """
+        return "generated" if type(self).step_schedule is BuiltWalker.step_schedule else None
 
     def replace(self, **params: ArrayLike) -> BuiltWalker:
         """A copy with some parameter values changed (no re-derivation)."""

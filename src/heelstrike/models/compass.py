@@ -172,9 +172,18 @@ class CompassGait(PlanarWalker):
         return () if self._scalar else super().parameter_shape
 
     @property
-    def compiled_kernel(self) -> CompiledKernel:
-        """``"compass"``: the hand-written kernel of :mod:`heelstrike.dynamics.compiled`."""
-        return "compass"
+    def compiled_kernel(self) -> CompiledKernel | None:
+        """``"compass"``: the hand-written kernel of :mod:`heelstrike.dynamics.compiled`.
+
+        None for a subclass that declares another step (its own :meth:`step_schedule` or
+        :meth:`heel_strike_function`): the kernel runs the compass gait's schedule only, so such
+        a walker runs on the scipy reference only.
+        """
+        standard = (
+            type(self).step_schedule is CompassGait.step_schedule
+            and type(self).heel_strike_function is CompassGait.heel_strike_function
+        )
+        return "compass" if standard else None
 
     @property
     def leg_com_from_foot(self) -> Any:

@@ -303,3 +303,22 @@ def test_no_walker_class_tests_or_fallbacks_above_models() -> None:
     assert any(f.parent.name == "dynamics" for f in files)
     found = [v for f in files for v in violations(f.read_text(), str(f.relative_to(SRC)))]
     assert found == []
+
+
+def test_section_point_is_one_layout_for_every_walker() -> None:
+    """``section_point``: the compass's ``(q3, q3_dot, q4_dot)`` on any walker's section, with
+    further links (the torso) starting upright and not turning (absolute angle and rate 0)."""
+    import numpy as np
+
+    from heelstrike.dynamics.phased import load_phased_walker
+    from heelstrike.models import CompassGait
+
+    np.testing.assert_array_equal(CompassGait().section_point(-0.2, 1.1, 0.3), [-0.2, 1.1, 0.3])
+    torso = load_phased_walker("torso")
+    q, qd = torso.section_to_state(torso.section_point(-0.2, 1.1, 0.3))
+    j = torso.joint_index("torso")
+    assert q[2] == -0.2 and qd[2] == 1.1
+    assert abs(q[2] + q[j]) < 1e-15 and abs(qd[2] + qd[j]) < 1e-15
+    kneed = load_phased_walker("kneed")
+    q, qd = kneed.section_to_state(kneed.section_point(-0.2, 1.1, 0.3))
+    assert q[2] == -0.2 and qd[2] == 1.1 and qd[kneed.joint_index("hip")] == 0.3

@@ -357,6 +357,31 @@ class PlanarWalker(ABC):
         """
         raise NotImplementedError(f"{type(self).__name__} defines no Poincare section")
 
+    def section_point(
+        self, stance_angle: float, stance_rate: float, swing_rate: float
+    ) -> FloatArray:
+        """A point of the Poincare section laid out from the compass gait's three numbers.
+
+        The one layout every gait search seeds with: the first section angle is
+        ``stance_angle`` (rad; the stance leg just after heel strike, < 0), the first two rates
+        ``stance_rate`` and ``swing_rate`` (rad/s); further section angles (e.g. a torso joint
+        relative to the stance leg) are ``-stance_angle`` and their rates ``-stance_rate``:
+        the further links start upright, not turning. For the compass gait this is
+        ``(q3, q3_dot, q4_dot)`` itself.
+
+        Returns
+        -------
+        ndarray, shape (d,)
+            In the order of :attr:`section_names`.
+        """
+        d = len(self.section_names)
+        n_ang = self.n_section_angles
+        z = np.zeros(d)
+        z[0], z[n_ang], z[n_ang + 1] = stance_angle, stance_rate, swing_rate
+        z[1:n_ang] = -stance_angle
+        z[n_ang + 2 :] = -stance_rate
+        return z
+
     def state_to_section(self, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
         """Inverse of :meth:`section_to_state` (position along the ground is dropped)."""
         raise NotImplementedError(f"{type(self).__name__} defines no Poincare section")

@@ -271,10 +271,7 @@ def write_basin(basin: Basin, out_dir: str | Path, stem: str = "basin") -> tuple
     """
     from heelstrike.plots.gait import basin_figure
 
-    out = _directory(out_dir)
-    png = out / f"{stem}.png"
-    basin_figure(basin).savefig(png, dpi=130)
-    return png, write_netcdf(basin.dataset, out / f"{stem}.nc")
+    return _figure_and_dataset(basin_figure(basin), basin.dataset, out_dir, stem)
 
 
 def write_gait_map(gmap: GaitMap, out_dir: str | Path, stem: str = "gait_map") -> tuple[Path, Path]:
@@ -288,11 +285,18 @@ def write_gait_map(gmap: GaitMap, out_dir: str | Path, stem: str = "gait_map") -
     """
     from heelstrike.plots.gait import gait_map_figure
 
-    out = _directory(out_dir)
-    png = out / f"{stem}.png"
-    gait_map_figure(gmap).savefig(png, dpi=130)
     ds = gmap.dataset.copy()
     ds["stable"] = ds["stable"].astype(np.int8)
+    return _figure_and_dataset(gait_map_figure(gmap), ds, out_dir, stem)
+
+
+def _figure_and_dataset(
+    fig: Any, ds: xr.Dataset, out_dir: str | Path, stem: str
+) -> tuple[Path, Path]:
+    """Write ``<stem>.png`` (130 dpi) and ``<stem>.nc`` into ``out_dir``."""
+    out = _directory(out_dir)
+    png = out / f"{stem}.png"
+    fig.savefig(png, dpi=130)
     return png, write_netcdf(ds, out / f"{stem}.nc")
 
 

@@ -26,6 +26,7 @@ from __future__ import annotations
 import functools
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -154,29 +155,93 @@ class Basin(ResultDictMixin):
         return {name: float(np.mean(codes == i)) for i, name in enumerate(OUTCOMES)}
 
 
-def _basin_variables(
-    dims: tuple[str, str],
-    shape: tuple[int, int],
-    outcome: Any,
-    taken: Any,
-    dist: Any,
-) -> dict[str, Any]:
-    """The data variables of every basin dataset (compass and described walkers alike)."""
+def _check_grid(grid: tuple[int, int], steps: int) -> tuple[int, int]:
+    """The grid sizes, after the checks every basin makes before computing."""
+    n1, n2 = (int(v) for v in grid)
+    if n1 < 1 or n2 < 1:
+        raise ValueError(f"grid must be positive, got {grid}")
+    _check_memory((n1, n2))
+    if steps < 1:
+        raise ValueError("steps must be >= 1")
+    return n1, n2
+
+
+def _walk_slice(
+    func: Any, coords: dict[str, FloatArray], units: tuple[str, str], zstar: FloatArray,
+    tol: float, chunks: int, store: str | os.PathLike[str] | None, progress: bool,
+) -> tuple[NDArray[np.int8], NDArray[np.int64], FloatArray, float]:
+    """Walk every point of the slice grid ``coords`` (two 1-D axes) with the sweep function
+    ``func``, in blocks of whole rows of the first axis; returns the outcome codes, heel
+    strikes taken, final distances to ``zstar`` (flattened) and the wall time (s)."""
+    from heelstrike.analysis.sweep import sweep
+
+    (first, values), (second, _) = coords.items()
+    rows = -(-values.size // max(1, min(int(chunks), values.size)))  # rows per ensemble call
+    t0 = time.perf_counter()
+    res = sweep(
+        func, coords, chunks={first: rows}, store=store, scheduler="sync", progress=progress,
+        units={first: units[0], second: units[1], "status": "1", "steps": "1", "z": "1"},
+    )
+    status = np.asarray(res["status"].values).ravel()
+    taken = np.asarray(res["steps"].values).ravel()
+    zf = np.asarray(res["z"].values).reshape(-1, zstar.size)
+    elapsed = time.perf_counter() - t0
+    dist = np.linalg.norm(zf - zstar, axis=1)
+    return _classify(status, dist, tol), taken, dist, elapsed
+
+
+def _make_basin(
+    coords: dict[str, Any], attrs: dict[str, Any], outcome: NDArray[np.int8],
+    taken: NDArray[np.int64], dist: FloatArray, zstar: FloatArray, elapsed: float,
+    axes: tuple[int, int] = (0, 1),
+) -> Basin:
+    """The :class:`Basin` of a walked slice (compass and described walkers alike)."""
+    dims = tuple(coords)
+    shape = tuple(len(coords[d][1]) for d in dims)
+    ds = xr.Dataset(
+        {
+            "outcome": (dims, np.asarray(outcome).reshape(shape), {
+                "long_name": "fate of the initial state",
+                "flag_values": np.arange(len(OUTCOMES), dtype=np.int8),
+                "flag_meanings": " ".join(OUTCOMES),
+            }),
+            "steps": (dims, np.asarray(taken).reshape(shape).astype(np.int32), {
+                "long_name": "heel strikes taken (a converged walk stops on arrival)",
+                "units": "1",
+            }),
+            "distance": (dims, np.asarray(dist).reshape(shape), {
+                "long_name": "final distance to the fixed point in section coordinates "
+                             "(Euclidean norm of rad and rad/s components, as the convergence "
+                             "test --tol)",
+                "units": "rad, rad s-1 (mixed)",
+            }),
+        },
+        coords=coords,
+        attrs=attrs,
+    )
+    frac = float(np.mean(outcome == 0))
+    ds.attrs["converging_fraction"] = frac
+    return Basin(dataset=ds, fixed_point=zstar, converging_fraction=frac, elapsed=elapsed,
+                 axes=axes, walker_steps=int(taken.sum()))
+
+
+def _walk_chunk(
+    a: FloatArray, b: FloatArray, zstar: tuple[float, ...], axes: tuple[int, int],
+    walk: Callable[[FloatArray], tuple[ArrayLike, ArrayLike, ArrayLike]],
+) -> dict[str, NDArray[np.generic]]:
+    """Sweep-function body: ``walk`` the section points ``zstar`` with coordinates ``axes`` set
+    to the chunk's broadcast ``(a, b)`` grid (``walk(Z)``, ``Z`` of shape ``(n, d)``, returns
+    the status codes, heel strikes taken and final section points); returns ``status`` and
+    ``steps`` (int64, shape ``(n_a, n_b)``) and ``z`` (shape ``(n_a, n_b, d)``)."""
+    A, B = np.broadcast_arrays(np.asarray(a, dtype=float), np.asarray(b, dtype=float))
+    Z = np.tile(np.asarray(zstar), (A.size, 1))
+    Z[:, axes[0]] = A.ravel()
+    Z[:, axes[1]] = B.ravel()
+    status, taken, zf = walk(Z)
     return {
-        "outcome": (dims, np.asarray(outcome).reshape(shape), {
-            "long_name": "fate of the initial state",
-            "flag_values": np.arange(len(OUTCOMES), dtype=np.int8),
-            "flag_meanings": " ".join(OUTCOMES),
-        }),
-        "steps": (dims, np.asarray(taken).reshape(shape).astype(np.int32), {
-            "long_name": "heel strikes taken (a converged walk stops on arrival)",
-            "units": "1",
-        }),
-        "distance": (dims, np.asarray(dist).reshape(shape), {
-            "long_name": "final distance to the fixed point in section coordinates (Euclidean "
-                         "norm of rad and rad/s components, as the convergence test --tol)",
-            "units": "rad, rad s-1 (mixed)",
-        }),
+        "status": np.asarray(status, dtype=np.int64).reshape(A.shape),
+        "steps": np.asarray(taken, dtype=np.int64).reshape(A.shape),
+        "z": np.asarray(zf, dtype=float).reshape(*A.shape, len(zstar)),
     }
 
 
@@ -238,12 +303,7 @@ def basin_of_attraction(
         Before any computing, if :func:`basin_memory_estimate` exceeds
         :func:`available_memory`; the message gives both.
     """
-    n3, nd = (int(v) for v in grid)
-    if n3 < 1 or nd < 1:
-        raise ValueError(f"grid must be positive, got {grid}")
-    _check_memory((n3, nd))
-    if steps < 1:
-        raise ValueError("steps must be >= 1")
+    n3, nd = _check_grid(grid, steps)
     (a0, a1), (b0, b1) = ranges
     if not (a0 < a1 and b0 < b1):
         raise ValueError(f"ranges must be increasing (min < max), got {ranges}")
@@ -251,32 +311,18 @@ def basin_of_attraction(
         zstar = find_limit_cycle(walker, slope=slope, method="compiled").fixed_point
     else:
         zstar = np.asarray(fixed_point, dtype=float).reshape(3)
-    from heelstrike.analysis.sweep import sweep
-
     q3 = np.linspace(a0, a1, n3)
     q3d = np.linspace(b0, b1, nd)
-    rows = -(-n3 // max(1, min(int(chunks), n3)))  # q3 rows per ensemble call
     func = functools.partial(
         _basin_chunk, walker=walker, slope=float(slope), zstar=tuple(map(float, zstar)),
         steps=int(steps), tol=float(tol), rtol=float(rtol), atol=float(atol), parallel=parallel,
     )
-    t0 = time.perf_counter()
-    res = sweep(
-        func, {"q3": q3, "q3_dot": q3d}, chunks={"q3": rows}, store=store, scheduler="sync",
-        progress=progress, units={"q3": "rad", "q3_dot": "rad s-1", "status": "1",
-                                  "steps": "1", "z": "1"},
-    )
-    status = np.asarray(res["status"].values).ravel()
-    taken = np.asarray(res["steps"].values).ravel()
-    zf = np.asarray(res["z"].values).reshape(-1, 3)
-    elapsed = time.perf_counter() - t0
-    dist = np.linalg.norm(zf - zstar, axis=1)
-    outcome = _classify(status, dist, tol)
-    shape = (n3, nd)
-    dims = ("q3", "q3_dot")
-    ds = xr.Dataset(
-        _basin_variables(dims, shape, outcome, taken, dist),
-        coords={
+    outcome, taken, dist, elapsed = _walk_slice(
+        func, {"q3": q3, "q3_dot": q3d}, ("rad", "rad s-1"), zstar, tol, chunks, store, progress)
+    from heelstrike.analysis.gait_map import _walker_kwargs
+
+    return _make_basin(
+        {
             "q3": ("q3", q3, {"units": "rad", "long_name": "post-impact stance angle q3",
                               "label": r"post-impact stance angle $q_3$ (rad)"}),
             "q3_dot": ("q3_dot", q3d, {
@@ -284,7 +330,7 @@ def basin_of_attraction(
                 "label": r"post-impact stance velocity $\dot q_3$ (rad/s)",
             }),
         },
-        attrs={
+        {
             "title": "basin of attraction of the passive compass gait",
             "section": "post-impact (q3, q3_dot) with q4 = -2 q3 and q4_dot = q4_dot*",
             "q4_dot": float(zstar[2]),
@@ -295,22 +341,14 @@ def basin_of_attraction(
             "slope": float(slope),
             "slope_units": "rad",
             "foot_radius": float(walker.foot_radius),
-            "hip_mass": float(walker.hip_mass),
-            "leg_mass": float(walker.leg_mass),
-            "leg_length": float(walker.leg_length),
-            "leg_com_from_hip": float(walker.leg_com_from_hip),
-            "leg_inertia": float(walker.leg_inertia),
-            "gravity": float(walker.gravity),
+            **_walker_kwargs(walker),
             "max_steps": int(steps),
             "tol": float(tol),
             "rtol": float(rtol),
             "atol": float(atol),
         },
+        outcome, taken, dist, zstar, elapsed,
     )
-    frac = float(np.mean(outcome == 0))
-    ds.attrs["converging_fraction"] = frac
-    return Basin(dataset=ds, fixed_point=zstar, converging_fraction=frac, elapsed=elapsed,
-                 walker_steps=int(taken.sum()))
 
 
 def _classify(status: NDArray[np.int64], dist: FloatArray, tol: float) -> NDArray[np.int8]:
@@ -338,22 +376,15 @@ def _basin_chunk(
     atol: float,
     parallel: bool | None,
 ) -> dict[str, NDArray[np.generic]]:
-    """Sweep function: walk every ``(q3, q3_dot)`` point of the chunk (see the sweep contract).
+    """Sweep function: walk every ``(q3, q3_dot)`` point of the chunk (see the sweep contract
+    and :func:`_walk_chunk`)."""
 
-    Returns the ensemble's ``status`` and ``steps`` (int64) and final section point ``z``
-    (rad, rad/s), shapes ``(n_q3, n_q3_dot)`` and ``(n_q3, n_q3_dot, 3)``.
-    """
-    A, B = np.broadcast_arrays(np.asarray(q3, dtype=float), np.asarray(q3_dot, dtype=float))
-    z0 = np.column_stack((A.ravel(), B.ravel(), np.full(A.size, zstar[2])))
-    res = ensemble_walk(
-        walker, z0, slope, steps=steps, rtol=rtol, atol=atol, record=False,
-        stop_near=(np.asarray(zstar), tol), parallel=parallel,
-    )
-    return {
-        "status": np.asarray(res.status, dtype=np.int64).reshape(A.shape),
-        "steps": np.asarray(res.steps, dtype=np.int64).reshape(A.shape),
-        "z": np.asarray(res.z, dtype=float).reshape(*A.shape, 3),
-    }
+    def walk(z0: FloatArray) -> tuple[Any, Any, Any]:
+        res = ensemble_walk(walker, z0, slope, steps=steps, rtol=rtol, atol=atol, record=False,
+                            stop_near=(np.asarray(zstar), tol), parallel=parallel)
+        return res.status, res.steps, res.z
+
+    return _walk_chunk(q3, q3_dot, zstar, (0, 1), walk)
 
 
 # -- described walkers (TOML models) -------------------------------------------------------------
@@ -430,18 +461,12 @@ def model_basin_of_attraction(
     MemoryError, ValueError, GaitNotFoundError
     """
     from heelstrike.analysis.model_gaits import find_model_gait
-    from heelstrike.analysis.sweep import sweep
     from heelstrike.dynamics.phased import PhasedWalker
 
     if backend not in ("compiled", "scipy"):
         raise ValueError(f"backend must be 'compiled' or 'scipy', got {backend!r}")
     w = PhasedWalker.from_built(walker)
-    n1, n2 = (int(v) for v in grid)
-    if n1 < 1 or n2 < 1:
-        raise ValueError(f"grid must be positive, got {grid}")
-    _check_memory((n1, n2))
-    if steps < 1:
-        raise ValueError("steps must be >= 1")
+    n1, n2 = _check_grid(grid, steps)
     names = w.section_names
     d = len(names)
     if fixed_point is None:
@@ -457,26 +482,13 @@ def model_basin_of_attraction(
     xa = np.linspace(a0, a1, n1)
     xb = np.linspace(b0, b1, n2)
     xn, yn = names[ia], names[ib]
-    rows = -(-n1 // max(1, min(int(chunks), n1)))
     func = functools.partial(
         _model_basin_chunk, description=w.description, params=dict(w.params),
         slope=float(slope), zstar=tuple(map(float, zstar)), axes=(ia, ib), steps=int(steps),
         tol=float(tol), rtol=float(rtol), atol=float(atol), backend=backend, parallel=parallel,
     )
-    t0 = time.perf_counter()
-    res = sweep(
-        func, {"a": xa, "b": xb}, chunks={"a": rows}, store=store, scheduler="sync",
-        progress=progress, units={"a": "rad", "b": "rad s-1", "status": "1", "steps": "1",
-                                  "z": "1"},
-    )
-    status = np.asarray(res["status"].values).ravel()
-    taken = np.asarray(res["steps"].values).ravel()
-    zf = np.asarray(res["z"].values).reshape(-1, d)
-    elapsed = time.perf_counter() - t0
-    dist = np.linalg.norm(zf - zstar, axis=1)
-    outcome = _classify(status, dist, tol)
-    shape = (n1, n2)
-    dims = (xn, yn)
+    outcome, taken, dist, elapsed = _walk_slice(
+        func, {"a": xa, "b": xb}, ("rad", "rad s-1"), zstar, tol, chunks, store, progress)
     held = [i for i in range(d) if i not in (ia, ib)]
     unit = ["rad" if i < ib else "rad/s" for i in range(d)]
     attrs: dict[str, Any] = {
@@ -497,21 +509,14 @@ def model_basin_of_attraction(
         attrs[f"fixed_point_{name}"] = float(zstar[i])
     for name, value in w.params.items():
         attrs[f"param_{name}"] = float(np.asarray(value))
-    ds = xr.Dataset(
-        _basin_variables(dims, shape, outcome, taken, dist),
-        coords={
-            xn: (xn, xa, {"units": "rad", "long_name": f"post-heel-strike stance angle {xn}",
-                          "label": f"post-impact stance angle {xn} (rad)"}),
-            yn: (yn, xb, {"units": "rad s-1",
-                          "long_name": f"post-heel-strike stance angular velocity {yn}",
-                          "label": f"post-impact stance velocity {yn} (rad/s)"}),
-        },
-        attrs=attrs,
-    )
-    frac = float(np.mean(outcome == 0))
-    ds.attrs["converging_fraction"] = frac
-    return Basin(dataset=ds, fixed_point=zstar, converging_fraction=frac, elapsed=elapsed,
-                 axes=(ia, ib), walker_steps=int(taken.sum()))
+    coords = {
+        xn: (xn, xa, {"units": "rad", "long_name": f"post-heel-strike stance angle {xn}",
+                      "label": f"post-impact stance angle {xn} (rad)"}),
+        yn: (yn, xb, {"units": "rad s-1",
+                      "long_name": f"post-heel-strike stance angular velocity {yn}",
+                      "label": f"post-impact stance velocity {yn} (rad/s)"}),
+    }
+    return _make_basin(coords, attrs, outcome, taken, dist, zstar, elapsed, axes=(ia, ib))
 
 
 def _model_basin_chunk(
@@ -530,35 +535,22 @@ def _model_basin_chunk(
     backend: str,
     parallel: bool | None,
 ) -> dict[str, NDArray[np.generic]]:
-    """Sweep function of :func:`model_basin_of_attraction` over the slice coordinates.
-
-    Returns ``status`` and ``steps`` (int64, shape ``(n_a, n_b)``) and the final section point
-    ``z`` (shape ``(n_a, n_b, d)``).
-    """
+    """Sweep function of :func:`model_basin_of_attraction` over the slice coordinates (see
+    :func:`_walk_chunk`)."""
     from heelstrike.dynamics.phased import PhasedWalker
 
     w = PhasedWalker(description, **params)
-    A, B = np.broadcast_arrays(np.asarray(a, dtype=float), np.asarray(b, dtype=float))
-    d = len(zstar)
-    Z = np.tile(np.asarray(zstar), (A.size, 1))
-    Z[:, axes[0]] = A.ravel()
-    Z[:, axes[1]] = B.ravel()
-    if backend == "compiled":
+
+    def walk(Z: FloatArray) -> tuple[Any, Any, Any]:
+        if backend != "compiled":
+            return _walk_points_scipy(w, Z, slope, steps, np.asarray(zstar), tol, rtol, atol)
         from heelstrike.dynamics.compiled_phased import ensemble_walk_phased
 
-        res = ensemble_walk_phased(
-            w, Z, slope=slope, steps=steps, rtol=rtol, atol=atol,
-            stop_near=(np.asarray(zstar), tol), parallel=parallel,
-        )
-        status, taken, zf = res.status, res.steps, res.z
-    else:
-        status, taken, zf = _walk_points_scipy(w, Z, slope, steps, np.asarray(zstar), tol,
-                                               rtol, atol)
-    return {
-        "status": np.asarray(status, dtype=np.int64).reshape(A.shape),
-        "steps": np.asarray(taken, dtype=np.int64).reshape(A.shape),
-        "z": np.asarray(zf, dtype=float).reshape(*A.shape, d),
-    }
+        res = ensemble_walk_phased(w, Z, slope=slope, steps=steps, rtol=rtol, atol=atol,
+                                   stop_near=(np.asarray(zstar), tol), parallel=parallel)
+        return res.status, res.steps, res.z
+
+    return _walk_chunk(a, b, zstar, axes, walk)
 
 
 def _walk_points_scipy(

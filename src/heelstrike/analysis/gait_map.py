@@ -209,6 +209,28 @@ def newton_gait(
 
 
 _OUTPUTS = ("spectral_radius", "period", "step_length", "collision_loss", "impact_angle")
+#: Units of the map's per-gait variables (compass and described walkers alike).
+_UNITS = {"spectral_radius": "1", "period": "s", "step_length": "m", "collision_loss": "J",
+          "impact_angle": "rad", "most_negative_real_multiplier": "1"}
+
+
+def _check_slopes(slopes: FloatArray) -> None:
+    if slopes.size < 1 or np.any(np.diff(slopes) <= 0) or slopes[0] <= 0:
+        raise ValueError("slopes must be positive and increasing")
+
+
+def _anchor_index(slopes: FloatArray) -> int:
+    """The anchor slope of a map: the grid slope closest to 3 deg."""
+    return int(np.argmin(np.abs(slopes - np.deg2rad(3.0))))
+
+
+def _add_derived(ds: xr.Dataset) -> None:
+    """``speed``, ``stable`` and ``gait_found`` of a map dataset, from its gait variables."""
+    ds["speed"] = (ds["step_length"] / ds["period"]).assign_attrs(units="m s-1")
+    ds["stable"] = (ds["spectral_radius"] < 1.0).assign_attrs(
+        long_name="all Floquet multipliers inside the unit circle")
+    ds["gait_found"] = ds["spectral_radius"].notnull().assign_attrs(
+        long_name="a period-one gait was found (else every output is NaN)")
 
 
 def _branch(
@@ -437,11 +459,10 @@ def gait_map(
     S = np.asarray(slopes, dtype=float).ravel()
     if R.size < 1 or S.size < 1:
         raise ValueError("radii and slopes must not be empty")
-    if np.any(np.diff(S) <= 0) or S[0] <= 0:
-        raise ValueError("slopes must be positive and increasing")
+    _check_slopes(S)
     if np.any(R < 0) or np.any(R > float(walker.leg_length)):
         raise ValueError("radii must satisfy 0 <= R <= leg_length")
-    anchor_index = int(np.argmin(np.abs(S - np.deg2rad(3.0))))
+    anchor_index = _anchor_index(S)
     anchors = _anchors(walker, R, float(S[anchor_index]), guess, rtol, atol)
     func = functools.partial(
         _map_chunk,
@@ -458,16 +479,7 @@ def gait_map(
         store=None if store is None else str(store),
         scheduler=scheduler,
         progress=progress,
-        units={
-            "spectral_radius": "1",
-            "period": "s",
-            "step_length": "m",
-            "collision_loss": "J",
-            "impact_angle": "rad",
-            "fixed_point": "rad, rad s-1, rad s-1",
-            "most_negative_real_multiplier": "1",
-            "period_doubling_slope": "rad",
-        },
+        units={**_UNITS, "fixed_point": "rad, rad s-1, rad s-1", "period_doubling_slope": "rad"},
         output_dims={"fixed_point": ("section",)},
     ).load()
     pd = ds["period_doubling_slope"].isel(slope=0, drop=True)
@@ -479,13 +491,7 @@ def gait_map(
     ds["fixed_point"].attrs.update(
         long_name="post-impact fixed point (q3 rad, q3_dot rad/s, q4_dot rad/s)"
     )
-    ds["speed"] = (ds["step_length"] / ds["period"]).assign_attrs(units="m s-1")
-    ds["stable"] = (ds["spectral_radius"] < 1.0).assign_attrs(
-        long_name="all Floquet multipliers inside the unit circle"
-    )
-    ds["gait_found"] = ds["spectral_radius"].notnull().assign_attrs(
-        long_name="a period-one gait was found (else every output is NaN)"
-    )
+    _add_derived(ds)
     ds.attrs.update(
         {f"walker_{k}": v for k, v in _walker_kwargs(walker).items()}
         | {"anchor_slope": float(S[anchor_index]), "rtol": rtol, "atol": atol}
@@ -554,16 +560,13 @@ def model_gait_map(
     S = np.asarray(slopes, dtype=float).ravel()
     if P.size < 1 or S.size < 1:
         raise ValueError("values and slopes must not be empty")
-    if np.any(np.diff(S) <= 0) or S[0] <= 0:
-        raise ValueError("slopes must be positive and increasing")
+    _check_slopes(S)
     d = len(w0.section_names)
     shape = (P.size, S.size)
-    out = {k: np.full(shape, np.nan) for k in (
-        "spectral_radius", "period", "step_length", "collision_loss", "impact_angle",
-        "most_negative_real_multiplier")}
+    out = {k: np.full(shape, np.nan) for k in _UNITS}
     fixed = np.full((*shape, d), np.nan)
     pd = np.full(P.size, np.nan)
-    anchor = int(np.argmin(np.abs(S - np.deg2rad(3.0))))
+    anchor = _anchor_index(S)
     prev_anchor: FloatArray | None = None
     for i, value in enumerate(P):
         try:
@@ -579,15 +582,13 @@ def model_gait_map(
                 g = find_model_gait(w, slope=float(S[j]), guess=guess, backend=backend)
             except (GaitNotFoundError, ValueError):
                 return None
-            mult = np.asarray(g.cycle.multipliers)
-            real = mult[np.abs(mult.imag) < 1e-9].real
-            out["spectral_radius"][i, j] = float(np.max(np.abs(mult)))
+            mnr = _most_negative_real(np.asarray(g.cycle.multipliers))
+            out["spectral_radius"][i, j] = float(np.max(np.abs(g.cycle.multipliers)))
             out["period"][i, j] = g.cycle.period
             out["step_length"][i, j] = g.cycle.step_length
             out["collision_loss"][i, j] = g.collision_loss
             out["impact_angle"][i, j] = g.cycle.impact_angle
-            out["most_negative_real_multiplier"][i, j] = (
-                float(real.min()) if real.size else np.nan)
+            out["most_negative_real_multiplier"][i, j] = np.nan if mnr is None else mnr
             fixed[i, j] = g.cycle.fixed_point
             return np.asarray(g.cycle.fixed_point, dtype=float)
 
@@ -614,10 +615,8 @@ def model_gait_map(
 
     unit = parameter_units(w0.description).get(parameter, "SI units")
     dims = (parameter, "slope")
-    units = {"spectral_radius": "1", "period": "s", "step_length": "m", "collision_loss": "J",
-             "impact_angle": "rad", "most_negative_real_multiplier": "1"}
     ds = xr.Dataset(
-        {k: (dims, v, {"units": units[k]}) for k, v in out.items()},
+        {k: (dims, v, {"units": _UNITS[k]}) for k, v in out.items()},
         coords={
             parameter: (parameter, P, {"long_name": f"walker parameter {parameter}",
                                        "units": unit, "label": f"{parameter} ({unit})"}),
@@ -630,11 +629,7 @@ def model_gait_map(
         "long_name": "post-heel-strike fixed point (section coordinates: rad, rad/s)"})
     ds["period_doubling_slope"] = ((parameter,), pd, {
         "units": "rad", "long_name": "slope where a multiplier crosses -1 (period doubling)"})
-    ds["speed"] = (ds["step_length"] / ds["period"]).assign_attrs(units="m s-1")
-    ds["stable"] = (ds["spectral_radius"] < 1.0).assign_attrs(
-        long_name="all Floquet multipliers inside the unit circle")
-    ds["gait_found"] = ds["spectral_radius"].notnull().assign_attrs(
-        long_name="a period-one gait was found (else every output is NaN)")
+    _add_derived(ds)
     ds.attrs.update({"model": w0.description.name, "parameter": parameter, "backend": backend,
                      "anchor_slope": float(S[anchor])}
                     | {f"param_{k}": float(np.asarray(v)) for k, v in w0.params.items()
@@ -743,11 +738,7 @@ def model_bifurcation(
     GaitNotFoundError
         If there is no gait at the first slope.
     """
-    from heelstrike.analysis.limit_cycle import (
-        BifurcationDiagram,
-        Continuation,
-        PoincareMap,
-    )
+    from heelstrike.analysis.limit_cycle import Continuation, bifurcation_diagram
     from heelstrike.analysis.model_gaits import find_model_gait
     from heelstrike.dynamics.backends import simulator as backend_simulator
     from heelstrike.dynamics.phased import PhasedWalker
@@ -755,20 +746,10 @@ def model_bifurcation(
     w = PhasedWalker.from_built(walker)
     simulator = backend_simulator(w, backend)  # ValueError: unknown or unsupported backend
     sl = np.asarray(slopes, dtype=float).ravel()
-    if sl.size < 1 or np.any(np.diff(sl) <= 0) or sl[0] <= 0:
-        raise ValueError("slopes must be positive and increasing")
+    _check_slopes(sl)
     first = find_model_gait(w, slope=float(sl[0]), backend=backend)
-    angles = np.full((sl.size, record), np.nan)
-    periods = np.full((sl.size, record), np.nan)
-    z = np.asarray(first.cycle.fixed_point, dtype=float)
-    for i, s in enumerate(sl):
-        pmap = PoincareMap(walker=w, slope=float(s), rtol=rtol, atol=atol, simulator=simulator)
-        res = pmap.walk(z, transient + record)
-        rec = res.impacts[transient:]
-        angles[i, : len(rec)] = [r.impact_angle for r in rec]
-        periods[i, : len(rec)] = [r.step_duration for r in rec]
-        if res.ok:
-            z = w.state_to_section(res.final_q, res.final_q_dot)
+    diagram = bifurcation_diagram(w, sl, guess=first.cycle.fixed_point, transient=transient,
+                                  record=record, rtol=rtol, atol=atol, simulator=simulator)
     values: list[float] = []
     cycles = []
     stopped = None
@@ -795,7 +776,7 @@ def model_bifurcation(
         if ma is not None and mb is not None and (ma + 1.0) * (mb + 1.0) < 0.0
     ]
     return (
-        BifurcationDiagram(slopes=sl, impact_angles=angles, periods=periods),
+        diagram,
         Continuation(parameter="slope", values=np.asarray(values), cycles=tuple(cycles),
                      period_doubling=np.asarray(pd, dtype=float), stopped=stopped),
     )

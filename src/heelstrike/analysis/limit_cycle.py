@@ -970,12 +970,14 @@ def bifurcation_diagram(
     atol: float = 1e-10,
     progress: bool = False,
     callback: Callable[[int], None] | None = None,
+    simulator: Callable[..., WalkResult] | None = None,
 ) -> BifurcationDiagram:
     """Brute-force bifurcation diagram over increasing slopes.
 
     For each slope the walker is released from the previous slope's last post-impact state
     (the first from ``guess`` or an automatically found gait), walks ``transient`` steps, and
-    the next ``record`` impact angles and step durations are stored.
+    the next ``record`` impact angles and step durations are stored. ``simulator`` is the
+    step simulator of :class:`PoincareMap` (default: the scipy reference).
     """
     sl = np.asarray(slopes, dtype=float)
     K = sl.size
@@ -986,7 +988,8 @@ def bifurcation_diagram(
     else:
         z = np.asarray(guess, dtype=float)
     for i in _progress(list(range(K)), progress, "bifurcation diagram"):
-        pmap = PoincareMap(walker=walker, slope=float(sl[i]), rtol=rtol, atol=atol)
+        pmap = PoincareMap(walker=walker, slope=float(sl[i]), rtol=rtol, atol=atol,
+                           simulator=simulator)
         res = pmap.walk(z, transient + record)
         rec = res.impacts[transient:]
         angles[i, : len(rec)] = [r.impact_angle for r in rec]

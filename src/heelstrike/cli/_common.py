@@ -147,6 +147,17 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
                    help="set a description parameter (SI units), repeatable, e.g. R=0.2")
 
 
+def add_backend_option(
+    p: argparse.ArgumentParser, help: str | None = None, default: str | None = None,
+    compass: str = "runs",
+) -> None:
+    """``--backend compiled|scipy``. The default help is that of the commands whose compass gait
+    (without ``--model``) ``compass`` on the scipy reference only."""
+    p.add_argument("--backend", choices=("compiled", "scipy"), default=default, help=help or (
+        "step simulator with --model: compiled (default; generated from the walker file) or the "
+        f"scipy reference; the compass gait without --model {compass} on the scipy reference"))
+
+
 def model_from_args(args: argparse.Namespace) -> Any:
     from heelstrike.dynamics.phased import load_phased_walker
 
@@ -193,7 +204,6 @@ def parse_floats(text: str, option: str, n: int | None = None) -> list[float]:
     return vals
 
 
-
 def writable_dir(path: str | os.PathLike[str], option: str = "--out") -> Any:
     """Create the directory ``path`` if needed and check that a file can be written in it,
     before any computing; returns it as a :class:`~pathlib.Path`."""
@@ -213,8 +223,6 @@ def writable_dir(path: str | os.PathLike[str], option: str = "--out") -> Any:
     return out
 
 
-
-
 def parse_guess(text: str | None) -> list[float] | None:
     if text is None:
         return None
@@ -225,8 +233,6 @@ def parse_guess(text: str | None) -> list[float] | None:
     if len(vals) != 3:
         raise CliError(f"invalid --guess {text!r}: expected 3 comma-separated numbers")
     return vals
-
-
 
 
 def add_store_option(p: argparse.ArgumentParser) -> None:
@@ -290,8 +296,6 @@ def parse_grid(text: str) -> tuple[int, int]:
     return n1, n2
 
 
-
-
 def parse_sweep(text: str) -> tuple[str, float, float, int]:
     name, sep, rest = text.partition(":")
     if not sep or not name:
@@ -303,8 +307,6 @@ def parse_sweep(text: str) -> tuple[str, float, float, int]:
     if count is None:
         raise argparse.ArgumentTypeError(f"invalid sweep {text!r}: COUNT is required")
     return name, start, stop, count
-
-
 
 
 ACTUATIONS = ("pushoff", "hip-energy", "hip-pd")
@@ -341,8 +343,6 @@ def family_from_args(args: argparse.Namespace) -> Any:
     from heelstrike.analysis.powered import actuation_family
 
     return actuation_family(args.actuation, **actuation_options(args))
-
-
 
 
 def linspace_grid(r: tuple[float, float, int | None], default_count: int) -> list[float]:

@@ -6,6 +6,7 @@ import json
 import math
 import os
 import sys
+from collections.abc import Iterable
 from typing import Any
 
 from heelstrike.cli._common import CliError
@@ -46,6 +47,33 @@ def print_json(obj: Any) -> None:
     sys.stdout.flush()
 
 
+def print_paths(paths: Iterable[Any]) -> None:
+    """Print the paths written, one per line."""
+    for path in paths:
+        print(path)
+
+
+def fixed_point_text(fixed_point: dict[str, float]) -> str:
+    """``'q3 = -0.200000, q3_dot = ...'``: a fixed point's section coordinates."""
+    return ", ".join(f"{k} = {v:.6f}" for k, v in fixed_point.items())
+
+
+def multipliers_text(multipliers: Iterable[complex]) -> str:
+    """The Floquet multipliers' moduli, ``'0.5200, 0.5200, 0.1800'``."""
+    return ", ".join(f"{abs(m):.4f}" for m in multipliers)
+
+
+def print_step_lines(gait: Any) -> None:
+    """The period (s), step length (m) and speed (m/s) lines of a gait report."""
+    print(f"  period          {gait.period:10.5f} s")
+    print(f"  step length     {gait.step_length:10.5f} m")
+    print(f"  speed           {gait.speed:10.5f} m/s")
+
+
+def print_stability_lines(gait: Any) -> None:
+    """The ``|multipliers|`` and ``stable`` lines of a gait report."""
+    print(f"  |multipliers|   {multipliers_text(gait.multipliers)}")
+    print(f"  stable          {'yes' if gait.stable else 'no'}")
 
 
 def one_line(exc: BaseException) -> str:

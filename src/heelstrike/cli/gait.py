@@ -9,6 +9,7 @@ from typing import Any
 
 from heelstrike.cli._common import (
     CliError,
+    add_backend_option,
     add_model_options,
     add_store_option,
     add_walker_options,
@@ -24,9 +25,21 @@ from heelstrike.cli._common import (
     walker_from_args,
     writable_dir,
 )
-from heelstrike.cli._render import print_json
+from heelstrike.cli._render import (
+    fixed_point_text,
+    multipliers_text,
+    print_json,
+    print_paths,
+    print_stability_lines,
+    print_step_lines,
+)
 
 __all__ = ['add_basin', 'add_bifurcation', 'add_gait', 'add_map', 'add_walk']
+
+
+def _no_gait(slope: float, exc: Exception) -> CliError:
+    """The error of a command that found no gait at ``slope`` (rad)."""
+    return CliError(f"no gait found at slope {math.degrees(slope):g} deg: {exc}")
 
 
 def add_gait(sub: Any) -> None:
@@ -44,9 +57,8 @@ def add_gait(sub: Any) -> None:
                    help="post-impact Q3,Q3DOT,Q4DOT to start Newton from (rad, rad/s); "
                    "write --guess=-0.27,1.09,-0.72 when Q3 is negative (with --model: the "
                    "walker's section coordinates)")
-    p.add_argument("--backend", choices=("compiled", "scipy"), default="compiled",
-                   help="step simulator: compiled numba kernels (default; generated from "
-                   "the walker file with --model) or the scipy reference")
+    add_backend_option(p, "step simulator: compiled numba kernels (default; generated from the "
+                       "walker file with --model) or the scipy reference", "compiled")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=_run_gait)
 
@@ -62,21 +74,17 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     try:
         gait = find_model_gait(walker, slope=args.slope, guess=guess, backend=args.backend)
     except GaitNotFoundError as exc:
-        raise CliError(f"no gait found at slope {math.degrees(args.slope):g} deg: {exc}") from exc
+        raise _no_gait(args.slope, exc) from exc
     d = gait.to_dict()
     d["model"] = walker.description.name
     if args.json:
         print_json(d)
         return 0
     c = gait.cycle
-    fp = ", ".join(f"{k} = {v:.6f}" for k, v in d["fixed_point"].items())
     print(f"passive gait of '{d['model']}', slope = {math.degrees(args.slope):g} deg")
-    print(f"  fixed point (just after heel strike): {fp}")
-    print(f"  period          {c.period:10.5f} s")
-    print(f"  step length     {c.step_length:10.5f} m")
-    print(f"  speed           {c.speed:10.5f} m/s")
-    print(f"  |multipliers|   {', '.join(f'{abs(m):.4f}' for m in c.multipliers)}")
-    print(f"  stable          {'yes' if c.stable else 'no'}")
+    print(f"  fixed point (just after heel strike): {fixed_point_text(d['fixed_point'])}")
+    print_step_lines(c)
+    print_stability_lines(c)
     for imp in d["impacts"]:
         print(f"  {imp['kind']:<15} T_c = {imp['T_c']:.6f} J")
     print(f"  collision loss  {gait.collision_loss:10.5f} J/step (sum of T_c)")
@@ -130,7 +138,7 @@ def _run_gait(args: argparse.Namespace) -> int:
             gaits = (find_limit_cycle(walker, slope=args.slope, guess=guess,
                                       method=args.backend),)
     except GaitNotFoundError as exc:
-        raise CliError(f"no gait found at slope {math.degrees(args.slope):g} deg: {exc}") from exc
+        raise _no_gait(args.slope, exc) from exc
     cycle = gaits[0]
     d = cycle.to_dict()
     d["gaits"] = [_gait_summary(c) for c in gaits]
@@ -143,19 +151,14 @@ def _run_gait(args: argparse.Namespace) -> int:
               "is shown in detail):")
         for i, c in enumerate(gaits):
             print(f"  [{i}] step length {c.step_length:.5f} m, period {c.period:.5f} s, "
-                  f"|multipliers| {', '.join(f'{abs(m):.4f}' for m in c.multipliers)}, "
+                  f"|multipliers| {multipliers_text(c.multipliers)}, "
                   f"{'stable' if c.stable else 'unstable'}")
-    fp = ", ".join(f"{k} = {v:.6f}" for k, v in d["fixed_point"].items())
-    mult = ", ".join(f"{abs(m):.4f}" for m in cycle.multipliers)
     print(f"passive gait, R = {args.radius:g} m, slope = {math.degrees(args.slope):g} deg")
-    print(f"  fixed point (just after impact): {fp}")
-    print(f"  period          {cycle.period:10.5f} s")
-    print(f"  step length     {cycle.step_length:10.5f} m")
-    print(f"  speed           {cycle.speed:10.5f} m/s")
+    print(f"  fixed point (just after impact): {fixed_point_text(d['fixed_point'])}")
+    print_step_lines(cycle)
     print(f"  impact angle    {cycle.impact_angle:10.5f} rad "
           f"({math.degrees(cycle.impact_angle):.3f} deg)")
-    print(f"  |multipliers|   {mult}")
-    print(f"  stable          {'yes' if cycle.stable else 'no'}")
+    print_stability_lines(cycle)
     print(f"  collision loss  {cycle.collision_loss:10.5f} J/step (T_c)")
     print(f"  energy released {cycle.potential_energy_released:10.5f} J/step (gravity)")
     print(f"  eta             {cycle.eta:10.5f} J/m")
@@ -175,10 +178,7 @@ def add_walk(sub: Any) -> None:
     )
     add_walker_options(p)
     add_model_options(p)
-    p.add_argument("--backend", choices=("compiled", "scipy"), default=None,
-                   help="step simulator with --model: compiled (default; generated from the "
-                   "walker file) or the scipy reference; the compass gait without --model "
-                   "walks on the scipy reference")
+    add_backend_option(p, compass="walks")
     p.add_argument("--slope", type=parse_angle, default=parse_angle("3deg"),
                    help="slope angle (default 3deg)")
     p.add_argument("--steps", type=positive_int, default=6, help="number of steps (default 6)")
@@ -232,8 +232,7 @@ def _walk_model(args: argparse.Namespace, out: Any, to_dir: bool) -> int:
     print(f"{walk.n_steps} steps, status: {walk.status.value} ({walk.message})")
     print(path)
     if to_dir:
-        for p in write_model_walk_figures(walker, walk, out):
-            print(p)
+        print_paths(write_model_walk_figures(walker, walk, out))
         print(f"heelstrike: the {' and '.join(COMPASS_ONLY_WALK_FIGURES)} figures are drawn for "
               "the compass gait only (without --model); not written", file=sys.stderr)
     return 0 if walk.ok else 1
@@ -282,8 +281,7 @@ def _run_walk(args: argparse.Namespace) -> int:
     print(f"{walk.n_steps} steps, status: {walk.status.value} ({walk.message})")
     print(path)
     if to_dir:
-        for p in write_walk_figures(walker, walk, out):
-            print(p)
+        print_paths(write_walk_figures(walker, walk, out))
     return 0 if walk.ok else 1
 
 
@@ -296,9 +294,8 @@ def add_bifurcation(sub: Any) -> None:
     )
     add_walker_options(p)
     add_model_options(p)
-    p.add_argument("--backend", choices=("compiled", "scipy"), default="compiled",
-                   help="step simulator with --model: compiled (default) or the scipy "
-                   "reference (the compass diagram's pipeline is fixed)")
+    add_backend_option(p, "step simulator with --model: compiled (default) or the scipy "
+                       "reference (the compass diagram's pipeline is fixed)", "compiled")
     p.add_argument("--slope-range", default="0.5deg:6deg",
                    type=lambda t: parse_range(t, parse_angle),
                    help="START:STOP[:COUNT] slopes, e.g. 0.5deg:6deg:56 (default count 45)")
@@ -331,19 +328,14 @@ def _run_bifurcation(args: argparse.Namespace) -> int:
                 record=args.record, backend=args.backend,
             )
         except GaitNotFoundError as exc:
-            raise CliError(f"no gait found at slope {math.degrees(start):g} deg: {exc}") from exc
-        for path in paths:
-            print(path)
-        return 0
-    paths = write_bifurcation(
-        walker, start, stop, count or 45, Path(args.out), transient=args.transient,
-        record=args.record, progress=True,
-    )
-    for path in paths:
-        print(path)
+            raise _no_gait(start, exc) from exc
+    else:
+        paths = write_bifurcation(
+            walker, start, stop, count or 45, Path(args.out), transient=args.transient,
+            record=args.record, progress=True,
+        )
+    print_paths(paths)
     return 0
-
-
 
 
 def add_basin(sub: Any) -> None:
@@ -358,9 +350,8 @@ def add_basin(sub: Any) -> None:
     )
     add_walker_options(p)
     add_model_options(p)
-    p.add_argument("--backend", choices=("compiled", "scipy"), default="compiled",
-                   help="step simulator: the compiled ensemble (default) or, with --model, "
-                   "the scipy reference (slow)")
+    add_backend_option(p, "step simulator: the compiled ensemble (default) or, with --model, "
+                       "the scipy reference (slow)", "compiled")
     p.add_argument("--slope", type=parse_angle, default=parse_angle("3deg"),
                    help="slope angle (default 3deg)")
     p.add_argument("--grid", type=parse_grid, default=None,
@@ -382,38 +373,28 @@ def add_basin(sub: Any) -> None:
     p.set_defaults(func=_run_basin)
 
 
-def _run_basin_model(args: argparse.Namespace) -> int:
-    from heelstrike.analysis import basin as basin_module
+def _basin(args: argparse.Namespace, compute: Any) -> Any:
+    """Check ``--tol`` and ``--out``, then compute the basin (with ``--store``)."""
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
-    from heelstrike.outputs import write_basin
 
-    walker = model_from_args(args)
-    grid = args.grid or (100, 100)
-    ranges = None
-    if args.q3_range is not None or args.q3dot_range is not None:
-        if args.q3_range is None or args.q3dot_range is None:
-            raise CliError("with --model give both --q3-range and --q3dot-range, or neither "
-                           "(default: a window about the fixed point)")
-        ranges = (args.q3_range[:2], args.q3dot_range[:2])
-        if not (ranges[0][0] < ranges[0][1] and ranges[1][0] < ranges[1][1]):
-            raise CliError("--q3-range and --q3dot-range need MIN < MAX")
     if not args.tol > 0:
         raise CliError("--tol must be > 0")
     writable_dir(args.out)
     try:
-        basin = run_with_store(args.store, lambda: basin_module.model_basin_of_attraction(
-            walker, args.slope, grid=grid, ranges=ranges, steps=args.steps, tol=args.tol,
-            backend=args.backend, progress=not args.json and sys.stderr.isatty(),
-            store=args.store,
-        ))
+        return run_with_store(args.store, compute)
     except GaitNotFoundError as exc:
-        raise CliError(f"no gait found at slope {math.degrees(args.slope):g} deg: {exc}") from exc
+        raise _no_gait(args.slope, exc) from exc
+
+
+def _render_basin(basin: Any, args: argparse.Namespace, grid: tuple[int, int],
+                  head: dict[str, Any], names: Any, title: str, fp: str, work: str) -> int:
+    """Write the basin's figure and data and report it (JSON ``head`` keys first)."""
+    from heelstrike.outputs import write_basin
+
     png, nc = write_basin(basin, args.out)
-    names = walker.section_names
-    ia, ib = basin.axes
     if args.json:
         print_json({
-            "model": walker.description.name,
+            **head,
             "converging_fraction": basin.converging_fraction,
             "fractions": basin.fractions(),
             "fixed_point": dict(zip(names, map(float, basin.fixed_point), strict=True)),
@@ -425,25 +406,48 @@ def _run_basin_model(args: argparse.Namespace) -> int:
             "data": str(nc),
         })
         return 0
-    fp = ", ".join(f"{k} = {v:.6f}" for k, v in zip(names, basin.fixed_point, strict=True))
-    print(f"basin of attraction of '{walker.description.name}', slope = "
-          f"{math.degrees(args.slope):g} deg, grid {grid[0]}x{grid[1]} over ({names[ia]}, "
-          f"{names[ib]}), up to {args.steps} steps")
+    print(title)
     print(f"  {'fixed point':20s} {fp}")
     print(f"  {'converging':20s} {100 * basin.converging_fraction:.3f} % of the grid")
     for name, frac in basin.fractions().items():
         if frac > 0 and name != "converged":
             print(f"  {name.replace('_', ' '):20s} {100 * frac:.3f} %")
-    print(f"  {'ensemble time':20s} {basin.elapsed:.1f} s ({basin.walker_steps} walker-steps)")
-    print(png)
-    print(nc)
+    print(f"  {'ensemble time':20s} {basin.elapsed:.1f} s{work}")
+    print_paths((png, nc))
     return 0
+
+
+def _run_basin_model(args: argparse.Namespace) -> int:
+    from heelstrike.analysis import basin as basin_module
+
+    walker = model_from_args(args)
+    grid = args.grid or (100, 100)
+    ranges = None
+    if args.q3_range is not None or args.q3dot_range is not None:
+        if args.q3_range is None or args.q3dot_range is None:
+            raise CliError("with --model give both --q3-range and --q3dot-range, or neither "
+                           "(default: a window about the fixed point)")
+        ranges = (args.q3_range[:2], args.q3dot_range[:2])
+        if not (ranges[0][0] < ranges[0][1] and ranges[1][0] < ranges[1][1]):
+            raise CliError("--q3-range and --q3dot-range need MIN < MAX")
+    basin = _basin(args, lambda: basin_module.model_basin_of_attraction(
+        walker, args.slope, grid=grid, ranges=ranges, steps=args.steps, tol=args.tol,
+        backend=args.backend, progress=not args.json and sys.stderr.isatty(),
+        store=args.store,
+    ))
+    names = walker.section_names
+    ia, ib = basin.axes
+    return _render_basin(
+        basin, args, grid, {"model": walker.description.name}, names,
+        f"basin of attraction of '{walker.description.name}', slope = "
+        f"{math.degrees(args.slope):g} deg, grid {grid[0]}x{grid[1]} over ({names[ia]}, "
+        f"{names[ib]}), up to {args.steps} steps",
+        fixed_point_text(dict(zip(names, basin.fixed_point, strict=True))),
+        f" ({basin.walker_steps} walker-steps)")
 
 
 def _run_basin(args: argparse.Namespace) -> int:
     from heelstrike.analysis.basin import basin_of_attraction
-    from heelstrike.analysis.limit_cycle import GaitNotFoundError
-    from heelstrike.outputs import write_basin
 
     if args.model is not None:
         return _run_basin_model(args)
@@ -453,46 +457,19 @@ def _run_basin(args: argparse.Namespace) -> int:
     walker = walker_from_args(args)
     a0, a1, _ = args.q3_range or (-0.5, -0.05, None)
     b0, b1, _ = args.q3dot_range or (0.3, 2.3, None)
-    args.grid = args.grid or (400, 400)
+    grid = args.grid or (400, 400)
     if not (a0 < a1 and b0 < b1):
         raise CliError("--q3-range and --q3dot-range need MIN < MAX")
-    if not args.tol > 0:
-        raise CliError("--tol must be > 0")
-    writable_dir(args.out)
-    try:
-        basin = run_with_store(args.store, lambda: basin_of_attraction(
-            walker, args.slope, grid=args.grid, ranges=((a0, a1), (b0, b1)), steps=args.steps,
-            tol=args.tol, progress=not args.json and sys.stderr.isatty(), store=args.store,
-        ))
-    except GaitNotFoundError as exc:
-        raise CliError(f"no gait found at slope {math.degrees(args.slope):g} deg: {exc}") from exc
-    png, nc = write_basin(basin, args.out)
-    if args.json:
-        print_json({
-            "converging_fraction": basin.converging_fraction,
-            "fractions": basin.fractions(),
-            "fixed_point": dict(zip(("q3", "q3_dot", "q4_dot"),
-                                    map(float, basin.fixed_point), strict=True)),
-            "grid": list(args.grid),
-            "steps": args.steps,
-            "slope": args.slope,
-            "elapsed": basin.elapsed,
-            "figure": str(png),
-            "data": str(nc),
-        })
-        return 0
-    print(f"basin of attraction, R = {args.radius:g} m, slope = {math.degrees(args.slope):g} deg, "
-          f"grid {args.grid[0]}x{args.grid[1]}, up to {args.steps} steps")
-    print(f"  {'fixed point':20s} q3 = {basin.fixed_point[0]:.6f} rad, q3_dot = "
-          f"{basin.fixed_point[1]:.6f} rad/s, q4_dot = {basin.fixed_point[2]:.6f} rad/s")
-    print(f"  {'converging':20s} {100 * basin.converging_fraction:.3f} % of the grid")
-    for name, frac in basin.fractions().items():
-        if frac > 0 and name != "converged":
-            print(f"  {name.replace('_', ' '):20s} {100 * frac:.3f} %")
-    print(f"  {'ensemble time':20s} {basin.elapsed:.1f} s")
-    print(png)
-    print(nc)
-    return 0
+    basin = _basin(args, lambda: basin_of_attraction(
+        walker, args.slope, grid=grid, ranges=((a0, a1), (b0, b1)), steps=args.steps,
+        tol=args.tol, progress=not args.json and sys.stderr.isatty(), store=args.store,
+    ))
+    z = basin.fixed_point
+    return _render_basin(
+        basin, args, grid, {}, ("q3", "q3_dot", "q4_dot"),
+        f"basin of attraction, R = {args.radius:g} m, slope = {math.degrees(args.slope):g} deg, "
+        f"grid {grid[0]}x{grid[1]}, up to {args.steps} steps",
+        f"q3 = {z[0]:.6f} rad, q3_dot = {z[1]:.6f} rad/s, q4_dot = {z[2]:.6f} rad/s", "")
 
 
 def add_map(sub: Any) -> None:
@@ -506,9 +483,8 @@ def add_map(sub: Any) -> None:
     )
     add_walker_options(p)
     add_model_options(p)
-    p.add_argument("--backend", choices=("compiled", "scipy"), default="compiled",
-                   help="step simulator: compiled (default) or, with --model, the scipy "
-                   "reference")
+    add_backend_option(p, "step simulator: compiled (default) or, with --model, the scipy "
+                       "reference", "compiled")
     p.add_argument("--radius", type=parse_range, default=None,
                    help="START:STOP[:COUNT] foot radii in m (default 0:0.6:7; with --model "
                    "the walker's parameter R)")
@@ -524,8 +500,17 @@ def add_map(sub: Any) -> None:
     p.set_defaults(func=_run_map)
 
 
-def _run_map_model(args: argparse.Namespace) -> int:
+def _map_slopes(args: argparse.Namespace) -> Any:
+    """The map's slopes (rad) from ``--slope START:STOP[:COUNT]`` (21 by default)."""
+    import numpy as np
 
+    s0, s1, ns = args.slope
+    if not 0 < s0 < s1:
+        raise CliError("--slope needs 0 < START < STOP")
+    return np.linspace(s0, s1, ns or 21)
+
+
+def _run_map_model(args: argparse.Namespace) -> int:
     import numpy as np
 
     from heelstrike.analysis.gait_map import model_gait_map
@@ -546,11 +531,8 @@ def _run_map_model(args: argparse.Namespace) -> int:
     if name not in walker.params:
         raise CliError(f"unknown parameter {name!r} of model {walker.description.name!r} (its "
                        f"parameters: {', '.join(sorted(walker.params))})")
-    s0, s1, ns = args.slope
-    if not 0 < s0 < s1:
-        raise CliError("--slope needs 0 < START < STOP")
+    slopes = _map_slopes(args)
     values = np.linspace(x0, x1, nx or 7)
-    slopes = np.linspace(s0, s1, ns or 21)
     writable_dir(args.out)
     gmap = model_gait_map(walker, name, values, slopes, backend=args.backend,
                           progress=not args.json and sys.stderr.isatty())
@@ -561,7 +543,6 @@ def _run_map_model(args: argparse.Namespace) -> int:
 
 
 def _run_map(args: argparse.Namespace) -> int:
-
     import numpy as np
 
     from heelstrike.analysis.gait_map import gait_map
@@ -575,13 +556,10 @@ def _run_map(args: argparse.Namespace) -> int:
         raise CliError("the compass map runs on the compiled step map only; for the scipy "
                        "reference use --model compass --backend scipy")
     r0, r1, nr = args.radius or (0.0, 0.6, 7)
-    s0, s1, ns = args.slope
     if not 0 <= r0 <= r1 <= args.leg_length:
         raise CliError("--radius needs 0 <= START <= STOP <= leg length")
-    if not 0 < s0 < s1:
-        raise CliError("--slope needs 0 < START < STOP")
+    slopes = _map_slopes(args)
     radii = np.linspace(r0, r1, nr or 7)
-    slopes = np.linspace(s0, s1, ns or 21)
     base = walker_from_args(argparse.Namespace(**{**vars(args), "radius": float(radii[0])}))
     writable_dir(args.out)
     try:
@@ -628,6 +606,5 @@ def _render_gait_map(gmap: Any, args: argparse.Namespace, head: dict[str, Any], 
         pd_text = "none in range" if v is None else f"{math.degrees(v):.3f} deg"
         print(f"  {label}: stable at {int(row.sum()):3d}/{row.size} slopes, "
               f"no gait at {int((~frow).sum()):3d}, period doubling {pd_text}")
-    print(png)
-    print(nc)
+    print_paths((png, nc))
     return 0

@@ -22,7 +22,7 @@ from heelstrike.cli._common import (
     walker_from_args,
     writable_dir,
 )
-from heelstrike.cli._render import one_line, print_json, require_finite
+from heelstrike.cli._render import one_line, print_json, print_paths, require_finite
 
 __all__ = ['add_impact', 'add_impact_map', 'add_reproduce']
 
@@ -46,8 +46,7 @@ def _run_reproduce(args: argparse.Namespace) -> int:
         paths = reproduce_paper(args.out)
     except OSError as exc:
         raise CliError(f"cannot write to {args.out!r}: {exc.strerror or exc}") from exc
-    for path in paths:
-        print(path)
+    print_paths(paths)
     return 0
 
 
@@ -90,7 +89,6 @@ def _check_rates(args: argparse.Namespace) -> None:
 
 
 def _run_impact_model(args: argparse.Namespace) -> int:
-
     from heelstrike.analysis.heel_strike import (
         check_heel_strike_state,
         check_striking_foot_approaches,
@@ -238,8 +236,6 @@ def _run_impact(args: argparse.Namespace) -> int:
     return 0
 
 
-
-
 def add_impact_map(sub: Any) -> None:
     p = sub.add_parser(
         "impact-map",
@@ -313,7 +309,5 @@ def _run_impact_map(args: argparse.Namespace) -> int:
             f"{', '.join(f'{k} = {v:g}' for k, v in point.items())}: {reason}; "
             "narrow --x/--y"
         )
-    paths = write_impact_map(m, out, units=parameter_units(walker.description))
-    for path in paths:
-        print(path)
+    print_paths(write_impact_map(m, out, units=parameter_units(walker.description)))
     return 0

@@ -14,6 +14,7 @@ from heelstrike.cli._common import (
     Parser,
     actuation_options,
     add_actuation_options,
+    add_backend_option,
     add_model_options,
     add_store_option,
     add_walker_options,
@@ -25,7 +26,13 @@ from heelstrike.cli._common import (
     walker_from_args,
     writable_dir,
 )
-from heelstrike.cli._render import print_json
+from heelstrike.cli._render import (
+    fixed_point_text,
+    print_json,
+    print_paths,
+    print_stability_lines,
+    print_step_lines,
+)
 
 __all__ = ['add_powered', 'add_study']
 
@@ -60,10 +67,7 @@ def add_powered(sub: Any) -> None:
     )
     add_walker_options(p)
     add_model_options(p)
-    p.add_argument("--backend", choices=("compiled", "scipy"), default=None,
-                   help="step simulator with --model: compiled (default; generated from the "
-                   "walker file) or the scipy reference; the compass gait without --model "
-                   "runs on the scipy reference")
+    add_backend_option(p)
     tgt = p.add_mutually_exclusive_group()
     tgt.add_argument("--speed", type=float, default=None, help="target mean speed (m/s)")
     tgt.add_argument("--step-length", type=float, default=None, help="target step length (m)")
@@ -125,18 +129,13 @@ def _run_powered(args: argparse.Namespace) -> int:
     if args.json:
         print_json(d)
         return 0
-    fp = ", ".join(f"{k} = {v:.6f}" for k, v in d["fixed_point"].items())
-    mult = ", ".join(f"{abs(m):.4f}" for m in gait.multipliers)
     label = args.actuation if gait.model is None else \
         f"{args.actuation}, model {gait.model}, {args.backend or 'compiled'} backend"
     print(f"powered gait ({label}), R = {radius:g} m, level ground")
     print(f"  {gait.parameter_name:15s} {gait.parameter:10.5f} {gait.parameter_unit}")
-    print(f"  fixed point (just after impact): {fp}")
-    print(f"  period          {gait.period:10.5f} s")
-    print(f"  step length     {gait.step_length:10.5f} m")
-    print(f"  speed           {gait.speed:10.5f} m/s")
-    print(f"  |multipliers|   {mult}")
-    print(f"  stable          {'yes' if gait.stable else 'no'}")
+    print(f"  fixed point (just after impact): {fixed_point_text(d['fixed_point'])}")
+    print_step_lines(gait)
+    print_stability_lines(gait)
     print("  energy books per step")
     print(f"    actuator work   {gait.actuator_work:12.6f} J (push-off "
           f"{gait.push_off_work:.6f} J, {gait.torque_joint} {gait.torque_work:.6f} J)")
@@ -170,10 +169,7 @@ def add_study(sub: Any) -> None:
     )
     add_walker_options(c)  # its --radius is replaced by the range below
     add_model_options(c)
-    c.add_argument("--backend", choices=("compiled", "scipy"), default=None,
-                   help="step simulator with --model: compiled (default; generated from the "
-                   "walker file) or the scipy reference; the compass gait without --model "
-                   "runs on the scipy reference")
+    add_backend_option(c)
     c.add_argument("--radius", dest="radii", type=parse_range, default=(0.0, 0.9, 4),
                    help="foot radii START:STOP:COUNT (m), default 0:0.9:4")
     tgt = c.add_mutually_exclusive_group()
@@ -189,20 +185,11 @@ def add_study(sub: Any) -> None:
     c.set_defaults(func=_run_study, radius=0.0)
 
 
-
-
-def _cost_figures(ds: Any, out: Any) -> list[Any]:
-    """The study's figures; without the paper's impact-only eta (described walkers) the cost
-    figures only."""
-    from heelstrike.outputs import write_cost_figures
-
-    return write_cost_figures(ds, out)
-
-
 def _run_study(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from heelstrike.analysis.cost_study import cost_study, save_study
+    from heelstrike.outputs import write_cost_figures
 
     model = None
     if args.model is None:
@@ -247,7 +234,7 @@ def _run_study(args: argparse.Namespace) -> int:
     out = Path(args.out)
     try:
         nc = save_study(ds, out / "cost_study.nc")
-        paths = [nc, *_cost_figures(ds, out)]
+        paths = [nc, *write_cost_figures(ds, out)]
     except OSError as exc:
         raise CliError(f"cannot write to {args.out!r}: {exc.strerror or exc}") from exc
     found = int(ds["cost_of_transport"].notnull().sum())
@@ -255,8 +242,7 @@ def _run_study(args: argparse.Namespace) -> int:
         raise CliError(f"no gait found at any of the {ds['cost_of_transport'].size} points of "
                        f"the grid ({', '.join(acts)} actuation; no figure drawn; the all-NaN "
                        f"data is in {str(nc)!r}); try other step lengths or speeds")
-    for path in paths:
-        print(path)
+    print_paths(paths)
     fresh = int((ds["branch"] == 1).sum())
     print(f"gaits: the cheapest found at each point, by continuation from neighbours or by "
           f"fresh searches from several seeds ({fresh} point(s) came from a fresh search; "

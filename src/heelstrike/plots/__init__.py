@@ -17,9 +17,11 @@ They are loaded on first use, so ``import heelstrike.plots`` does not import mat
 from __future__ import annotations
 
 import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
     from heelstrike.plots.paper import figure2, figure3a, figure3b
 
 __all__ = ["figure2", "figure3a", "figure3b"]
@@ -33,3 +35,16 @@ def __getattr__(name: str) -> Any:
 
 def __dir__() -> list[str]:
     return sorted(set(globals()) | set(__all__))
+
+
+def _new_figure(
+    width: float, height: float, *, dpi: float | None = None,
+    layout: Literal["constrained"] | None = "constrained",
+) -> Figure:
+    """A ``width`` x ``height`` (inches) figure on its own Agg canvas (no pyplot state)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, height), dpi=dpi, layout=layout)
+    FigureCanvasAgg(fig)
+    return fig

@@ -17,7 +17,6 @@ from typing import Any
 import numpy as np
 from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
 from matplotlib.artist import Artist
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
@@ -27,6 +26,7 @@ from heelstrike.analysis.gait_map import GaitMap
 from heelstrike.analysis.limit_cycle import BifurcationDiagram, Continuation
 from heelstrike.analysis.walk_tables import WalkResult
 from heelstrike.models.compass import CompassGait
+from heelstrike.plots import _new_figure
 
 __all__ = [
     "LEG_COLOURS",
@@ -63,8 +63,7 @@ def _walk_scene(
 ) -> tuple[Figure, Any]:
     """Axes of an animation: equal aspect, the slope drawn from ``xmin`` to ``xmax`` (m), room
     ``margins`` (m) below the ground and above ``ytop``."""
-    fig = Figure(figsize=(7, 3.6), dpi=90)
-    FigureCanvasAgg(fig)
+    fig = _new_figure(7, 3.6, dpi=90, layout=None)
     ax = fig.add_subplot()
     ax.set_aspect("equal")
     ax.set_xlim(xmin, xmax)
@@ -168,8 +167,7 @@ def bifurcation_figure(
     With a ``continuation`` the period-one branch is overlaid (solid where stable, dotted where
     unstable) and its period-doubling slopes marked.
     """
-    fig = Figure(figsize=(7, 6), dpi=110)
-    FigureCanvasAgg(fig)
+    fig = _new_figure(7, 6, dpi=110, layout=None)
     ax1, ax2 = fig.subplots(2, 1, sharex=True)
     slopes_deg = np.rad2deg(diagram.slopes)
     for ax, data, ylabel, scale in (
@@ -225,8 +223,7 @@ def basin_figure(basin: Basin) -> Figure:
     ds = basin.dataset
     xname, yname = ds["outcome"].dims
     q3, q3d = ds[xname].values, ds[yname].values
-    fig = Figure(figsize=(7.5, 5.5), layout="constrained")
-    FigureCanvasAgg(fig)
+    fig = _new_figure(7.5, 5.5)
     ax = fig.add_subplot()
     cmap = ListedColormap(list(_COLOURS))
     norm = BoundaryNorm(np.arange(len(OUTCOMES) + 1) - 0.5, cmap.N)
@@ -279,8 +276,7 @@ def gait_map_figure(gmap: GaitMap) -> Figure:
     R = ds[pname].values
     S = np.degrees(ds["slope"].values)
     rho = ds["spectral_radius"].values
-    fig = Figure(figsize=(7.5, 5.2), layout="constrained")
-    FigureCanvasAgg(fig)
+    fig = _new_figure(7.5, 5.2)
     ax = fig.add_subplot()
     ax.set_facecolor("#d9d9d9")  # no period-one gait found
     finite = rho[np.isfinite(rho)]
@@ -317,14 +313,6 @@ def gait_map_figure(gmap: GaitMap) -> Figure:
 
 # -- the walk, seen: strobe, phase portrait, step kinematics and ground reaction, energy --------
 # Each figure draws a table of heelstrike.analysis.walk_tables (pandas DataFrame, SI units).
-
-
-def _new_figure(width: float, height: float) -> Figure:
-    fig = Figure(figsize=(width, height), dpi=110, layout="constrained")
-    FigureCanvasAgg(fig)
-    return fig
-
-
 def strobe_figure(
     strobe: Any, *, foot_radius: float, slope: float = 0.0, title: str = ""
 ) -> Figure:
@@ -345,7 +333,7 @@ def strobe_figure(
     -------
     matplotlib.figure.Figure
     """
-    fig = _new_figure(8.0, 3.6)
+    fig = _new_figure(8.0, 3.6, dpi=110)
     ax = fig.add_subplot()
     ax.set_aspect("equal")
     n = len(strobe)
@@ -400,7 +388,7 @@ def phase_portrait_figure(
         rate; grey dotted lines join the states just before and just after each heel strike
         (the impact and the leg relabelling). On a limit cycle every step traces the same loop.
     """
-    fig = _new_figure(6.4, 5.0)
+    fig = _new_figure(6.4, 5.0, dpi=110)
     ax = fig.add_subplot()
     steps = np.unique(portrait["step"].to_numpy())
     stance_label, swing_label = labels or (
@@ -447,7 +435,7 @@ def step_figure(step: Any, *, title: str = "") -> Figure:
         Top: ``q3``, ``q4`` and the swing leg's angle (deg); middle: normal and tangential
         ground force on the stance foot (N); bottom: the friction coefficient the step needs.
     """
-    fig = _new_figure(7.0, 7.0)
+    fig = _new_figure(7.0, 7.0, dpi=110)
     ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True)
     t = step["t_s"]
     ax1.plot(t, np.rad2deg(step["q3_rad"]), color="tab:blue", label="stance leg $q_3$")
@@ -489,7 +477,7 @@ def energy_figure(energy: Any, impacts: Any, *, title: str = "") -> Figure:
         Between impacts the total is constant; at each heel strike (dashed lines) it drops by
         the impact's ``T_c``.
     """
-    fig = _new_figure(7.5, 4.6)
+    fig = _new_figure(7.5, 4.6, dpi=110)
     ax = fig.add_subplot()
     U0 = float(energy["potential_J"].iloc[0])
     t = energy["t_s"]
@@ -548,7 +536,7 @@ def model_diagram(
     up_l = np.array([-np.sin(th_l), np.cos(th_l)])
     tip_r, tip_l = PR - R * up_r, PL - R * up_l  # the legs' ends (feet's lowest points on axis)
 
-    fig = _new_figure(7.5, 6.2)
+    fig = _new_figure(7.5, 6.2, dpi=110)
     ax = fig.add_subplot()
     ax.set_aspect("equal")
     ax.axhline(0.0, color="0.3", lw=2)

@@ -13,7 +13,6 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
@@ -21,6 +20,7 @@ from matplotlib.patches import Patch
 from numpy.typing import NDArray
 
 from heelstrike.analysis.model_gaits import ANGLE, ImpactMap
+from heelstrike.plots import _new_figure
 
 __all__ = ["LIFT_BOUNDARY_GID", "impact_map_figure"]
 
@@ -60,8 +60,7 @@ def impact_map_figure(m: ImpactMap, units: Mapping[str, str] | None = None) -> F
     matplotlib.figure.Figure
     """
     u = dict(units or {})
-    fig = Figure(figsize=(14, 4.4), layout="constrained")
-    FigureCanvasAgg(fig)
+    fig = _new_figure(14, 4.4)
     axes = fig.subplots(1, 3)
     xs, ys = _axis(m.x_name, m.x), _axis(m.y_name, m.y)
     X, Y = np.meshgrid(xs, ys)

@@ -13,21 +13,16 @@ from __future__ import annotations
 import matplotlib as mpl
 import numpy as np
 import pandas as pd
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import Colormap
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
 from heelstrike.analysis.paper import Figure3bData
+from heelstrike.plots import _new_figure
 
 __all__ = ["figure2", "figure3a", "figure3b"]
 
-
-def _new_figure(width: float, height: float) -> Figure:
-    fig = Figure(figsize=(width, height), layout="constrained")
-    FigureCanvasAgg(fig)
-    return fig
 
 
 def _radius_colours(radii: np.ndarray, cmap: Colormap) -> dict[float, tuple[float, ...]]:

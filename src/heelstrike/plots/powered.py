@@ -8,16 +8,12 @@ from __future__ import annotations
 
 import xarray as xr
 from matplotlib import colormaps
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+
+from heelstrike.plots import _new_figure
 
 __all__ = ["BRANCH_CAPTION", "cost_figure", "paper_comparison_figure"]
 
-
-def _new_figure(width: float, height: float) -> Figure:
-    fig = Figure(figsize=(width, height), layout="constrained")
-    FigureCanvasAgg(fig)
-    return fig
 
 
 def _target(ds: xr.Dataset) -> str:

@@ -500,6 +500,21 @@ def gait_map(
 
 
 # -- described walkers (TOML models) -------------------------------------------------------------
+def _model_multiplier(
+    walker: BuiltWalker, backend: str, slope: float, guess: FloatArray
+) -> tuple[float, FloatArray]:
+    """Most negative real multiplier and fixed point of a described walker's gait at a slope
+    (the ``solve`` of :func:`~heelstrike.analysis.limit_cycle.refine_period_doubling`)."""
+    from heelstrike.analysis.model_gaits import find_model_gait
+
+    try:
+        g = find_model_gait(walker, slope=slope, guess=guess, backend=backend)
+    except ValueError as exc:
+        raise GaitNotFoundError(str(exc)) from exc
+    mnr = _most_negative_real(np.asarray(g.cycle.multipliers))
+    return (np.nan if mnr is None else mnr), np.asarray(g.cycle.fixed_point, dtype=float)
+
+
 def model_gait_map(
     walker: BuiltWalker,
     parameter: str,
@@ -537,9 +552,10 @@ def model_gait_map(
     GaitMap
         Dataset over ``(parameter, slope)`` with the variables of :func:`gait_map` (the
         ``fixed_point`` over the walker's ``section`` names; ``collision_loss`` the sum of
-        ``T_c`` over the step's impacts) and ``period_doubling_slope`` per value, linearly
-        interpolated between the grid slopes where the most negative real multiplier crosses
-        -1 (NaN if none in range).
+        ``T_c`` over the step's impacts) and ``period_doubling_slope`` per value: where the most
+        negative real multiplier crosses -1 between two grid slopes, located by
+        :func:`~heelstrike.analysis.limit_cycle.refine_period_doubling` (the one definition;
+        NaN if none in range).
 
     Raises
     ------
@@ -605,7 +621,9 @@ def model_gait_map(
         m = out["most_negative_real_multiplier"][i]
         for j in range(S.size - 1):
             if m[j] > -1.0 >= m[j + 1]:
-                pd[i] = S[j] + (S[j + 1] - S[j]) * (m[j] + 1.0) / (m[j] - m[j + 1])
+                pd[i] = refine_period_doubling(functools.partial(_model_multiplier, w, backend),
+                                               float(S[j]), float(S[j + 1]), float(m[j]),
+                                               fixed[i, j])
                 break
         if progress:
             print(f"heelstrike: {parameter} = {value:g}: gaits at "

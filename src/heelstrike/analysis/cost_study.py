@@ -465,17 +465,10 @@ def _seed_walker(base: CompassGait, model: Any | None, r: float) -> Any:
 
 
 def _fresh_start(w: Any, q3: float, w3: float, w4: float, p0: float) -> FloatArray:
-    """Newton start on ``w``'s section: stance angle ``-q3``, rates ``(w3, w4)``, parameter
-    ``p0``; further joints of a described walker (a torso) start upright (relative angle
-    ``q3``, rate ``-w3``), as in :func:`heelstrike.analysis.powered._model_seed_sections`."""
-    d = len(w.section_names)
-    n_ang = w.n_section_angles
-    z = np.zeros(d + 1)
-    z[0], z[n_ang], z[n_ang + 1], z[d] = -q3, w3, w4, p0
-    if n_ang > 1:
-        z[1:n_ang] = q3
-        z[n_ang + 2 : d] = -w3
-    return z
+    """Newton start on ``w``'s section: stance angle ``-q3``, rates ``(w3, w4)``
+    (:meth:`~heelstrike.models.base.PlanarWalker.section_point`: further links upright), then
+    the parameter ``p0``."""
+    return np.append(w.section_point(-q3, w3, w4), p0)
 
 
 def _fresh_gaits(

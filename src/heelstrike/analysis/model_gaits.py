@@ -114,21 +114,15 @@ class ModelGait(ResultDictMixin):
 
 
 def _grid_guesses(walker: PhasedWalker) -> list[FloatArray]:
-    d = len(walker.section_names)
-    n_ang = d - len(walker._section_v)
-    out = []
-    for a, w, h in itertools.product(
-        (-0.1, -0.15, -0.2, -0.25, -0.3), (0.6, 0.8, 1.0, 1.2, 1.4, 1.6), (-1.0, -0.6, -0.3, 0.0)
-    ):
-        z = np.zeros(d)
-        z[0] = a
-        z[n_ang] = w
-        z[n_ang + 1] = h
-        if n_ang > 1:  # further joints (e.g. a torso) held upright: relative angle -a
-            z[1:n_ang] = -a
-            z[n_ang + 2 :] = -w
-        out.append(z)
-    return out
+    """Seeds on the walker's section: stance angles, stance and swing rates
+    (:meth:`~heelstrike.models.base.PlanarWalker.section_point`)."""
+    return [
+        walker.section_point(a, w, h)
+        for a, w, h in itertools.product(
+            (-0.1, -0.15, -0.2, -0.25, -0.3), (0.6, 0.8, 1.0, 1.2, 1.4, 1.6),
+            (-1.0, -0.6, -0.3, 0.0),
+        )
+    ]
 
 
 def find_model_gait(

@@ -1037,22 +1037,9 @@ def declared_posture_law(walker: Any) -> Any:
 
 
 def _model_seed_sections(walker: Any) -> tuple[tuple[float, ...], ...]:
-    """The compass seeds ``(q3, q3_dot, q4_dot)`` on a described walker's section.
-
-    Further joints in the section (a torso) start upright: relative angle ``-q3`` and rate
-    ``-q3_dot`` (the layout of :func:`heelstrike.analysis.model_gaits.find_model_gait`'s grid).
-    """
-    d = len(walker.section_names)
-    n_ang = d - len(walker._section_v)
-    out = []
-    for a, w, h in _SEED_SECTIONS:
-        z = np.zeros(d)
-        z[0], z[n_ang], z[n_ang + 1] = a, w, h
-        if n_ang > 1:
-            z[1:n_ang] = -a
-            z[n_ang + 2 :] = -w
-        out.append(tuple(float(v) for v in z))
-    return tuple(out)
+    """The compass seeds ``(q3, q3_dot, q4_dot)`` laid out on any walker's section
+    (:meth:`~heelstrike.models.base.PlanarWalker.section_point`: further links upright)."""
+    return tuple(tuple(float(v) for v in walker.section_point(*s)) for s in _SEED_SECTIONS)
 
 
 def find_model_powered_gait(

@@ -298,14 +298,9 @@ def _refine_period_doubling(
 
 
 def _walker_kwargs(walker: CompassGait) -> dict[str, float]:
-    return {
-        "hip_mass": float(walker.hip_mass),
-        "leg_mass": float(walker.leg_mass),
-        "leg_length": float(walker.leg_length),
-        "leg_com_from_hip": float(walker.leg_com_from_hip),
-        "leg_inertia": float(walker.leg_inertia),
-        "gravity": float(walker.gravity),
-    }
+    """The walker's named parameters (:attr:`~heelstrike.models.base.PlanarWalker.parameters`)
+    except the foot radius, which the map sweeps."""
+    return {k: float(v) for k, v in walker.parameters.items() if k != "foot_radius"}
 
 
 def _map_chunk(

@@ -105,6 +105,41 @@ def test_lazy_jacobian_skips_the_neighbours_at_the_root() -> None:
 
 
 @pytest.mark.slow
+def test_chord_reuses_a_good_jacobian_and_replaces_a_bad_one_once() -> None:
+    """``jacobian="chord"``: one evaluation per iteration with the given Jacobian; a Jacobian that
+    does not contract 5x is replaced once by forward differences (2 more evaluations); one that
+    still fails ends the start STALLED instead of looping."""
+    r2 = np.sqrt(2.0)
+    root = np.array([r2, r2])
+    J_root = np.array([[2 * r2, 2 * r2], [-1.0, 1.0]])  # the exact Jacobian at the root
+    calls: list[int] = []
+
+    def residual(X: np.ndarray) -> np.ndarray:
+        calls.append(X.shape[0])
+        return _circle_line(X)
+
+    x0 = root + np.array([1e-3, -2e-3])
+    sol = newton_solve(residual, x0, tol=1e-13, jacobian="chord", jacobian0=J_root[None],
+                       jacobian_at_root=False)
+    assert sol.status[0] is NewtonStatus.CONVERGED
+    np.testing.assert_allclose(sol.x[0], root, atol=1e-13)
+    assert sum(calls) == sol.iterations[0]  # one evaluation per iteration, no differences
+    # a poor Jacobian (wrong sign of a column): replaced once by forward differences
+    calls.clear()
+    bad = J_root * np.array([[1.0, -1.0], [1.0, -1.0]])
+    sol = newton_solve(residual, x0, tol=1e-12, jacobian="chord", jacobian0=bad[None],
+                       fd_step=1e-7, jacobian_at_root=False)
+    assert sol.status[0] is NewtonStatus.CONVERGED
+    assert calls.count(2) == 1  # the one forward-difference Jacobian (n = 2 points)
+    # a residual no chord step can reduce (|F| grows away from a saddle): STALLED, not a loop
+    calls.clear()
+    sol = newton_solve(lambda X: np.stack((X[:, 0] ** 2 + 1.0, X[:, 1]), axis=1),
+                       np.array([0.3, 0.0]), tol=1e-12, jacobian="chord",
+                       jacobian0=np.eye(2)[None], jacobian_at_root=False)
+    assert sol.status[0] is NewtonStatus.STALLED
+    assert sol.iterations[0] < 20
+
+
 def test_compass_fixed_point_matches_the_step_map() -> None:
     """On the compiled compass map, the engine's fixed point is a gait: P(z) = z to 1e-10, and
     its multipliers are those of an independent finite-difference Jacobian of P."""

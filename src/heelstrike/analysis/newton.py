@@ -137,7 +137,9 @@ def newton_solve(
     tol: float,
     max_iter: int = 20,
     fd_step: float = 1e-6,
-    jacobian: Literal["central", "broyden"] = "central",
+    jacobian: Literal["central", "broyden", "chord"] = "central",
+    jacobian0: ArrayLike | None = None,
+    contraction: float = 0.2,
     jacobian_at_root: bool = True,
     line_search: Literal["finite", "decrease"] = "finite",
     min_step: float = 1e-3,
@@ -166,10 +168,20 @@ def newton_solve(
         Newton steps per start.
     fd_step : float
         Relative finite-difference step of the Jacobian.
-    jacobian : {"central", "broyden"}
+    jacobian : {"central", "broyden", "chord"}
         ``central``: central differences at every iterate (``2n`` evaluations). ``broyden``:
         forward differences (``n`` evaluations) once, then Broyden's rank-one update after each
-        step (recomputed once when the line search fails with a stale Jacobian).
+        step (recomputed once when the line search fails with a stale Jacobian). ``chord``: the
+        same Jacobian at every iterate (``jacobian0``, else forward differences) and full steps
+        ``x - J^-1 F(x)``, one evaluation each: a step is taken if it reduces ``|F|``; the
+        Jacobian is kept while a step reduces ``|F|`` at least ``1 / contraction``-fold, else it
+        is replaced once by forward differences; a second replacement ends the start
+        :attr:`NewtonStatus.STALLED` (no line search; for a good Jacobian of a nearby point,
+        e.g. a coarse stage's, on an expensive accurate residual).
+    jacobian0 : array_like, shape (K, n, n), optional
+        Initial Jacobians (``broyden``, ``chord``); a non-finite one is computed instead.
+    contraction : float
+        ``chord``: the fold reduction a step must reach for the Jacobian to be kept.
     jacobian_at_root : bool
         Evaluate the iterate and its neighbours in one call, so that a converged start also
         has its Jacobian (the Floquet multipliers of a fixed point). ``False``: the neighbours
@@ -211,6 +223,11 @@ def newton_solve(
     fresh = np.zeros(K, dtype=bool)
     F_cur = np.full((K, n), np.nan)
     have_F = np.zeros(K, dtype=bool)
+    chord = jacobian == "chord"
+    refreshed = np.zeros(K, dtype=bool)  # chord: its Jacobian was replaced once already
+    if jacobian0 is not None:
+        J0 = np.broadcast_to(np.asarray(jacobian0, dtype=float), (K, n, n))
+        J_cur = [J0[k].copy() if np.all(np.isfinite(J0[k])) else None for k in range(K)]
     active = np.arange(K)
     it = 0
     while active.size:
@@ -229,6 +246,8 @@ def newton_solve(
             need_jac &= ~(np.linalg.norm(F_cur[active], axis=1) < tol)
             need_jac &= np.all(np.isfinite(F_cur[active]), axis=1)
             new_F[:] = False
+        if chord:  # a chord Jacobian is replaced once at most
+            need_jac &= ~refreshed[active]
         pts, dx = _differences(x[need_jac], fd_step, central)
         values = _evaluate(residual, np.concatenate((x[new_F], pts.reshape(-1, n))), n)
         nf = int(new_F.sum())
@@ -243,9 +262,11 @@ def newton_solve(
                 Jk = np.swapaxes((nb[j] - F[row]) / dx[j][:, None], 0, 1)
             J_cur[active[row]] = Jk
             fresh[active[row]] = True
+            refreshed[active[row]] = chord
         res = np.linalg.norm(F, axis=1)
         keep = np.ones(active.size, dtype=bool)
         step = np.zeros_like(x)
+        retry = np.zeros(active.size, dtype=bool)  # chord: no step this time, Jacobian dropped
         for a, k in enumerate(active):
             iters[k] = it
             F_all[k] = F[a]
@@ -254,17 +275,22 @@ def newton_solve(
                 status[k], keep[a] = NewtonStatus.STEP_FAILED, False
             elif res[a] < tol:
                 status[k], keep[a] = NewtonStatus.CONVERGED, False
-            elif it > max_iter or Jk is None:
+            elif it > max_iter:
                 keep[a] = False
+            elif Jk is None:
+                status[k], keep[a] = (NewtonStatus.STALLED if chord else status[k]), False
             elif not np.all(np.isfinite(Jk)):
                 status[k], keep[a] = NewtonStatus.JACOBIAN_FAILED, False
             else:
                 try:
                     step[a] = np.linalg.solve(Jk, -F[a])
                 except np.linalg.LinAlgError:
-                    status[k], keep[a] = NewtonStatus.SINGULAR, False
+                    if chord:
+                        J_cur[k], retry[a] = None, True
+                    else:
+                        status[k], keep[a] = NewtonStatus.SINGULAR, False
         lam = np.ones(active.size)
-        pending = keep.copy()
+        pending = keep & ~retry
         ok = np.zeros(active.size, dtype=bool)
         F_try = np.full_like(x, np.nan)
         while np.any(pending):
@@ -274,6 +300,11 @@ def newton_solve(
                 trial = project(trial)
             Ft = _evaluate(residual, trial, n)
             fine = np.all(np.isfinite(Ft), axis=1)
+            if chord:  # full steps only: a failed or worse trial is judged below
+                F_try[idx] = Ft
+                ok[idx] = fine
+                pending[:] = False
+                break
             if line_search == "decrease":
                 fine &= np.linalg.norm(Ft, axis=1) < (1.0 - 0.25 * lam[idx]) * res[idx]
             F_try[idx[fine]] = Ft[fine]
@@ -285,7 +316,14 @@ def newton_solve(
             else:
                 pending &= lam > min_step
         for a, k in enumerate(active):
-            if not keep[a]:
+            if not keep[a] or retry[a]:
+                continue
+            if chord:
+                new_res = float(np.linalg.norm(F_try[a])) if ok[a] else np.inf
+                if new_res < res[a]:
+                    X[k], F_cur[k] = x[a] + step[a], F_try[a]
+                if not new_res <= contraction * res[a]:
+                    J_cur[k] = None
                 continue
             if line_search == "finite":  # the damped step is taken whatever lam became
                 X[k] = x[a] + lam[a] * step[a]

@@ -609,47 +609,29 @@ def _polish(
     prob: _Problem, x0: FloatArray, value: float, tol: float, J0: FloatArray, max_iter: int,
     h: float,
 ) -> tuple[FloatArray, float, int]:
-    """Converge a search-stage gait on the accurate map (chord iterations, then Newton).
+    """Converge a search-stage gait on the accurate map: chord iterations, then Newton.
 
     The search-stage Jacobian ``J0`` is close to the accurate one, so the chord iteration
-    ``x <- x - J^-1 F(x)`` gains digits at one simulated step per iteration. If it contracts by
+    ``x <- x - J^-1 F(x)`` (:func:`~heelstrike.analysis.newton.newton_solve` with
+    ``jacobian="chord"``) gains digits at one simulated step per iteration. If it contracts by
     less than 5x per step, ``J`` is replaced once by a forward-difference Jacobian of the
     accurate map (``n`` steps, relative step ``sqrt(rtol)``, which balances truncation and
     integration noise); if that fails too, damped Newton with central differences takes over.
     """
-    x = x0.copy()
-    F = prob.residual(x, value)
-    if not np.all(np.isfinite(F)):
+    from heelstrike.analysis.newton import NewtonStatus, newton_solve
+
+    def residual(X: FloatArray) -> FloatArray:
+        return np.stack([prob.residual(x, value) for x in X])
+
+    sol = newton_solve(
+        residual, x0, tol=tol, max_iter=max_iter, fd_step=max(h, float(np.sqrt(prob.rtol))),
+        jacobian="chord", jacobian0=J0[None], contraction=0.2, jacobian_at_root=False,
+    )
+    if sol.status[0] is NewtonStatus.STEP_FAILED and sol.iterations[0] == 1:
         raise PoweredGaitNotFoundError("the walker fails to take a step from the search's gait")
-    res = float(np.linalg.norm(F))
-    J: FloatArray | None = J0 if np.all(np.isfinite(J0)) else None
-    refreshed = False
-    h_fwd = max(h, float(np.sqrt(prob.rtol)))
-    for it in range(1, max_iter + 1):
-        if res < tol:
-            return x, res, it
-        if J is None:
-            if refreshed:
-                break
-            J = prob.jacobian(x, value, h_fwd, F)
-            refreshed = True
-            if not np.all(np.isfinite(J)):
-                break
-        try:
-            x_try = x + np.linalg.solve(J, -F)
-        except np.linalg.LinAlgError:
-            J = None
-            continue
-        F_try = prob.residual(x_try, value)
-        res_try = float(np.linalg.norm(F_try)) if np.all(np.isfinite(F_try)) else np.inf
-        contracted = res_try <= 0.2 * res
-        if res_try < res:
-            x, F, res = x_try, F_try, res_try
-        if not contracted:
-            J = None
-    if res < tol:
-        return x, res, max_iter
-    x, res, it, _ = _newton(prob, x, value, tol, max_iter, h)
+    if sol.converged[0]:
+        return sol.x[0], float(sol.residual_norm[0]), int(sol.iterations[0])
+    x, res, it, _ = _newton(prob, sol.x[0], value, tol, max_iter, h)
     return x, res, it
 
 

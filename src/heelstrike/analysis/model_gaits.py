@@ -17,7 +17,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -178,16 +178,25 @@ def find_model_gait(
     if guess is not None:
         starts = [np.asarray(guess, dtype=float)]
     else:
-        coarse = PoincareMap(walker=w, rtol=1e-7, atol=1e-8, **kw)
-        scored = []
-        for z in _grid_guesses(w):
-            z1 = coarse(z)
-            if np.all(np.isfinite(z1)):
-                scored.append((float(np.linalg.norm(z1 - z)), z))
-        if not scored:
+        # the grid mapped once at a coarse tolerance: one batched compiled call, or step by
+        # step on the scipy reference; Newton starts from the most nearly periodic points
+        Z = np.array(_grid_guesses(w))
+        if backend == "compiled":
+            from heelstrike.dynamics.compiled_phased import ensemble_walk_phased
+
+            # the actuation was checked for the compiled backend above (backend_simulator)
+            ens = ensemble_walk_phased(w, Z, slope=slope, torque=cast(Any, torque),
+                                       push_off=cast(Any, push_off), rtol=1e-7, atol=1e-8,
+                                       parallel=False)
+            Z1 = np.where(ens.ok[:, None], ens.z, np.nan)
+        else:
+            coarse = PoincareMap(walker=w, rtol=1e-7, atol=1e-8, **kw)
+            Z1 = np.array([coarse(z) for z in Z])
+        err = np.linalg.norm(Z1 - Z, axis=1)
+        mapped = np.flatnonzero(np.all(np.isfinite(Z1), axis=1))
+        if mapped.size == 0:
             raise GaitNotFoundError("no step could be completed from any automatic guess")
-        scored.sort(key=lambda s: s[0])
-        starts = [z for _, z in scored[:5]]
+        starts = [Z[i] for i in mapped[np.argsort(err[mapped], kind="stable")][:5]]
     # Newton from each start until a stable gait is found; without one, the most attracting
     # gait found (as find_limit_cycles orders the compass's gaits: stable first)
     last: Exception | None = None

@@ -30,6 +30,7 @@ coordinates (``SingleSupport(locked=(j, ...))``).
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import importlib.resources
 import os
@@ -252,6 +253,12 @@ def _arr(x: ArrayLike, n: int, name: str) -> FloatArray:
     return a
 
 
+def _read_only(a: FloatArray) -> FloatArray:
+    """``a`` made read-only (a cached property of a frozen walker must not be changed)."""
+    a.setflags(write=False)
+    return a
+
+
 def _first(a: FloatArray) -> FloatArray:
     """View of a state batch (..., n) with the coordinate axis first, shape (n, ...)."""
     return a if a.ndim == 1 else a.transpose(a.ndim - 1, *range(a.ndim - 1))
@@ -376,15 +383,17 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         return f"BuiltWalker({self.description.name!r}, {vals})"
 
     # -- PlanarWalker ---------------------------------------------------------------------------
-    @property
+    # total_mass, scale and foot_radii depend on the (frozen) parameter values only: computed
+    # once per walker (each evaluates description expressions), returned read-only.
+    @functools.cached_property
     def total_mass(self) -> FloatArray:
         d = self.description
         masses = [self._eval(lk.mass) for lk in d.links] + [
             self._eval(pm.mass) for pm in d.point_masses
         ]
-        return np.asarray(sum(masses))
+        return _read_only(np.asarray(sum(masses), dtype=float))
 
-    @property
+    @functools.cached_property
     def scale(self) -> WalkerScale:
         """``(total mass, gravity, leg length)`` (kg, m/s^2, m).
 
@@ -394,15 +403,16 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         measured = super().scale
         g = np.asarray(self._values["g"], dtype=float)
         return WalkerScale(
-            total_mass=measured.total_mass,
-            gravity=np.broadcast_to(g, np.shape(measured.gravity)).copy(),
-            leg_length=measured.leg_length,
+            total_mass=_read_only(np.array(measured.total_mass, dtype=float)),
+            gravity=_read_only(np.broadcast_to(g, np.shape(measured.gravity)).copy()),
+            leg_length=_read_only(np.array(measured.leg_length, dtype=float)),
         )
 
-    @property
+    @functools.cached_property
     def foot_radii(self) -> tuple[FloatArray, FloatArray]:
         st, sw = self.description.feet
-        return np.asarray(self._eval(st.radius)), np.asarray(self._eval(sw.radius))
+        return (_read_only(np.array(self._eval(st.radius), dtype=float)),
+                _read_only(np.array(self._eval(sw.radius), dtype=float)))
 
     def mass_matrix(self, q: ArrayLike) -> FloatArray:
         """Mass matrix ``M(q)`` (kg, kg m, kg m^2), shape (..., n, n)."""

@@ -22,6 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
+from heelstrike.dynamics.backends import BoundSimulator
 from heelstrike.dynamics.hybrid import PushOff, WalkResult, simulate
 from heelstrike.dynamics.single_support import TorqueLaw
 from heelstrike.models.base import PlanarWalker
@@ -125,16 +126,46 @@ class PoincareMap:
             return np.full(np.shape(z), np.nan)
         return np.asarray(self.walker.state_to_section(res.final_q, res.final_q_dot))
 
+    def many(self, Z: ArrayLike) -> FloatArray:
+        """``P`` at every row of ``Z`` (shape (B, d)); rows of NaN where the step fails.
+
+        One batched compiled call where the walker's kernel runs the map: the compass map
+        (``method="compiled"``), or a described walker whose ``simulator`` is the compiled
+        backend (:class:`~heelstrike.dynamics.backends.BoundSimulator`); otherwise row by row.
+        Each row equals ``self(Z[i])`` (the same kernel, walker by walker).
+        """
+        Z_ = np.atleast_2d(np.asarray(Z, dtype=float))
+        if self.method == "compiled":
+            from heelstrike.dynamics.compiled import COMPLETED, ensemble_walk
+
+            ens = ensemble_walk(self.walker, Z_, self.slope, steps=1,  # type: ignore[arg-type]
+                                rtol=self.rtol, atol=self.atol,
+                                max_step_duration=self.max_step_duration, parallel=False)
+            return np.where((ens.status == COMPLETED)[:, None], ens.z, np.nan)
+        if (
+            isinstance(self.simulator, BoundSimulator)
+            and self.simulator.backend == "compiled"
+            and self.walker.compiled_kernel == "generated"
+        ):
+            from heelstrike.dynamics.compiled_phased import ensemble_walk_phased
+
+            ens_p = ensemble_walk_phased(
+                self.walker, Z_, slope=self.slope,  # type: ignore[arg-type]
+                torque=cast(Any, self.torque), push_off=cast(Any, self.push_off),
+                rtol=self.rtol, atol=self.atol, max_step_duration=self.max_step_duration,
+                max_step=self.max_step, parallel=False,
+            )
+            return np.where(ens_p.ok[:, None], ens_p.z, np.nan)
+        return np.stack([self(z) for z in Z_])
+
     def jacobian(self, z: ArrayLike, step: float = 1e-6) -> FloatArray:
-        """Central-difference Jacobian ``DP(z)``, shape (d, d)."""
+        """Central-difference Jacobian ``DP(z)``, shape (d, d) (one :meth:`many` call)."""
         z_ = np.asarray(z, dtype=float)
         d = z_.size
-        Jac = np.empty((d, d))
-        for i in range(d):
-            dz = np.zeros(d)
-            dz[i] = step * max(1.0, abs(z_[i]))
-            Jac[:, i] = (self(z_ + dz) - self(z_ - dz)) / (2.0 * dz[i])
-        return Jac
+        dz = step * np.maximum(1.0, np.abs(z_))
+        offsets = np.diag(dz)
+        P = self.many(np.concatenate((z_ + offsets, z_ - offsets)))
+        return (P[:d] - P[d:]).T / (2.0 * dz)
 
 
 class _WalkField:
@@ -471,7 +502,7 @@ def _newton(
     """
     from heelstrike.analysis.newton import newton_solve
 
-    sol = newton_solve(lambda Z: np.stack([pmap(x) for x in Z]) - Z, z, tol=tol,
+    sol = newton_solve(lambda Z: pmap.many(Z) - Z, z, tol=tol,
                        max_iter=max_iter, fd_step=fd_step, jacobian_at_root=False)
     if not sol.converged[0]:
         raise GaitNotFoundError(sol.message(0))

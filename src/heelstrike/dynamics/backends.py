@@ -33,7 +33,6 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from functools import partial
 from types import MappingProxyType
 from typing import Any, Literal
 
@@ -45,6 +44,7 @@ from heelstrike.models.base import PlanarWalker
 __all__ = [
     "BACKENDS",
     "BackendEntry",
+    "BoundSimulator",
     "KernelKind",
     "backend_entry",
     "check_backend",
@@ -266,6 +266,24 @@ def simulate(
     )
 
 
+@dataclass(frozen=True, kw_only=True)
+class BoundSimulator:
+    """:func:`simulate` bound to a backend: call it with :func:`simulate`'s arguments.
+
+    Attributes
+    ----------
+    backend : str
+        The backend every call runs on; code that can batch many walks on that backend (e.g.
+        :meth:`heelstrike.analysis.limit_cycle.PoincareMap.many`) reads it.
+    """
+
+    backend: str
+
+    def __call__(self, walker: PlanarWalker, q0: ArrayLike, q_dot0: ArrayLike,
+                 **kwargs: Any) -> WalkResult:
+        return simulate(walker, q0, q_dot0, backend=self.backend, **kwargs)
+
+
 def simulator(
     walker: PlanarWalker,
     backend: str,
@@ -274,7 +292,7 @@ def simulator(
     push_off: Any = None,
     friction: float | None = None,
     **options: Any,
-) -> Callable[..., WalkResult]:
+) -> BoundSimulator:
     """:func:`simulate` bound to a backend, checked up front for this walker and actuation.
 
     For code that takes a step simulator with :func:`simulate`'s signature (e.g.
@@ -288,4 +306,4 @@ def simulator(
     """
     check_backend(walker, backend, torque=torque, push_off=push_off, friction=friction,
                   **options)
-    return partial(simulate, backend=backend)
+    return BoundSimulator(backend=backend)

@@ -23,6 +23,8 @@ from __future__ import annotations
 
 import math
 import threading
+import types
+from collections.abc import Callable
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -84,6 +86,29 @@ def use_parallel(parallel: bool | None) -> bool:
     if parallel is None:
         return threading.current_thread() is threading.main_thread()
     return bool(parallel)
+
+
+def serial_and_parallel(py_func: Callable[..., None], **options: Any) -> tuple[Any, Any]:
+    """Compile a batch kernel twice with numba: ``(serial, parallel)``.
+
+    ``py_func`` loops over its items with ``numba.prange``, which is ``range`` in the serial
+    compile and a parallel loop in the ``parallel=True`` one; ``options`` go to both ``njit``
+    calls (``cache=True`` is added). Each compile gets its own copy of the function, named
+    ``<name>_serial`` / ``<name>_parallel``: numba keys its disk cache by a function's name and
+    bytecode but not by the compile options, so two compiles of one function would load each
+    other's cached code (the parallel kernel running serially, or worse).
+    """
+
+    def named(suffix: str) -> Callable[..., None]:
+        f = types.FunctionType(py_func.__code__, py_func.__globals__, py_func.__name__ + suffix,
+                               py_func.__defaults__, py_func.__closure__)
+        f.__qualname__ = py_func.__qualname__ + suffix
+        f.__doc__ = py_func.__doc__
+        return f
+
+    serial = njit(cache=True, **options)(named("_serial"))
+    parallel = njit(cache=True, parallel=True, **options)(named("_parallel"))
+    return serial, parallel
 
 
 def _solve_2x4(
@@ -231,17 +256,8 @@ solve_2x4 = njit(inline="always", fastmath=False, cache=True)(_solve_2x4)
 
 
 def _impact_2x4_body(
-    M: FloatArray,
-    A: FloatArray,
-    qd: FloatArray,
-    e: float,
-    T: FloatArray,
-    Tc: FloatArray,
-    Ta: FloatArray,
-    qp: FloatArray,
-    lam: FloatArray,
-    status: NDArray[np.uint8],
-    i: int,
+    M: FloatArray, A: FloatArray, qd: FloatArray, e: float, T: FloatArray, Tc: FloatArray,
+    Ta: FloatArray, qp: FloatArray, lam: FloatArray, status: NDArray[np.uint8], i: int,
 ) -> None:
     """Resolve item ``i``; ``M`` (N, 4, 4), ``A`` (N, 2, 4), ``qd`` (N, 4). Writes outputs."""
     for r in range(4):
@@ -266,16 +282,16 @@ def _impact_2x4_body(
 _body = njit(inline="always", fastmath=False, cache=True)(_impact_2x4_body)
 
 
-@njit(parallel=True, fastmath=False, cache=True)
-def _kernel_parallel(M, A, qd, e, T, Tc, Ta, qp, lam, status):  # type: ignore[no-untyped-def]
+def _impact_2x4_kernel(
+    M: FloatArray, A: FloatArray, qd: FloatArray, e: float, T: FloatArray, Tc: FloatArray,
+    Ta: FloatArray, qp: FloatArray, lam: FloatArray, status: NDArray[np.uint8],
+) -> None:
+    """Every item of the batch (:func:`_impact_2x4_body`)."""
     for i in prange(M.shape[0]):
         _body(M, A, qd, e, T, Tc, Ta, qp, lam, status, i)
 
 
-@njit(parallel=False, fastmath=False, cache=True)
-def _kernel_serial(M, A, qd, e, T, Tc, Ta, qp, lam, status):  # type: ignore[no-untyped-def]
-    for i in range(M.shape[0]):
-        _body(M, A, qd, e, T, Tc, Ta, qp, lam, status, i)
+_KERNELS = serial_and_parallel(_impact_2x4_kernel)
 
 
 def raise_for_status(status: NDArray[np.uint8], messages: dict[int, str]) -> None:
@@ -288,6 +304,41 @@ def raise_for_status(status: NDArray[np.uint8], messages: dict[int, str]) -> Non
             f"{messages.get(code, f'status {code}')} (flat batch index {first}; "
             f"{bad.size} bad item(s) in total)"
         )
+
+
+def batched_impact(
+    kernels: tuple[Any, Any],
+    args: tuple[Any, ...],
+    batch: tuple[int, ...],
+    e: float,
+    parallel: bool | None,
+    messages: Callable[[NDArray[np.uint8]], dict[int, str]],
+) -> FastImpactResult:
+    """Run a ``(serial, parallel)`` impact kernel pair (:func:`serial_and_parallel`) on a batch.
+
+    The kernel is called as ``kernel(*args, e, T, Tc, Ta, q_dot+, lambda, status)`` on flat
+    outputs of ``prod(batch)`` items; a status other than 0 raises :class:`ImpactInputError`
+    with ``messages(status)[code]``.
+    """
+    n = int(np.prod(batch, dtype=np.int64))
+    T = np.empty(n)
+    Tc = np.empty(n)
+    Ta = np.empty(n)
+    qp = np.empty((n, 4))
+    lam = np.empty((n, 2))
+    status = np.zeros(n, dtype=np.uint8)
+    kernel = kernels[1] if use_parallel(parallel) else kernels[0]
+    kernel(*args, e, T, Tc, Ta, qp, lam, status)
+    raise_for_status(status, messages(status))
+    Tc_ = Tc.reshape(batch)
+    return FastImpactResult(
+        kinetic_energy=T.reshape(batch),
+        kinetic_energy_constrained=Tc_,
+        kinetic_energy_admissible=Ta.reshape(batch),
+        velocity_post=qp.reshape((*batch, 4)),
+        constraint_impulse=lam.reshape((*batch, 2)),
+        energy_lost=(1.0 - e * e) * Tc_,
+    )
 
 
 def _cond_note(M: FloatArray, status: NDArray[np.uint8], code: int) -> str:
@@ -375,29 +426,13 @@ def impact_2x4(
     Mf = np.ascontiguousarray(np.broadcast_to(M_, (*batch, 4, 4))).reshape(n, 4, 4)
     Af = np.ascontiguousarray(np.broadcast_to(A_, (*batch, 2, 4))).reshape(n, 2, 4)
     vf = np.ascontiguousarray(np.broadcast_to(v, (*batch, 4))).reshape(n, 4)
-    T = np.empty(n)
-    Tc = np.empty(n)
-    Ta = np.empty(n)
-    qp = np.empty((n, 4))
-    lam = np.empty((n, 2))
-    status = np.zeros(n, dtype=np.uint8)
-    kernel: Any = _kernel_parallel if use_parallel(parallel) else _kernel_serial
-    kernel(Mf, Af, vf, e, T, Tc, Ta, qp, lam, status)
-    raise_for_status(
-        status,
-        {
+
+    def messages(status: NDArray[np.uint8]) -> dict[int, str]:
+        return {
             STATUS_NOT_FINITE: "M, A or q_dot contains non-finite values (nan or inf)",
             STATUS_NOT_SPD: "M is not positive definite" + _cond_note(Mf, status, STATUS_NOT_SPD),
             STATUS_RANK_DEFICIENT: "A is rank deficient (fewer than k=2 independent rows)",
             STATUS_SINGULAR: "M is not positive definite" + _cond_note(Mf, status, STATUS_SINGULAR),
-        },
-    )
-    Tc_ = Tc.reshape(batch)
-    return FastImpactResult(
-        kinetic_energy=T.reshape(batch),
-        kinetic_energy_constrained=Tc_,
-        kinetic_energy_admissible=Ta.reshape(batch),
-        velocity_post=qp.reshape((*batch, 4)),
-        constraint_impulse=lam.reshape((*batch, 2)),
-        energy_lost=(1.0 - e * e) * Tc_,
-    )
+        }
+
+    return batched_impact(_KERNELS, (Mf, Af, vf), batch, e, parallel, messages)

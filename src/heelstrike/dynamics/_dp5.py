@@ -2,23 +2,25 @@
 
 :mod:`heelstrike.dynamics.compiled` (the paper's compass gait) and
 :mod:`heelstrike.dynamics.compiled_phased` (described walkers) integrate single support with this
-pair and ``solve_ivp``'s conventions; each keeps only its own right-hand side calls. A step of
-size ``h`` from ``y`` with stages ``k`` (shape (7, d), ``k[0] = f(y)``) is ``stage(y, h, k, s,
-tmp); k[s] = f(tmp)`` for ``s = 1..5``, :func:`solution`, ``k[6] = f(ynew)`` (FSAL) and
-:func:`error_estimate`; then scipy's :func:`error_norm` and step control (:func:`grow_factor`,
-:func:`shrink_factor`). :func:`initial_step_first` / :func:`initial_step` are Hairer's starting
-step, split around the caller's ``f1 = f(y + h0 f0)``. An event's sign change over an accepted
-step is :func:`crossed` (``solve_ivp``'s rule); its time is located by the Illinois method
-(:func:`secant_point`, :func:`illinois_update`, :func:`bracket_closed`) on the exact Runge-Kutta
-step of trial length ``tau`` from the step's start (no dense output).
+pair and ``solve_ivp``'s conventions. A step of size ``h`` from ``y`` with stages ``k`` (shape
+(7, d), ``k[0] = f(y)``) is ``stage(y, h, k, s, tmp); k[s] = f(tmp)`` for ``s = 1..5``,
+:func:`solution`, ``k[6] = f(ynew)`` (FSAL) and :func:`error_estimate`; then scipy's
+:func:`error_norm` and step control (:func:`grow_factor`, :func:`shrink_factor`).
+:func:`initial_step_first` / :func:`initial_step` are Hairer's starting step, split around the
+caller's ``f1 = f(y + h0 f0)``. An event's sign change over an accepted step is :func:`crossed`
+(``solve_ivp``'s rule); its time is located by the Illinois method (:func:`secant_point`,
+:func:`illinois_update`, :func:`bracket_closed`) on the exact Runge-Kutta step of trial length
+``tau`` from the step's start (no dense output). :func:`integrator` compiles the step, the
+starting step and the event location for one right-hand side.
 
 The expressions keep the kernels' former operation order (results are bit for bit the same);
-numba inlines these small functions (``inline="always"``).
+numba inlines the small functions (``inline="always"``).
 """
 
 from __future__ import annotations
 
 import math
+from typing import Any, NamedTuple
 
 from numba import njit
 
@@ -177,6 +179,15 @@ def crossed(g0: float, g1: float, direction: int) -> bool:
 
 
 @_jit
+def any_crossed(g_old: FloatArray, g_new: FloatArray, dirs: Any, n_ev: int) -> bool:
+    """Whether any of the first ``n_ev`` events crossed (:func:`crossed`) over a step."""
+    for j in range(n_ev):
+        if crossed(g_old[j], g_new[j], dirs[j]):
+            return True
+    return False
+
+
+@_jit
 def secant_point(lo: float, flo: float, hi: float, fhi: float) -> float:
     """Next trial of the Illinois method in the bracket ``[lo, hi]`` (bisection fallback)."""
     c = (lo * fhi - hi * flo) / (fhi - flo)
@@ -210,3 +221,126 @@ def illinois_update(
 def bracket_closed(lo: float, hi: float, t: float) -> bool:
     """The event bracket ``[lo, hi]`` (step-relative times, s) is small enough at time ``t``."""
     return hi - lo <= EVENT_TIME_TOL + 4e-16 * abs(t)
+
+
+class Integrator(NamedTuple):
+    """The DP5 drivers of one right-hand side (numba functions, :func:`integrator`).
+
+    - ``step(ctx, y, h, k, tmp, ynew, full)``: one step of size ``h`` (s) from ``y`` with
+      ``k[0] = f(y)``; writes ``ynew`` and, with ``full``, ``k[6] = f(ynew)`` (FSAL) and the
+      error estimate's components into ``tmp``.
+    - ``start_step(ctx, y, k, ktry, tmp, rtol, atol, max_step)``: Hairer's starting step (s),
+      its first trial and the result clamped to ``max_step``; ``ktry[0]``, ``tmp``: work space.
+    - ``first_event(ctx, y, hh, t, k, ktry, tmp, ynew, ytry, kinds, dirs, n_ev, g_old, g_new)
+      -> (j, tau)``: of the events ``kinds[:n_ev]`` whose values crossed from ``g_old`` (at
+      ``y``, time ``t``) to ``g_new`` (at ``ynew``, after the accepted step ``hh``; call it
+      only if :func:`any_crossed`), the earliest, ``kinds[j]`` at ``t + tau``, each located by
+      the Illinois method on the exact step; ``y`` is overwritten with the state there.
+    """
+
+    step: Any
+    start_step: Any
+    first_event: Any
+
+
+def integrator(rhs: Any, event: Any) -> Integrator:
+    """Compile the DP5 drivers for one right-hand side and its events.
+
+    ``rhs(ctx, y, dy)`` writes ``f(y)`` into ``dy`` and ``event(ctx, y, kind)`` returns the
+    value of event ``kind`` at ``y`` (numba functions; ``ctx`` is whatever the caller passes
+    through). The drivers call them directly (closure constants, not function arguments, which
+    would keep the kernels that call the drivers out of numba's disk cache); they are compiled
+    into, and cached with, those kernels.
+    """
+    gen = njit(nogil=True)
+
+    @gen
+    def step(
+        ctx: Any, y: FloatArray, h: float, k: FloatArray, tmp: FloatArray, ynew: FloatArray,
+        full: bool,
+    ) -> None:
+        stage(y, h, k, 1, tmp)  # stage numbers as literals: numba folds the stage's branch
+        rhs(ctx, tmp, k[1])
+        stage(y, h, k, 2, tmp)
+        rhs(ctx, tmp, k[2])
+        stage(y, h, k, 3, tmp)
+        rhs(ctx, tmp, k[3])
+        stage(y, h, k, 4, tmp)
+        rhs(ctx, tmp, k[4])
+        stage(y, h, k, 5, tmp)
+        rhs(ctx, tmp, k[5])
+        solution(y, h, k, ynew)
+        if full:
+            rhs(ctx, ynew, k[6])
+            error_estimate(h, k, tmp)
+
+    @gen
+    def start_step(
+        ctx: Any, y: FloatArray, k: FloatArray, ktry: FloatArray, tmp: FloatArray, rtol: float,
+        atol: float, max_step: float,
+    ) -> float:
+        h0, d1 = initial_step_first(y, k[0], rtol, atol)
+        h0 = min(h0, max_step)
+        for i in range(y.shape[0]):
+            tmp[i] = y[i] + h0 * k[0, i]
+        rhs(ctx, tmp, ktry[0])
+        return min(initial_step(y, k[0], ktry[0], h0, d1, rtol, atol), max_step)
+
+    @gen
+    def locate(
+        ctx: Any, y: FloatArray, hh: float, t: float, kind: int, g0: float, g1: float,
+        k: FloatArray, ktry: FloatArray, tmp: FloatArray, ytry: FloatArray,
+    ) -> float:
+        """Time (s from ``t``) where event ``kind`` goes from ``g0`` at ``y`` to ``g1`` after
+        the step of size ``hh``: Illinois on the exact RK step of trial length."""
+        lo, flo = 0.0, g0
+        hi, fhi = hh, g1
+        if flo == 0.0:
+            return 0.0
+        root = hi
+        if fhi == 0.0:
+            return root
+        side = 0
+        for _ in range(200):
+            c = secant_point(lo, flo, hi, fhi)
+            for r in range(y.shape[0]):
+                ktry[0, r] = k[0, r]
+            step(ctx, y, c, ktry, tmp, ytry, False)
+            fc = event(ctx, ytry, kind)
+            root = c
+            if fc == 0.0:
+                break
+            lo, flo, hi, fhi, side = illinois_update(lo, flo, hi, fhi, side, c, fc)
+            if bracket_closed(lo, hi, t):
+                root = hi if abs(fhi) < abs(flo) else lo
+                break
+        return root
+
+    @gen
+    def first_event(
+        ctx: Any, y: FloatArray, hh: float, t: float, k: FloatArray, ktry: FloatArray,
+        tmp: FloatArray, ynew: FloatArray, ytry: FloatArray, kinds: Any, dirs: Any, n_ev: int,
+        g_old: FloatArray, g_new: FloatArray,
+    ) -> tuple[int, float]:
+        best = -1
+        best_tau = hh
+        for j in range(n_ev):
+            if crossed(g_old[j], g_new[j], dirs[j]):
+                root = locate(ctx, y, hh, t, kinds[j], g_old[j], g_new[j], k, ktry, tmp, ytry)
+                if best < 0 or root < best_tau:
+                    best = j
+                    best_tau = root
+        if best >= 0:
+            d = y.shape[0]
+            if best_tau == hh:
+                for r in range(d):
+                    y[r] = ynew[r]
+            elif best_tau > 0.0:
+                for r in range(d):
+                    ktry[0, r] = k[0, r]
+                step(ctx, y, best_tau, ktry, tmp, ytry, False)
+                for r in range(d):
+                    y[r] = ytry[r]
+        return best, best_tau
+
+    return Integrator(step=step, start_step=start_step, first_event=first_event)

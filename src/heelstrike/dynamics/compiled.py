@@ -44,7 +44,6 @@ constants below, compile-time constants for numba; :meth:`WalkStatus.from_code` 
 from __future__ import annotations
 
 import math
-import threading
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
@@ -54,6 +53,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray, IntArray
+from heelstrike.core.fast import serial_and_parallel, use_parallel
 from heelstrike.dynamics import _dp5 as dp5
 from heelstrike.dynamics.hybrid import ImpactRecord, WalkResult, WalkStatus
 from heelstrike.models import _contact
@@ -182,38 +182,6 @@ def _rhs(p: FloatArray, y: FloatArray, dy: FloatArray) -> None:
 
 
 @njit(cache=True, nogil=True)
-def _dp5(
-    p: FloatArray,
-    y: FloatArray,
-    h: float,
-    k: FloatArray,
-    tmp: FloatArray,
-    ynew: FloatArray,
-    full: bool,
-) -> None:
-    """One DP5 step (:mod:`heelstrike.dynamics._dp5`) of size ``h`` from ``y`` with
-    ``k[0] = f(y)``; writes ``ynew``.
-
-    With ``full`` the FSAL stage ``k[6] = f(ynew)`` is evaluated and the error estimate's
-    components are left in ``tmp``.
-    """
-    dp5.stage(y, h, k, 1, tmp)
-    _rhs(p, tmp, k[1])
-    dp5.stage(y, h, k, 2, tmp)
-    _rhs(p, tmp, k[2])
-    dp5.stage(y, h, k, 3, tmp)
-    _rhs(p, tmp, k[3])
-    dp5.stage(y, h, k, 4, tmp)
-    _rhs(p, tmp, k[4])
-    dp5.stage(y, h, k, 5, tmp)
-    _rhs(p, tmp, k[5])
-    dp5.solution(y, h, k, ynew)
-    if full:
-        _rhs(p, ynew, k[6])
-        dp5.error_estimate(h, k, tmp)
-
-
-@njit(cache=True, nogil=True)
 def _event_value(p: FloatArray, y: FloatArray, kind: int) -> float:
     if kind == _EV_MID or kind == _EV_BACK2:
         return y[0]
@@ -227,16 +195,8 @@ def _event_value(p: FloatArray, y: FloatArray, kind: int) -> float:
     return lam_n
 
 
-@njit(cache=True, nogil=True)
-def _initial_step(p: FloatArray, y: FloatArray, f0: FloatArray, rtol: float, atol: float) -> float:
-    """Hairer's starting step for a 5th-order method (as ``solve_ivp``)."""
-    h0, d1 = dp5.initial_step_first(y, f0, rtol, atol)
-    y1 = np.empty(4)
-    f1 = np.empty(4)
-    for i in range(4):
-        y1[i] = y[i] + h0 * f0[i]
-    _rhs(p, y1, f1)
-    return dp5.initial_step(y, f0, f1, h0, d1, rtol, atol)
+#: The DP5 drivers (:func:`heelstrike.dynamics._dp5.integrator`) of ``_rhs``; ``ctx`` is ``p``.
+_ode = dp5.integrator(_rhs, _event_value)
 
 
 @njit(cache=True, nogil=True)
@@ -275,7 +235,7 @@ def _integrate_phase(
         if kinds[j] == _EV_NORMAL and g_old[j] <= 0.0:
             return _EV_NORMAL, t, h  # contact already lost: no sign change to detect
     if not h > 0.0:
-        h = _initial_step(p, y, k[0], rtol, atol)
+        h = _ode.start_step(p, y, k, ktry, tmp, rtol, atol, math.inf)
     n_steps = 0
     while True:
         if t >= t_limit:
@@ -289,7 +249,7 @@ def _integrate_phase(
         hh = min(h, t_limit - t)
         # --- attempt a step
         while True:
-            _dp5(p, y, hh, k, tmp, ynew, True)
+            _ode.step(p, y, hh, k, tmp, ynew, True)
             en = dp5.error_norm(y, ynew, tmp, rtol, atol)
             if en <= 1.0:
                 break
@@ -298,50 +258,12 @@ def _integrate_phase(
                 return _EV_FAIL, t, hh
         h_next = hh * dp5.grow_factor(en)
         # --- events over [t, t + hh]
-        best = -1
-        best_tau = hh
         for j in range(n_ev):
             g_new[j] = _event_value(p, ynew, kinds[j])
-        for j in range(n_ev):
-            if not dp5.crossed(g_old[j], g_new[j], dirs[j]):
-                continue
-            # Illinois on the exact RK step of length tau
-            lo, flo = 0.0, g_old[j]
-            hi, fhi = hh, g_new[j]
-            root = hi
-            if flo == 0.0:
-                root = 0.0
-            elif fhi != 0.0:
-                side = 0
-                for _ in range(200):
-                    c = dp5.secant_point(lo, flo, hi, fhi)
-                    for r in range(4):
-                        ktry[0, r] = k[0, r]
-                    _dp5(p, y, c, ktry, tmp, ytry, False)
-                    fc = _event_value(p, ytry, kinds[j])
-                    root = c
-                    if fc == 0.0:
-                        break
-                    lo, flo, hi, fhi, side = dp5.illinois_update(lo, flo, hi, fhi, side, c, fc)
-                    if dp5.bracket_closed(lo, hi, t):
-                        root = hi if abs(fhi) < abs(flo) else lo
-                        break
-            if best < 0 or root < best_tau:
-                best = j
-                best_tau = root
-        if best >= 0:
-            if best_tau == 0.0:
-                pass  # y unchanged
-            elif best_tau == hh:
-                for r in range(4):
-                    y[r] = ynew[r]
-            else:
-                for r in range(4):
-                    ktry[0, r] = k[0, r]
-                _dp5(p, y, best_tau, ktry, tmp, ytry, False)
-                for r in range(4):
-                    y[r] = ytry[r]
-            return kinds[best], t + best_tau, h_next
+        if dp5.any_crossed(g_old, g_new, dirs, n_ev):
+            best, tau = _ode.first_event(p, y, hh, t, k, ktry, tmp, ynew, ytry, kinds, dirs,
+                                         n_ev, g_old, g_new)
+            return kinds[best], t + tau, h_next
         # --- accept
         t = t + hh
         for r in range(4):
@@ -446,84 +368,26 @@ def _phase_status(ev: int) -> int:
     return INTEGRATION_FAILED
 
 
-@njit(cache=True, nogil=True)
-def _run(
-    i: int,
-    P: FloatArray,
-    Y: FloatArray,
-    steps: int,
-    rtol: float,
-    atol: float,
-    max_duration: float,
-    target: FloatArray,
-    stop_tol: float,
-    status: IntArray,
-    taken: IntArray,
-    elapsed: FloatArray,
-    angle: FloatArray,
-    time: FloatArray,
-    tc: FloatArray,
-    length: FloatArray,
-    record: bool,
+def _ensemble(
+    P: FloatArray, Y: FloatArray, order: IntArray, steps: int, rtol: float, atol: float,
+    max_duration: float, target: FloatArray, stop_tol: float, status: IntArray,
+    taken: IntArray, elapsed: FloatArray, angle: FloatArray, time: FloatArray, tc: FloatArray,
+    length: FloatArray, record: bool,
 ) -> None:
-    r = i if record else 0
-    st, n, t = _walk_one(
-        P[i], Y[i], steps, rtol, atol, max_duration, target, stop_tol,
-        angle[r], time[r], tc[r], length[r], record,
-    )
-    status[i] = st
-    taken[i] = n
-    elapsed[i] = t
-
-
-@njit(cache=True, nogil=True, parallel=True)
-def _ensemble_parallel(
-    P: FloatArray,
-    Y: FloatArray,
-    order: IntArray,
-    steps: int,
-    rtol: float,
-    atol: float,
-    max_duration: float,
-    target: FloatArray,
-    stop_tol: float,
-    status: IntArray,
-    taken: IntArray,
-    elapsed: FloatArray,
-    angle: FloatArray,
-    time: FloatArray,
-    tc: FloatArray,
-    length: FloatArray,
-    record: bool,
-) -> None:
+    """Walk walkers ``order[j]`` (rows of ``P``, ``Y``) with :func:`_walk_one`; ``prange``."""
     for j in prange(order.shape[0]):
-        _run(order[j], P, Y, steps, rtol, atol, max_duration, target, stop_tol,
-             status, taken, elapsed, angle, time, tc, length, record)
+        i = order[j]
+        r = i if record else 0
+        st, n, t = _walk_one(
+            P[i], Y[i], steps, rtol, atol, max_duration, target, stop_tol,
+            angle[r], time[r], tc[r], length[r], record,
+        )
+        status[i] = st
+        taken[i] = n
+        elapsed[i] = t
 
 
-@njit(cache=True, nogil=True)
-def _ensemble_serial(
-    P: FloatArray,
-    Y: FloatArray,
-    order: IntArray,
-    steps: int,
-    rtol: float,
-    atol: float,
-    max_duration: float,
-    target: FloatArray,
-    stop_tol: float,
-    status: IntArray,
-    taken: IntArray,
-    elapsed: FloatArray,
-    angle: FloatArray,
-    time: FloatArray,
-    tc: FloatArray,
-    length: FloatArray,
-    record: bool,
-) -> None:
-    for j in range(order.shape[0]):
-        _run(order[j], P, Y, steps, rtol, atol, max_duration, target, stop_tol,
-             status, taken, elapsed, angle, time, tc, length, record)
+_ensemble_serial, _ensemble_parallel = serial_and_parallel(_ensemble, nogil=True)
 
 
 @njit(cache=True, nogil=True)
@@ -536,12 +400,12 @@ def _integrate_plain(
     tmp = np.empty(4)
     ynew = np.empty(4)
     _rhs(p, y, k[0])
-    h = _initial_step(p, y, k[0], rtol, atol)
+    h = _ode.start_step(p, y, k, np.empty((1, 4)), tmp, rtol, atol, math.inf)
     t = 0.0
     n = 0
     while t < t_end and n < out.shape[0]:
         hh = min(h, t_end - t)
-        _dp5(p, y, hh, k, tmp, ynew, True)
+        _ode.step(p, y, hh, k, tmp, ynew, True)
         en = dp5.error_norm(y, ynew, tmp, rtol, atol)
         if en <= 1.0:
             t += hh
@@ -590,14 +454,24 @@ def walker_parameters(walker: PlanarWalker, slope: ArrayLike = 0.0) -> FloatArra
     return np.ascontiguousarray(np.stack(b, axis=-1))
 
 
-def _use_parallel(parallel: bool | None) -> bool:
-    if parallel is None:
-        return threading.current_thread() is threading.main_thread()
-    return bool(parallel)
+class EnsembleStatus:
+    """What the ensemble results of both compiled kernels offer on their ``status`` codes."""
+
+    status: IntArray
+
+    @property
+    def status_names(self) -> NDArray[np.str_]:
+        """Status of every walker as a ``WalkStatus`` value string, shape (N,)."""
+        return np.asarray(STATUS_NAMES)[self.status]
+
+    @property
+    def ok(self) -> NDArray[np.bool_]:
+        """Walkers that completed every requested step (or stopped on arrival), shape (N,)."""
+        return np.asarray(self.status == COMPLETED)
 
 
 @dataclass(frozen=True, kw_only=True)
-class EnsembleResult(ResultDictMixin):
+class EnsembleResult(EnsembleStatus, ResultDictMixin):
     """Outcome of :func:`ensemble_walk` for ``N`` walkers and up to ``S`` steps.
 
     Attributes
@@ -630,16 +504,6 @@ class EnsembleResult(ResultDictMixin):
     step_time: FloatArray | None
     collision_loss: FloatArray | None
     step_length: FloatArray | None
-
-    @property
-    def status_names(self) -> NDArray[np.str_]:
-        """Status of every walker as a ``WalkStatus`` value string, shape (N,)."""
-        return np.asarray(STATUS_NAMES)[self.status]
-
-    @property
-    def ok(self) -> NDArray[np.bool_]:
-        """Walkers that completed every requested step, shape (N,)."""
-        return np.asarray(self.status == COMPLETED)
 
 
 def ensemble_walk(
@@ -728,7 +592,7 @@ def ensemble_walk(
         steps, float(rtol), float(atol), float(max_step_duration), target, stop_tol,
         status, taken, elapsed, angle, time, tc, length, bool(record),
     )
-    if _use_parallel(parallel) and n > 1:
+    if use_parallel(parallel) and n > 1:
         # a fixed shuffle balances the static prange split (falls are much cheaper than walks)
         order = np.random.default_rng(0).permutation(n).astype(np.int64)
         _ensemble_parallel(P, Y, order, *args)

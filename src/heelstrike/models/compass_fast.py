@@ -34,14 +34,13 @@ Agreement with the reference is to rounding: about ``1e-15 cond(M)`` relative
 from __future__ import annotations
 
 import math
-from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit, prange
 from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._typing import FloatArray
-from heelstrike.core.fast import raise_for_status, use_parallel
+from heelstrike.core.fast import FastImpactResult, batched_impact, serial_and_parallel
 from heelstrike.core.impact import ImpactInputError
 from heelstrike.models.compass import CompassGait
 
@@ -83,31 +82,13 @@ _INPUTS = (
 )
 
 
-class HeelStrikeImpact(NamedTuple):
-    """Heel-strike impact of the compass gait, each field of the broadcast input shape (...).
+class HeelStrikeImpact(FastImpactResult):
+    """Heel-strike impact of the compass gait: the fields of
+    :class:`~heelstrike.core.fast.FastImpactResult`, each of the broadcast input shape (...)
+    (``T_c`` and ``T_a`` of eq. 10; ``lambda``: tangential and normal impulse on the striking
+    foot), and the trailing foot's ``q2_dot_post``."""
 
-    Attributes
-    ----------
-    kinetic_energy : ndarray, shape (...)
-        Pre-impact kinetic energy ``T`` (J).
-    kinetic_energy_constrained : ndarray, shape (...)
-        ``T_c`` (J), eq. (10); the energy lost ``|W_col|`` for ``e = 0``.
-    kinetic_energy_admissible : ndarray, shape (...)
-        ``T_a`` (J), eq. (10).
-    velocity_post : ndarray, shape (..., 4)
-        ``q_dot+`` (m/s, m/s, rad/s, rad/s).
-    constraint_impulse : ndarray, shape (..., 2)
-        ``lambda`` (N s): tangential and normal impulse on the striking foot.
-    energy_lost : ndarray, shape (...)
-        ``(1 - e^2) T_c`` (J).
-    """
-
-    kinetic_energy: FloatArray
-    kinetic_energy_constrained: FloatArray
-    kinetic_energy_admissible: FloatArray
-    velocity_post: FloatArray
-    constraint_impulse: FloatArray
-    energy_lost: FloatArray
+    __slots__ = ()
 
     @property
     def q2_dot_post(self) -> FloatArray:
@@ -263,33 +244,15 @@ def _strike(
     )
 
 
-
-
 #: :func:`_strike` compiled (inlined into its callers); also what the compiled walk uses.
 strike = njit(inline="always", cache=True)(_strike)
 
 
 def _heel_strike_body(
-    q3a: FloatArray,
-    Ra: FloatArray,
-    w1a: FloatArray,
-    w2a: FloatArray,
-    w3a: FloatArray,
-    w4a: FloatArray,
-    mHa: FloatArray,
-    ma: FloatArray,
-    la: FloatArray,
-    ba: FloatArray,
-    Ia: FloatArray,
-    rolling: bool,
-    e: float,
-    T: FloatArray,
-    Tc: FloatArray,
-    Ta: FloatArray,
-    qp: FloatArray,
-    lam: FloatArray,
-    status: NDArray[np.uint8],
-    i: int,
+    q3a: FloatArray, Ra: FloatArray, w1a: FloatArray, w2a: FloatArray, w3a: FloatArray,
+    w4a: FloatArray, mHa: FloatArray, ma: FloatArray, la: FloatArray, ba: FloatArray,
+    Ia: FloatArray, rolling: bool, e: float, T: FloatArray, Tc: FloatArray, Ta: FloatArray,
+    qp: FloatArray, lam: FloatArray, status: NDArray[np.uint8], i: int,
 ) -> None:
     """Resolve item ``i``. Each input is a 1-D array of the batch length, or of length 1 for a
     broadcast scalar (inputs in ``_INPUTS`` order)."""
@@ -317,22 +280,19 @@ def _heel_strike_body(
 _body = njit(inline="always", fastmath=False, cache=True)(_heel_strike_body)
 
 
-@njit(parallel=True, fastmath=False, cache=True)
-def _kernel_parallel(  # type: ignore[no-untyped-def]
-    q3, R, w1, w2, w3, w4, mH, m, ll, b, inertia, rolling, e, T, Tc, Ta, qp, lam, status
-):
+def _heel_strike_kernel(
+    q3: FloatArray, R: FloatArray, w1: FloatArray, w2: FloatArray, w3: FloatArray,
+    w4: FloatArray, mH: FloatArray, m: FloatArray, ll: FloatArray, b: FloatArray,
+    inertia: FloatArray, rolling: bool, e: float, T: FloatArray, Tc: FloatArray,
+    Ta: FloatArray, qp: FloatArray, lam: FloatArray, status: NDArray[np.uint8],
+) -> None:
+    """Every item of the batch (:func:`_heel_strike_body`)."""
     for i in prange(T.shape[0]):
         _body(q3, R, w1, w2, w3, w4, mH, m, ll, b, inertia, rolling, e, T, Tc, Ta, qp, lam,
               status, i)
 
 
-@njit(parallel=False, fastmath=False, cache=True)
-def _kernel_serial(  # type: ignore[no-untyped-def]
-    q3, R, w1, w2, w3, w4, mH, m, ll, b, inertia, rolling, e, T, Tc, Ta, qp, lam, status
-):
-    for i in range(T.shape[0]):
-        _body(q3, R, w1, w2, w3, w4, mH, m, ll, b, inertia, rolling, e, T, Tc, Ta, qp, lam,
-              status, i)
+_KERNELS = serial_and_parallel(_heel_strike_kernel)
 
 
 def heel_strike_impact(
@@ -415,27 +375,12 @@ def heel_strike_impact(
     except ValueError as exc:
         shapes = ", ".join(f"{n} {a.shape}" for n, a in zip(_INPUTS, arrays, strict=True))
         raise ImpactInputError(f"inputs do not broadcast: {shapes}") from exc
-    n = int(np.prod(batch, dtype=np.int64))
     # 1-D kernel inputs: scalars stay length 1; full-shape contiguous arrays are not copied.
     flat = [
         a.reshape(1) if a.size == 1 else np.ascontiguousarray(np.broadcast_to(a, batch)).ravel()
         for a in arrays
     ]
-    T = np.empty(n)
-    Tc = np.empty(n)
-    Ta = np.empty(n)
-    qp = np.empty((n, 4))
-    lam = np.empty((n, 2))
-    status = np.zeros(n, dtype=np.uint8)
-    kernel: Any = _kernel_parallel if use_parallel(parallel) else _kernel_serial
-    kernel(*flat, q1_dot is None, e, T, Tc, Ta, qp, lam, status)
-    raise_for_status(status, _MESSAGES)
-    Tc_ = Tc.reshape(batch)
-    return HeelStrikeImpact(
-        kinetic_energy=T.reshape(batch),
-        kinetic_energy_constrained=Tc_,
-        kinetic_energy_admissible=Ta.reshape(batch),
-        velocity_post=qp.reshape((*batch, 4)),
-        constraint_impulse=lam.reshape((*batch, 2)),
-        energy_lost=(1.0 - e * e) * Tc_,
+    return HeelStrikeImpact._make(
+        batched_impact(_KERNELS, (*flat, q1_dot is None), batch, e, parallel,
+                       lambda _: _MESSAGES)
     )

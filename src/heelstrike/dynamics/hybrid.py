@@ -553,6 +553,26 @@ def _events(
     return events
 
 
+def _impact_event(
+    kind: ImpactKind, step: int, time: float, q: FloatArray, q_dot_minus: FloatArray,
+    res: ImpactResult, rows: FloatArray, lock_rows: FloatArray, trailing_normal_velocity: float,
+    trailing_mode: str,
+) -> PhasedImpact:
+    """The :class:`PhasedImpact` record of one resolved impact."""
+    q_dot_plus = np.asarray(res.velocity_post)
+    return PhasedImpact(
+        kind=kind, step=step, time=time, q=q.copy(), q_dot_minus=q_dot_minus.copy(),
+        q_dot_plus=q_dot_plus.copy(), rows=rows,
+        kinetic_energy=float(res.kinetic_energy),
+        kinetic_energy_constrained=float(res.kinetic_energy_constrained),
+        kinetic_energy_admissible=float(res.kinetic_energy_admissible),
+        energy_lost=float(res.energy_lost),
+        impulse=np.asarray(res.constraint_impulse, dtype=float),
+        lock_rows=lock_rows.copy(), lock_velocity_post=lock_rows @ q_dot_plus,
+        trailing_normal_velocity=trailing_normal_velocity, trailing_mode=trailing_mode,
+    )
+
+
 def check_initial_state(
     walker: PlanarWalker, q0: ArrayLike, q_dot0: ArrayLike, steps: int,
     schedule: StepSchedule | None = None,
@@ -730,20 +750,8 @@ def simulate(
             A = np.vstack((A_R, A_lock))
             res = impact(walker.mass_matrix(q), A, qd)
             qd_plus = np.asarray(res.velocity_post)
-            events_out.append(
-                PhasedImpact(
-                    kind="knee_strike", step=k, time=t, q=q.copy(), q_dot_minus=qd.copy(),
-                    q_dot_plus=qd_plus.copy(), rows=A,
-                    kinetic_energy=float(res.kinetic_energy),
-                    kinetic_energy_constrained=float(res.kinetic_energy_constrained),
-                    kinetic_energy_admissible=float(res.kinetic_energy_admissible),
-                    energy_lost=float(res.energy_lost),
-                    impulse=np.asarray(res.constraint_impulse, dtype=float),
-                    lock_rows=A_lock.copy(), lock_velocity_post=A_lock @ qd_plus,
-                    trailing_normal_velocity=float((A_R @ qd_plus)[1]),
-                    trailing_mode="stick",
-                )
-            )
+            events_out.append(_impact_event("knee_strike", k, t, q, qd, res, A, A_lock,
+                                            float((A_R @ qd_plus)[1]), "stick"))
             qd = qd_plus
         if ended is not None:
             status = ended
@@ -771,19 +779,8 @@ def simulate(
             mode = "separate" if v_trail >= 0.0 else "penetrating"
             foot_impulse = np.asarray(res.constraint_impulse, dtype=float)[:2].copy()
         qd_plus = np.asarray(res.velocity_post)
-        events_out.append(
-            PhasedImpact(
-                kind="heel_strike", step=k, time=t, q=q.copy(), q_dot_minus=qd.copy(),
-                q_dot_plus=qd_plus.copy(), rows=rows,
-                kinetic_energy=float(res.kinetic_energy),
-                kinetic_energy_constrained=float(res.kinetic_energy_constrained),
-                kinetic_energy_admissible=float(res.kinetic_energy_admissible),
-                energy_lost=float(res.energy_lost),
-                impulse=np.asarray(res.constraint_impulse, dtype=float),
-                lock_rows=A_lock.copy(), lock_velocity_post=A_lock @ qd_plus,
-                trailing_normal_velocity=v_trail, trailing_mode=mode,
-            )
-        )
+        events_out.append(_impact_event("heel_strike", k, t, q, qd, res, rows, A_lock, v_trail,
+                                        mode))
         records.append(
             ImpactRecord(
                 step=k, time=t, q=q.copy(), q_dot_minus=qd.copy(), q_dot_plus=qd_plus.copy(),

@@ -5,6 +5,8 @@ Usage::
     python benchmarks/run_all.py                 # run all, print tables
     python benchmarks/run_all.py --update-readme # also rewrite the results in README.md
     python benchmarks/run_all.py --quick -k impact
+    python benchmarks/run_all.py -k cli          # run one, save its results/bench_cli.json
+    python benchmarks/run_all.py --from-results --update-readme   # tables of the saved results
 
 Each benchmark runs in its own process, one after the other (never concurrently: they would
 compete for the cores). A benchmark script must accept ``--json PATH`` (and ``--quick``) and
@@ -42,12 +44,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("-k", default="", help="run only benchmarks whose name contains this")
     parser.add_argument("--update-readme", action="store_true",
                         help="replace the results section of benchmarks/README.md")
+    parser.add_argument("--from-results", action="store_true",
+                        help="run nothing: the tables of the saved benchmarks/results/*.json")
     args = parser.parse_args(argv)
     (HERE / "results").mkdir(exist_ok=True)
     tables = []
     failed = []
     for script in sorted(HERE.glob("bench_*.py")):
         if args.k not in script.stem:
+            continue
+        if args.from_results:
+            saved = HERE / "results" / f"{script.stem}.json"
+            if not saved.exists():
+                failed.append(f"{script.name} (no saved result)")
+                continue
+            tables.append(_load(script).format_table(json.loads(saved.read_text())))
             continue
         print(f"== {script.name}", flush=True)
         with tempfile.TemporaryDirectory() as tmp:

@@ -127,6 +127,8 @@ BAD = [
     ["impact", "--angle", "20deg", "--q3dot", "nan"],
     ["impact", "--angle", "20deg", "--com-from-hip", "1"],
     ["impact", "--angle", "20deg", "--json", "--radius", "x"],
+    ["impact", "--model", "kneed", "--angle", "20deg", "--backend", "compiled"],
+    ["impact", "--angle", "20deg", "--backend", "numba"],
     ["reproduce", "--bogus"],
 ]
 
@@ -211,3 +213,18 @@ def test_out_that_is_an_existing_file_is_named_as_such(command, tmp_path, capsys
     assert len(lines) == 1 and lines[0].startswith("heelstrike: error: cannot write")
     assert "not a directory" in lines[0]
     assert blocker.read_text() == "x"
+
+
+def test_impact_backend_compiled_gives_the_reference_numbers(capsys):
+    """``impact --backend compiled`` (the numba compass kernel) reports the reference's JSON
+    (the same keys, values to round-off) for a non-paper walker with restitution."""
+    argv = ["impact", "--radius", "0.3", "--angle", "25deg", "--q3dot", "1.3", "--q4dot", "-0.5",
+            "--restitution", "0.2", "--leg-inertia", "0.05", "--json"]
+    ref = _impact_json(argv, capsys)
+    fast = _impact_json([*argv, "--backend", "compiled"], capsys)
+    assert fast.keys() == ref.keys()
+    for key, value in ref.items():
+        if isinstance(value, (bool, dict)) or value is None:
+            assert fast[key] == value, key
+        else:
+            np.testing.assert_allclose(fast[key], value, rtol=1e-12, atol=1e-12, err_msg=key)

@@ -15,6 +15,7 @@ Every function broadcasts: the impact angle and any walker parameter may be arra
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -188,8 +189,9 @@ class HeelStrikeStudy(ResultDictMixin):
         nothing is lost (``T_c = 0``) and the trailing foot neither lifts nor presses.
         For one heel strike (shape ``()``) the fields of shape ``(...)`` are Python ``float``
         and ``bool``.
-    impact : ImpactResult
-        The full result of :func:`heelstrike.core.impact.impact` (projectors, impulses).
+    impact : ImpactResult or None
+        The full result of :func:`heelstrike.core.impact.impact` (projectors, impulses); None
+        on the compiled backend, which forms no projectors.
     """
 
     impact_angle: FloatArray | float
@@ -209,7 +211,7 @@ class HeelStrikeStudy(ResultDictMixin):
     eta: FloatArray | float
     trailing_foot_lifts: BoolArray | bool
     degenerate_wheel: BoolArray | bool
-    impact: ImpactResult
+    impact: ImpactResult | None
 
     def __post_init__(self) -> None:
         # One heel strike (shape ()): the fields of shape (...) are Python floats and bools.
@@ -232,6 +234,7 @@ def heel_strike_study(
     q3_dot: ArrayLike = 1.0,
     q4_dot: ArrayLike = 0.0,
     restitution: float = 0.0,
+    backend: Literal["scipy", "compiled"] = "scipy",
 ) -> HeelStrikeStudy:
     """Decompose the kinetic energy at heel strike and the loss per metre (paper eqs. 5-16).
 
@@ -246,6 +249,11 @@ def heel_strike_study(
         rolls: ``q1_dot = -R q3_dot``, ``q2_dot = 0``.
     restitution : float
         ``e`` in [0, 1] applied to the constrained velocity; 0 is the paper's inert impact.
+    backend : {"scipy", "compiled"}
+        ``"scipy"``: the reference projectors (:func:`heelstrike.core.impact.impact`, numpy and
+        scipy). ``"compiled"``: the numba compass kernel
+        (:func:`heelstrike.models.compass_fast.heel_strike_impact`, batched; no projectors,
+        ``impact`` is None); the same numbers to round-off.
 
     Returns
     -------
@@ -257,11 +265,31 @@ def heel_strike_study(
     heelstrike.core.impact.ImpactInputError
         For non-finite angles or velocities or ``restitution`` outside [0, 1].
     """
+    if backend not in ("scipy", "compiled"):
+        raise ValueError(f"backend must be 'scipy' or 'compiled', got {backend!r}")
     q, q_dot = heel_strike_state(walker, impact_angle, q3_dot=q3_dot, q4_dot=q4_dot)
-    M = walker.mass_matrix(q)
-    A = walker.contact_jacobian(q, "left")
-    res = impact(M, A, q_dot, restitution=restitution)
-    shape = np.shape(res.kinetic_energy)
+    res: ImpactResult | None = None
+    if backend == "compiled":
+        from heelstrike.models.compass_fast import heel_strike_impact
+
+        fast = heel_strike_impact(impact_angle, walker=walker, q3_dot=q3_dot, q4_dot=q4_dot,
+                                  restitution=restitution)
+        T, T_c, T_a = (np.asarray(x, dtype=float) for x in (
+            fast.kinetic_energy, fast.kinetic_energy_constrained, fast.kinetic_energy_admissible))
+        v_post, impulse = fast.velocity_post, fast.constraint_impulse
+        lost = np.asarray(fast.energy_lost)
+        v_pre = np.broadcast_to(np.asarray(q_dot, dtype=float), (*np.shape(T), 4))
+        # v+ = v_a - e v_c with v_a, v_c M-orthogonal: T+ = T_a + e^2 T_c
+        post = T_a + float(restitution) ** 2 * T_c
+    else:
+        res = impact(walker.mass_matrix(q), walker.contact_jacobian(q, "left"), q_dot,
+                     restitution=restitution)
+        T, T_c, T_a = (np.asarray(x, dtype=float) for x in (
+            res.kinetic_energy, res.kinetic_energy_constrained, res.kinetic_energy_admissible))
+        v_post, impulse = res.velocity_post, res.constraint_impulse
+        lost, post = np.asarray(res.energy_lost), np.asarray(res.kinetic_energy_post)
+        v_pre = res.velocity_pre
+    shape = np.shape(T)
 
     def bc(x: ArrayLike) -> FloatArray:
         return np.asarray(np.broadcast_to(np.asarray(x, dtype=float), shape))
@@ -271,24 +299,24 @@ def heel_strike_study(
     l = bc(walker.leg_length)
     L_S = bc(step_length(walker, q3))
     eta = np.full(shape, np.nan)
-    np.divide(res.energy_lost, L_S, out=eta, where=L_S > 0)
+    np.divide(lost, L_S, out=eta, where=L_S > 0)
     qd_pre = np.broadcast_to(q_dot, (*shape, 4))
     scale = l * (np.abs(qd_pre[..., 2]) + np.abs(qd_pre[..., 3]))
-    lifts = trailing_foot_lifts(res.velocity_post[..., 1], scale)
+    lifts = trailing_foot_lifts(np.asarray(v_post)[..., 1], scale)
     return HeelStrikeStudy(
         impact_angle=q3,
         foot_radius=R,
         leg_length=l,
-        restitution=res.restitution,
+        restitution=float(restitution),
         state=np.asarray(np.broadcast_to(q, (*shape, 4))),
-        velocity_pre=res.velocity_pre,
-        velocity_post=res.velocity_post,
-        constraint_impulse=res.constraint_impulse,
-        kinetic_energy=np.asarray(res.kinetic_energy, dtype=float),
-        kinetic_energy_constrained=np.asarray(res.kinetic_energy_constrained, dtype=float),
-        kinetic_energy_admissible=np.asarray(res.kinetic_energy_admissible, dtype=float),
-        kinetic_energy_post=np.asarray(res.kinetic_energy_post, dtype=float),
-        energy_lost=np.asarray(res.energy_lost, dtype=float),
+        velocity_pre=np.asarray(v_pre, dtype=float),
+        velocity_post=np.asarray(v_post, dtype=float),
+        constraint_impulse=np.asarray(impulse, dtype=float),
+        kinetic_energy=np.asarray(T, dtype=float),
+        kinetic_energy_constrained=np.asarray(T_c, dtype=float),
+        kinetic_energy_admissible=np.asarray(T_a, dtype=float),
+        kinetic_energy_post=np.asarray(post, dtype=float),
+        energy_lost=np.asarray(lost, dtype=float),
         step_length=L_S,
         eta=eta,
         trailing_foot_lifts=np.asarray(lifts, dtype=bool),

@@ -12,6 +12,7 @@ from heelstrike.cli._common import (
     COMPASS_PARAMS,
     CliError,
     Explicit,
+    add_backend_option,
     add_model_options,
     add_walker_options,
     explicit_options,
@@ -77,6 +78,11 @@ def add_impact(sub: Any) -> None:
     p.add_argument("--restitution", type=float, default=0.0, action=Explicit,
                    help="restitution e of the constrained velocity, 0 <= e <= 1 (default 0; "
                    "compass gait, and robots' striking contacts (normal rows))")
+    add_backend_option(p, "heel-strike kernel of the compass gait: scipy (default: the "
+                       "reference projectors of eqs. 5-13, numpy/scipy; the command then starts "
+                       "without loading numba) or compiled (the numba compass kernel, "
+                       "heelstrike.models.compass_fast; same numbers to round-off). A described "
+                       "walker's (--model) or robot's heel strike runs on the reference", "scipy")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     cli_robot.add_robot_impact_options(p)  # issue 10: --robot/--urdf/--mjcf, --strike, --keep
     p.set_defaults(func=_run_impact)
@@ -155,6 +161,10 @@ def _run_impact(args: argparse.Namespace) -> int:
     from heelstrike.models import heel_strike_state
 
     given = explicit_options(args)
+    if args.backend == "compiled" and (args.model is not None or cli_robot.robot_requested(args)):
+        raise CliError("--backend compiled is the compass gait's heel-strike kernel; a described "
+                       "walker's (--model) or a robot's heel strike (complementarity) runs on the "
+                       "reference: drop --backend compiled")
     if cli_robot.robot_requested(args):
         ignored = [f"--{d.replace('_', '-')}" for d in sorted(given & {*COMPASS_PARAMS,
                                                                       "q3dot", "q4dot"})]
@@ -187,7 +197,7 @@ def _run_impact(args: argparse.Namespace) -> int:
     q_pre, qd_pre = heel_strike_state(walker, args.angle, q3_dot=args.q3dot, q4_dot=args.q4dot)
     check_striking_foot_approaches(walker, q_pre, qd_pre)
     s = heel_strike_study(walker, args.angle, q3_dot=args.q3dot, q4_dot=args.q4dot,
-                          restitution=args.restitution)
+                          restitution=args.restitution, backend=args.backend)
     d: dict[str, Any] = {
         "T": float(s.kinetic_energy),
         "T_c": float(s.kinetic_energy_constrained),

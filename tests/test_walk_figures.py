@@ -154,3 +154,25 @@ def test_walk_out_rejects_file_that_is_not_animation(tmp_path, capsys):
     assert main(["walk", "--steps", "1", "--out", str(f)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "not a directory" in err[0]
+
+
+def test_bifurcation_branch_pieces_meet_at_the_period_doubling() -> None:
+    """The stable (solid) and unstable (dotted) pieces of the period-one branch are drawn to the
+    period-doubling slope between two continuation points and meet there (no gap)."""
+    import numpy as np
+
+    from heelstrike.plots.gait import _branch_piece
+
+    x = np.array([3.0, 4.0, 5.0, 6.0])
+    y = np.array([10.0, 12.0, 16.0, 18.0])
+    stable = np.array([True, True, False, False])
+    xs, ys = _branch_piece(x, y, stable, True, np.array([4.4]))
+    xu, yu = _branch_piece(x, y, stable, False, np.array([4.4]))
+    np.testing.assert_allclose(xs[:3], [3.0, 4.0, 4.4])
+    np.testing.assert_allclose(ys[:3], [10.0, 12.0, 13.6])
+    assert np.isnan(xs[3])
+    np.testing.assert_allclose(xu, [4.4, 5.0, 6.0])
+    np.testing.assert_allclose(yu, [13.6, 16.0, 18.0])
+    # without a crossing between them, the pieces meet half-way
+    xm, _ = _branch_piece(x, y, stable, False, np.array([]))
+    assert xm[0] == 4.5

@@ -21,6 +21,7 @@ from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
 from heelstrike._frames import slope_to_world as _to_world
+from heelstrike._typing import FloatArray
 from heelstrike.analysis.basin import OUTCOMES, Basin
 from heelstrike.analysis.gait_map import GaitMap
 from heelstrike.analysis.limit_cycle import BifurcationDiagram, Continuation
@@ -159,6 +160,33 @@ def animate_walk(
     return _save_animation(fig, draw, len(times), fps, out)
 
 
+def _branch_piece(
+    x: FloatArray, y: FloatArray, stable: NDArray[np.bool_], want: bool, crossings: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """The points of a continued branch where ``stable == want``, as one polyline with NaN
+    gaps; where stability changes between two points the line runs on to the change (the
+    crossing slope between them, else the midpoint) along the straight segment joining them,
+    so the stable and unstable pieces meet there."""
+    xs: list[float] = []
+    ys: list[float] = []
+    for i in range(len(x)):
+        if stable[i] == want:
+            xs.append(float(x[i]))
+            ys.append(float(y[i]))
+        if i + 1 < len(x) and stable[i] != stable[i + 1]:
+            lo, hi = sorted((float(x[i]), float(x[i + 1])))
+            inside = [c for c in crossings if lo <= c <= hi]
+            xc = float(inside[0]) if inside else 0.5 * (lo + hi)
+            t = (xc - x[i]) / (x[i + 1] - x[i]) if x[i + 1] != x[i] else 0.5
+            yc = float(y[i] + t * (y[i + 1] - y[i]))
+            xs.append(xc)
+            ys.append(yc)
+            if stable[i] == want:  # the piece ends here
+                xs.append(np.nan)
+                ys.append(np.nan)
+    return np.asarray(xs), np.asarray(ys)
+
+
 def bifurcation_figure(
     diagram: BifurcationDiagram, continuation: Continuation | None = None, *, title: str = ""
 ) -> Figure:
@@ -184,11 +212,11 @@ def bifurcation_figure(
             ang = np.rad2deg([c.impact_angle for c in continuation.cycles])
             per = np.asarray([c.period for c in continuation.cycles])
             stable = np.asarray([c.stable for c in continuation.cycles])
+            pds = np.rad2deg(continuation.period_doubling)
             for ax, y in ((ax1, ang), (ax2, per)):
-                ax.plot(np.where(stable, v, np.nan), np.where(stable, y, np.nan), "-",
-                        color="tab:blue", label="period-one gait, stable")
-                ax.plot(np.where(~stable, v, np.nan), np.where(~stable, y, np.nan), ":",
-                        color="tab:blue", label="period-one gait, unstable")
+                for want, style, label in ((True, "-", "stable"), (False, ":", "unstable")):
+                    xs, ys = _branch_piece(v, y, stable, want, pds)
+                    ax.plot(xs, ys, style, color="tab:blue", label=f"period-one gait, {label}")
                 for k, pd in enumerate(np.rad2deg(continuation.period_doubling)):
                     ax.axvline(pd, color="tab:red", ls="--", lw=1,
                                label=f"period doubling, {pd:.3f} deg" if k == 0 else None)

@@ -175,7 +175,8 @@ class CompassGait(PlanarWalker):
     def compiled_kernel(self) -> CompiledKernel | None:
         """``"compass"``: the hand-written kernel of :mod:`heelstrike.dynamics.compiled`.
 
-        None for a subclass that declares another step (its own :meth:`step_schedule` or
+        None for a subclass that declares another step (its own
+        :meth:`~heelstrike.models.base.PlanarWalker.step_schedule` or
         :meth:`heel_strike_function`): the kernel runs the compass gait's schedule only, so such
         a walker runs on the scipy reference only.
         """

@@ -370,3 +370,12 @@ def test_period_doubling_of_a_described_walker_has_the_same_definition():
     m = gm.dataset["most_negative_real_multiplier"].values[0]
     linear = 4.0 + 0.5 * (m[0] + 1.0) / (m[0] - m[1])
     assert abs(linear - pd_ref) > 1e-3  # the old rule: a different answer
+
+
+def test_continuation_says_where_it_stopped_in_degrees():
+    """A continuation in the slope that runs out of gaits says at which slope, in degrees (the
+    point-foot compass gait has a gait at 3 deg, none at 20 deg)."""
+    cont = continue_limit_cycle(CompassGait(), "slope", np.deg2rad([3.0, 20.0]),
+                                guess=[-0.2705, 1.2, -0.9], method="compiled")
+    assert len(cont.cycles) == 1 and cont.values[0] == pytest.approx(np.deg2rad(3.0))
+    assert cont.stopped is not None and cont.stopped.startswith("no gait at slope 20 deg: ")

@@ -14,7 +14,6 @@ radius per chunk).
 from __future__ import annotations
 
 import functools
-import itertools
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -751,7 +750,7 @@ def model_bifurcation(
     GaitNotFoundError
         If there is no gait at the first slope.
     """
-    from heelstrike.analysis.limit_cycle import Continuation, bifurcation_diagram
+    from heelstrike.analysis.limit_cycle import bifurcation_diagram, continue_limit_cycle
     from heelstrike.analysis.model_gaits import find_model_gait
     from heelstrike.dynamics.backends import simulator as backend_simulator
     from heelstrike.dynamics.phased import PhasedWalker
@@ -763,33 +762,11 @@ def model_bifurcation(
     first = find_model_gait(w, slope=float(sl[0]), backend=backend)
     diagram = bifurcation_diagram(w, sl, guess=first.cycle.fixed_point, transient=transient,
                                   record=record, rtol=rtol, atol=atol, simulator=simulator)
-    values: list[float] = []
-    cycles = []
-    stopped = None
-    guess = np.asarray(first.cycle.fixed_point, dtype=float)
-    for s in np.linspace(sl[0], sl[-1], max(int(continuation_points), 1)):
-        try:
-            g = find_model_gait(w, slope=float(s), guess=guess, backend=backend)
-        except GaitNotFoundError as exc:
-            stopped = f"no gait at slope {np.rad2deg(s):.4g} deg: {exc}"
-            break
-        values.append(float(s))
-        cycles.append(g.cycle)
-        guess = np.asarray(g.cycle.fixed_point, dtype=float)
-    def solve(v: float, z0: FloatArray) -> tuple[float, FloatArray]:
-        c = find_model_gait(w, slope=v, guess=z0, backend=backend).cycle
-        m = _most_negative_real(c.multipliers)
-        return (np.nan if m is None else m), np.asarray(c.fixed_point, dtype=float)
-
-    mnr = [_most_negative_real(c.multipliers) for c in cycles]
-    pd = [
-        refine_period_doubling(solve, values[k], values[k + 1], ma,
-                               np.asarray(cycles[k].fixed_point, dtype=float))
-        for k, (ma, mb) in enumerate(itertools.pairwise(mnr))
-        if ma is not None and mb is not None and (ma + 1.0) * (mb + 1.0) < 0.0
-    ]
-    return (
-        diagram,
-        Continuation(parameter="slope", values=np.asarray(values), cycles=tuple(cycles),
-                     period_doubling=np.asarray(pd, dtype=float), stopped=stopped),
+    # the branch: the one continuation (each gait by Newton from the previous fixed point with
+    # find_model_gait's tolerances), period doubling by refine_period_doubling
+    branch = continue_limit_cycle(
+        w, "slope", np.linspace(sl[0], sl[-1], max(int(continuation_points), 1)),
+        guess=first.cycle.fixed_point, simulator=simulator, tol=1e-10, max_iter=20,
+        rtol=1e-11, atol=1e-11,
     )
+    return diagram, branch

@@ -886,7 +886,9 @@ def continue_limit_cycle(
         try:
             c = find_limit_cycle(w, slope=s, guess=z, **kwargs)
         except GaitNotFoundError as exc:
-            stopped = f"{parameter} = {v:g}: {exc}"
+            where = (f"slope {np.rad2deg(v):.4g} deg" if parameter == "slope"
+                     else f"{parameter} = {v:g}")
+            stopped = f"no gait at {where}: {exc}"
             break
         cycles.append(c)
         found.append(float(v))

@@ -192,7 +192,6 @@ def test_walk_command_with_model(tmp_path: Path, capsys: pytest.CaptureFixture[s
     (["walk", "--backend", "compiled"], "use --model compass"),
     (["walk", "--param", "R=0.1"], "--param needs --model"),
     (["walk", "--model", "kneed", "--guess", "1,2"], "--guess"),
-    (["bifurcation", "--backend", "scipy"], "--model compass --backend scipy"),
     (["bifurcation", "--model", "kneed", "--slope-range", "0.5deg:1deg:2"], "no gait found"),
     (["map", "--x", "R:0:0.1:2"], "--x needs --model"),
     (["map", "--backend", "scipy"], "--model compass --backend scipy"),
@@ -267,3 +266,27 @@ def test_bifurcation_command_with_model(tmp_path: Path, capsys: pytest.CaptureFi
     assert len(rows) == 4 and rows["impact_angle_rad"].notna().all()
     branch = pd.read_csv(tmp_path / "period_one_branch.csv")
     assert branch["stable"].all()
+
+
+@pytest.mark.slow
+def test_compass_bifurcation_runs_on_either_backend() -> None:
+    """The compass bifurcation diagram takes --backend like every command (it was refused on
+    scipy): the scipy reference and the compiled kernel give the same period-one branch and the
+    same steady states, and the same period-doubling slope."""
+    import numpy as np
+
+    from heelstrike.analysis.gait_map import compass_bifurcation
+    from heelstrike.models import CompassGait
+
+    slopes = np.deg2rad([4.0, 4.3, 4.6])
+    kw = {"transient": 20, "record": 4, "continuation_points": 3}
+    d_c, b_c = compass_bifurcation(CompassGait(), slopes, backend="compiled", **kw)
+    d_s, b_s = compass_bifurcation(CompassGait(), slopes, backend="scipy", **kw)
+    np.testing.assert_allclose(d_c.impact_angles, d_s.impact_angles, atol=1e-7)
+    np.testing.assert_allclose(d_c.periods, d_s.periods, atol=1e-7)
+    np.testing.assert_allclose([c.fixed_point for c in b_c.cycles],
+                               [c.fixed_point for c in b_s.cycles], atol=1e-8)
+    assert b_c.period_doubling.size == b_s.period_doubling.size == 1
+    assert np.degrees(b_c.period_doubling[0]) == pytest.approx(
+        np.degrees(b_s.period_doubling[0]), abs=1e-4)
+    assert np.degrees(b_c.period_doubling[0]) == pytest.approx(4.391, abs=1e-3)

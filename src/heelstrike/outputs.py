@@ -155,11 +155,13 @@ def write_bifurcation(
     record: int = 16,
     continuation_points: int = 12,
     progress: bool = False,
+    backend: str = "compiled",
 ) -> list[Path]:
     """The compass gait's slope bifurcation diagram, written (PNG, PDF and CSV).
 
     Computed by :func:`heelstrike.analysis.gait_map.compass_bifurcation` over ``count`` slopes
-    from ``slope_start`` to ``slope_stop`` (rad); written by :func:`write_bifurcation_files`.
+    from ``slope_start`` to ``slope_stop`` (rad) on ``backend``; written by
+    :func:`write_bifurcation_files`.
 
     Returns
     -------
@@ -172,6 +174,7 @@ def write_bifurcation(
     diagram, branch = compass_bifurcation(
         walker, np.linspace(slope_start, slope_stop, count), transient=transient,
         record=record, continuation_points=continuation_points, progress=progress,
+        backend=backend,
     )
     return write_bifurcation_files(
         diagram, branch, out_dir,

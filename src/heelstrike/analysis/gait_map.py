@@ -657,6 +657,7 @@ def compass_bifurcation(
     record: int = 16,
     continuation_points: int = 12,
     progress: bool = False,
+    backend: str = "compiled",
 ) -> tuple[BifurcationDiagram, Continuation]:
     """Slope bifurcation diagram of the compass gait and its period-one branch.
 
@@ -666,8 +667,8 @@ def compass_bifurcation(
     discarded, ``record`` impact angles and step periods kept per slope) and the continuation of
     the period-one gait over ``continuation_points`` slopes evenly spaced over the same range
     (:func:`~heelstrike.analysis.limit_cycle.continue_limit_cycle`, tolerances 1e-10), which
-    marks the period-doubling slopes. :func:`model_bifurcation` is the same for a described
-    walker.
+    marks the period-doubling slopes, all on one ``backend``. :func:`model_bifurcation` is the
+    same for a described walker.
 
     Parameters
     ----------
@@ -680,6 +681,9 @@ def compass_bifurcation(
         Slopes of the branch.
     progress : bool
         Report progress on stderr.
+    backend : {"compiled", "scipy"}
+        Step simulator of the walks and of the branch's Poincare map: the compass kernel
+        (batched map) or the scipy reference.
 
     Returns
     -------
@@ -689,18 +693,25 @@ def compass_bifurcation(
     ------
     GaitNotFoundError
         If there is no gait at the first slope.
+    ValueError
+        Unknown backend.
     """
     from heelstrike.analysis.limit_cycle import bifurcation_diagram, continue_limit_cycle
+    from heelstrike.dynamics.backends import simulator as backend_simulator
 
+    simulator = backend_simulator(walker, backend)  # ValueError: unknown or unsupported backend
     sl = np.asarray(slopes, dtype=float).ravel()
-    first = find_limit_cycle(walker, slope=float(sl[0]), progress=progress)
+    # the gait at the first slope (its fixed point seeds the walks and the branch): the
+    # automatic search, with Newton on the chosen backend's map
+    first = find_limit_cycle(walker, slope=float(sl[0]), progress=progress,
+                             method="compiled" if backend == "compiled" else "scipy")
     diagram = bifurcation_diagram(
         walker, sl, guess=first.fixed_point, transient=transient, record=record,
-        progress=progress,
+        progress=progress, simulator=simulator,
     )
     branch = continue_limit_cycle(
         walker, "slope", np.linspace(sl[0], sl[-1], continuation_points),
-        guess=first.fixed_point, progress=progress, rtol=1e-10, atol=1e-10,
+        guess=first.fixed_point, progress=progress, rtol=1e-10, atol=1e-10, simulator=simulator,
     )
     return diagram, branch
 

@@ -130,23 +130,23 @@ class PoincareMap:
         """``P`` at every row of ``Z`` (shape (B, d)); rows of NaN where the step fails.
 
         One batched compiled call where the walker's kernel runs the map: the compass map
-        (``method="compiled"``), or a described walker whose ``simulator`` is the compiled
-        backend (:class:`~heelstrike.dynamics.backends.BoundSimulator`); otherwise row by row.
+        (``method="compiled"``, or the passive compass with the compiled backend as
+        ``simulator``), or a described walker whose ``simulator`` is the compiled backend
+        (:class:`~heelstrike.dynamics.backends.BoundSimulator`); otherwise row by row.
         Each row equals ``self(Z[i])`` (the same kernel, walker by walker).
         """
         Z_ = np.atleast_2d(np.asarray(Z, dtype=float))
-        if self.method == "compiled":
+        compiled = isinstance(self.simulator, BoundSimulator) and \
+            self.simulator.backend == "compiled"
+        if self.method == "compiled" or (compiled and self.walker.compiled_kernel == "compass"
+                                         and self.torque is None and self.push_off is None):
             from heelstrike.dynamics.compiled import COMPLETED, ensemble_walk
 
             ens = ensemble_walk(self.walker, Z_, self.slope, steps=1,  # type: ignore[arg-type]
                                 rtol=self.rtol, atol=self.atol,
                                 max_step_duration=self.max_step_duration, parallel=False)
             return np.where((ens.status == COMPLETED)[:, None], ens.z, np.nan)
-        if (
-            isinstance(self.simulator, BoundSimulator)
-            and self.simulator.backend == "compiled"
-            and self.walker.compiled_kernel == "generated"
-        ):
+        if compiled and self.walker.compiled_kernel == "generated":
             from heelstrike.dynamics.compiled_phased import ensemble_walk_phased
 
             ens_p = ensemble_walk_phased(

@@ -294,8 +294,9 @@ def add_bifurcation(sub: Any) -> None:
     )
     add_walker_options(p)
     add_model_options(p)
-    add_backend_option(p, "step simulator with --model: compiled (default) or the scipy "
-                       "reference (the compass diagram's pipeline is fixed)", "compiled")
+    add_backend_option(p, "step simulator of the walks and the period-one branch: compiled "
+                       "(default) or the scipy reference (slower: minutes for the compass "
+                       "gait's 45 slopes)", "compiled")
     p.add_argument("--slope-range", default="0.5deg:6deg",
                    type=lambda t: parse_range(t, parse_angle),
                    help="START:STOP[:COUNT] slopes, e.g. 0.5deg:6deg:56 (default count 45)")
@@ -310,9 +311,6 @@ def _run_bifurcation(args: argparse.Namespace) -> int:
 
     from heelstrike.outputs import write_bifurcation
 
-    if args.model is None and args.backend != "compiled":
-        raise CliError("--backend scipy is not supported by the compass bifurcation diagram "
-                       "yet (its pipeline is fixed); use --model compass --backend scipy")
     walker = walker_from_args(args) if args.model is None else model_from_args(args)
     start, stop, count = args.slope_range
     if not 0 < start < stop:
@@ -332,7 +330,7 @@ def _run_bifurcation(args: argparse.Namespace) -> int:
     else:
         paths = write_bifurcation(
             walker, start, stop, count or 45, Path(args.out), transient=args.transient,
-            record=args.record, progress=True,
+            record=args.record, progress=True, backend=args.backend,
         )
     print_paths(paths)
     return 0

@@ -796,6 +796,7 @@ def simulate_compiled(
     max_step_duration: float = 5.0,
     rtol: float = 1e-10,
     atol: float = 1e-10,
+    max_step: float = np.inf,
 ) -> WalkResult:
     """Compiled :func:`~heelstrike.dynamics.hybrid.simulate` of one passive compass gait.
 
@@ -822,6 +823,9 @@ def simulate_compiled(
         Time bound of one step (s).
     rtol, atol : float
         Integrator (DP5) tolerances.
+    max_step : float
+        Must be ``inf``: the kernel's steps are set by the tolerances alone (a cap on the step
+        asks for dense samples: use the scipy backend).
 
     Returns
     -------
@@ -837,6 +841,9 @@ def simulate_compiled(
     check_compiled_compass(torque, push_off, friction, restitution)
     if steps < 1:
         raise ValueError("steps must be >= 1")
+    if np.isfinite(max_step):
+        raise ValueError("the compiled compass kernel takes no max_step (it records the phase "
+                         "boundaries only); use backend='scipy' for dense samples")
     p = walker_parameters(walker, slope)
     if p.shape != (8,):
         raise ValueError("the compiled compass kernel walks one walker (scalar parameters)")

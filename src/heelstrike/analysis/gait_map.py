@@ -696,7 +696,6 @@ def compass_bifurcation(
     ValueError
         Unknown backend.
     """
-    from heelstrike.analysis.limit_cycle import bifurcation_diagram, continue_limit_cycle
     from heelstrike.dynamics.backends import simulator as backend_simulator
 
     simulator = backend_simulator(walker, backend)  # ValueError: unknown or unsupported backend
@@ -705,13 +704,28 @@ def compass_bifurcation(
     # automatic search, with Newton on the chosen backend's map
     first = find_limit_cycle(walker, slope=float(sl[0]), progress=progress,
                              method="compiled" if backend == "compiled" else "scipy")
-    diagram = bifurcation_diagram(
-        walker, sl, guess=first.fixed_point, transient=transient, record=record,
-        progress=progress, simulator=simulator,
+    return _diagram_and_branch(
+        walker, sl, first.fixed_point, simulator, transient=transient, record=record,
+        continuation_points=continuation_points, progress=progress, walk_tolerances={},
+        branch_tolerances={"rtol": 1e-10, "atol": 1e-10},
     )
+
+
+def _diagram_and_branch(
+    walker: Any, slopes: FloatArray, z0: ArrayLike, simulator: Any, *, transient: int,
+    record: int, continuation_points: int, progress: bool, walk_tolerances: dict[str, Any],
+    branch_tolerances: dict[str, Any],
+) -> tuple[BifurcationDiagram, Continuation]:
+    """The brute-force diagram and the continued period-one branch over ``slopes``, both from
+    the fixed point ``z0`` at the first slope, on ``simulator`` (the bifurcation functions'
+    shared part)."""
+    from heelstrike.analysis.limit_cycle import bifurcation_diagram, continue_limit_cycle
+
+    diagram = bifurcation_diagram(walker, slopes, guess=z0, transient=transient, record=record,
+                                  progress=progress, simulator=simulator, **walk_tolerances)
     branch = continue_limit_cycle(
-        walker, "slope", np.linspace(sl[0], sl[-1], continuation_points),
-        guess=first.fixed_point, progress=progress, rtol=1e-10, atol=1e-10, simulator=simulator,
+        walker, "slope", np.linspace(slopes[0], slopes[-1], max(int(continuation_points), 1)),
+        guess=z0, progress=progress, simulator=simulator, **branch_tolerances,
     )
     return diagram, branch
 
@@ -733,9 +747,10 @@ def model_bifurcation(
     1998): from the gait at the first slope, each slope's walk starts from the previous slope's
     last post-impact state, takes ``transient`` steps, and the next ``record`` impact angles
     (stance angle ``q[2]`` at heel strike, rad) and step durations (s) are kept. The branch:
-    :func:`~heelstrike.analysis.model_gaits.find_model_gait` continued over
-    ``continuation_points`` slopes (each from the previous fixed point; it stops at the first
-    slope without a gait), with the slopes where a real multiplier crosses -1
+    :func:`~heelstrike.analysis.limit_cycle.continue_limit_cycle` over ``continuation_points``
+    slopes (each gait from the previous fixed point, with
+    :func:`~heelstrike.analysis.model_gaits.find_model_gait`'s tolerances; it stops at the
+    first slope without a gait), with the slopes where a real multiplier crosses -1
     (:func:`~heelstrike.analysis.limit_cycle.refine_period_doubling`).
 
     Parameters
@@ -761,7 +776,6 @@ def model_bifurcation(
     GaitNotFoundError
         If there is no gait at the first slope.
     """
-    from heelstrike.analysis.limit_cycle import bifurcation_diagram, continue_limit_cycle
     from heelstrike.analysis.model_gaits import find_model_gait
     from heelstrike.dynamics.backends import simulator as backend_simulator
     from heelstrike.dynamics.phased import PhasedWalker
@@ -771,13 +785,11 @@ def model_bifurcation(
     sl = np.asarray(slopes, dtype=float).ravel()
     _check_slopes(sl)
     first = find_model_gait(w, slope=float(sl[0]), backend=backend)
-    diagram = bifurcation_diagram(w, sl, guess=first.cycle.fixed_point, transient=transient,
-                                  record=record, rtol=rtol, atol=atol, simulator=simulator)
-    # the branch: the one continuation (each gait by Newton from the previous fixed point with
-    # find_model_gait's tolerances), period doubling by refine_period_doubling
-    branch = continue_limit_cycle(
-        w, "slope", np.linspace(sl[0], sl[-1], max(int(continuation_points), 1)),
-        guess=first.cycle.fixed_point, simulator=simulator, tol=1e-10, max_iter=20,
-        rtol=1e-11, atol=1e-11,
+    # the branch: each gait by Newton from the previous fixed point with find_model_gait's
+    # tolerances
+    return _diagram_and_branch(
+        w, sl, first.cycle.fixed_point, simulator, transient=transient, record=record,
+        continuation_points=continuation_points, progress=False,
+        walk_tolerances={"rtol": rtol, "atol": atol},
+        branch_tolerances={"tol": 1e-10, "max_iter": 20, "rtol": 1e-11, "atol": 1e-11},
     )
-    return diagram, branch

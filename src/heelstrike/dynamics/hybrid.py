@@ -501,17 +501,7 @@ class _ShiftedTorque:
         return np.asarray(self.law(t - self.t0, q, q_dot))
 
 
-@dataclass(frozen=True, kw_only=True)
-class _Seg:
-    t: FloatArray
-    q: FloatArray
-    qd: FloatArray
-    w: FloatArray
-    event: str | None
-    failed: bool
-
-
-def _segment_outcome(seg: _Seg, want: str) -> WalkStatus | None:
+def _segment_outcome(seg: Segment, want: str) -> WalkStatus | None:
     """Status that ends the walk after a segment, or None if it ended with the wanted event."""
     if seg.failed:
         return WalkStatus.INTEGRATION_FAILED
@@ -727,18 +717,16 @@ def simulate(
                                         _events(sup, q_ref, stage, friction), rtol, atol,
                                         max_step)
                 qs, qds = sup.unpack(raw.x[:, : 2 * m], q_ref)
-                seg = _Seg(t=raw.t, q=qs, qd=qds, w=raw.x[:, -1], event=raw.event,
-                           failed=raw.failed)
-                t_s.append(seg.t)
-                q_s.append(seg.q)
-                qd_s.append(seg.qd)
-                w_s.append(seg.w)
-                leg_s.append(np.full(len(seg.t), stance))
-                step_s.append(np.full(len(seg.t), k))
-                phase_s.append(np.full(len(seg.t), phase.name))
-                t, q, qd = float(seg.t[-1]), seg.q[-1].copy(), seg.qd[-1].copy()
-                work = float(seg.w[-1])
-                ended = _segment_outcome(seg, stage.until.name)
+                t_s.append(raw.t)
+                q_s.append(qs)
+                qd_s.append(qds)
+                w_s.append(raw.x[:, -1])
+                leg_s.append(np.full(len(raw.t), stance))
+                step_s.append(np.full(len(raw.t), k))
+                phase_s.append(np.full(len(raw.t), phase.name))
+                t, q, qd = float(raw.t[-1]), qs[-1].copy(), qds[-1].copy()
+                work = float(raw.x[-1, -1])
+                ended = _segment_outcome(raw, stage.until.name)
                 if ended is not None:
                     break
             if ended is not None or phase.reset == "heel_strike":

@@ -17,14 +17,14 @@ import pytest
 
 from heelstrike.core import fast
 from heelstrike.core.fast import impact_2x4, serial_and_parallel
-from heelstrike.dynamics import compiled
+from heelstrike.dynamics import _compass_kernels, compiled
 from heelstrike.dynamics.compiled import ensemble_walk, walker_parameters
 from heelstrike.models import compass_fast
 from heelstrike.models.compass import CompassGait
 from heelstrike.models.compass_fast import heel_strike_impact
 
 TWINS = {
-    "ensemble_walk": (compiled._ensemble_serial, compiled._ensemble_parallel),
+    "ensemble_walk": (_compass_kernels._ensemble_serial, _compass_kernels._ensemble_parallel),
     "heel_strike_impact": compass_fast._KERNELS,
     "impact_2x4": fast._KERNELS,
 }
@@ -97,9 +97,10 @@ def test_walking_kernel_with_shared_drivers_is_disk_cacheable() -> None:
     # which numba refuses to cache; the drivers take them as closure constants instead
     p = walker_parameters(CompassGait(), 0.05)
     y = np.array([-0.26682122, 0.53364244, 1.08394013, -0.68587173])
-    ev, t, _ = compiled._integrate_phase(p, y, 0.0, 5.0, 1, 0.0, 1e-10, 1e-10, np.empty((7, 4)))
+    integrate_phase = _compass_kernels._integrate_phase
+    ev, t, _ = integrate_phase(p, y, 0.0, 5.0, 1, 0.0, 1e-10, 1e-10, np.empty((7, 4)))
     assert ev == compiled._EV_MID and 0.0 < t < 1.0
-    overloads: dict[Any, Any] = compiled._integrate_phase.overloads
+    overloads: dict[Any, Any] = _compass_kernels._integrate_phase.overloads
     assert overloads
     for cres in overloads.values():
         assert not cres.library.has_dynamic_globals

@@ -22,7 +22,6 @@ and item-level parallelism do not oversubscribe the cores.
 from __future__ import annotations
 
 import math
-import threading
 import types
 from collections.abc import Callable
 from typing import Any, NamedTuple
@@ -32,6 +31,7 @@ from numba import njit, prange
 from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._typing import FloatArray
+from heelstrike.core._parallel import use_parallel
 from heelstrike.core.impact import ImpactInputError
 
 __all__ = ["FastImpactResult", "impact_2x4", "use_parallel"]
@@ -76,16 +76,6 @@ class FastImpactResult(NamedTuple):
     velocity_post: FloatArray
     constraint_impulse: FloatArray
     energy_lost: FloatArray
-
-
-def use_parallel(parallel: bool | None) -> bool:
-    """Resolve the ``parallel`` option of the fast kernels.
-
-    ``None`` means: parallel on the main thread, serial on any other thread.
-    """
-    if parallel is None:
-        return threading.current_thread() is threading.main_thread()
-    return bool(parallel)
 
 
 def serial_and_parallel(py_func: Callable[..., None], **options: Any) -> tuple[Any, Any]:

@@ -57,13 +57,9 @@ from heelstrike._typing import FloatArray, IntArray
 from heelstrike.core.fast import use_parallel
 from heelstrike.core.impact import ImpactInputError
 from heelstrike.dynamics import _dp5 as dp5
+from heelstrike.dynamics._compass_kernels import lift_velocity_scale_jit, lifts_jit
 from heelstrike.dynamics.actuation import PushOff
-from heelstrike.dynamics.compiled import (
-    STATUS_NAMES,
-    EnsembleStatus,
-    lift_velocity_scale_jit,
-    lifts_jit,
-)
+from heelstrike.dynamics.compiled import STATUS_NAMES, EnsembleStatus
 from heelstrike.dynamics.hybrid import ImpactRecord, WalkStatus
 from heelstrike.dynamics.phased import (
     ImpactKind,

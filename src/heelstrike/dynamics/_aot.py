@@ -1,0 +1,334 @@
+"""Compiled kernels ahead of time: one numba source, an extension module that loads without numba.
+
+The compiled backends' kernels are numba functions. Called through numba's JIT they cost every
+new process the numba floor (importing numba, its typing registries and scipy.linalg, then
+loading each kernel from numba's disk cache: about 0.5 s on the reference machine, more than the
+whole of ``heelstrike impact --json``). For the serial entry points this module compiles the
+*same* Python functions once, ahead of time, with numba's ``pycc`` into a CPython extension
+module in heelstrike's cache, and later processes import that module directly: no numba, no
+LLVM, no typing at run time. The arithmetic is numba's, so results are identical to the JIT
+kernels' bit for bit (``tests/test_aot.py`` checks it walk by walk).
+
+- A library (:class:`AotLibrary`) lists its exports with explicit numba signatures; the module
+  name carries a digest of everything the machine code depends on (the kernel sources, the
+  numba version, the Python ABI, the signatures, a caller key such as a generated walker's),
+  so an edited kernel is rebuilt and never confused with an old one.
+- Built modules live in ``<cache>/aot/`` (:func:`heelstrike.models._generated.cache_dir`). A
+  module is machine code: it is loaded only if it and its folder are owned by the current user,
+  not symbolic links and writable by nobody else (the rules of the generated-code cache).
+  Builds write into a private temporary folder and move the result into place atomically.
+- The generic x86-64 (or host-architecture baseline) target is used, not the build machine's
+  CPU, so a cache shared between machines stays valid; on the reference machine the generic
+  kernel runs at the JIT's speed.
+- Every call checks the array arguments against the declared signature (dtype, dimensions,
+  C order) before entering machine code that trusts them.
+- ``HEELSTRIKE_AOT=0`` turns the tier off (numba's JIT is used). If a build fails (no C
+  compiler, a numba without ``pycc``), a :class:`AotWarning` says so once and the JIT is used.
+
+The parallel (``prange``) entry points stay on numba's JIT: ``pycc`` compiles serial code only.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import importlib.machinery
+import importlib.util
+import os
+import re
+import sys
+import sysconfig
+import tempfile
+import threading
+import time
+import warnings
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+
+from heelstrike.models._generated import _unsafe, cache_dir
+
+__all__ = ["AotExport", "AotLibrary", "AotWarning", "aot_enabled", "load_library"]
+
+#: Bumped when the layout of built modules changes.
+_FORMAT = "heelstrike-aot-1"
+#: Environment variable: ``0`` (or ``false``, ``no``, ``off``) disables the ahead-of-time tier.
+ENV = "HEELSTRIKE_AOT"
+
+
+class AotWarning(UserWarning):
+    """The ahead-of-time kernels could not be built or loaded; numba's JIT is used instead."""
+
+
+_DTYPES = {"f8": np.dtype(np.float64), "i8": np.dtype(np.int64), "b1": np.dtype(np.bool_)}
+
+
+def _array_rank(spec: str) -> tuple[np.dtype[Any], int] | None:
+    """``(dtype, ndim)`` of an array type string such as ``f8[:,::1]``; None for a scalar."""
+    m = re.fullmatch(r"(f8|i8|b1)\[((?::,\s*)*)::1\]", spec.replace(" ", ""))
+    if m is None:
+        if re.fullmatch(r"f8|i8|b1", spec):
+            return None
+        raise ValueError(f"unsupported ahead-of-time argument type {spec!r} (use C-order arrays "
+                         "such as f8[:,::1], or the scalars f8, i8, b1)")
+    return _DTYPES[m.group(1)], m.group(2).count(":") + 1
+
+
+@dataclass(frozen=True, kw_only=True)
+class AotExport:
+    """One exported function of an ahead-of-time library.
+
+    Attributes
+    ----------
+    name : str
+        Its name in the extension module (and on the loaded library).
+    args : tuple of str
+        numba types of the arguments: ``f8``, ``i8``, ``b1`` or C-order arrays of them
+        (``f8[::1]``, ``f8[:,::1]``, ``i8[::1]``, ...).
+    returns : str
+        numba type of the result, e.g. ``void``, ``f8``, ``UniTuple(f8, 2)``,
+        ``Tuple((i8, f8, f8))``.
+    """
+
+    name: str
+    args: tuple[str, ...]
+    returns: str
+
+    @property
+    def signature(self) -> str:
+        """The numba signature string, ``returns(args...)``."""
+        return f"{self.returns}({', '.join(self.args)})"
+
+
+@dataclass(frozen=True, kw_only=True)
+class AotLibrary:
+    """A set of kernels compiled together into one extension module.
+
+    Attributes
+    ----------
+    name : str
+        Short name (letters, digits, underscores), part of the module name.
+    exports : tuple of AotExport
+        The exported functions and their signatures.
+    functions : callable
+        ``functions() -> {export name: numba dispatcher or Python function}``: the functions to
+        compile. Called only to build (it may import numba); for a dispatcher its Python
+        function is compiled.
+    source_modules : tuple of str
+        Modules whose source files define the compiled code (their bytes enter the digest).
+    key : str
+        Further digest input, e.g. the key of a walker's generated code.
+    """
+
+    name: str
+    exports: tuple[AotExport, ...]
+    functions: Callable[[], Mapping[str, Any]]
+    source_modules: tuple[str, ...]
+    key: str = ""
+
+
+class _Checked:
+    """A loaded library: each export behind a check of its array arguments."""
+
+    def __init__(self, module: ModuleType, exports: tuple[AotExport, ...], path: Path) -> None:
+        self.module = module
+        self.path = path
+        for e in exports:
+            setattr(self, e.name, _checked(getattr(module, e.name), e))
+
+
+def _checked(fn: Callable[..., Any], export: AotExport) -> Callable[..., Any]:
+    arrays = [(i, spec) for i, spec in enumerate(_array_rank(a) for a in export.args)
+              if spec is not None]
+    n_args = len(export.args)
+
+    def call(*args: Any) -> Any:
+        if len(args) != n_args:
+            raise TypeError(f"{export.name}() takes {n_args} arguments ({len(args)} given)")
+        for i, (dtype, ndim) in arrays:
+            a = args[i]
+            if not (isinstance(a, np.ndarray) and a.dtype == dtype and a.ndim == ndim
+                    and a.flags.c_contiguous and a.flags.aligned):
+                raise TypeError(
+                    f"{export.name}(): argument {i} must be a C-ordered {ndim}-d {dtype} array "
+                    f"(got {type(a).__name__} {getattr(a, 'dtype', '')} "
+                    f"{getattr(a, 'shape', '')})"
+                )
+        return fn(*args)
+
+    call.__name__ = export.name
+    call.__doc__ = f"Ahead-of-time kernel ``{export.signature}``."
+    return call
+
+
+def aot_enabled() -> bool:
+    """Whether the ahead-of-time tier is on (``HEELSTRIKE_AOT`` not set to 0/false/no/off)."""
+    return os.environ.get(ENV, "1").strip().lower() not in ("0", "false", "no", "off")
+
+
+def _module_file(name: str) -> Path:
+    spec = importlib.util.find_spec(name)
+    if spec is None or spec.origin is None:
+        raise ImportError(f"no source for module {name}")
+    return Path(spec.origin)
+
+
+def _numba_version_file() -> bytes:
+    """The bytes of numba's version file (cheaper than importing numba or its metadata)."""
+    spec = importlib.util.find_spec("numba")
+    if spec is None or not spec.submodule_search_locations:
+        return b"no numba"
+    path = Path(next(iter(spec.submodule_search_locations))) / "_version.py"
+    try:
+        return path.read_bytes()
+    except OSError:
+        return b"numba version unknown"
+
+
+def _digest(lib: AotLibrary) -> str:
+    h = hashlib.sha256()
+    for part in (_FORMAT, sys.implementation.cache_tag, str(sysconfig.get_config_var("EXT_SUFFIX")),
+                 lib.name, lib.key):
+        h.update(part.encode() + b"\0")
+    h.update(_numba_version_file())
+    for e in lib.exports:
+        h.update(f"{e.name}:{e.signature}\0".encode())
+    for mod in sorted(lib.source_modules):
+        h.update(mod.encode() + b"\0")
+        h.update(_module_file(mod).read_bytes())
+    return h.hexdigest()
+
+
+@functools.cache
+def module_name(lib: AotLibrary) -> str:
+    """Name of the library's extension module (its digest included; computed once a process)."""
+    return f"_heelstrike_aot_{lib.name}_{_digest(lib)[:24]}"
+
+
+def _path(lib: AotLibrary) -> Path:
+    suffix = importlib.machinery.EXTENSION_SUFFIXES[0]
+    return cache_dir() / "aot" / f"{module_name(lib)}{suffix}"
+
+
+def _safe(path: Path) -> str | None:
+    """Why ``path`` (a built module) must not be loaded, or None if it may be."""
+    for what, is_dir in ((path.parent, True), (path, False)):
+        try:
+            why = _unsafe(os.lstat(what), directory=is_dir)
+        except OSError as exc:
+            return f"{what}: {exc.strerror}"
+        if why is not None:
+            return f"{what} {why}"
+    return None
+
+
+def _import(name: str, path: Path) -> ModuleType:
+    loader = importlib.machinery.ExtensionFileLoader(name, str(path))
+    spec = importlib.util.spec_from_file_location(name, str(path), loader=loader)
+    if spec is None:  # pragma: no cover - only for a path importlib cannot describe
+        raise ImportError(f"cannot load {path}")
+    module = importlib.util.module_from_spec(spec)
+    loader.exec_module(module)
+    return module
+
+
+def build(lib: AotLibrary, *, quiet: bool = False) -> Path:
+    """Compile ``lib`` with numba's ``pycc`` into the cache and return the module's path.
+
+    Raises
+    ------
+    RuntimeError
+        If the build fails (the message says why), or the cache folder is unsafe.
+    """
+    path = _path(lib)
+    folder = path.parent
+    folder.mkdir(parents=True, exist_ok=True, mode=0o700)
+    why = _unsafe(os.lstat(folder), directory=True)
+    if why is not None:
+        raise RuntimeError(f"not building into {folder}: it {why}")
+    if not quiet:
+        print(f"heelstrike: compiling the {lib.name} kernels ahead of time (first use only, "
+              "cached afterwards; this takes a few seconds to a minute)",
+              file=sys.stderr, flush=True)
+    t0 = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # pycc's pending-deprecation notice is ours to handle
+        from numba.pycc import CC
+
+        functions = lib.functions()
+        with tempfile.TemporaryDirectory(dir=folder, prefix=".build-") as tmp:
+            cc = CC(module_name(lib))
+            cc.output_dir = tmp
+            cc.verbose = False
+            for e in lib.exports:
+                fn = functions[e.name]
+                cc.export(e.name, e.signature)(getattr(fn, "py_func", fn))
+            try:
+                cc.compile()
+            except Exception as exc:  # compiler missing, pycc failure: reported by the caller
+                raise RuntimeError(f"numba.pycc could not build {lib.name}: {exc}") from exc
+            built = [p for p in Path(tmp).iterdir() if p.name.endswith(path.suffix)]
+            if len(built) != 1:
+                raise RuntimeError(f"numba.pycc built {[p.name for p in built]}, expected one "
+                                   f"module ending in {path.suffix}")
+            os.chmod(built[0], 0o700)
+            os.replace(built[0], path)  # atomic: concurrent builders never see partial files
+    if not quiet:
+        print(f"heelstrike: built {path.name} in {time.perf_counter() - t0:.1f} s",
+              file=sys.stderr, flush=True)
+    return path
+
+
+class _LoadedLibraries:
+    """What this process loaded (or failed to build), by module name: a cache, so an object
+    (module-level dicts are data to :func:`heelstrike.analysis.sweep.sweep`'s identity)."""
+
+    def __init__(self) -> None:
+        self.by_name: dict[str, _Checked | None] = {}
+
+
+_LOCK = threading.Lock()
+_LOADED = _LoadedLibraries()
+
+
+def load_library(lib: AotLibrary, *, build_missing: bool = True) -> Any | None:
+    """The library's ahead-of-time module, built on first use; None to use numba's JIT.
+
+    None when the tier is off (``HEELSTRIKE_AOT=0``), when the module is missing and
+    ``build_missing`` is false, or when it cannot be built or loaded (with an
+    :class:`AotWarning`, once per library and process).
+
+    Returns
+    -------
+    object or None
+        An object with one attribute per export: the compiled function behind a check of its
+        array arguments (dtype, ``ndim``, C order); ``.path`` is the module file.
+    """
+    if not aot_enabled():
+        return None
+    name = module_name(lib)
+    with _LOCK:
+        if name in _LOADED.by_name:
+            return _LOADED.by_name[name]
+        path = _path(lib)
+        result: _Checked | None = None
+        try:
+            if path.exists():
+                why = _safe(path)
+                if why is not None:
+                    raise RuntimeError(f"not loading {path.name}: {why}")
+            elif build_missing:
+                build(lib)
+            if path.exists():
+                result = _Checked(_import(name, path), lib.exports, path)
+        except (OSError, ImportError, RuntimeError) as exc:
+            warnings.warn(f"heelstrike: ahead-of-time kernels unavailable ({exc}); using "
+                          "numba's JIT", AotWarning, stacklevel=3)
+            result = None
+        if result is not None or build_missing:  # a module merely missing is looked for again
+            _LOADED.by_name[name] = result
+        return result

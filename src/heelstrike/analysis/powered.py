@@ -27,6 +27,15 @@ its gaits spanned). It then polishes the gait on the accurate map by chord itera
 search's Jacobian (about one step per three digits) and measures the multipliers there by
 central differences.
 
+Walkers without a level-ground seed gait
+-----------------------------------------
+A kneed walker's passive gaits exist only on slopes steeper than about 2 deg, and the push-off
+seeds converge to nothing on level ground. Given its passive gaits (``passive_gait``), the
+search then reaches level ground by a homotopy (:func:`_slope_homotopy`): from the passive gait
+on a slope, a continuation in the slope lowers it to 0 with the target held and the push-off
+free, raising the target where that continuation folds; the level gait it ends at starts the
+continuation in the target as a seed gait would.
+
 McGeer's wheel (``R = l``)
 --------------------------
 With ``R = l`` both foot arcs are centred on the hip: the two contact points coincide, the
@@ -40,11 +49,12 @@ same point); the legs are then relabelled by hand and the gait is flagged
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any, Literal, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -67,6 +77,7 @@ from heelstrike.dynamics.single_support import TorqueLaw
 from heelstrike.models.base import PlanarWalker
 
 Target = Literal["speed", "step_length"]
+_T = TypeVar("_T")
 
 __all__ = [
     "ACTUATIONS",
@@ -294,8 +305,10 @@ def powered_step(
     atol: float = 1e-10,
     max_step_duration: float = 4.0,
     simulator: Callable[..., WalkResult] | None = None,
+    slope: float = 0.0,
 ) -> PoweredStep:
-    """Simulate one step on level ground from the post-impact section point ``z``.
+    """Simulate one step on level ground (or on ``slope``, rad) from the post-impact section
+    point ``z``.
 
     Handles McGeer's wheel (module docstring): a ``trailing_foot_stays`` outcome with a zero
     (to round-off) trailing-foot velocity is accepted only when ``R = l``. ``simulator`` is a
@@ -306,7 +319,7 @@ def powered_step(
     q, qd = walker.section_to_state(z_)
     E0 = float(mechanical_energy(walker, q, qd))
     walk = (simulate if simulator is None else simulator)(
-        walker, q, qd, slope=0.0, steps=1, torque=torque, push_off=push_off,
+        walker, q, qd, slope=slope, steps=1, torque=torque, push_off=push_off,
         rtol=rtol, atol=atol, max_step_duration=max_step_duration,
     )
     rec = walk.impacts[0] if walk.impacts else None
@@ -494,6 +507,26 @@ SEARCH_FD_STEP = 3e-4
 #: Map iterations per seed candidate (see :func:`_seeds`).
 SEED_STEPS = 12
 
+#: Slopes (rad) of the passive gaits the slope homotopy starts from, tried in order (about 2.9,
+#: 4.0 and 2.0 deg; see :func:`_slope_homotopy`): a kneed walker's passive gaits exist only on
+#: slopes steeper than about 2 deg.
+HOMOTOPY_SLOPES = (0.05, 0.07, 0.035)
+
+#: Relative raise of the target (speed or step length) where the homotopy's continuation in the
+#: slope folds.
+HOMOTOPY_RAISE = 0.1
+
+#: Largest number of raises of the target during the homotopy.
+HOMOTOPY_RAISES = 10
+
+#: Slope (rad) by which the homotopy backs off from a fold of its continuation in the slope
+#: before it raises the target (at the fold itself the augmented Jacobian is singular).
+HOMOTOPY_BACKOFF = 0.005
+
+#: Slope step (rad) below which a stalled continuation in the slope stops: where the fold is
+#: located to.
+HOMOTOPY_SLOPE_RESOLUTION = 2e-4
+
 
 @dataclass(frozen=True, kw_only=True)
 class _Problem:
@@ -509,13 +542,16 @@ class _Problem:
     bar: Any = None
     simulator: Callable[..., WalkResult] | None = None
     seed_sections: tuple[tuple[float, ...], ...] = _SEED_SECTIONS
+    slope: float = 0.0
+    passive_gait: Callable[[float], ArrayLike] | None = None
 
     def at_tolerance(self, tol: float) -> _Problem:
         """The same problem integrated at ``rtol = atol = tol``, sharing budget and clock."""
-        return _Problem(walker=self.walker, family=self.family, target=self.target,
-                        rtol=tol, atol=tol, budget=self.budget, _count=self._count,
-                        deadline=self.deadline, time_limit=self.time_limit, bar=self.bar,
-                        simulator=self.simulator, seed_sections=self.seed_sections)
+        return self.replace(rtol=tol, atol=tol)
+
+    def replace(self, **changes: Any) -> _Problem:
+        """The same problem with some fields changed, sharing budget and clock."""
+        return dataclasses.replace(self, **changes)  # _count: the same list, shared
 
     def step(self, x: FloatArray) -> PoweredStep:
         self._count[0] += 1
@@ -532,7 +568,7 @@ class _Problem:
             )
         torque, push = self.family.build(self.walker, float(x[-1]))
         return powered_step(self.walker, x[:-1], torque, push, rtol=self.rtol, atol=self.atol,
-                            simulator=self.simulator)
+                            simulator=self.simulator, slope=self.slope)
 
     def measure(self, st: PoweredStep) -> float:
         assert st.record is not None
@@ -666,6 +702,184 @@ def _seeds(prob: _Problem) -> Iterator[FloatArray]:
                 yield best[1]
 
 
+def _constant(value: _T) -> Callable[[float], _T]:
+    """The function of ``lam`` that returns ``value``."""
+    return lambda _lam: value
+
+
+def _continue_scalar(
+    problem_at: Callable[[float], _Problem], value_at: Callable[[float], float], x: FloatArray,
+    J: FloatArray, start: float, end: float, *, first_step: float, max_step: float,
+    resolution: float, tol: float, h: float,
+) -> tuple[list[tuple[float, FloatArray, FloatArray]], int, Exception | None]:
+    """Natural-parameter continuation of a gait in a scalar ``lam`` from ``start`` to ``end``.
+
+    The problem and the target value are functions of ``lam`` (the slope of the ground, rad,
+    or the target itself). Secant predictor from the last two gaits, Newton as in the
+    target continuation of :func:`_find` (a fresh forward-difference Jacobian, Broyden
+    updates; the last gait's Broyden Jacobian made Newton stall near folds); a step Newton
+    does not solve quickly is halved, and below ``resolution`` the continuation stops (a fold
+    of the family, or a step the walker cannot take).
+
+    Returns
+    -------
+    path : list of (float, ndarray, ndarray)
+        The gaits reached, in order, from the start ``(start, x, J)``: ``(lam, x, J)`` with
+        ``x`` (shape (d + 1,), section point and parameter) and its Jacobian (shape
+        (d + 1, d + 1)); the last one's ``lam`` is ``end`` exactly if the continuation got
+        there.
+    iterations : int
+        Newton iterations.
+    error : Exception or None
+        Why the last failed step failed (None if none failed).
+    """
+    lower = problem_at(start).family.lower
+    path = [(start, x, J)]
+    lam, x_prev, lam_prev = start, None, None
+    d, its = first_step, 0
+    error: Exception | None = None
+    while lam != end:
+        lam_try = end if abs(end - lam) <= d else lam + float(np.sign(end - lam)) * d
+        x_pred = x.copy()
+        if x_prev is not None and lam_prev is not None:
+            x_pred = x + (x - x_prev) * ((lam_try - lam) / (lam - lam_prev))
+            x_pred[-1] = max(x_pred[-1], lower)
+        try:
+            x_new, _, it, J_new = _newton(
+                problem_at(lam_try), x_pred, value_at(lam_try), tol, CONTINUATION_ITERATIONS,
+                h, forward=True, accept=10.0 * tol, min_step=CONTINUATION_MIN_STEP,
+                min_rate=CONTINUATION_MIN_RATE)
+        except SearchLimitError:
+            raise
+        except PoweredGaitNotFoundError as exc:
+            error = exc
+            d = 0.5 * abs(lam_try - lam)
+            if d < resolution:
+                break
+            continue
+        its += it
+        x_prev, lam_prev = x, lam
+        x, lam, J = x_new, lam_try, J_new
+        path.append((lam, x, J))
+        d = min(2.0 * d, max_step)
+    return path, its, error
+
+
+def _slope_homotopy(
+    search: _Problem, target: Target, unit: str, tol: float, h: float, no_seed: str,
+) -> tuple[tuple[FloatArray, float, int, FloatArray], str]:
+    """A first level-ground gait from a passive gait on a slope (no seed gait on level ground).
+
+    Walkers whose passive gaits exist only on slopes steeper than some angle (a kneed walker's
+    end at a fold near 2 deg) have no seed gait on level ground for :func:`_find` to start
+    from. A homotopy connects the two: from the passive gait (zero push-off) found by
+    ``search.passive_gait`` on one of :data:`HOMOTOPY_SLOPES`, a natural-parameter
+    continuation in the slope (:func:`_continue_scalar`) lowers the slope to 0 with the
+    target (speed or step length) held at the passive gait's value and the push-off impulse
+    free: the push-off takes over the energy input that the slope supplied. Where that
+    continuation folds (a lowest slope at this target), the target is raised by
+    :data:`HOMOTOPY_RAISE` at the fold's slope (a continuation in the target) and the slope
+    continuation resumes, at most :data:`HOMOTOPY_RAISES` times.
+
+    Returns
+    -------
+    first : tuple
+        ``(x, value, iterations, J)``: the level-ground gait, its target value, Newton
+        iterations and Jacobian, for :func:`_find`'s continuation to the requested target.
+    via : str
+        How it was reached (appended to the search's failure messages).
+
+    Raises
+    ------
+    PoweredGaitNotFoundError
+        No passive gait on any of the slopes, or no homotopy reached level ground; the
+        message lists, per slope, where the homotopy stopped (slope in deg, target).
+    """
+    from heelstrike.analysis.limit_cycle import GaitNotFoundError
+
+    assert search.passive_gait is not None
+    name, pname = search.family.name, search.family.parameter_name
+    tried: list[str] = []
+    for s0 in HOMOTOPY_SLOPES:
+        deg0 = float(np.rad2deg(s0))
+        state = f"looking for the passive gait on a {deg0:.3g} deg slope"
+        try:
+            try:
+                z0 = np.asarray(search.passive_gait(s0), dtype=float)
+            except SearchLimitError:
+                raise
+            except (GaitNotFoundError, PoweredGaitNotFoundError) as exc:
+                tried.append(f"no passive gait on a {deg0:.3g} deg slope ({exc})")
+                continue
+            start = search.replace(slope=s0)
+            x = np.append(z0, max(0.0, search.family.lower))
+            st = start.step(x)
+            if not st.ok:
+                tried.append(f"the passive gait on a {deg0:.3g} deg slope does not step")
+                continue
+            v0 = v = start.measure(st)
+            try:
+                x, _, its, J = _newton(start, x, v, tol, 20, h, forward=True, accept=10.0 * tol)
+            except PoweredGaitNotFoundError as exc:
+                if isinstance(exc, SearchLimitError):
+                    raise
+                tried.append(f"the passive gait on a {deg0:.3g} deg slope is not a gait of the "
+                             f"augmented map ({exc})")
+                continue
+            s, raises = s0, 0
+            while True:
+                state = (f"lowering the slope from {deg0:.3g} deg (had reached "
+                         f"{np.rad2deg(s):.3g} deg, {target} {v:.4g} {unit})")
+                path, it, err = _continue_scalar(
+                    lambda lam: search.replace(slope=lam), _constant(v), x, J, s, 0.0,
+                    first_step=s0 / 8.0, max_step=s0 / 4.0,
+                    resolution=HOMOTOPY_SLOPE_RESOLUTION, tol=tol, h=h)
+                its += it
+                s_fold, x, J = path[-1]
+                if s_fold == 0.0:
+                    raised = (f", the {target} raised from {v0:.4g} to {v:.4g} {unit} at "
+                              f"{raises} fold(s) of the slope continuation" if raises else "")
+                    via = (f" [no seed gait on level ground; these gaits were reached by a "
+                           f"homotopy from the passive gait on a {deg0:.3g} deg slope "
+                           f"({target} {v0:.4g} {unit}), the slope lowered to 0 while the "
+                           f"push-off {pname} took over{raised}]")
+                    return (x, v, its, J), via
+                at = f"{np.rad2deg(s_fold):.3g} deg"
+                lowest = (f"from the passive gait on a {deg0:.3g} deg slope ({target} "
+                          f"{v0:.4g} {unit}) the slope was lowered only to {at} (at {target} "
+                          f"{v:.4g} {unit}, {pname} {x[-1]:.4g} {search.family.parameter_unit}"
+                          f"; {err})")
+                if raises == HOMOTOPY_RAISES:
+                    tried.append(f"{lowest} after {raises} raises of the {target}")
+                    break
+                # back off from the fold (where the Jacobian is singular) before raising
+                above = [p for p in path if p[0] >= s_fold + HOMOTOPY_BACKOFF]
+                s, x, J = above[-1] if above else path[0]
+                state = (f"raising the {target} from {v:.4g} {unit} at {np.rad2deg(s):.3g} "
+                         f"deg, above the fold near {at} of the homotopy from {deg0:.3g} deg")
+                path, it, err2 = _continue_scalar(
+                    _constant(search.replace(slope=s)), lambda lam: lam, x, J, v,
+                    v * (1.0 + HOMOTOPY_RAISE), first_step=HOMOTOPY_RAISE * v,
+                    max_step=HOMOTOPY_RAISE * v, resolution=CONTINUATION_RESOLUTION * v,
+                    tol=tol, h=h)
+                its += it
+                v_new, x, J = path[-1]
+                if v_new == v:
+                    tried.append(f"{lowest}, and the {target} could not be raised at "
+                                 f"{np.rad2deg(s):.3g} deg ({err2})")
+                    break
+                v, raises = v_new, raises + 1
+        except SearchLimitError as exc:
+            raise SearchLimitError(
+                f"{exc} while {state}, on the homotopy to level ground (no {name} seed gait on "
+                f"level ground: {no_seed}); the target was never approached"
+            ) from exc
+    raise PoweredGaitNotFoundError(
+        f"no periodic {name} gait found on level ground: {no_seed}; and no homotopy from a "
+        f"passive gait on a slope reached level ground: {'; '.join(tried)}"
+    )
+
+
 def find_powered_gait(
     walker: PlanarWalker,
     *,
@@ -685,6 +899,7 @@ def find_powered_gait(
     progress: bool = False,
     simulator: Callable[..., WalkResult] | None = None,
     seed_sections: tuple[tuple[float, ...], ...] | None = None,
+    passive_gait: Callable[[float], ArrayLike] | None = None,
 ) -> PoweredGait:
     """Find a period-one level-ground gait with a given speed or step length.
 
@@ -731,6 +946,12 @@ def find_powered_gait(
     seed_sections : tuple of tuple of float, optional
         Section points the seed search starts from (None: the compass gait's
         ``(q3, q3_dot, q4_dot)`` seeds).
+    passive_gait : callable, optional
+        ``passive_gait(slope)``: section point of a passive gait (zero push-off, the family's
+        torque law at zero parameter) on a slope (rad); raises ``GaitNotFoundError`` (or
+        ``PoweredGaitNotFoundError``) if there is none. When no seed gait is found on level
+        ground, the search starts a homotopy in the slope from such a gait on one of
+        :data:`HOMOTOPY_SLOPES` (see :func:`_slope_homotopy`). None (default): no homotopy.
 
     Returns
     -------
@@ -781,7 +1002,8 @@ def find_powered_gait(
     prob = _Problem(walker=walker, family=family, target=target, rtol=rtol, atol=atol,
                     budget=max_evaluations, deadline=time.monotonic() + limit, time_limit=limit,
                     bar=bar, simulator=simulator,
-                    seed_sections=_SEED_SECTIONS if seed_sections is None else seed_sections)
+                    seed_sections=_SEED_SECTIONS if seed_sections is None else seed_sections,
+                    passive_gait=passive_gait)
     try:
         return _find(prob, target, value, guess, tol, max_iter, fd_step, max_continuation,
                      fallback)
@@ -848,15 +1070,20 @@ def _find(
             f"(iterating the map from {len(prob.family.seed(prob.walker))} seed "
             f"{prob.family.parameter_name} values); the target was never approached"
         ) from exc
+    unit = "m/s" if target == "speed" else "m"
+    via = ""  # how the first gait was reached, when not from a level-ground seed
     if first is None:
         why = f" (last: {last_error})" if last_error is not None else ""
-        raise PoweredGaitNotFoundError(
-            f"no periodic {prob.family.name} gait found: Newton converged from none of the "
-            f"{len(prob.family.seed(prob.walker))} seed {prob.family.parameter_name} values "
-            f"(other gains or a guess may find one){why}"
-        )
+        no_seed = (f"Newton converged from none of the {len(prob.family.seed(prob.walker))} "
+                   f"seed {prob.family.parameter_name} values on level ground{why}")
+        if prob.passive_gait is None:
+            raise PoweredGaitNotFoundError(
+                f"no periodic {prob.family.name} gait found: Newton converged from none of the "
+                f"{len(prob.family.seed(prob.walker))} seed {prob.family.parameter_name} values "
+                f"(other gains or a guess may find one){why}"
+            )
+        first, via = _slope_homotopy(search, target, unit, p_tol, s_h, no_seed)
     x, current, total_it, J = first
-    unit = "m/s" if target == "speed" else "m"
     frac, dfrac = 0.0, 1.0
     steps = 0
     while frac < 1.0:
@@ -866,7 +1093,7 @@ def _find(
             raise PoweredGaitNotFoundError(
                 f"continuation from {target} {current:.4g} towards {value:.4g} {unit} took too "
                 f"many steps (reached {reached:.4g} {unit}; the target is probably outside the "
-                "reachable range of this actuation)"
+                f"reachable range of this actuation){via}"
             )
         f_try = min(1.0, frac + dfrac)
         v_try = current + f_try * (value - current)
@@ -890,7 +1117,7 @@ def _find(
         except SearchLimitError as exc:
             raise SearchLimitError(
                 f"{exc}: continuation from {target} {current:.4g} towards {value:.4g} {unit} "
-                f"had reached {reached:.4g} {unit}"
+                f"had reached {reached:.4g} {unit}{via}"
             ) from exc
         except PoweredGaitNotFoundError as exc:
             dfrac = 0.5 * (f_try - frac)  # half the increment that failed
@@ -903,7 +1130,7 @@ def _find(
                          f"(continuation from {current:.4g} stopped there: {exc})")
                 raise PoweredGaitNotFoundError(
                     f"no gait with {target} {value:g} {unit}: the {prob.family.name} gaits "
-                    f"found {found}; other gains may reach further"
+                    f"found {found}{via or '; other gains may reach further'}"
                 ) from exc
             continue
         total_it += it
@@ -1024,6 +1251,11 @@ def _model_seed_sections(walker: Any) -> tuple[tuple[float, ...], ...]:
     return tuple(tuple(float(v) for v in walker.section_point(*s)) for s in _SEED_SECTIONS)
 
 
+#: Newton tolerance of the passive gait a described walker's slope homotopy starts from (it only
+#: starts a continuation on the search's map).
+PASSIVE_TOLERANCE = 1e-7
+
+
 def find_model_powered_gait(
     walker: Any,
     *,
@@ -1046,7 +1278,16 @@ def find_model_powered_gait(
     .. math:: W_{push} + W_{posture} = \\sum T_c,
 
     since ``T + V`` returns to its value (:attr:`PoweredGait.energy_balance_error` is the
-    integration error of that book).
+    integration error of that book; ``sum T_c`` counts the knee strikes too).
+
+    Walkers without a level-ground seed gait (the kneed walker: its passive gaits end at a
+    fold near a 2 deg slope) are reached by a homotopy in the slope from their passive gait
+    on one of :data:`HOMOTOPY_SLOPES` (:func:`~heelstrike.analysis.model_gaits.find_model_gait`
+    with the posture law): the slope is lowered to 0 while the push-off takes over the
+    energy input, the target raised where that continuation folds, and the level-ground gait
+    so found is continued to the target (:func:`_slope_homotopy`). The kneed walker's gaits
+    reached this way span about 1.22-1.41 m/s (a fold at the slow end, a step the walker
+    cannot take at the fast end): a slower target fails with a message saying what was tried.
 
     Parameters
     ----------
@@ -1063,7 +1304,8 @@ def find_model_powered_gait(
     posture : bool
         Apply the declared posture law (default); False: push-off only.
     **options
-        Passed to :func:`find_powered_gait` (``tol``, ``rtol``, ``time_limit``, ``guess``...).
+        Passed to :func:`find_powered_gait` (``tol``, ``rtol``, ``time_limit``, ``guess``...;
+        ``passive_gait=None`` turns the slope homotopy off).
 
     Returns
     -------
@@ -1099,6 +1341,16 @@ def find_model_powered_gait(
         lower=base.lower,
         torque_joint="hip" if law is None else "torso",
     )
+
+    def passive_gait(slope: float) -> FloatArray:
+        from heelstrike.analysis.model_gaits import find_model_gait
+
+        gait = find_model_gait(walker, slope=slope, torque=law, backend=backend,
+                               tol=PASSIVE_TOLERANCE, rtol=SEARCH_TOLERANCE * 0.1,
+                               atol=SEARCH_TOLERANCE * 0.1)
+        return np.asarray(gait.cycle.fixed_point, dtype=float)
+
+    options.setdefault("passive_gait", passive_gait)
     return find_powered_gait(w, actuation=family, speed=speed, step_length=step_length,
                              simulator=simulator, seed_sections=_model_seed_sections(w),
                              **options)

@@ -9,6 +9,7 @@ JIT (with a warning) when it cannot be built.
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -153,6 +154,25 @@ def test_the_module_name_follows_sources_key_and_signatures() -> None:
     assert all(n.startswith("_heelstrike_aot_compass_") for n in names)
 
 
+def _command_in_new_process(argv: list[str], modules: tuple[str, ...]) -> tuple[Any, ...]:
+    """Run ``heelstrike argv`` in a new interpreter: exit status, which of ``modules`` it
+    imported, and whether it printed a result."""
+    code = (
+        "import sys, io, json, contextlib\n"
+        "from heelstrike.cli import main\n"
+        "out = io.StringIO()\n"
+        "with contextlib.redirect_stdout(out):\n"
+        f"    rc = main({argv!r})\n"
+        f"print(json.dumps([rc, {{m: m in sys.modules for m in {list(modules)!r}}}, "
+        "len(out.getvalue()) > 100]))\n"
+    )
+    env = {k: v for k, v in os.environ.items() if k != _aot.ENV}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          env=env, check=False, timeout=900)
+    assert done.returncode == 0, done.stderr
+    return tuple(json.loads(done.stdout.strip().splitlines()[-1]))
+
+
 def _axpy(a: float, x: Any, y: Any) -> None:
     for i in range(x.shape[0]):
         y[i] += a * x[i]
@@ -234,15 +254,115 @@ def test_gait_command_with_a_built_module_imports_no_numba() -> None:
     # the gait search runs on the serial kernels: with their module built, a new process
     # loads it and never imports numba (what makes `gait` cheap to start)
     load_library(compiled._LIBRARY)
-    code = (
-        "import sys, io, contextlib\n"
-        "from heelstrike.cli import main\n"
-        "out = io.StringIO()\n"
-        "with contextlib.redirect_stdout(out):\n"
-        "    rc = main(['gait', '--radius', '0.3', '--slope', '3deg', '--json'])\n"
-        "print(rc, 'numba' in sys.modules, len(out.getvalue()) > 100)\n"
-    )
-    env = {k: v for k, v in os.environ.items() if k != _aot.ENV}
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          env=env, check=False, timeout=600)
-    assert done.stdout.split() == ["0", "False", "True"], done.stderr
+    rc, loaded, printed = _command_in_new_process(
+        ["gait", "--radius", "0.3", "--slope", "3deg", "--json"], ("numba",))
+    assert (rc, loaded, printed) == (0, {"numba": False}, True)
+
+
+# -- described walkers --------------------------------------------------------------------------
+#: The kneed walker's gait on a 0.0504 rad slope (``gait --model kneed``; rad, rad/s).
+Z_KNEED = np.array([-0.26476942921497637, 1.2181144245144957, -1.0955048313544355])
+
+
+def _kneed_args(z: Any, steps: int) -> tuple[Any, ...]:
+    from heelstrike.dynamics import compiled_phased as cp
+    from heelstrike.dynamics.phased import PhasedWalker
+    from heelstrike.models import load_walker
+
+    w = PhasedWalker.from_built(load_walker("kneed"))
+    q, qd = w.section_to_state(z)
+    stance, swing, lockv = cp._locks(w)
+    p, cfg = cp._configuration(w, 0.0504, None, None, None, 1e-6)
+    return (p, cfg, np.ascontiguousarray(q), np.ascontiguousarray(qd), steps,
+            np.asarray(stance, dtype=np.int64), np.asarray(swing, dtype=np.int64), lockv, 5.0,
+            1e-10, 1e-10, np.inf)
+
+
+@pytest.mark.slow
+def test_kneed_aot_walk_and_ensemble_equal_the_jit_kernel_bit_for_bit() -> None:
+    from heelstrike.dynamics import compiled_phased as cp
+    from heelstrike.dynamics._phased_kernels import JitBound
+    from heelstrike.models import load_walker
+
+    walker = load_walker("kneed")
+    aot = load_library(cp._library(walker))
+    assert aot is not None
+    jit = JitBound(cp.numba_model(walker))
+    rng = np.random.default_rng(4)
+    statuses = set()
+    for z in Z_KNEED + rng.normal(0.0, 0.02, (6, 3)):
+        args = _kneed_args(z, 3)
+        a, b = aot.walk(*args), jit.walk(*args)
+        status, ns, ni = a[0], a[2], a[4]
+        statuses.add(int(status))
+        assert (status, ns, ni) == (b[0], b[2], b[4])
+        np.testing.assert_array_equal(a[1][:ns], b[1][:ns])  # samples
+        np.testing.assert_array_equal(a[3][:ni], b[3][:ni])  # impact rows
+        for x, y in zip(a[5:], b[5:], strict=True):  # step starts, final state
+            np.testing.assert_array_equal(x, y)
+    assert len(statuses) >= 2  # completed walks and a failure
+    # the ensemble kernel, walker by walker with a stop on arrival
+    base = _kneed_args(Z_KNEED, 4)
+    Z = Z_KNEED + rng.normal(0.0, 0.01, (8, 3))
+    states = [_kneed_args(z, 4)[2:4] for z in Z]
+    Q = np.ascontiguousarray([s[0] for s in states])
+    QD = np.ascontiguousarray([s[1] for s in states])
+    outs = []
+    for kern in (aot, jit):
+        out = (np.zeros(8, np.int64), np.zeros(8, np.int64), np.zeros_like(Q), np.zeros_like(Q))
+        kern.ensemble(*base[:2], Q, QD, *base[4:], np.array([2], np.int64),
+                      np.array([2, 4], np.int64), Z_KNEED.copy(), 1e-4, 0, 8, *out)
+        outs.append(out)
+    for x, y in zip(*outs, strict=True):
+        np.testing.assert_array_equal(x, y)
+
+
+def test_the_aot_kernel_needs_no_lapack_for_the_rank_test() -> None:
+    # numpy's matrix_rank would make the compiled module load scipy's LAPACK at run time; the
+    # kernel's own test must give numpy's answer
+    from heelstrike.dynamics._phased_kernels import independent_rows
+
+    rng = np.random.default_rng(8)
+    for trial in range(400):
+        n = int(rng.integers(1, 9))
+        k = int(rng.integers(0, n + 2))
+        A = rng.normal(size=(k + 1, n)) * 10.0 ** rng.integers(-6, 7)
+        if trial % 3 == 1 and k >= 2:
+            A[k - 1] = 2.0 * A[0] - A[1]  # exactly dependent in exact arithmetic
+        expected = k <= n and (k == 0 or np.linalg.matrix_rank(A[:k]) == k)
+        assert independent_rows(np.ascontiguousarray(A), k) == expected
+
+
+def test_own_walker_files_use_the_jit_unless_asked(
+    private_cache: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from importlib.resources import files
+
+    from heelstrike.dynamics import compiled_phased as cp
+    from heelstrike.models import load_walker
+
+    text = (files("heelstrike") / "walkers" / "kneed.toml").read_text()
+    own = tmp_path / "my_kneed.toml"
+    own.write_text(text)
+    walker = load_walker(own)
+    assert not cp._builds_ahead_of_time(walker)
+    assert cp._builds_ahead_of_time(load_walker("kneed"))
+    monkeypatch.setenv(_aot.ENV, "all")
+    assert cp._builds_ahead_of_time(walker)
+    monkeypatch.setenv(_aot.ENV, "1")
+    # no module built for this structure yet in the private cache: the JIT kernel runs it
+    from heelstrike.dynamics._phased_kernels import JitBound
+
+    assert isinstance(cp._kernels(walker), JitBound)
+    assert not (private_cache / "aot").exists() or not list((private_cache / "aot").iterdir())
+
+
+@pytest.mark.slow
+def test_kneed_gait_command_with_a_built_module_imports_no_numba() -> None:
+    from heelstrike.dynamics import compiled_phased as cp
+    from heelstrike.models import load_walker
+
+    assert load_library(cp._library(load_walker("kneed"))) is not None
+    rc, loaded, printed = _command_in_new_process(
+        ["gait", "--model", "kneed", "--slope", "0.0504rad", "--json"], ("numba", "scipy.linalg"))
+    assert (rc, loaded, printed) == (0, {"numba": False, "scipy.linalg": False}, True)

@@ -22,8 +22,10 @@ kernels' bit for bit (``tests/test_aot.py`` checks it walk by walk).
   kernel runs at the JIT's speed.
 - Every call checks the array arguments against the declared signature (dtype, dimensions,
   C order) before entering machine code that trusts them.
-- ``HEELSTRIKE_AOT=0`` turns the tier off (numba's JIT is used). If a build fails (no C
-  compiler, a numba without ``pycc``), a :class:`AotWarning` says so once and the JIT is used.
+- ``HEELSTRIKE_AOT=0`` turns the tier off (numba's JIT is used); ``HEELSTRIKE_AOT=all`` also
+  builds modules that are otherwise left to the JIT (a described walker of your own: see
+  :mod:`heelstrike.dynamics.compiled_phased`). If a build fails (no C compiler, a numba
+  without ``pycc``), a :class:`AotWarning` says so once and the JIT is used.
 
 The parallel (``prange``) entry points stay on numba's JIT: ``pycc`` compiles serial code only.
 """
@@ -50,13 +52,14 @@ from typing import Any
 
 import numpy as np
 
-from heelstrike.models._generated import _unsafe, cache_dir
+from heelstrike.models._generated import _unsafe, cache_dir, numba_fingerprint
 
-__all__ = ["AotExport", "AotLibrary", "AotWarning", "aot_enabled", "load_library"]
+__all__ = ["AotExport", "AotLibrary", "AotWarning", "aot_enabled", "aot_mode", "load_library"]
 
 #: Bumped when the layout of built modules changes.
 _FORMAT = "heelstrike-aot-1"
-#: Environment variable: ``0`` (or ``false``, ``no``, ``off``) disables the ahead-of-time tier.
+#: Environment variable: ``0`` (or ``false``, ``no``, ``off``) disables the ahead-of-time tier,
+#: ``all`` builds every library asked for (default: the libraries their callers build).
 ENV = "HEELSTRIKE_AOT"
 
 
@@ -165,9 +168,17 @@ def _checked(fn: Callable[..., Any], export: AotExport) -> Callable[..., Any]:
     return call
 
 
+def aot_mode() -> str:
+    """``"off"`` (``HEELSTRIKE_AOT`` is 0, false, no or off), ``"all"`` or ``"on"`` (default)."""
+    value = os.environ.get(ENV, "1").strip().lower()
+    if value in ("0", "false", "no", "off"):
+        return "off"
+    return "all" if value == "all" else "on"
+
+
 def aot_enabled() -> bool:
     """Whether the ahead-of-time tier is on (``HEELSTRIKE_AOT`` not set to 0/false/no/off)."""
-    return os.environ.get(ENV, "1").strip().lower() not in ("0", "false", "no", "off")
+    return aot_mode() != "off"
 
 
 def _module_file(name: str) -> Path:
@@ -177,24 +188,12 @@ def _module_file(name: str) -> Path:
     return Path(spec.origin)
 
 
-def _numba_version_file() -> bytes:
-    """The bytes of numba's version file (cheaper than importing numba or its metadata)."""
-    spec = importlib.util.find_spec("numba")
-    if spec is None or not spec.submodule_search_locations:
-        return b"no numba"
-    path = Path(next(iter(spec.submodule_search_locations))) / "_version.py"
-    try:
-        return path.read_bytes()
-    except OSError:
-        return b"numba version unknown"
-
-
 def _digest(lib: AotLibrary) -> str:
     h = hashlib.sha256()
     for part in (_FORMAT, sys.implementation.cache_tag, str(sysconfig.get_config_var("EXT_SUFFIX")),
                  lib.name, lib.key):
         h.update(part.encode() + b"\0")
-    h.update(_numba_version_file())
+    h.update(numba_fingerprint().encode())
     for e in lib.exports:
         h.update(f"{e.name}:{e.signature}\0".encode())
     for mod in sorted(lib.source_modules):

@@ -14,8 +14,11 @@ their rates, the foot centres and the leg swap as sympy expressions; this module
     for a walker without mirrors).
 
 Every function returns a float (0.0 unless said otherwise) and has a fixed numba signature
-(:data:`DYNAMICS_SIG` ...), so compiled simulation kernels take them as first-class function
-arguments and are compiled (and disk-cached) once for all walkers.
+(:func:`signatures`), so compiled simulation kernels take them as first-class function
+arguments and are compiled (and disk-cached) once for all walkers. This module imports numba
+only to compile: the key of a walker's code (:func:`numba_source_key`) needs no numba, so a
+process that runs a walker's ahead-of-time kernels (:mod:`heelstrike.dynamics._aot`) never
+loads it.
 
 Security and caching
 --------------------
@@ -36,6 +39,7 @@ only while that folder and its files are owned by the user and writable by nobod
 from __future__ import annotations
 
 import ast
+import functools
 import hashlib
 import math
 import os
@@ -48,13 +52,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numba
-from numba import types as nbt
-
 from heelstrike.models._generated import (
     CacheWarning,
     cache_dir,
     generator_fingerprint,
+    numba_fingerprint,
     read_cached,
     verify_source,
     write_cached,
@@ -63,23 +65,34 @@ from heelstrike.models.builder import CODEGEN_VERSION
 from heelstrike.models.description import WalkerDescription
 
 __all__ = [
-    "CONTACTS_SIG",
-    "DYNAMICS_SIG",
-    "SWAP_SIG",
     "NumbaModel",
     "build_numba",
     "generate_numba_source",
+    "numba_source_key",
+    "signatures",
 ]
 
-_V = nbt.float64[::1]
-_M = nbt.float64[:, ::1]
-#: ``dynamics(q, u, p, slope, M, h) -> 0.0``.
-DYNAMICS_SIG = nbt.float64(_V, _V, _V, nbt.float64, _M, _V)
-#: ``contacts(q, u, p, A, rate, c) -> 0.0``; ``A`` (2, 2, n), ``rate`` and ``c`` (2, 2).
-CONTACTS_SIG = nbt.float64(_V, _V, _V, nbt.float64[:, :, ::1], _M, _M)
-#: ``swap(q, u, p, q_new, u_new) -> 1.0`` (0.0: no swap declared).
-SWAP_SIG = nbt.float64(_V, _V, _V, _V, _V)
-_SIGS = {"dynamics": DYNAMICS_SIG, "contacts": CONTACTS_SIG, "swap": SWAP_SIG}
+#: The three generated functions, in the order of :func:`signatures`.
+FUNCTIONS = ("dynamics", "contacts", "swap")
+
+
+@functools.cache
+def signatures() -> dict[str, Any]:
+    """The numba signatures of the generated functions (imports numba).
+
+    - ``dynamics(q, u, p, slope, M, h) -> 0.0``;
+    - ``contacts(q, u, p, A, rate, c) -> 0.0``; ``A`` (2, 2, n), ``rate`` and ``c`` (2, 2);
+    - ``swap(q, u, p, q_new, u_new) -> 1.0`` (0.0: no swap declared).
+    """
+    from numba import types as nbt
+
+    v = nbt.float64[::1]
+    m = nbt.float64[:, ::1]
+    return {
+        "dynamics": nbt.float64(v, v, v, nbt.float64, m, v),
+        "contacts": nbt.float64(v, v, v, nbt.float64[:, :, ::1], m, m),
+        "swap": nbt.float64(v, v, v, v, v),
+    }
 #: The only name generated code uses without defining it (injected; no builtins).
 _HELPERS: Mapping[str, Any] = types.MappingProxyType({"math": math})
 
@@ -103,12 +116,35 @@ def _key(desc: WalkerDescription) -> str:
             "numba-kernels",
             CODEGEN_VERSION,
             _package_version(),
-            numba.__version__,
+            numba_fingerprint(),
             generator_fingerprint("_codegen", "_codegen_numba", "description"),
             desc.structure_key(),
         )
     )
     return hashlib.sha256(text.encode()).hexdigest()
+
+
+class _KeyCache:
+    """Keys computed in this process by description identity (a cache, an object: module-level
+    dicts are data to :func:`heelstrike.analysis.sweep.sweep`'s identity)."""
+
+    def __init__(self) -> None:
+        self.by_id: dict[int, tuple[WalkerDescription, str]] = {}
+
+
+_KEYS = _KeyCache()
+
+
+def numba_source_key(desc: WalkerDescription) -> str:
+    """The key of a walker structure's generated numba code (computed once a process per
+    description; imports no numba). It names the cached source and the walker's ahead-of-time
+    kernels."""
+    hit = _KEYS.by_id.get(id(desc))
+    if hit is not None and hit[0] is desc:
+        return hit[1]
+    key = _key(desc)
+    _KEYS.by_id[id(desc)] = (desc, key)
+    return key
 
 
 def _param_symbols(d: Mapping[str, Any], desc: WalkerDescription) -> list[Any]:
@@ -205,7 +241,7 @@ def check_source(source: str) -> None:
         verifier) on any syntax outside the whitelist (see the module docstring), a string
         constant, or an attribute other than ``math.sin/cos/sqrt/pi``.
     """
-    verify_source(source, helpers=set(_HELPERS), functions=set(_SIGS))
+    verify_source(source, helpers=set(_HELPERS), functions=set(FUNCTIONS))
     tree = ast.parse(source)
     for node in ast.walk(tree):
         if not isinstance(node, _ALLOWED_NODES):
@@ -292,8 +328,11 @@ def _load(source: str, path: Path, key: str, cache: bool) -> dict[str, Any]:
     exec(compile(source, str(path), "exec"), ns)
     # numba rebuilds a cached function's environment by importing its module by name
     sys.modules[name] = mod
+    import numba
+
     return {
-        fname: numba.njit(sig, cache=cache, nogil=True)(ns[fname]) for fname, sig in _SIGS.items()
+        fname: numba.njit(sig, cache=cache, nogil=True)(ns[fname])
+        for fname, sig in signatures().items()
     }
 
 
@@ -315,7 +354,7 @@ def build_numba(desc: WalkerDescription, *, use_cache: bool = True) -> NumbaMode
         hit = _BY_DESCRIPTION.get(id(desc))
         if hit is not None and hit[0] is desc:
             return hit[1]
-    key = _key(desc)
+    key = numba_source_key(desc) if use_cache else _key(desc)
     if use_cache and key in _MEMORY:
         _BY_DESCRIPTION[id(desc)] = (desc, _MEMORY[key])
         return _MEMORY[key]

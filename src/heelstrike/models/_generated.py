@@ -23,7 +23,9 @@ A cache entry that fails any check is not run: the caller rebuilds it and warns
 from __future__ import annotations
 
 import ast
+import functools
 import hashlib
+import importlib.util
 import os
 import stat
 import tempfile
@@ -38,6 +40,7 @@ __all__ = [
     "cache_dir",
     "generator_fingerprint",
     "load_source",
+    "numba_fingerprint",
     "read_cached",
     "verify_source",
     "write_cached",
@@ -80,6 +83,27 @@ def generator_fingerprint(*modules: str) -> str:
             h.update((here / f"{name}.py").read_bytes())
         _FINGERPRINT[modules] = h.hexdigest()
     return _FINGERPRINT[modules]
+
+
+@functools.cache
+def numba_fingerprint() -> str:
+    """sha256 of the installed numba's version file, without importing numba.
+
+    Part of the keys of what numba compiles (generated walker code, ahead-of-time kernels), so
+    a numba upgrade invalidates them. Reading one file costs far less than importing numba or
+    its distribution metadata.
+    """
+    spec = importlib.util.find_spec("numba")
+    h = hashlib.sha256(b"numba\0")
+    if spec is None or not spec.submodule_search_locations:
+        h.update(b"not installed")
+        return h.hexdigest()
+    path = Path(next(iter(spec.submodule_search_locations))) / "_version.py"
+    try:
+        h.update(path.read_bytes())
+    except OSError:
+        h.update(b"version unknown")
+    return h.hexdigest()
 
 
 # -- verification --------------------------------------------------------------------------------

@@ -7,7 +7,8 @@ Jacobians) with its two step simulators:
 compiled   ``heelstrike.dynamics.compiled_phased.simulate_phased_compiled``: numba kernel
            (DP5, events on the exact RK step, knee strike, complementarity heel strike) calling
            functions generated from the walker's sympy expressions
-           (``heelstrike.models._codegen_numba``).
+           (``heelstrike.models._codegen_numba``); serial calls run the walker's module
+           compiled ahead of time from that kernel (``heelstrike.dynamics._aot``).
 scipy      ``heelstrike.dynamics.phased.simulate_phased`` (DOP853, the reference).
 
 Correctness before speed: both gaits are compared (fixed point, period, step length, ``T_c`` of
@@ -18,10 +19,12 @@ Timed:
 - in one process, warm (caches loaded, one untimed call first): ``find_model_gait`` with each
   backend (median of repeats for compiled, one run for scipy);
 - ``heelstrike gait --model kneed --json`` as a new process with each ``--backend`` (warm disk
-  caches; includes interpreter start and imports);
+  caches; includes interpreter start and imports; ``PYTHONDONTWRITEBYTECODE`` removed from the
+  child's environment, as in a default Python, so imports use bytecode caches);
 - compile time without any cache: a new process with empty ``HEELSTRIKE_CACHE_DIR`` and
   ``NUMBA_CACHE_DIR`` runs the compiled gait twice; the first call minus the second is the
-  sympy derivation plus numba compilation. Then a new process with those (now warm) caches.
+  sympy derivation plus the numba compilation (the walker's ahead-of-time module). Then a new
+  process with those (now warm) caches.
 
 Run ``python benchmarks/bench_model_gait.py`` (``--quick``: fewer repeats, ``--json PATH``).
 """
@@ -118,7 +121,7 @@ def run(quick: bool = False) -> dict[str, Any]:
     rows.append({"table": "compile", "what": "same process: second compiled gait",
                  "seconds": cold["second"]})
     rows.append({"table": "compile",
-                 "what": "derivation + numba compilation (first minus second)",
+                 "what": "derivation + numba compilation, ahead of time (first minus second)",
                  "seconds": cold["first"] - cold["second"]})
     rows.append({"table": "compile", "what": "new process, warm caches: first compiled gait",
                  "seconds": warm["first"]})
@@ -136,7 +139,7 @@ def run(quick: bool = False) -> dict[str, Any]:
     rows.append({"table": "gait", "path": "find_model_gait, backend='scipy'",
                  "seconds": t_s, "ratio": 1.0})
     # -- the command, new processes, warm disk caches --------------------------------------
-    env = dict(os.environ)
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
     _cli("compiled", env)  # make sure the disk caches are warm
     tc_cli, out_c = _cli("compiled", env)
     ts_cli, out_s = _cli("scipy", env)

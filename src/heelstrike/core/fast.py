@@ -380,7 +380,7 @@ def impact_2x4(
         Coefficient ``e`` in [0, 1] (default 0, the paper's inert impact).
     parallel : bool or None, optional
         Run the item loop in parallel threads; ``None`` (default) does so only on the main
-        thread (see :func:`use_parallel`).
+        thread (see :func:`heelstrike.core._parallel.use_parallel`).
 
     Returns
     -------

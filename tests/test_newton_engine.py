@@ -163,3 +163,21 @@ def test_compass_fixed_point_matches_the_step_map() -> None:
                          for e in np.eye(3)])
     mult = np.sort(np.abs(np.linalg.eigvals(sol.jacobian[0] + np.eye(3))))
     np.testing.assert_allclose(mult, np.sort(np.abs(np.linalg.eigvals(J))), atol=1e-5)
+
+
+@pytest.mark.parametrize("at_root", [True, False])
+def test_no_point_is_evaluated_twice(at_root: bool) -> None:
+    # a residual is a whole simulated step: the accepted trial point of the line search is the
+    # next iterate, and its F is reused, not computed again
+    seen: list[tuple[float, ...]] = []
+
+    def residual(X: np.ndarray) -> np.ndarray:
+        seen.extend(tuple(row) for row in X)
+        return _circle_line(X)
+
+    starts = np.array([[1.0, 0.5], [-1.0, -3.0], [3.0, 2.9]])
+    sol = newton_solve(residual, starts, tol=1e-12, jacobian_at_root=at_root)
+    assert list(sol.converged) == [True, True, True]
+    assert len(seen) == len(set(seen))
+    # and the roots are still the roots
+    np.testing.assert_allclose(np.abs(sol.x), np.sqrt(2.0), atol=1e-12)

@@ -329,7 +329,9 @@ def newton_solve(
                 X[k] = x[a] + lam[a] * step[a]
                 if project is not None:
                     X[k] = project(X[k][None, :])[0]
-                have_F[k] = False
+                # a trial that stepped is the new iterate: its F is known (not evaluated again)
+                F_cur[k] = F_try[a]
+                have_F[k] = bool(ok[a])
                 J_cur[k] = None
                 continue
             if not ok[a]:

@@ -23,7 +23,9 @@ the family's seed parameters, Newton with forward-difference Jacobians kept up t
 Broyden's formula, and natural-parameter continuation in the target from the seed gait's own
 speed or step length (tangent predictor; a step that Newton does not solve quickly is halved,
 and where the halvings stall, at a fold of the family, the search stops and reports the range
-its gaits spanned). It then polishes the gait on the accurate map by chord iterations with the
+its gaits spanned, with the end verified by solves to :data:`FAMILY_END_RESIDUAL`, since past
+a fold the residual's nonzero minimum can pass the path's looser bar; :func:`_family_end`).
+It then polishes the gait on the accurate map by chord iterations with the
 search's Jacobian (about one step per three digits) and measures the multipliers there by
 central differences.
 
@@ -527,6 +529,23 @@ HOMOTOPY_BACKOFF = 0.005
 #: located to.
 HOMOTOPY_SLOPE_RESOLUTION = 2e-4
 
+#: Relative resolution (of the target) to which a failed search locates where its family of
+#: gaits ends (:func:`_family_end`).
+FAMILY_END_RESOLUTION = 1e-3
+
+#: Residual (on the search map) a gait must reach to count as verified in :func:`_family_end`:
+#: 10x the search map's integration noise. Past a fold the minimum of ``|F|`` grows from zero
+#: in proportion to the distance, so a looser bar would verify points past the fold.
+FAMILY_END_RESIDUAL = 1e-6
+
+#: Doublings of the distance (from :data:`CONTINUATION_RESOLUTION` / 2 of the target) at which
+#: :func:`_family_end` looks for a verified gait on either side of a failed target.
+FAMILY_END_DOUBLINGS = 6
+
+#: A largest multiplier within this of ``+1`` at the end of a family marks a fold (saddle-node:
+#: the family turns back there, and the minimum of ``|F|`` past it is not zero).
+FOLD_MULTIPLIER_TOLERANCE = 0.05
+
 
 @dataclass(frozen=True, kw_only=True)
 class _Problem:
@@ -880,6 +899,133 @@ def _slope_homotopy(
     )
 
 
+def _family_end(
+    search: _Problem, accurate: _Problem, x: FloatArray, value: float, tol: float, h: float,
+    max_iter: int, fd_step: float,
+) -> tuple[float, FloatArray, complex] | None:
+    """Where the family of gaits near a failed target ``value`` ends, verified.
+
+    A continuation step or the final solve is accepted at a residual of up to
+    ``10 *`` :data:`PATH_RESIDUAL`, which past a fold (where no gait exists) is met by the
+    minimum of ``|F|`` itself: the ends the search reports could then lie beyond the gaits
+    that exist. Here only solves to ``tol`` on the search map count (no stall accepted above
+    it). From ``x`` (the search's point at ``value``, shape (d + 1,)) a verified gait is
+    looked for at ``value -+ delta``, ``delta`` doubling from ``CONTINUATION_RESOLUTION / 2``
+    of the target (:data:`FAMILY_END_DOUBLINGS` times), then the border between verified
+    targets and ``value`` is bisected to :data:`FAMILY_END_RESOLUTION` of the target.
+
+    Parameters
+    ----------
+    search, accurate : _Problem
+        The search-stage problem (solves) and the accurate one (multipliers).
+    x : ndarray, shape (d + 1,)
+        Section point and parameter the search failed from.
+    value : float
+        The target that failed (m/s or m).
+    tol : float
+        Residual of a verified gait (:data:`FAMILY_END_RESIDUAL`).
+    h, fd_step : float
+        Relative finite-difference steps of the search's Jacobians and of ``DP``.
+    max_iter : int
+        Newton iterations per solve.
+
+    Returns
+    -------
+    (end, x_end, multiplier) or None
+        The verified target nearest the failure (m/s or m), its gait (shape (d + 1,)) and the
+        largest multiplier (by modulus) of its ``DP`` (central differences on the
+        ``accurate`` map, relative step ``max(fd_step, sqrt(rtol))``; NaN if a step failed);
+        None if ``value`` itself solves to ``tol`` (the failure is not the family's end) or
+        no verified gait was found.
+
+    Raises
+    ------
+    SearchLimitError
+        When the budget or the clock runs out.
+    """
+
+    def solve(x0: FloatArray, v: float) -> FloatArray | None:
+        try:
+            return _newton(search, x0, v, tol, max_iter, h, forward=True, accept=tol,
+                           min_step=CONTINUATION_MIN_STEP)[0]
+        except SearchLimitError:
+            raise
+        except PoweredGaitNotFoundError:
+            return None
+
+    if solve(x, value) is not None:
+        return None
+    delta = 0.5 * CONTINUATION_RESOLUTION * abs(value)
+    ok: tuple[float, FloatArray] | None = None
+    for _ in range(FAMILY_END_DOUBLINGS + 1):
+        for v in (value - delta, value + delta):
+            xv = solve(x, v) if v > 0 else None
+            if xv is not None:
+                ok = (v, xv)
+                break
+        if ok is not None:
+            break
+        delta *= 2.0
+    if ok is None:
+        return None
+    lo, x_lo = ok
+    hi = value
+    while abs(hi - lo) > FAMILY_END_RESOLUTION * abs(value):
+        mid = 0.5 * (lo + hi)
+        x_mid = solve(x_lo, mid)
+        if x_mid is None:
+            hi = mid
+        else:
+            lo, x_lo = mid, x_mid
+    # multipliers by central differences on the accurate map (near a fold the search map's
+    # forward differences at ``h`` are off by more than the distance of a multiplier from 1)
+    d = x_lo.size - 1
+    h_dp = max(fd_step, float(np.sqrt(accurate.rtol)))
+    DP = np.empty((d, d))
+    for i in range(d):
+        dz = np.zeros(d + 1)
+        dz[i] = h_dp * max(1.0, abs(x_lo[i]))
+        DP[:, i] = (accurate.step(x_lo + dz).z_next - accurate.step(x_lo - dz).z_next) / (
+            2.0 * dz[i])
+    if not np.all(np.isfinite(DP)):
+        return lo, x_lo, complex(np.nan)
+    mult = np.linalg.eigvals(DP)
+    return lo, x_lo, complex(mult[np.argmax(np.abs(mult))])
+
+
+def _end_message(
+    prob: _Problem, target: Target, value: float, unit: str, path: tuple[float, float],
+    end: tuple[float, FloatArray, complex], exc: Exception,
+) -> str:
+    """The error of a search whose family of gaits ends (:func:`_family_end`) short of
+    ``value``: a fold (a multiplier at ``+1``) or an end for another reason. ``path``: the
+    targets the continuation started and stopped at; only its part on this side of the
+    verified end is reported as gaits found."""
+    v_end, x_end, m = end
+    fam = prob.family
+    if value > v_end:
+        lo, hi, side = min(*path, v_end), v_end, "above"
+    else:
+        lo, hi, side = v_end, max(*path, v_end), "below"
+    found = (f"span {lo:.4g} to {hi:.4g} {unit} and end near {v_end:.4g} {unit}"
+             if hi - lo > FAMILY_END_RESOLUTION * abs(value) else
+             f"end near {v_end:.4g} {unit}")
+    at = f"{fam.parameter_name} {x_end[-1]:.4g} {fam.parameter_unit}"
+    if abs(m - 1.0) < FOLD_MULTIPLIER_TOLERANCE:
+        return (
+            f"no gait with {target} {value:g} {unit}: the {fam.name} gaits found {found} "
+            f"({at}), at a fold: a Floquet multiplier reaches +1 there (largest |m| = "
+            f"{abs(m):.3f} at that gait) and the family turns back, so none of its gaits has a "
+            f"{target} {side} about {v_end:.4g} {unit} (past the fold Newton stalls at the "
+            f"residual's nonzero minimum: {exc}); other gains may reach further"
+        )
+    largest = f"; largest multiplier |m| = {abs(m):.3f}" if np.isfinite(abs(m)) else ""
+    return (
+        f"no gait with {target} {value:g} {unit}: the {fam.name} gaits found {found} "
+        f"({at}{largest}); Newton finds none {side} it ({exc}); other gains may reach further"
+    )
+
+
 def find_powered_gait(
     walker: PlanarWalker,
     *,
@@ -1034,6 +1180,21 @@ def _find(
         x, res, it = _polish(prob, x, value, tol, J, max_iter, fd_step)
         return _characterise(prob, x, res, its + it, fd_step)
 
+    def end_of_family(
+        x: FloatArray, at: float, exc: Exception, path: tuple[float, float]
+    ) -> PoweredGaitNotFoundError | None:
+        """The error saying where the gaits end (:func:`_family_end`) when the search fails
+        at ``at`` from ``x``; None if that cannot be verified (budget or clock included)."""
+        try:
+            end = _family_end(search, prob, x, at, min(s_tol, FAMILY_END_RESIDUAL), s_h,
+                              max_iter, fd_step)
+        except SearchLimitError:
+            return None
+        if end is None:
+            return None
+        return PoweredGaitNotFoundError(
+            _end_message(prob, target, value, unit, path, end, exc))
+
     if guess is not None:
         x0 = np.asarray(guess, dtype=float)
         try:
@@ -1122,6 +1283,10 @@ def _find(
         except PoweredGaitNotFoundError as exc:
             dfrac = 0.5 * (f_try - frac)  # half the increment that failed
             if dfrac * abs(value - current) < CONTINUATION_RESOLUTION * max(abs(value), 1e-3):
+                if not via:  # where the gaits really end (the path may lie past a fold)
+                    ended = end_of_family(x, v_try, exc, (current, reached))
+                    if ended is not None:
+                        raise ended from exc
                 lo, hi = min(current, reached), max(current, reached)
                 found = (f"span only {lo:.6g} {unit} (the seed gait; continuation could not "
                          f"move it towards {value:g} {unit}: {exc})"
@@ -1136,7 +1301,17 @@ def _find(
         total_it += it
         x, frac, J = x_new, f_try, J_new
         dfrac = min(2.0 * dfrac, 1.0)
-    return finish(x, J, total_it)
+    try:
+        return finish(x, J, total_it)
+    except SearchLimitError:
+        raise
+    except PoweredGaitNotFoundError as exc:
+        # the search accepted a residual (its bar, or a stall under 10x it) that the polish
+        # cannot reduce: just past a fold the residual's nonzero minimum is that small
+        ended = end_of_family(x, value, exc, (current, value)) if not via else None
+        if ended is None:
+            raise
+        raise ended from exc
 
 
 def _characterise(

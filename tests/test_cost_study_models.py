@@ -57,7 +57,7 @@ def test_model_compass_equals_compass_study(tmp_path: Path,
 
 @pytest.fixture(scope="module")
 def torso_study() -> xr.Dataset:
-    # 5 m/s is far beyond the torso walker's push-off gaits (they end near 0.5 m/s)
+    # 5 m/s is far beyond the torso walker's push-off gaits (they end at a fold, 0.4902 m/s)
     return cost_study((0.0, 0.1), (0.35, 0.4, 5.0), target="speed", model=load_walker("torso"))
 
 

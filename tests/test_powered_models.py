@@ -40,7 +40,7 @@ from heelstrike.models.description import ModelDescriptionError, parse_descripti
 
 WALKERS = Path(heelstrike.__file__).parent / "walkers"
 
-SPEED = 0.4  # m/s: inside the range of the torso walker's push-off gaits (they end near 0.5)
+SPEED = 0.4  # m/s: inside the range of the torso walker's push-off gaits (a fold at 0.4902)
 
 
 @pytest.fixture(scope="module")

@@ -979,14 +979,7 @@ def _family_end(
             lo, x_lo = mid, x_mid
     # multipliers by central differences on the accurate map (near a fold the search map's
     # forward differences at ``h`` are off by more than the distance of a multiplier from 1)
-    d = x_lo.size - 1
-    h_dp = max(fd_step, float(np.sqrt(accurate.rtol)))
-    DP = np.empty((d, d))
-    for i in range(d):
-        dz = np.zeros(d + 1)
-        dz[i] = h_dp * max(1.0, abs(x_lo[i]))
-        DP[:, i] = (accurate.step(x_lo + dz).z_next - accurate.step(x_lo - dz).z_next) / (
-            2.0 * dz[i])
+    DP = _section_jacobian(accurate, x_lo, fd_step)
     if not np.all(np.isfinite(DP)):
         return lo, x_lo, complex(np.nan)
     mult = np.linalg.eigvals(DP)
@@ -1314,6 +1307,30 @@ def _find(
         raise ended from exc
 
 
+def _section_jacobian(
+    prob: _Problem, x: FloatArray, fd_step: float, *, base: FloatArray | None = None
+) -> FloatArray:
+    """``DP``, shape (d, d): the step map's Jacobian in the section point at ``x`` (shape
+    (d + 1,), the parameter held), relative step ``max(fd_step, sqrt(rtol))`` (it balances
+    truncation ``~h`` and integration noise ``~rtol / h``).
+
+    Forward differences from ``base`` (the step's own ``z_next``: ``d`` more steps), else
+    central differences (``2 d`` steps; needed near a fold, where a multiplier's distance
+    from 1 is below the forward differences' error).
+    """
+    d = x.size - 1
+    h = max(fd_step, float(np.sqrt(prob.rtol)))
+    DP = np.empty((d, d))
+    for i in range(d):
+        dz = np.zeros(d + 1)
+        dz[i] = h * max(1.0, abs(x[i]))
+        if base is None:
+            DP[:, i] = (prob.step(x + dz).z_next - prob.step(x - dz).z_next) / (2.0 * dz[i])
+        else:
+            DP[:, i] = (prob.step(x + dz).z_next - base) / dz[i]
+    return DP
+
+
 def _characterise(
     prob: _Problem, x: FloatArray, residual: float, iterations: int, fd_step: float
 ) -> PoweredGait:
@@ -1332,12 +1349,7 @@ def _characterise(
     assert rec is not None and st.ok
     z = x[:-1]
     d = z.size
-    h = max(fd_step, float(np.sqrt(prob.rtol)))
-    DP = np.empty((d, d))
-    for i in range(d):
-        dz = np.zeros(d + 1)
-        dz[i] = h * max(1.0, abs(z[i]))
-        DP[:, i] = (prob.step(x + dz).z_next - st.z_next) / dz[i]
+    DP = _section_jacobian(prob, x, fd_step, base=st.z_next)
     mult = np.linalg.eigvals(DP).astype(complex) if np.all(np.isfinite(DP)) else np.full(d, np.nan)
     mult = mult[np.argsort(-np.abs(mult), kind="stable")]
     m, g, _ = _scale(walker)

@@ -187,6 +187,10 @@ def test_basin_with_netcdf4_writes_netcdf4(
 
 # -- version, python -m, citation ----------------------------------------------------------
 def test_version_and_python_m() -> None:
+    import heelstrike
+
+    # the version is written once (heelstrike/_version.py); the installed metadata reads it
+    assert heelstrike.__version__ == version("heelstrike")
     expected = f"heelstrike {version('heelstrike')}"
     for cmd in ([sys.executable, "-m", "heelstrike", "--version"],):
         out = subprocess.run(cmd, capture_output=True, text=True, timeout=120, check=True)
@@ -202,7 +206,15 @@ def test_version_and_python_m() -> None:
 
 
 def test_version_matches_pyproject_and_citation() -> None:
-    meta = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    # the version is written once, in heelstrike/_version.py, which pyproject reads
+    assert pyproject["project"]["dynamic"] == ["version"]
+    attr = pyproject["tool"]["setuptools"]["dynamic"]["version"]["attr"]
+    assert attr == "heelstrike._version.__version__"
+    declared = re.search(r'^__version__ = "([^"]+)"$',
+                         (ROOT / "src/heelstrike/_version.py").read_text(), re.M)
+    assert declared is not None
+    meta = {"version": declared.group(1)}
     assert version("heelstrike") == meta["version"]
     cff = (ROOT / "CITATION.cff").read_text(encoding="utf-8")
     assert re.search(rf"^version: \"?{re.escape(meta['version'])}\"?$", cff, re.M)

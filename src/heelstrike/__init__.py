@@ -10,19 +10,15 @@ on first use, so that ``import heelstrike`` (and ``heelstrike --help``) does not
 
 from __future__ import annotations
 
-from importlib.metadata import PackageNotFoundError, version
 from typing import TYPE_CHECKING, Any
 
+from heelstrike._version import __version__
 from heelstrike.core import ImpactResult, impact
 from heelstrike.models import CompassGait, heel_strike_state
 
 if TYPE_CHECKING:
     from heelstrike.dynamics import WalkResult, WalkStatus, simulate
 
-try:
-    __version__ = version("heelstrike")
-except PackageNotFoundError:  # pragma: no cover
-    __version__ = "0.0.0"
 
 _LAZY = {"WalkResult", "WalkStatus", "simulate"}
 

@@ -28,6 +28,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 from heelstrike._optional import MissingExtraError
+from heelstrike._version import __version__
 from heelstrike.cli import gait, paper, powered, robot
 from heelstrike.cli._common import CliError, Parser, parse_angle, parse_range
 from heelstrike.cli._render import fail, one_line
@@ -50,23 +51,13 @@ _COMMANDS: tuple[Callable[[Any], None], ...] = (
 )
 
 
-def _version() -> str:
-    """The installed distribution's version (:mod:`importlib.metadata`)."""
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        return version("heelstrike")
-    except PackageNotFoundError:  # pragma: no cover - running from a source tree
-        return "unknown (not installed)"
-
-
 def build_parser() -> argparse.ArgumentParser:
     """The ``heelstrike`` argument parser with every registered command."""
     parser = Parser(
         prog="heelstrike",
         description="Impulsive dynamics and energetics of walking machines.",
     )
-    parser.add_argument("--version", action="version", version=f"heelstrike {_version()}")
+    parser.add_argument("--version", action="version", version=f"heelstrike {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
     for add in _COMMANDS:
         add(sub)

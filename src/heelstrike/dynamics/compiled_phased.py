@@ -46,7 +46,6 @@ import importlib.resources
 import itertools
 import math
 import os
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -586,6 +585,8 @@ def ensemble_walk_phased(
 
         def block(lo: int, hi: int) -> None:
             kernels.ensemble(*common[:2], Qs, QDs, *common[4:], lo, hi, *sub)
+
+        from concurrent.futures import ThreadPoolExecutor  # only for threaded ensembles
 
         with ThreadPoolExecutor(n_threads) as pool:
             futures = [pool.submit(block, int(lo), int(hi))

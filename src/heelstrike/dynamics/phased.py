@@ -34,7 +34,7 @@ from heelstrike.dynamics.hybrid import (
     check_initial_state,
     simulate,
 )
-from heelstrike.models.builder import BuiltWalker, load_walker
+from heelstrike.models.builder import BuiltWalker, walker_description
 from heelstrike.models.description import WalkerDescription
 
 __all__ = [
@@ -164,7 +164,7 @@ def load_phased_walker(
     name_or_path: str | os.PathLike[str], **params: ArrayLike
 ) -> PhasedWalker:
     """:func:`~heelstrike.models.builder.load_walker` returning a :class:`PhasedWalker`."""
-    return PhasedWalker.from_built(load_walker(name_or_path, **params))  # type: ignore[arg-type]
+    return PhasedWalker(walker_description(name_or_path), **params)  # type: ignore[arg-type]
 
 
 def stance_and_swing_locks(walker: BuiltWalker) -> tuple[tuple[int, ...], tuple[int, ...]]:

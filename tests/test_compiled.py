@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from heelstrike.dynamics import compiled
 from heelstrike.dynamics.compiled import (
     STATUS_NAMES,
     ensemble_walk,
-    reduced_dynamics_compiled,
     single_support_compiled,
     step_map_compiled,
 )
@@ -28,6 +28,15 @@ def _reference(walker, z, slope, steps):
 
 def test_status_names_are_walk_status_values():
     assert STATUS_NAMES == tuple(s.value for s in WalkStatus)
+
+
+def reduced_dynamics_compiled(walker, state, slope):
+    """The compiled kernel's single-support accelerations (N, 2) and ground reactions (N, 2)
+    (tangential, normal; N) at reduced states ``(q3, q4, q3_dot, q4_dot)``, one call per row."""
+    p = compiled.walker_parameters(walker, slope)
+    Y = np.atleast_2d(np.asarray(state, dtype=float))
+    out = np.array([compiled._serial().dynamics(p, np.ascontiguousarray(y)) for y in Y])
+    return out[:, :2], out[:, 2:]
 
 
 @pytest.mark.parametrize("radius", [0.0, 0.3, 0.9])

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from _compass_points import point_jacobians
 from heelstrike.dynamics.single_support import SingleSupport, solve_small
 from heelstrike.models import CompassGait
 from heelstrike.models.base import gravity_vector
@@ -57,7 +58,7 @@ def test_compass_terms_equal_point_jacobian_products(name: str) -> None:
     w = COMPASSES[name]
     q, qd = _states(4, (3,), RNG_SEED + 1)
     slope = 0.05
-    J_H, J_R, J_L = w._point_jacobians(q)
+    J_H, J_R, J_L = point_jacobians(w, q)
     mH, m, inertia = (np.asarray(v, dtype=float)[..., None, None]
                       for v in (w.hip_mass, w.leg_mass, w.leg_inertia))
     W = np.zeros((4, 4))
@@ -67,8 +68,8 @@ def test_compass_terms_equal_point_jacobian_products(name: str) -> None:
              + inertia * W)
     # accelerations of the points at q_ddot = 0 by finite differences of J(q) q_dot along q_dot
     eps = 1e-6
-    Jp = w._point_jacobians(q + eps * qd)
-    Jm = w._point_jacobians(q - eps * qd)
+    Jp = point_jacobians(w, q + eps * qd)
+    Jm = point_jacobians(w, q - eps * qd)
     g = gravity_vector(w.gravity, slope)[..., None, :]
     acc = [np.einsum("...ij,...j->...i", (a - b) / (2 * eps), qd)
            for a, b in zip(Jp, Jm, strict=True)]

@@ -11,6 +11,7 @@ import mpmath
 import numpy as np
 import pytest
 
+from _compass_points import point_jacobians
 from heelstrike.core.fast import impact_2x4
 from heelstrike.core.impact import ImpactInputError, constrained_projector, impact
 from heelstrike.models.compass import CompassGait, heel_strike_state
@@ -170,7 +171,7 @@ def _compass_exact_tc(b: float, q3: float) -> tuple[np.ndarray, np.ndarray, np.n
     assembled in 60 digits from the point Jacobians (``M = sum m J^T J``), not rounded."""
     w = CompassGait(leg_com_from_hip=b)
     q, qd = heel_strike_state(w, q3)
-    J_H, J_R, J_L = w._point_jacobians(q)
+    J_H, J_R, J_L = point_jacobians(w, q)
     A = w.contact_jacobian(q, "left")
     with mpmath.workdps(60):
         Mm = mpmath.zeros(4, 4)
@@ -216,7 +217,7 @@ def _compass_factor(b: float, q3: float) -> tuple[np.ndarray, np.ndarray, np.nda
     """Mass factor ``F = [sqrt(mH) J_H; sqrt(m) J_R; sqrt(m) J_L]`` (``M = F^T F``), A, q_dot."""
     w = CompassGait(leg_com_from_hip=b)
     q, qd = heel_strike_state(w, q3)
-    J_H, J_R, J_L = w._point_jacobians(q)
+    J_H, J_R, J_L = point_jacobians(w, q)
     F = np.vstack([np.sqrt(w.hip_mass) * J_H, np.sqrt(w.leg_mass) * J_R,
                    np.sqrt(w.leg_mass) * J_L])
     return F, w.contact_jacobian(q, "left"), qd

@@ -21,7 +21,6 @@ from heelstrike.dynamics.phased import (
     TorsoPD,
     load_phased_walker,
     simulate_phased,
-    stance_and_swing_locks,
 )
 from heelstrike.models import CompassGait
 
@@ -61,7 +60,7 @@ def _segments(t: np.ndarray) -> list[tuple[int, int]]:
 
 
 def test_lock_split(kneed: PhasedWalker) -> None:
-    assert stance_and_swing_locks(kneed) == ((3,), (5,))
+    assert kneed.stance_and_swing_locks() == ((3,), (5,))
 
 
 def test_energy_conserved_in_every_phase_kneed(kneed: PhasedWalker) -> None:

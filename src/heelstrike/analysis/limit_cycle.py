@@ -983,14 +983,6 @@ class BifurcationDiagram(ResultDictMixin):
     impact_angles: FloatArray
     periods: FloatArray
 
-    def branches(self, decimals: int = 6) -> NDArray[np.int_]:
-        """Number of distinct steady values per slope (1: period one, 2: period two ...)."""
-        out = []
-        for row in self.impact_angles:
-            r = row[np.isfinite(row)]
-            out.append(len(np.unique(np.round(r, decimals))) if r.size else 0)
-        return np.asarray(out)
-
 
 def bifurcation_diagram(
     walker: PlanarWalker,

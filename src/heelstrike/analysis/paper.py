@@ -236,8 +236,5 @@ class PaperFigureData(ResultDictMixin):
 
 def paper_figure_data(walker: CompassGait | None = None) -> PaperFigureData:
     """Compute the data of Figs. 2, 3a and 3b for ``walker`` (default: the paper's)."""
-    return PaperFigureData(
-        figure2=figure2_data(walker),
-        figure3a=figure3a_data(walker),
-        figure3b=figure3b_data(walker),
-    )
+    table = figure2_data(walker)  # Figs. 2 and 3a plot columns of one table
+    return PaperFigureData(figure2=table, figure3a=table.copy(), figure3b=figure3b_data(walker))

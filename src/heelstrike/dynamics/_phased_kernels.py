@@ -28,6 +28,15 @@ from numba.core.errors import NumbaExperimentalFeatureWarning
 from heelstrike._typing import FloatArray, IntArray
 from heelstrike.dynamics import _dp5 as dp5
 from heelstrike.dynamics._compass_kernels import lift_velocity_scale_jit, lifts_jit
+from heelstrike.dynamics.compiled import (
+    COMPLETED,
+    FELL_BACKWARD,
+    FELL_FORWARD,
+    INTEGRATION_FAILED,
+    LOST_CONTACT,
+    NO_HEEL_STRIKE,
+    TRAILING_FOOT_STAYS,
+)
 from heelstrike.dynamics.compiled_phased import (
     _C_KD,
     _C_KP,
@@ -55,14 +64,7 @@ from heelstrike.dynamics.compiled_phased import (
     _KIND_KNEE,
     _NO_CONSISTENT_ASSIGNMENT,
     _NO_SWAP,
-    COMPLETED,
-    FELL_BACKWARD,
-    FELL_FORWARD,
-    INTEGRATION_FAILED,
-    LOST_CONTACT,
-    NO_HEEL_STRIKE,
     SLIPPED,
-    TRAILING_FOOT_STAYS,
 )
 from heelstrike.models._codegen_numba import NumbaModel, signatures
 

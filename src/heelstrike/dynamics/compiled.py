@@ -70,7 +70,6 @@ __all__ = [
     "EnsembleResult",
     "check_compiled_compass",
     "ensemble_walk",
-    "reduced_dynamics_compiled",
     "simulate_compiled",
     "single_support_compiled",
     "step_map_compiled",
@@ -438,39 +437,6 @@ def step_map_compiled(
         step_length=float(res.step_length[0, 0]),
         status=status,
     )
-
-
-def reduced_dynamics_compiled(
-    walker: CompassGait, state: ArrayLike, slope: float = 0.0
-) -> tuple[FloatArray, FloatArray]:
-    """Compiled single-support accelerations and ground reaction at reduced states.
-
-    Parameters
-    ----------
-    walker : CompassGait
-        Scalar-parameter walker.
-    state : array_like, shape (N, 4)
-        ``(q3, q4, q3_dot, q4_dot)`` (rad, rad/s).
-    slope : float
-        Slope (rad).
-
-    Returns
-    -------
-    accelerations : ndarray, shape (N, 2)
-        ``(q3_ddot, q4_ddot)`` (rad/s^2).
-    reaction : ndarray, shape (N, 2)
-        Ground force on the stance foot, (tangential, normal) (N).
-    """
-    p = walker_parameters(walker, slope)
-    Y = np.atleast_2d(np.asarray(state, dtype=float))
-    acc = np.empty((Y.shape[0], 2))
-    lam = np.empty((Y.shape[0], 2))
-    kernel = _serial().dynamics
-    for i, y in enumerate(Y):
-        a3, a4, lt, ln = kernel(p, np.ascontiguousarray(y, dtype=float))
-        acc[i] = a3, a4
-        lam[i] = lt, ln
-    return acc, lam
 
 
 def single_support_compiled(

@@ -68,7 +68,6 @@ from heelstrike.dynamics.phased import (
     PhasedWalkResult,
     TorsoPD,
     check_initial_state,
-    stance_and_swing_locks,
 )
 from heelstrike.models._codegen_numba import NumbaModel, build_numba, numba_source_key
 from heelstrike.models.builder import BuiltWalker
@@ -83,15 +82,8 @@ __all__ = [
     "simulate_phased_compiled",
 ]
 
-# Kernel status codes: plain ints taken from the enum (numba freezes globals at compile time).
-COMPLETED = WalkStatus.COMPLETED.code
-FELL_FORWARD = WalkStatus.FELL_FORWARD.code
-FELL_BACKWARD = WalkStatus.FELL_BACKWARD.code
-TRAILING_FOOT_STAYS = WalkStatus.TRAILING_FOOT_STAYS.code
-LOST_CONTACT = WalkStatus.LOST_CONTACT.code
+# Kernel status codes beyond the compass kernel's (plain ints: numba freezes globals).
 SLIPPED = WalkStatus.SLIPPED.code
-NO_HEEL_STRIKE = WalkStatus.NO_HEEL_STRIKE.code
-INTEGRATION_FAILED = WalkStatus.INTEGRATION_FAILED.code
 _NO_CONSISTENT_ASSIGNMENT = WalkStatus.NO_CONSISTENT_ASSIGNMENT.code
 _NO_SWAP = WalkStatus.NO_LEG_SWAP.code
 
@@ -234,7 +226,7 @@ def check_compiled_actuation(walker: BuiltWalker, torque: Any, push_off: Any) ->
 
 def _locks(walker: BuiltWalker) -> tuple[tuple[int, ...], tuple[int, ...], FloatArray]:
     """``(stance locks, swing locks, lock angle of every coordinate (rad, 0 if none))``."""
-    stance_locks, swing_locks = stance_and_swing_locks(walker)
+    stance_locks, swing_locks = walker.stance_and_swing_locks()
     lockv = np.zeros(walker.n_coordinates)
     for j, a in zip(walker.lockable_joints, walker.lock_angles, strict=True):
         lockv[j] = float(a)

@@ -484,10 +484,6 @@ class PhasedWalkResult(WalkResult):
     phase: NDArray[np.str_] = field(default_factory=lambda: np.array([], dtype=str))
     mechanical_energy: FloatArray = field(default_factory=lambda: np.array([]))
 
-    def step_losses(self, step: int) -> FloatArray:
-        """``T_c`` (J) of every impact of one step, in order."""
-        return np.asarray([e.kinetic_energy_constrained for e in self.events if e.step == step])
-
 
 # -- the one loop ------------------------------------------------------------------------------
 @dataclass(frozen=True, kw_only=True)

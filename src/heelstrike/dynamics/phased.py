@@ -46,7 +46,6 @@ __all__ = [
     "check_initial_state",
     "load_phased_walker",
     "simulate_phased",
-    "stance_and_swing_locks",
 ]
 
 
@@ -165,11 +164,6 @@ def load_phased_walker(
 ) -> PhasedWalker:
     """:func:`~heelstrike.models.builder.load_walker` returning a :class:`PhasedWalker`."""
     return PhasedWalker(walker_description(name_or_path), **params)  # type: ignore[arg-type]
-
-
-def stance_and_swing_locks(walker: BuiltWalker) -> tuple[tuple[int, ...], tuple[int, ...]]:
-    """:meth:`~heelstrike.models.builder.BuiltWalker.stance_and_swing_locks` of ``walker``."""
-    return walker.stance_and_swing_locks()
 
 
 # -- torque law for the torso walker ------------------------------------------------------------

@@ -95,14 +95,6 @@ class SingleSupport:
         """Indices of ``q`` integrated as ``theta`` (the stance angle first)."""
         return self._free
 
-    @property
-    def basis(self) -> FloatArray:
-        """Constant null-space basis ``J`` (n, m) of the stance constraint.
-
-        ``q_dot = J theta_dot``.
-        """
-        return self._basis
-
     # -- state maps --------------------------------------------------------------------------
     def pack(self, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
         """Integrator state ``(theta, theta_dot)`` of a full state; shape (2 m,)."""

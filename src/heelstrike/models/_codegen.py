@@ -32,7 +32,7 @@ from sympy.printing.numpy import NumPyPrinter
 
 from heelstrike.models.description import Expr, WalkerDescription, evaluate_expression
 
-__all__ = ["HELPER_NAMES", "generate_source", "parameter_symbol"]
+__all__ = ["generate_source", "parameter_symbol"]
 
 #: The module's header. Nothing from the walker file enters generated code: parameters are
 #: ``p_0, p_1, ...`` (in ``WalkerDescription.param_names`` order), points are indexed (in
@@ -48,10 +48,6 @@ N = {n}
 N_PARAMS = {n_params}
 N_POINTS = {n_points}
 '''
-
-#: Names the generated module uses without defining them.
-HELPER_NAMES = frozenset({"numpy", "zeros", "_lead"})
-
 
 def parameter_symbol(index: int) -> str:
     """Identifier of the parameter at ``index`` in generated code."""

@@ -120,7 +120,7 @@ def _lead(q: Any, *args: Any) -> tuple[int, ...]:
     return np.broadcast_shapes(lead, *shapes) if shapes else lead
 
 
-#: What generated walker modules may use by name (see :data:`HELPER_NAMES` of the generator).
+#: What generated walker modules may use by name (the only names their source does not define).
 _HELPERS: Mapping[str, Any] = MappingProxyType({"numpy": np, "zeros": np.zeros, "_lead": _lead})
 
 _MEMORY: dict[str, GeneratedModel] = {}

@@ -187,11 +187,6 @@ class CompassGait(PlanarWalker):
         return "compass" if standard else None
 
     @property
-    def leg_com_from_foot(self) -> Any:
-        """Distance ``a = l - b`` (m) from a foot's lowest point to the leg's centre of mass."""
-        return self.leg_length - self.leg_com_from_hip
-
-    @property
     def total_mass(self) -> FloatArray:
         return np.asarray(self.hip_mass + 2.0 * self.leg_mass)
 
@@ -214,25 +209,6 @@ class CompassGait(PlanarWalker):
         return np.asarray(getattr(self, name), dtype=float)
 
     # -- kinematics ---------------------------------------------------------------------------
-    def _point_jacobians(self, q: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Jacobians (..., 2, 4) of the hip, right-leg and left-leg centres of mass."""
-        l, b, R = (self._p(k, q) for k in ("leg_length", "leg_com_from_hip", "foot_radius"))
-        s = l - R
-        q3, q34 = q[..., 2], q[..., 2] + q[..., 3]
-        de3, de34 = _de(q3), _de(q34)
-        shape = np.broadcast_shapes(q3.shape, s.shape)
-        eye = np.broadcast_to(np.eye(2), (*shape, 2, 2))
-        zero = np.zeros((*shape, 2))
-
-        def jac(col3: FloatArray, col4: FloatArray) -> FloatArray:
-            cols = np.broadcast_arrays(col3, col4, zero)
-            return np.concatenate((eye, cols[0][..., None], cols[1][..., None]), axis=-1)
-
-        J_H = jac(s[..., None] * de3, zero)
-        J_R = jac((s - b)[..., None] * de3, zero)
-        J_L = jac(s[..., None] * de3 - b[..., None] * de34, -b[..., None] * de34)
-        return J_H, J_R, J_L
-
     def positions(self, q: ArrayLike) -> CompassPositions:
         """Positions of hip, foot centres, contact points and leg centres of mass (m)."""
         q_ = _q(q)
@@ -262,7 +238,7 @@ class CompassGait(PlanarWalker):
 
     # -- dynamics -----------------------------------------------------------------------------
     def _jacobian_columns(self, q: FloatArray) -> _Columns:
-        """The non-trivial columns of the point Jacobians of :meth:`_point_jacobians`.
+        """The non-trivial columns of the point Jacobians of the hip and the legs' centres of mass.
 
         Every point Jacobian is ``[I_2, c3, c4]``; ``c4`` vanishes for the hip and the right
         leg. Each column is an ``(x, y)`` pair of arrays (or scalars) broadcast like ``q[..., 0]``

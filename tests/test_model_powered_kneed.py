@@ -5,8 +5,8 @@ folds there), and the push-off seeds on level ground converge to nothing. The mo
 (:func:`~heelstrike.analysis.powered.find_model_powered_gait`) then starts from the passive
 gait on a slope and lowers the slope to 0 while the push-off impulse takes over the energy
 input (:func:`~heelstrike.analysis.powered._slope_homotopy`). The level-ground gaits so reached
-start at a fold near 1.22 m/s; slower targets (the CLI's default 0.5 m/s) get an error that
-says what was tried.
+start at a fold near 1.22 m/s; slower targets (0.5 m/s, the CLI's default before the walker
+file declared 1.3 m/s) get an error that says what was tried.
 
 Physics checked on the gait at 1.3 m/s, independently of the search, on the scipy reference map
 at ``rtol = 1e-12``: the state is periodic, the mean speed is the target, and the energy book
@@ -38,7 +38,7 @@ from heelstrike.dynamics.phased import PhasedWalker, PhasedWalkResult, simulate_
 from heelstrike.models.builder import load_walker
 
 SPEED = 1.3  # m/s: inside the level-ground push-off gaits the homotopy reaches (~1.22-1.41)
-SLOW = 0.5  # m/s: the CLI's default target, below the slowest of those gaits
+SLOW = 0.5  # m/s: the CLI's former default target, below the slowest of those gaits
 
 
 @pytest.fixture(scope="module")
@@ -168,7 +168,8 @@ def test_without_passive_gaits_the_error_says_so() -> None:
 # -- CLI ----------------------------------------------------------------------------------------
 def test_cli_kneed_default_speed_fails_with_one_specific_line(
         capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["powered", "--model", "kneed"]) == 2  # the default target is 0.5 m/s
+    # 0.5 m/s, the former default target (the file now declares 1.3 m/s, inside the family)
+    assert main(["powered", "--model", "kneed", "--speed", "0.5"]) == 2
     captured = capsys.readouterr()
     assert captured.out == ""
     lines = [ln for ln in captured.err.splitlines() if ln.startswith("heelstrike: error:")]

@@ -33,6 +33,7 @@ UNITS: dict[str, str | None] = {
     "impact_angle": "rad", "slope": "rad", "period_doubling_slope": "rad",
     "period": "s", "time": "s", "elapsed": "s",
     "speed": "m/s", "trailing_normal_velocity": "m/s", "trailing_foot_lift_velocity": "m/s",
+    "target_speed": "m/s", "target_step_length": "m",
     # dimensionless numbers and counts
     "restitution": "1", "multipliers": "1", "multipliers_complex": "1",
     "cost_of_transport": "1", "spectral_radius": "1", "converging_fraction": "1",
@@ -41,7 +42,7 @@ UNITS: dict[str, str | None] = {
     # not quantities
     "trailing_foot_lifts": None, "degenerate_wheel": None, "stable": None,
     "trailing_foot_grazes": None, "model": None, "torque_joint": None, "coordinates": None,
-    "actuation": None,
+    "actuation": None, "target_source": None,
     "parameter_name": None, "parameter_unit": None, "kind": None, "figure": None,
     "data": None, "residual": None, "status": None, "message": None, "gait_found": None,
 }

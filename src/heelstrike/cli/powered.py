@@ -69,7 +69,10 @@ def add_powered(sub: Any) -> None:
     add_model_options(p)
     add_backend_option(p)
     tgt = p.add_mutually_exclusive_group()
-    tgt.add_argument("--speed", type=float, default=None, help="target mean speed (m/s)")
+    tgt.add_argument("--speed", type=float, default=None,
+                     help="target mean speed (m/s); default: the walker's declared target "
+                     "speed, 0.5 m/s for the compass gait (with --model: the walker file's "
+                     "[powered] speed)")
     tgt.add_argument("--step-length", type=float, default=None, help="target step length (m)")
     p.add_argument("--actuation", choices=ACTUATIONS, default="pushoff",
                    help="actuation model (default pushoff)")
@@ -97,28 +100,38 @@ def _run_powered(args: argparse.Namespace) -> int:
         refuse_hip_law_options(args)
     walker = walker_from_args(args) if args.model is None else model_from_args(args)
     if args.speed is None and args.step_length is None:
-        args.speed = 0.5
-    target, value = (
-        ("speed", args.speed) if args.speed is not None else ("step_length", args.step_length)
-    )
+        declared = walker.powered_speed
+        if declared is None:
+            raise CliError(f"--model {args.model} declares no target speed (a [powered] "
+                           "table with speed = ... m/s in its walker file): give --speed or "
+                           "--step-length")
+        target, value, source = "speed", float(declared), "walker"
+        declared_note = " (the walker's declared target)"
+    elif args.speed is not None:
+        target, value, source, declared_note = "speed", args.speed, "--speed", ""
+    else:
+        target, value, source, declared_note = "step_length", args.step_length, "--step-length", ""
     if not (math.isfinite(value) and value > 0):
         raise CliError(f"--{target.replace('_', '-')} must be finite and > 0, got {value:g}")
+    speed, step_length = (value, None) if target == "speed" else (None, value)
     radius = float(walker.foot_radii[0]) if args.model is not None else args.radius
     out = None if args.out is None else writable_dir(args.out)
     try:
         if args.model is None:
             gait = find_powered_gait(walker, actuation=family_from_args(args), progress=True,
-                                     time_limit=DEFAULT_TIME_LIMIT, **{target: value})
+                                     time_limit=DEFAULT_TIME_LIMIT, speed=speed,
+                                     step_length=step_length)
         else:
             gait = find_model_powered_gait(walker, backend=args.backend or "compiled",
                                            progress=True, time_limit=DEFAULT_TIME_LIMIT,
-                                           **{target: value})
+                                           speed=speed, step_length=step_length)
     except PoweredGaitNotFoundError as exc:
         raise CliError(
-            f"no {args.actuation} gait found with {target.replace('_', ' ')} {value:g} "
-            f"at R = {radius:g} m: {exc}"
+            f"no {args.actuation} gait found with {target.replace('_', ' ')} {value:g}"
+            f"{declared_note} at R = {radius:g} m: {exc}"
         ) from exc
-    d = gait.to_dict()
+    d = {**gait.to_dict(), "target_speed": speed, "target_step_length": step_length,
+         "target_source": source}
     if out is not None:
         from heelstrike.analysis.powered import energy_book_tables
         from heelstrike.outputs import write_powered_energy
@@ -132,6 +145,9 @@ def _run_powered(args: argparse.Namespace) -> int:
     label = args.actuation if gait.model is None else \
         f"{args.actuation}, model {gait.model}, {args.backend or 'compiled'} backend"
     print(f"powered gait ({label}), R = {radius:g} m, level ground")
+    unit = "m/s" if target == "speed" else "m"
+    given = "the walker's declared target" if source == "walker" else source
+    print(f"  target          {target.replace('_', ' ')} {value:g} {unit} ({given})")
     print(f"  {gait.parameter_name:15s} {gait.parameter:10.5f} {gait.parameter_unit}")
     print(f"  fixed point (just after impact): {fixed_point_text(d['fixed_point'])}")
     print_step_lines(gait)

@@ -54,7 +54,16 @@ import numpy as np
 
 from heelstrike.models._generated import _unsafe, cache_dir, numba_fingerprint
 
-__all__ = ["AotExport", "AotLibrary", "AotWarning", "aot_enabled", "aot_mode", "load_library"]
+__all__ = [
+    "AotExport",
+    "AotLibrary",
+    "AotWarning",
+    "aot_enabled",
+    "aot_mode",
+    "compile_seconds",
+    "load_library",
+    "track_numba_compiles",
+]
 
 #: Bumped when the layout of built modules changes.
 _FORMAT = "heelstrike-aot-1"
@@ -254,6 +263,19 @@ def build(lib: AotLibrary, *, quiet: bool = False) -> Path:
               "cached afterwards; this takes a few seconds to a minute)",
               file=sys.stderr, flush=True)
     t0 = time.perf_counter()
+    _CLOCK.start()
+    try:
+        _compile(lib, path, folder)
+    finally:
+        _CLOCK.end()
+    if not quiet:
+        print(f"heelstrike: built {path.name} in {time.perf_counter() - t0:.1f} s",
+              file=sys.stderr, flush=True)
+    return path
+
+
+def _compile(lib: AotLibrary, path: Path, folder: Path) -> None:
+    """The ``pycc`` build of :func:`build` (into a private folder, moved into ``path``)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # pycc's pending-deprecation notice is ours to handle
         from numba.pycc import CC
@@ -276,10 +298,67 @@ def build(lib: AotLibrary, *, quiet: bool = False) -> Path:
                                    f"module ending in {path.suffix}")
             os.chmod(built[0], 0o700)
             os.replace(built[0], path)  # atomic: concurrent builders never see partial files
-    if not quiet:
-        print(f"heelstrike: built {path.name} in {time.perf_counter() - t0:.1f} s",
-              file=sys.stderr, flush=True)
-    return path
+
+
+class _CompileClock:
+    """Wall time this process has spent compiling kernels: ``pycc`` builds and numba JIT
+    compiles (nested compiles count once). An object, like :class:`_LoadedLibraries`."""
+
+    def __init__(self) -> None:
+        self.seconds = 0.0
+        self.depth = 0
+        self.started = 0.0
+        self.listening = False
+        self.lock = threading.Lock()
+
+    def start(self) -> None:
+        with self.lock:
+            if self.depth == 0:
+                self.started = time.monotonic()
+            self.depth += 1
+
+    def end(self) -> None:
+        with self.lock:
+            self.depth -= 1
+            if self.depth == 0:
+                self.seconds += time.monotonic() - self.started
+
+
+_CLOCK = _CompileClock()
+
+
+def compile_seconds() -> float:
+    """Seconds (wall, :func:`time.monotonic`) this process has spent compiling kernels so far.
+
+    One-time costs of a first run (building an ahead-of-time module, numba compiling a kernel
+    into its disk cache) that a search's time limit should not count
+    (:func:`heelstrike.analysis.powered.find_powered_gait`). A compile in progress counts up
+    to now.
+    """
+    with _CLOCK.lock:
+        running = time.monotonic() - _CLOCK.started if _CLOCK.depth > 0 else 0.0
+        return _CLOCK.seconds + running
+
+
+def track_numba_compiles() -> None:
+    """Count numba's JIT compiles (its ``numba:compile`` events) in :func:`compile_seconds`.
+
+    Called by the kernel modules when they import numba; idempotent.
+    """
+    with _CLOCK.lock:
+        if _CLOCK.listening:
+            return
+        _CLOCK.listening = True
+    from numba.core import event
+
+    class _Listener(event.Listener):
+        def on_start(self, ev: Any) -> None:
+            _CLOCK.start()
+
+        def on_end(self, ev: Any) -> None:
+            _CLOCK.end()
+
+    event.register("numba:compile", _Listener())
 
 
 class _LoadedLibraries:

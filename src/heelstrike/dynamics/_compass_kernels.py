@@ -19,6 +19,7 @@ from numba import njit, prange
 from heelstrike._typing import FloatArray, IntArray
 from heelstrike.core.fast import serial_and_parallel
 from heelstrike.dynamics import _dp5 as dp5
+from heelstrike.dynamics._aot import track_numba_compiles
 from heelstrike.dynamics.compiled import (
     _EV_BACK1,
     _EV_BACK2,
@@ -38,6 +39,8 @@ from heelstrike.dynamics.compiled import (
 )
 from heelstrike.models import _contact
 from heelstrike.models.compass_fast import strike
+
+track_numba_compiles()  # a search's time limit does not count compiling (see _aot)
 
 # The one lift rule (heelstrike.models._contact), compiled for the kernels of both modules.
 lifts_jit: Any = njit(cache=True, nogil=True, inline="always")(_contact.lifts)

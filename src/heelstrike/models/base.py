@@ -218,6 +218,17 @@ class PlanarWalker(ABC):
         return None
 
     @property
+    def powered_speed(self) -> float | None:
+        """The walker's declared target mean speed (m/s) for a powered gait on level ground.
+
+        What ``heelstrike powered`` seeks when given neither ``--speed`` nor ``--step-length``:
+        a speed inside the walker's family of push-off gaits, declared by the walker (a walker
+        file's ``[powered] speed``), never assumed by the caller. None (the default): the
+        walker declares none.
+        """
+        return None
+
+    @property
     def compiled_kernel(self) -> CompiledKernel | None:
         """Which compiled kernel simulates this walker (:data:`CompiledKernel`), or None.
 

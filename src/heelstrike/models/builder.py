@@ -370,6 +370,12 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         """
         return "generated" if type(self).step_schedule is BuiltWalker.step_schedule else None
 
+    @property
+    def powered_speed(self) -> float | None:
+        """The walker file's ``[powered] speed`` (m/s), or None if it declares none."""
+        powered = self.description.powered
+        return None if powered is None else powered.speed
+
     def replace(self, **params: ArrayLike) -> BuiltWalker:
         """A copy with some parameter values changed (no re-derivation)."""
         merged: dict[str, Any] = dict(self._values)

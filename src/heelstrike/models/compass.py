@@ -187,6 +187,16 @@ class CompassGait(PlanarWalker):
         return "compass" if standard else None
 
     @property
+    def powered_speed(self) -> float | None:
+        """0.5 m/s: the compass gait's declared target speed for a powered gait.
+
+        The default of ``heelstrike powered`` without ``--model``; inside the level push-off,
+        energy-tracking and swing-leg PD gaits at ``R = 0`` and ``0.3 m`` with the default gains
+        (``walkers/compass.toml`` declares the same in its ``[powered]`` table).
+        """
+        return 0.5
+
+    @property
     def total_mass(self) -> FloatArray:
         return np.asarray(self.hip_mass + 2.0 * self.leg_mass)
 

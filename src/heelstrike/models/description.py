@@ -61,6 +61,13 @@ TOML format
     kp = "60.0 * mT"        # stiffness (N m/rad), >= 0; a number or an expression
     kd = 30.0               # damping (N m s/rad), >= 0
     angle = 0.0             # optional, set point of the link's absolute angle (rad)
+    [powered]               # optional: the walker's default powered target (PoweredSpec)
+    speed = 0.5             # mean speed (m/s), a finite number > 0: what `heelstrike powered
+                            # --model FILE` seeks when given neither --speed nor --step-length
+
+Without ``[powered]`` the walker declares no default target and ``heelstrike powered --model``
+asks for ``--speed`` or ``--step-length``. Choose a speed inside the walker's family of
+level-ground push-off gaits (the shipped files: compass 0.5, torso 0.45, kneed 1.3 m/s).
 
 Walker files are data: nothing in them is ever executed or pasted into code. Parameter names
 must be ASCII identifiers (not keywords, not reserved); expressions are bounded in length,
@@ -92,6 +99,7 @@ __all__ = [
     "ModelDescriptionError",
     "PointMassSpec",
     "PostureLawSpec",
+    "PoweredSpec",
     "WalkerDescription",
     "check_parameter_name",
     "constraint_holds",
@@ -486,6 +494,21 @@ class PostureLawSpec:
 
 
 @dataclass(frozen=True, kw_only=True)
+class PoweredSpec:
+    """The walker's declared default target for a powered gait (the ``[powered]`` table).
+
+    Attributes
+    ----------
+    speed : float
+        Target mean speed (m/s), finite and > 0: the level-ground gait ``heelstrike powered``
+        seeks when given neither ``--speed`` nor ``--step-length``
+        (:attr:`heelstrike.models.base.PlanarWalker.powered_speed`).
+    """
+
+    speed: float
+
+
+@dataclass(frozen=True, kw_only=True)
 class WalkerDescription:
     """A validated walker description.
 
@@ -507,6 +530,9 @@ class WalkerDescription:
         :meth:`check_values` whenever values are set.
     control : tuple of PostureLawSpec
         Declared posture laws (``[control.<name>]`` tables); not part of the derivation.
+    powered : PoweredSpec or None
+        The declared default powered target (``[powered]``), or None; not part of the
+        derivation.
     source : str
         Where the description came from (file path or ``"<dict>"``); not part of the model.
     """
@@ -518,6 +544,7 @@ class WalkerDescription:
     point_masses: tuple[PointMassSpec, ...] = ()
     constraints: tuple[str, ...] = ()
     control: tuple[PostureLawSpec, ...] = ()
+    powered: PoweredSpec | None = None
     source: str = field(default="<dict>", compare=False)
 
     @property
@@ -570,6 +597,7 @@ class WalkerDescription:
         d.pop("source")
         d.pop("constraints")
         d.pop("control")
+        d.pop("powered")
         d["params"] = [k for k, _ in self.params]
         return json.dumps(d, sort_keys=True, default=str)
 
@@ -731,7 +759,10 @@ _TOP_KEYS = {
     "description",
     "reference",
     "control",
+    "powered",
 }
+_POWERED_KEYS = {"speed"}
+_POWERED_REQUIRED = ("speed",)
 _CONTROL_KEYS = {"joint", "kp", "kd", "angle"}
 _CONTROL_REQUIRED = ("joint", "kp", "kd")
 
@@ -788,7 +819,8 @@ def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> Wal
     data : mapping
         Top-level keys ``name``, ``params``, ``link`` (list), ``foot`` (list of two) and
         optionally ``point_mass`` (list), ``constraints``, ``control`` (declared posture laws,
-        :class:`PostureLawSpec`), ``description``, ``reference`` (free text).
+        :class:`PostureLawSpec`), ``powered`` (the default powered target,
+        :class:`PoweredSpec`), ``description``, ``reference`` (free text).
     source : str
         Origin, for messages.
 
@@ -985,6 +1017,7 @@ def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> Wal
     )
 
     control = _parse_control(top.get("control", {}), params, links, roots[0])
+    powered = _parse_powered(top["powered"]) if "powered" in top else None
 
     desc = WalkerDescription(
         name=name,
@@ -994,6 +1027,7 @@ def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> Wal
         point_masses=tuple(pms),
         constraints=constraints,
         control=control,
+        powered=powered,
         source=source,
     )
     seen_points: set[str] = set()
@@ -1055,6 +1089,20 @@ def _parse_control(
             )
         )
     return tuple(out)
+
+
+def _parse_powered(raw: Any) -> PoweredSpec:
+    """Validate the optional ``[powered]`` table (the default powered target)."""
+    tab = _table(raw, "powered")
+    _check_keys(tab, _POWERED_KEYS, _POWERED_REQUIRED, "powered")
+    v = tab["speed"]
+    if isinstance(v, bool) or not isinstance(v, int | float):
+        raise ModelDescriptionError(
+            f"powered.speed: must be a number (m/s), not {type(v).__name__}"
+        )
+    if not (math.isfinite(v) and v > 0):
+        raise ModelDescriptionError(f"powered.speed: must be finite and > 0 (m/s), got {v:g}")
+    return PoweredSpec(speed=float(v))
 
 
 def read_description(path: str | Path) -> WalkerDescription:

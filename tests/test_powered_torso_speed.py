@@ -137,3 +137,20 @@ def test_scipy_backend_names_the_same_end(end: tuple[float, float],
     assert abs(ref.parameter - near_end.parameter) < 1e-8
     assert np.max(np.abs(ref.fixed_point - near_end.fixed_point)) < 1e-8
     assert abs(ref.collision_loss - near_end.collision_loss) < 1e-8
+
+
+@pytest.mark.parametrize("speed", [0.3, 0.15])
+def test_targets_far_below_the_seed_are_reached(speed: float) -> None:
+    """The continuation from the seed gait (near the fold, ~0.49 m/s) down to slow targets
+    needs about 60 tried steps; a limit of 24 made the search refuse 0.3 m/s as "probably
+    outside the reachable range". The gait found is a fixed point of the scipy reference map at
+    the target speed, and its energy book closes."""
+    g = find_model_powered_gait(load_walker("torso"), speed=speed)
+    assert abs(g.speed - speed) < 1e-9 and g.residual < 1e-8
+    pw = PhasedWalker.from_built(load_walker("torso"))
+    P = PoincareMap(walker=pw, simulator=simulate_phased, torque=declared_posture_law(pw),
+                    push_off=PushOff(impulse=g.parameter), rtol=1e-12, atol=1e-12)
+    assert np.max(np.abs(P(g.fixed_point) - g.fixed_point)) < 1e-8
+    rec = P.walk(g.fixed_point).impacts[0]
+    assert abs(rec.step_length / rec.step_duration - speed) < 1e-8
+    assert abs(g.push_off_work + g.torque_work - g.collision_loss) < 1e-8

@@ -41,6 +41,14 @@ from heelstrike.models.builder import load_walker
 END = re.compile(r"end near ([0-9.]+) m/s \(impulse ([0-9.]+) N s\), at a fold")
 
 
+def _reference_map(impulse: float) -> PoincareMap:
+    """The torso walker's step map on the scipy reference at ``rtol = atol = 1e-12``, with its
+    declared posture law and a push-off of ``impulse`` (N s)."""
+    pw = PhasedWalker.from_built(load_walker("torso"))
+    return PoincareMap(walker=pw, simulator=simulate_phased, torque=declared_posture_law(pw),
+                       push_off=PushOff(impulse=impulse), rtol=1e-12, atol=1e-12)
+
+
 def _error(speed: float, **options: Any) -> str:
     with pytest.raises(PoweredGaitNotFoundError) as info:
         find_model_powered_gait(load_walker("torso"), speed=speed, **options)
@@ -80,9 +88,7 @@ def test_reported_end_is_a_real_gait_near_a_multiplier_of_one(
     assert 0.48 < end[0] < 0.495  # the family does not reach the old claimed 0.4993 m/s
     assert abs(g.speed - (end[0] - 1e-3)) < 1e-9 and g.residual < 1e-8
     assert abs(g.parameter - end[1]) < 0.05  # the impulse the message names
-    pw = PhasedWalker.from_built(load_walker("torso"))
-    P = PoincareMap(walker=pw, simulator=simulate_phased, torque=declared_posture_law(pw),
-                    push_off=PushOff(impulse=g.parameter), rtol=1e-12, atol=1e-12)
+    P = _reference_map(g.parameter)
     assert np.max(np.abs(P(g.fixed_point) - g.fixed_point)) < 1e-8
     rec = P.walk(g.fixed_point).impacts[0]
     assert abs(rec.step_length / rec.step_duration - g.speed) < 1e-8
@@ -147,9 +153,7 @@ def test_targets_far_below_the_seed_are_reached(speed: float) -> None:
     the target speed, and its energy book closes."""
     g = find_model_powered_gait(load_walker("torso"), speed=speed)
     assert abs(g.speed - speed) < 1e-9 and g.residual < 1e-8
-    pw = PhasedWalker.from_built(load_walker("torso"))
-    P = PoincareMap(walker=pw, simulator=simulate_phased, torque=declared_posture_law(pw),
-                    push_off=PushOff(impulse=g.parameter), rtol=1e-12, atol=1e-12)
+    P = _reference_map(g.parameter)
     assert np.max(np.abs(P(g.fixed_point) - g.fixed_point)) < 1e-8
     rec = P.walk(g.fixed_point).impacts[0]
     assert abs(rec.step_length / rec.step_duration - speed) < 1e-8

@@ -125,3 +125,49 @@ def test_model_study_refuses_in_library() -> None:
         cost_study(RADII, LENGTHS, model=load_walker("torso"), actuations=("hip-pd",))
     with pytest.raises(ValueError, match=r"R = 2 m outside \[0, 1\] m"):
         cost_study((0.0, 2.0), LENGTHS, model=load_walker("torso"))
+
+
+def test_largest_admissible_radius_follows_the_walker_files_constraints() -> None:
+    kneed = load_walker("kneed")
+    a1, b1 = kneed.params["a1"], kneed.params["b1"]
+    r = kneed.largest_admissible("R", 1.0)  # the constraint R <= a1 + b1 (0.5 m) binds
+    assert abs(r - (a1 + b1)) < 1e-9 and r <= a1 + b1
+    kneed.replace(R=r)  # admitted
+    with pytest.raises(ValueError):
+        kneed.replace(R=r + 1e-6)
+    assert load_walker("torso").largest_admissible("R", 0.7) == 0.7  # not binding (R <= l)
+    with pytest.raises(ValueError, match="not a parameter"):
+        kneed.largest_admissible("nope", 1.0)
+
+
+def test_model_without_declared_speed_asks_for_a_target(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    import heelstrike
+
+    src = (Path(heelstrike.__file__).parent / "walkers" / "torso.toml").read_text()
+    head, sep, _ = src.partition("[powered]")
+    assert sep  # the shipped file declares one; this copy does not
+    own = tmp_path / "own.toml"
+    own.write_text(head)
+    assert main(["study", "cost", "--model", str(own), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "declares no target speed" in err and "--speed or --step-length" in err
+
+
+@pytest.mark.slow
+def test_kneed_defaults_study_the_walkers_own_range(tmp_path: Path) -> None:
+    """With defaults the kneed study used R up to 0.9 m (its file admits R <= 0.5 m) and step
+    lengths 0.3-0.6 m (its level push-off gaits have 0.70-0.96 m): it failed. Now: radii up to
+    0.9 x 0.5 m and speeds 0.95-1.05 x its declared 1.3 m/s; the gaits found are periodic
+    level gaits at their target speed whose energy books close."""
+    ds = _cli(["study", "cost", "--model", "kneed"], tmp_path)
+    assert np.allclose(ds["radius"].values, np.linspace(0.0, 0.45, 4), atol=1e-9)
+    assert np.allclose(ds["speed"].values, np.linspace(0.95 * 1.3, 1.05 * 1.3, 4))
+    found = ds["found"].values.astype(bool)
+    assert found.sum() >= 8  # most of the grid (10 of 16 on the reference machine)
+    T_c = ds["collision_loss"].values[found]
+    W = ds["push_off_work"].values[found] + ds["torque_work"].values[found]
+    assert np.all(np.abs(W - T_c) < 1e-8)
+    speed = (ds["step_length"] / ds["period"]).transpose(*ds["found"].dims).values
+    target = np.broadcast_to(ds["speed"].values, found.shape)
+    assert np.all(np.abs(speed[found] - target[found]) < 1e-6)

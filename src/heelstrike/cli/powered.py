@@ -186,13 +186,18 @@ def add_study(sub: Any) -> None:
     add_walker_options(c)  # its --radius is replaced by the range below
     add_model_options(c)
     add_backend_option(c)
-    c.add_argument("--radius", dest="radii", type=parse_range, default=(0.0, 0.9, 4),
-                   help="foot radii START:STOP:COUNT (m), default 0:0.9:4")
+    c.add_argument("--radius", dest="radii", type=parse_range, default=None,
+                   help="foot radii START:STOP:COUNT (m); default 0 to 0.9 x the largest foot "
+                   "radius the walker admits, 4 values (0:0.9:4 for the paper's compass gait, "
+                   "R <= l = 1 m; with --model: its file's constraints, e.g. 0:0.45:4 for kneed)")
     tgt = c.add_mutually_exclusive_group()
     tgt.add_argument("--step-length", dest="lengths", type=parse_range, default=None,
-                     help="step lengths START:STOP:COUNT (m), default 0.3:0.6:4")
+                     help="step lengths START:STOP:COUNT (m), default 0.3:0.6:4 for the "
+                     "paper's compass gait (without --model)")
     tgt.add_argument("--speed", dest="speeds", type=parse_range, default=None,
-                     help="speeds START:STOP:COUNT (m/s)")
+                     help="speeds START:STOP:COUNT (m/s); the default with --model: 4 speeds "
+                     "from 0.95 to 1.05 x the walker's declared target speed (its file's "
+                     "[powered] speed, where its push-off gaits exist)")
     c.add_argument("--actuation", action="append", choices=ACTUATIONS, default=None,
                    help="actuation model, repeatable (default pushoff)")
     add_actuation_options(c)
@@ -228,9 +233,19 @@ def _run_study(args: argparse.Namespace) -> int:
                            f"(its parameters: {', '.join(sorted(model.params))})")
         walker = None
         leg_length = float(model.scale.leg_length)
+    if args.radii is None:  # the walker's own range (R = l is McGeer's wheel: stop short)
+        largest = leg_length if model is None else model.largest_admissible("R", leg_length)
+        args.radii = (0.0, 0.9 * largest, 4)
     radii = linspace_grid(args.radii, 4)
     if min(radii) < 0 or max(radii) > leg_length:
         raise CliError(f"--radius must lie in [0, {leg_length:g}] m")
+    if args.speeds is None and args.lengths is None and model is not None:
+        declared = model.powered_speed
+        if declared is None:
+            raise CliError(f"--model {args.model} declares no target speed (a [powered] table "
+                           "with speed = ... m/s in its walker file): give --speed or "
+                           "--step-length")
+        args.speeds = (0.95 * declared, 1.05 * declared, 4)
     if args.speeds is not None:
         target, values = "speed", linspace_grid(args.speeds, 4)
     else:

@@ -376,6 +376,44 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         powered = self.description.powered
         return None if powered is None else powered.speed
 
+    def largest_admissible(self, name: str, upper: float) -> float:
+        """The largest value of parameter ``name`` up to ``upper`` that the description admits.
+
+        The other parameters keep their values; the admitted values are taken to form an
+        interval that contains the current one (true of the bounds and linear constraints of
+        the shipped files, e.g. the kneed walker's ``R <= a1 + b1``). Bisection to 1e-12
+        relative on :meth:`WalkerDescription.check_values`.
+
+        Parameters
+        ----------
+        name : str
+            A scalar parameter, e.g. ``"R"`` (SI units).
+        upper : float
+            Largest value of interest (same units).
+
+        Returns
+        -------
+        float
+            ``upper`` if admitted, else the end of the admitted interval (just inside it).
+        """
+        if name not in self._values:
+            raise ValueError(f"{name!r} is not a parameter of {self.description.name!r}")
+
+        def admitted(v: float) -> bool:
+            try:
+                self.description.check_values({**self._values, name: v})
+            except ModelDescriptionError:
+                return False
+            return True
+
+        lo, hi = float(self._values[name]), float(upper)
+        if admitted(hi):
+            return hi
+        while hi - lo > 1e-12 * max(abs(hi), 1.0):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if admitted(mid) else (lo, mid)
+        return lo
+
     def replace(self, **params: ArrayLike) -> BuiltWalker:
         """A copy with some parameter values changed (no re-derivation)."""
         merged: dict[str, Any] = dict(self._values)

@@ -173,6 +173,24 @@ _SEED_SECTIONS = (
 )
 
 
+def _other_gains(family: ActuationFamily, before: str, after: str) -> str:
+    """``"other gains"`` (between ``before`` and ``after``) for a family with a torque law
+    whose gains could change its gaits (the hip laws, a declared posture law); "" for the
+    push-off alone, which has none."""
+    has_law = family.name != "pushoff" or family.torque_joint != "hip"
+    return f"{before}other gains{after}" if has_law else ""
+
+
+def _scaled_seed_sections(walker: PlanarWalker) -> tuple[tuple[float, ...], ...]:
+    """:data:`_SEED_SECTIONS` (chosen for ``g = 9.81 m/s^2``, ``l = 1 m``) for this walker:
+    angles as they are, rates scaled by the walker's ``sqrt(g / l)`` (its inverse time scale),
+    so a walker on the Moon or with long legs starts near its own gaits; unchanged for the
+    reference walker (a factor of exactly 1)."""
+    _, g, l = _scale(walker)
+    k = float(np.sqrt((g / l) / 9.81))
+    return tuple((q, k * qd3, k * qd4) for q, qd3, qd4 in _SEED_SECTIONS)
+
+
 def _scale(walker: PlanarWalker) -> tuple[float, float, float]:
     """``(m_total, g, l)`` of any walker: its :attr:`~heelstrike.models.base.PlanarWalker.scale`."""
     s = walker.scale
@@ -1014,12 +1032,13 @@ def _end_message(
             f"({at}), at a fold: a Floquet multiplier reaches +1 there (largest |m| = "
             f"{abs(m):.3f} at that gait) and the family turns back, so none of its gaits has a "
             f"{target} {side} about {v_end:.4g} {unit} (past the fold Newton stalls at the "
-            f"residual's nonzero minimum: {exc}); other gains may reach further"
+            f"residual's nonzero minimum: {exc}){_other_gains(fam, '; ', ' may reach further')}"
         )
     largest = f"; largest multiplier |m| = {abs(m):.3f}" if np.isfinite(abs(m)) else ""
     return (
         f"no gait with {target} {value:g} {unit}: the {fam.name} gaits found {found} "
-        f"({at}{largest}); Newton finds none {side} it ({exc}); other gains may reach further"
+        f"({at}{largest}); Newton finds none {side} it ({exc})"
+        f"{_other_gains(fam, '; ', ' may reach further')}"
     )
 
 
@@ -1152,7 +1171,8 @@ def find_powered_gait(
                     budget=max_evaluations, deadline=time.monotonic() + limit, time_limit=limit,
                     compiled_before=compile_seconds(),
                     bar=bar, simulator=simulator,
-                    seed_sections=_SEED_SECTIONS if seed_sections is None else seed_sections,
+                    seed_sections=(_scaled_seed_sections(walker) if seed_sections is None
+                                   else seed_sections),
                     passive_gait=passive_gait)
     try:
         return _find(prob, target, value, guess, tol, max_iter, fd_step, max_continuation,
@@ -1245,7 +1265,8 @@ def _find(
             raise PoweredGaitNotFoundError(
                 f"no periodic {prob.family.name} gait found: Newton converged from none of the "
                 f"{len(prob.family.seed(prob.walker))} seed {prob.family.parameter_name} values "
-                f"(other gains or a guess may find one){why}"
+                f"({_other_gains(prob.family, '', ' or ')}a starting guess (the library's guess=) "
+                f"may find one){why}"
             )
         first, via = _slope_homotopy(search, target, unit, p_tol, s_h, no_seed)
     x, current, total_it, J = first
@@ -1299,7 +1320,7 @@ def _find(
                          f"(continuation from {current:.4g} stopped there: {exc})")
                 raise PoweredGaitNotFoundError(
                     f"no gait with {target} {value:g} {unit}: the {prob.family.name} gaits "
-                    f"found {found}{via or '; other gains may reach further'}"
+                    f"found {found}{via or _other_gains(prob.family, '; ', ' may reach further')}"
                 ) from exc
             continue
         total_it += it

@@ -231,12 +231,24 @@ def write_bifurcation_files(
         ``bifurcation.png`` and ``.pdf`` (:func:`heelstrike.plots.gait.bifurcation_figure`),
         ``bifurcation.csv`` (one row per recorded step: ``slope_deg``, ``impact_angle_rad``,
         ``period_s``) and ``period_one_branch.csv`` (``slope_deg``, ``impact_angle_rad``,
-        ``period_s``, ``spectral_radius``, ``stable``).
+        ``period_s``, ``spectral_radius``, ``stable``). If the branch starts above the
+        diagram's first slope (no gait below it), that part of the range is shaded on the
+        figure and noted in its title.
     """
     from heelstrike.plots.gait import bifurcation_figure
 
     out = _directory(out_dir)
+    # a range that starts below the walker's first gait (the branch starts later): that part is
+    # shaded, nothing is drawn there, and the title says so
+    gap = (np.rad2deg([diagram.slopes[0], branch.values[0]]) if branch.values.size
+           and branch.values[0] > diagram.slopes[0] else None)
+    if gap is not None:
+        kind = "stable gait" if branch.cycles[0].stable else "gait"
+        title += f"\nno {kind} found from {gap[0]:.4g} to {gap[1]:.4g} deg (shaded)"
     fig = bifurcation_figure(diagram, branch, title=title)
+    if gap is not None:
+        for ax in fig.axes:
+            ax.axvspan(gap[0], gap[1], color="0.85", lw=0, zorder=0)
     paths = [out / "bifurcation.png", out / "bifurcation.pdf"]
     for p in paths:
         fig.savefig(p)

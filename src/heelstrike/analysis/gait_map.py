@@ -2,18 +2,24 @@
 
 For every foot radius the period-one gait is followed along the slope by natural-parameter
 continuation (Newton's method on the compiled Poincare map
-:func:`~heelstrike.dynamics.compiled.step_map_compiled`, central-difference Jacobian). Each
-radius's branch starts from an *anchor* gait at the slope of the grid closest to 3 deg, obtained
-by continuation in the radius from the point-foot gait (found by the automatic attractor search).
-At every point the Floquet multipliers give the spectral radius and stability; where the most
-negative real multiplier crosses -1 between two slopes the period-doubling slope is refined by
-bisection. Radii are evaluated with :func:`heelstrike.analysis.sweep.sweep` (Dask threads, one
-radius per chunk).
+:func:`~heelstrike.dynamics.compiled.step_map_compiled`, central-difference Jacobian) with step
+control: secant-predicted sub-steps of at most 0.25 deg between the grid's slopes, halved when
+Newton fails, is slow or lands far from the prediction (:func:`_follow`), so the branch, and
+the gaits at the grid's slopes, do not depend on the grid. Each radius's branch starts from an
+*anchor* gait at 3 deg (or the nearest end of the slope range), obtained by continuation in the
+radius from the point-foot gait (found by the automatic attractor search). At every point the
+Floquet multipliers give the spectral radius and stability; where the most negative real
+multiplier crosses -1 between two continuation points (grid slopes or sub-steps) the
+period-doubling slope is refined by bisection. Radii are evaluated with
+:func:`heelstrike.analysis.sweep.sweep` (Dask threads, one radius per chunk).
 """
 
 from __future__ import annotations
 
 import functools
+import itertools
+import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -35,7 +41,11 @@ from heelstrike.models.compass import CompassGait
 if TYPE_CHECKING:
     import xarray as xr
 
-    from heelstrike.analysis.limit_cycle import BifurcationDiagram, Continuation
+    from heelstrike.analysis.limit_cycle import (
+        BifurcationDiagram,
+        Continuation,
+        LimitCycle,
+    )
     from heelstrike.dynamics.phased import PhasedWalker
     from heelstrike.models.builder import BuiltWalker
 
@@ -218,9 +228,12 @@ def _check_slopes(slopes: FloatArray) -> None:
         raise ValueError("slopes must be positive and increasing")
 
 
-def _anchor_index(slopes: FloatArray) -> int:
-    """The anchor slope of a map: the grid slope closest to 3 deg."""
-    return int(np.argmin(np.abs(slopes - np.deg2rad(3.0))))
+def _anchor_slope(slopes: FloatArray) -> float:
+    """The anchor slope of a map (rad): 3 deg, or the end of the slope range nearest to it.
+
+    It depends on the range only, not on the grid inside it, so maps over the same range
+    continue the same branches."""
+    return float(np.clip(np.deg2rad(3.0), slopes[0], slopes[-1]))
 
 
 def _add_derived(ds: xr.Dataset) -> None:
@@ -232,49 +245,184 @@ def _add_derived(ds: xr.Dataset) -> None:
         long_name="a period-one gait was found (else every output is NaN)")
 
 
+#: Natural-parameter continuation of the maps: the largest sub-step along the slope (rad; the
+#: grid's slopes are reached through sub-steps no longer than this whatever the grid), the
+#: smallest sub-step as a fraction of the largest (below it the branch ends: a fold or a lost
+#: gait), the Newton iterations allowed per sub-step, the iterations above which the next
+#: sub-step is halved, and the largest corrector distance ``|z - z_predicted|`` (section units,
+#: rad and rad/s) of an accepted sub-step (a larger one is a jump to another gait family).
+_SLOPE_STEP = float(np.deg2rad(0.25))
+_MIN_STEP_FRACTION = 1.0 / 32.0
+_STEP_MAX_ITER = 10
+_SLOW_ITER = 5
+_MAX_JUMP = 0.05
+#: Largest sub-step of the continuation in the compass walker's foot radius (m).
+_RADIUS_STEP = 0.05
+#: Largest sub-step of the continuation in a described walker's parameter, relative to
+#: ``max(1, |base value|, max |values|)`` (SI units).
+_PARAMETER_STEP = 0.05
+#: Absolute precision (rad) of the period-doubling slope refined between two sub-steps.
+_PD_TOL = 1e-9
+
+
+@dataclass(frozen=True, kw_only=True)
+class _Point:
+    """An accepted point of a continuation: parameter value, fixed point, most negative real
+    multiplier (NaN if none is real) and the solver's gait object."""
+
+    value: float
+    z: FloatArray
+    mnr: float
+    gait: Any
+
+
+#: ``solve(value, guess, max_iter) -> (gait, fixed point, Newton iterations, most negative real
+#: multiplier)``; raises :class:`GaitNotFoundError`.
+_Solve = Callable[[float, FloatArray, int], tuple[Any, FloatArray, int, float]]
+
+
+def _follow(
+    solve: _Solve, start: _Point, targets: Sequence[float], h_max: float
+) -> tuple[list[_Point | None], list[_Point]]:
+    """Natural-parameter continuation from ``start`` through ``targets`` with step control.
+
+    ``targets`` lie on one side of ``start.value``, ordered away from it. Sub-steps are at most
+    ``h_max``; each is predicted by the secant through the last two accepted points (the last
+    point for the first sub-step) and corrected by ``solve``. A sub-step is retried at half the
+    length when Newton fails, needs more than ``_STEP_MAX_ITER`` iterations, or lands farther
+    than ``_MAX_JUMP`` from the prediction; the length doubles again (up to ``h_max``) after
+    fast sub-steps and halves after slow ones. The branch ends where the sub-step would fall
+    below ``h_max * _MIN_STEP_FRACTION``. So the gaits at the targets are those of one branch,
+    whatever the targets are.
+
+    Returns
+    -------
+    (list of _Point or None, list of _Point)
+        Per target its gait (None past the end of the branch); every accepted point in order,
+        ``start`` first.
+    """
+    path = [start]
+    out: list[_Point | None] = [None] * len(targets)
+    h, h_min = h_max, h_max * _MIN_STEP_FRACTION
+    for k, t in enumerate(targets):
+        while True:
+            cur = path[-1]
+            rem = float(t) - cur.value
+            if abs(rem) <= 1e-12 * max(1.0, abs(float(t))):
+                out[k] = cur
+                break
+            v = float(t) if abs(rem) <= h else cur.value + math.copysign(h, rem)
+            pred = cur.z
+            if len(path) >= 2 and path[-2].value != cur.value:
+                prev = path[-2]
+                pred = cur.z + (cur.z - prev.z) * ((v - cur.value) / (cur.value - prev.value))
+            try:
+                gait, z, it, mnr = solve(v, pred, _STEP_MAX_ITER)
+                ok = bool(np.all(np.isfinite(z))) and float(np.linalg.norm(z - pred)) <= _MAX_JUMP
+            except GaitNotFoundError:
+                ok = False
+            length = abs(v - cur.value)
+            if not ok:
+                h = 0.5 * length
+                if h < h_min:
+                    return out, path
+                continue
+            path.append(_Point(value=v, z=np.asarray(z, dtype=float), mnr=mnr, gait=gait))
+            h = min(h_max, 2.0 * length) if it <= 3 else (0.5 * length if it > _SLOW_ITER
+                                                          else length)
+            h = max(h, h_min)
+    return out, path
+
+
+def _follow_both_ways(
+    solve: _Solve, start: _Point, targets: FloatArray, h_max: float
+) -> tuple[list[_Point | None], list[_Point]]:
+    """:func:`_follow` from ``start`` up and down through ``targets`` (any order); returns per
+    target its gait (None where the branch does not reach) and every accepted point sorted by
+    value."""
+    T = np.asarray(targets, dtype=float)
+    up = [i for i in np.argsort(T, kind="stable") if T[i] >= start.value]
+    down = [i for i in np.argsort(-T, kind="stable") if T[i] < start.value]
+    out: list[_Point | None] = [None] * T.size
+    points = [start]
+    for idx in (up, down):
+        if not idx:
+            continue
+        got, path = _follow(solve, start, [float(T[i]) for i in idx], h_max)
+        for i, g in zip(idx, got, strict=True):
+            out[i] = g
+        points += path[1:]
+    return out, sorted(points, key=lambda p: p.value)
+
+
+def _pd_bracket(
+    points: Sequence[_Point], any_sign: bool = True
+) -> tuple[_Point, _Point] | None:
+    """The first pair of consecutive continuation points (by increasing value) between which the
+    most negative real multiplier crosses -1 (with ``any_sign`` False: from above -1 to -1 or
+    below), or None."""
+    for a, b in itertools.pairwise(points):
+        fa, fb = a.mnr + 1.0, b.mnr + 1.0
+        if not (np.isfinite(fa) and np.isfinite(fb)):
+            continue
+        if (fa * fb < 0.0) if any_sign else (fa > 0.0 >= fb):
+            return a, b
+    return None
+
+
+def _pd_iterations(lo: float, hi: float) -> int:
+    """Bisection halvings that shrink the bracket ``[lo, hi]`` below ``_PD_TOL``."""
+    return max(12, int(np.ceil(np.log2(max(abs(hi - lo), _PD_TOL) / _PD_TOL))))
+
+
 def _branch(
     walker: CompassGait,
     slopes: FloatArray,
-    anchor_index: int,
+    anchor_slope: float,
     anchor: FloatArray,
     rtol: float,
     atol: float,
 ) -> tuple[dict[str, FloatArray], FloatArray, FloatArray, float]:
-    """Continue the gait of one walker along ``slopes`` both ways from the anchor.
+    """Continue the gait of one walker from the anchor (its fixed point at ``anchor_slope``)
+    up and down through ``slopes`` (:func:`_follow`: sub-steps of at most ``_SLOPE_STEP``, so
+    the branch does not depend on the grid).
 
     Returns per-slope outputs, fixed points (S, 3), most negative real multiplier (S,) and the
-    refined period-doubling slope (NaN if none in range).
+    refined period-doubling slope: the first crossing of -1 between any two continuation points,
+    grid slopes or sub-steps (NaN if none in range).
     """
     S = slopes.size
     out = {k: np.full(S, np.nan) for k in _OUTPUTS}
     fixed = np.full((S, 3), np.nan)
     mnr = np.full(S, np.nan)
-    gaits: dict[int, NewtonGait] = {}
-    for direction in (1, -1):
-        z = anchor
-        rng = range(anchor_index, S) if direction == 1 else range(anchor_index - 1, -1, -1)
-        for i in rng:
-            try:
-                g = newton_gait(walker, float(slopes[i]), z, rtol=rtol, atol=atol)
-            except GaitNotFoundError:
-                break  # the branch ends (fold or failure): leave the rest NaN
-            gaits[i] = g
-            z = g.z
-            fixed[i] = g.z
-            mnr[i] = g.most_negative_real
-            out["spectral_radius"][i] = g.spectral_radius
-            out["period"][i] = g.period
-            out["step_length"][i] = g.step_length
-            out["collision_loss"][i] = g.collision_loss
-            out["impact_angle"][i] = g.impact_angle
+
+    def solve(slope: float, z: FloatArray, max_iter: int) -> tuple[Any, FloatArray, int, float]:
+        g = newton_gait(walker, slope, z, rtol=rtol, atol=atol, max_iter=max_iter)
+        return g, g.z, g.iterations, g.most_negative_real
+
+    try:
+        start = _Point(value=anchor_slope, z=anchor, mnr=float("nan"), gait=None)
+        g0, z0, _, m0 = solve(anchor_slope, anchor, 20)
+        start = _Point(value=anchor_slope, z=z0, mnr=m0, gait=g0)
+    except GaitNotFoundError:
+        return out, fixed, mnr, float("nan")
+    got, points = _follow_both_ways(solve, start, slopes, _SLOPE_STEP)
+    for i, p in enumerate(got):
+        if p is None:
+            continue  # the branch ends (fold or failure) before this slope: NaN
+        g = p.gait
+        fixed[i] = g.z
+        mnr[i] = g.most_negative_real
+        out["spectral_radius"][i] = g.spectral_radius
+        out["period"][i] = g.period
+        out["step_length"][i] = g.step_length
+        out["collision_loss"][i] = g.collision_loss
+        out["impact_angle"][i] = g.impact_angle
     pd = float("nan")
-    for i in range(S - 1):
-        a, b = mnr[i], mnr[i + 1]
-        if np.isfinite(a) and np.isfinite(b) and (a + 1.0) * (b + 1.0) < 0.0:
-            pd = _refine_period_doubling(
-                walker, float(slopes[i]), float(slopes[i + 1]), gaits[i], a, rtol, atol
-            )
-            break
+    bracket = _pd_bracket([p for p in points if slopes[0] <= p.value <= slopes[-1]])
+    if bracket is not None:
+        a, b = bracket
+        pd = _refine_period_doubling(walker, a.value, b.value, a.gait, a.mnr, rtol, atol)
     return out, fixed, mnr, pd
 
 
@@ -287,13 +435,14 @@ def _refine_period_doubling(
     rtol: float,
     atol: float,
 ) -> float:
-    """:func:`~heelstrike.analysis.limit_cycle.refine_period_doubling` on the compiled map."""
+    """:func:`~heelstrike.analysis.limit_cycle.refine_period_doubling` on the compiled map, to
+    ``_PD_TOL``."""
 
     def solve(slope: float, z: FloatArray) -> tuple[float, FloatArray]:
         g = newton_gait(walker, slope, z, rtol=rtol, atol=atol)
         return g.most_negative_real, g.z
 
-    return refine_period_doubling(solve, s0, s1, m0, g0.z)
+    return refine_period_doubling(solve, s0, s1, m0, g0.z, iterations=_pd_iterations(s0, s1))
 
 
 def _walker_kwargs(walker: CompassGait) -> dict[str, float]:
@@ -308,7 +457,7 @@ def _map_chunk(
     *,
     walker: tuple[tuple[str, float], ...],
     anchors: tuple[tuple[float, ...], ...],
-    anchor_index: int,
+    anchor_slope: float,
     rtol: float,
     atol: float,
 ) -> dict[str, FloatArray]:
@@ -326,7 +475,7 @@ def _map_chunk(
         if anchor is None or not np.all(np.isfinite(anchor)):
             continue
         w = CompassGait(foot_radius=float(R), **dict(walker))
-        out, fixed, mnr, pd = _branch(w, slopes, anchor_index, anchor, rtol, atol)
+        out, fixed, mnr, pd = _branch(w, slopes, anchor_slope, anchor, rtol, atol)
         for k in _OUTPUTS:
             res[k][j] = out[k]
         res["fixed_point"][j] = fixed
@@ -371,11 +520,17 @@ def _anchors(
     rtol: float, atol: float,
 ) -> list[FloatArray]:
     """Gaits at ``slope`` for every radius (NaNs where none is found), by continuation in the
-    radius in sorted order, from the point foot's preferred gait (or from ``guess`` at the
-    smallest radius). Where the continuation breaks, the automatic search is run at that radius
-    and the continuation restarts from what it finds; radii without a gait get NaNs and never
-    abort the map."""
+    radius in sorted order (:func:`_follow`, sub-steps of at most 0.05 m), from the point
+    foot's preferred gait (or from ``guess`` at the smallest radius). Where the continuation
+    breaks, the automatic search is run at that radius and the continuation restarts from what
+    it finds; radii without a gait get NaNs and never abort the map."""
     order = np.argsort(radii)
+
+    def solve(R: float, z: FloatArray, max_iter: int) -> tuple[Any, FloatArray, int, float]:
+        g = newton_gait(walker.replace(foot_radius=R), slope, z, rtol=rtol, atol=atol,
+                        max_iter=max_iter)
+        return g, g.z, g.iterations, g.most_negative_real
+
     if guess is None:
         R_prev = 0.0
         z = _direct(walker.replace(foot_radius=0.0), slope, rtol, atol)
@@ -391,16 +546,11 @@ def _anchors(
         R = float(radii[k])
         zk = np.full(3, np.nan)
         if np.all(np.isfinite(z)):
-            # sub-steps of at most 0.05 m in the radius keep Newton in its basin
-            n_sub = max(1, int(np.ceil(abs(R - R_prev) / 0.05)))
-            try:
-                zc = z
-                for Rs in np.linspace(R_prev, R, n_sub + 1)[1:]:
-                    zc = newton_gait(walker.replace(foot_radius=float(Rs)), slope, zc,
-                                     rtol=rtol, atol=atol).z
-                zk = zc
-            except GaitNotFoundError:
-                pass
+            # continuation in the radius with step control (sub-steps of at most 0.05 m)
+            (got,), _ = _follow(solve, _Point(value=R_prev, z=z, mnr=np.nan, gait=None), [R],
+                                _RADIUS_STEP)
+            if got is not None:
+                zk = got.z
         if not np.all(np.isfinite(zk)):
             zk = _direct(walker.replace(foot_radius=R), slope, rtol, atol)
         out[k] = zk
@@ -432,8 +582,8 @@ def gait_map(
     slopes : array_like, shape (S,)
         Increasing slopes (rad), > 0.
     guess : array_like, shape (3,), optional
-        Section point near the gait of the smallest radius at the anchor slope (the grid slope
-        closest to 3 deg); automatic search if omitted.
+        Section point near the gait of the smallest radius at the anchor slope (3 deg, or the
+        nearest end of the slope range); automatic search if omitted.
     rtol, atol : float
         Integrator tolerances of the compiled map.
     store : path, optional
@@ -456,13 +606,13 @@ def gait_map(
     _check_slopes(S)
     if np.any(R < 0) or np.any(R > float(walker.leg_length)):
         raise ValueError("radii must satisfy 0 <= R <= leg_length")
-    anchor_index = _anchor_index(S)
-    anchors = _anchors(walker, R, float(S[anchor_index]), guess, rtol, atol)
+    anchor_slope = _anchor_slope(S)
+    anchors = _anchors(walker, R, anchor_slope, guess, rtol, atol)
     func = functools.partial(
         _map_chunk,
         walker=tuple(sorted(_walker_kwargs(walker).items())),
         anchors=tuple((float(r), *map(float, a)) for r, a in zip(R, anchors, strict=True)),
-        anchor_index=anchor_index,
+        anchor_slope=anchor_slope,
         rtol=float(rtol),
         atol=float(atol),
     )
@@ -488,7 +638,7 @@ def gait_map(
     _add_derived(ds)
     ds.attrs.update(
         {f"walker_{k}": v for k, v in _walker_kwargs(walker).items()}
-        | {"anchor_slope": float(S[anchor_index]), "rtol": rtol, "atol": atol}
+        | {"anchor_slope": anchor_slope, "rtol": rtol, "atol": atol}
     )
     return GaitMap(dataset=ds)
 
@@ -520,11 +670,16 @@ def model_gait_map(
 ) -> GaitMap:
     """Period-one gaits of a described walker over (one parameter, slope), by continuation.
 
-    For every parameter value (in the given order) the gait at the anchor slope (the grid slope
-    closest to 3 deg) is found with :func:`~heelstrike.analysis.model_gaits.find_model_gait`,
-    from the previous value's anchor gait (or the automatic search for the first one or after a
-    failure); the branch is then continued up and down the slopes, each Newton solve starting
-    from the neighbouring slope's fixed point.
+    Every gait is found by Newton's method
+    (:func:`~heelstrike.analysis.model_gaits.find_model_gait`) within a natural-parameter
+    continuation with step control (as :func:`gait_map`: sub-steps, halved when Newton fails,
+    is slow or lands far from the secant prediction), so the gaits at the grid points do not
+    depend on the grid. The anchors: the walker's own gait at the anchor slope (3 deg, or the
+    nearest end of the slope range; automatic search) is continued in the parameter, up and
+    down from the walker's value, to every value. Where that breaks, the value's gait is
+    continued in the parameter from the previous value's branch at other slopes, else found by
+    the automatic search at the anchor slope and then about every 1 deg of the range. Each
+    value's branch is then continued up and down the slopes from its anchor.
 
     Parameters
     ----------
@@ -547,14 +702,16 @@ def model_gait_map(
         Dataset over ``(parameter, slope)`` with the variables of :func:`gait_map` (the
         ``fixed_point`` over the walker's ``section`` names; ``collision_loss`` the sum of
         ``T_c`` over the step's impacts) and ``period_doubling_slope`` per value: where the most
-        negative real multiplier crosses -1 between two grid slopes, located by
+        negative real multiplier crosses -1 (from above) between two continuation points, grid
+        slopes or sub-steps, located by
         :func:`~heelstrike.analysis.limit_cycle.refine_period_doubling` (the one definition;
         NaN if none in range).
 
     Raises
     ------
     ValueError
-        Unknown parameter, or slopes not positive and increasing.
+        Unknown parameter, a value the walker's description rejects (e.g. the kneed walker's
+        ``R <= a1 + b1``), or slopes not positive and increasing.
     """
     import sys
 
@@ -571,58 +728,118 @@ def model_gait_map(
     if P.size < 1 or S.size < 1:
         raise ValueError("values and slopes must not be empty")
     _check_slopes(S)
+    walkers: list[PhasedWalker] = []
+    for value in P:
+        try:
+            walkers.append(w0.replace(**{parameter: float(value)}))
+        except ValueError as exc:  # refused, never drawn as "no gait"
+            raise ValueError(f"{parameter} = {value:g} is not admitted by the walker "
+                             f"{w0.description.name!r}: {exc}") from exc
     d = len(w0.section_names)
     shape = (P.size, S.size)
     out = {k: np.full(shape, np.nan) for k in _UNITS}
     fixed = np.full((*shape, d), np.nan)
     pd = np.full(P.size, np.nan)
-    anchor = _anchor_index(S)
-    prev_anchor: FloatArray | None = None
-    for i, value in enumerate(P):
+    s_a = _anchor_slope(S)
+    # further anchor slopes where the branch has no gait at s_a: about every 1 deg of the range
+    # (the range only, not the grid), nearest to s_a first
+    n_fb = max(2, int(np.ceil((S[-1] - S[0]) / np.deg2rad(1.0))) + 1)
+    fallback = sorted(np.linspace(S[0], S[-1], n_fb), key=lambda s: abs(s - s_a))
+    base = float(w0.params[parameter])
+    h_param = _PARAMETER_STEP * max(1.0, abs(base), float(np.max(np.abs(P))))
+
+    def gait_of(w: PhasedWalker, slope: float, guess: FloatArray | None,
+                max_iter: int = 20) -> tuple[Any, FloatArray, int, float]:
         try:
-            w = w0.replace(**{parameter: float(value)})
-        except ValueError:  # the description's constraints exclude this value: no gait
-            prev_anchor = None
-            continue
+            g = find_model_gait(w, slope=slope, guess=guess, backend=backend, max_iter=max_iter)
+        except ValueError as exc:
+            raise GaitNotFoundError(str(exc)) from exc
+        m = _most_negative_real(np.asarray(g.cycle.multipliers))
+        return (g, np.asarray(g.cycle.fixed_point, dtype=float), int(g.cycle.iterations),
+                float("nan") if m is None else float(m))
 
-        def solve(
-            j: int, guess: FloatArray | None, w: PhasedWalker = w, i: int = i
-        ) -> FloatArray | None:
-            try:
-                g = find_model_gait(w, slope=float(S[j]), guess=guess, backend=backend)
-            except (GaitNotFoundError, ValueError):
-                return None
-            mnr = _most_negative_real(np.asarray(g.cycle.multipliers))
-            out["spectral_radius"][i, j] = float(np.max(np.abs(g.cycle.multipliers)))
-            out["period"][i, j] = g.cycle.period
-            out["step_length"][i, j] = g.cycle.step_length
-            out["collision_loss"][i, j] = g.collision_loss
-            out["impact_angle"][i, j] = g.cycle.impact_angle
-            out["most_negative_real_multiplier"][i, j] = np.nan if mnr is None else mnr
-            fixed[i, j] = g.cycle.fixed_point
-            return np.asarray(g.cycle.fixed_point, dtype=float)
+    def point(value: float, found: tuple[Any, FloatArray, int, float]) -> _Point:
+        return _Point(value=value, z=found[1], mnr=found[3], gait=found[0])
 
-        z = solve(anchor, prev_anchor)
-        if z is None and prev_anchor is not None:
-            z = solve(anchor, None)
-        prev_anchor = z
-        for direction in (1, -1):
-            guess = z
-            j = anchor + direction
-            while guess is not None and 0 <= j < S.size:
-                guess = solve(j, guess)
-                j += direction
-        m = out["most_negative_real_multiplier"][i]
-        for j in range(S.size - 1):
-            if m[j] > -1.0 >= m[j + 1]:
-                pd[i] = refine_period_doubling(functools.partial(_model_multiplier, w, backend),
-                                               float(S[j]), float(S[j + 1]), float(m[j]),
-                                               fixed[i, j])
-                break
-        if progress:
-            print(f"heelstrike: {parameter} = {value:g}: gaits at "
-                  f"{int(np.isfinite(out['period'][i]).sum())}/{S.size} slopes",
-                  file=sys.stderr)
+    def in_parameter(slope: float) -> _Solve:
+        return lambda v, z, it: gait_of(w0.replace(**{parameter: v}), slope, z, it)
+
+    def search(w: PhasedWalker, slope: float) -> _Point | None:
+        try:
+            return point(slope, gait_of(w, slope, None))
+        except GaitNotFoundError:
+            return None
+
+    # the anchor chain starts from the walker's own gait at s_a (automatic search) and follows
+    # the parameter up and down from its value, so every map over the same ranges continues the
+    # same branches
+    first = search(w0, s_a)
+    chain0 = None if first is None else _Point(value=base, z=first.z, mnr=first.mnr,
+                                               gait=first.gait)
+    order = [i for i in np.argsort(P, kind="stable") if P[i] >= base]
+    order_down = [i for i in np.argsort(-P, kind="stable") if P[i] < base]
+    for idx in (order, order_down):
+        chain = chain0  # the last gait at s_a, as a point in the parameter
+        prev: tuple[float, list[_Point]] | None = None  # the last value's slope branch
+        for i in idx:
+            value, w = float(P[i]), walkers[i]
+            start: _Point | None = None
+            if chain is not None:  # 1. continuation in the parameter at s_a
+                (got,), _ = _follow(in_parameter(s_a), chain, [value], h_param)
+                if got is not None:
+                    chain, start = got, _Point(value=s_a, z=got.z, mnr=got.mnr, gait=got.gait)
+            if start is None and prev is not None:
+                # 2. from the last value's gaits at the other anchor slopes
+                tried: list[float] = []
+                for s in fallback:
+                    near = prev[1][int(np.argmin([abs(q.value - s) for q in prev[1]]))]
+                    if near.value in tried or len(tried) >= 3:
+                        continue
+                    tried.append(near.value)
+                    pt = _Point(value=prev[0], z=near.z, mnr=near.mnr, gait=near.gait)
+                    (got,), _ = _follow(in_parameter(near.value), pt, [value], h_param)
+                    if got is not None:
+                        start = _Point(value=near.value, z=got.z, mnr=got.mnr, gait=got.gait)
+                        break
+            if start is None:  # 3. the automatic search, at s_a then at the other slopes
+                for s in fallback if s_a in fallback else [s_a, *fallback]:
+                    start = search(w, float(s))
+                    if start is not None:
+                        if start.value == s_a:
+                            chain = _Point(value=value, z=start.z, mnr=start.mnr,
+                                           gait=start.gait)
+                        break
+            if start is None:
+                prev = None
+                continue
+
+            def solve(s: float, z: FloatArray, it: int, w: PhasedWalker = w
+                      ) -> tuple[Any, FloatArray, int, float]:
+                return gait_of(w, s, z, it)
+
+            got_s, points = _follow_both_ways(solve, start, S, _SLOPE_STEP)
+            for j, at in enumerate(got_s):
+                if at is None:
+                    continue
+                g = at.gait
+                out["spectral_radius"][i, j] = float(np.max(np.abs(g.cycle.multipliers)))
+                out["period"][i, j] = g.cycle.period
+                out["step_length"][i, j] = g.cycle.step_length
+                out["collision_loss"][i, j] = g.collision_loss
+                out["impact_angle"][i, j] = g.cycle.impact_angle
+                out["most_negative_real_multiplier"][i, j] = at.mnr
+                fixed[i, j] = g.cycle.fixed_point
+            prev = (value, points)
+            bracket = _pd_bracket(points, any_sign=False)
+            if bracket is not None:
+                a, b = bracket
+                pd[i] = refine_period_doubling(
+                    functools.partial(_model_multiplier, w, backend), a.value, b.value, a.mnr,
+                    a.z, iterations=_pd_iterations(a.value, b.value))
+            if progress:
+                print(f"heelstrike: {parameter} = {value:g}: gaits at "
+                      f"{int(np.isfinite(out['period'][i]).sum())}/{S.size} slopes",
+                      file=sys.stderr)
     from heelstrike.models.description import parameter_units
 
     unit = parameter_units(w0.description).get(parameter, "SI units")
@@ -643,10 +860,90 @@ def model_gait_map(
         "units": "rad", "long_name": "slope where a multiplier crosses -1 (period doubling)"})
     _add_derived(ds)
     ds.attrs.update({"model": w0.description.name, "parameter": parameter, "backend": backend,
-                     "anchor_slope": float(S[anchor])}
+                     "anchor_slope": s_a}
                     | {f"param_{k}": float(np.asarray(v)) for k, v in w0.params.items()
                        if k != parameter})
     return GaitMap(dataset=ds)
+
+
+#: Most slopes of the coarse scan for the first gait of a bifurcation range (when there is no
+#: gait at its first slope; never more than the range's slopes), and the width (rad) to which
+#: the start of the gait family is bisected.
+_ONSET_SCAN_POINTS = 12
+_ONSET_TOL = 1e-5
+
+
+def _first_gait(
+    auto: Callable[[float], LimitCycle],
+    near: Callable[[float, FloatArray], LimitCycle],
+    start: float,
+    stop: float,
+    points: int,
+) -> list[tuple[float, LimitCycle]]:
+    """The first slope of ``[start, stop]`` (rad) with a gait, and that gait.
+
+    ``auto(slope)`` is the walker's automatic gait search and ``near(slope, z)`` Newton from
+    ``z``; both raise :class:`GaitNotFoundError`. If ``auto`` finds a gait at ``start``, that is
+    the answer. Otherwise ``auto`` scans ``points`` slopes evenly spaced over the
+    range for the first stable gait (else, if it finds none stable, the first gait), the gait
+    is continued down the scan (``near``) while it exists, and the slope where its family starts
+    is bisected to ``_ONSET_TOL`` between the last slope without it and the first with it: the
+    returned slope has a gait (the one returned), ``_ONSET_TOL`` below it the family has none.
+
+    Returns
+    -------
+    list of (float, LimitCycle)
+        The gaits of the family found on the way, by increasing slope (rad): the first is the
+        answer, the others (none if there is a gait at ``start``) lead away from it.
+
+    Raises
+    ------
+    GaitNotFoundError
+        If ``auto`` finds no gait at any scanned slope.
+    """
+    try:
+        return [(start, auto(start))]
+    except GaitNotFoundError:
+        pass
+    scan = np.linspace(start, stop, max(points, 2))
+    first: tuple[int, LimitCycle] | None = None
+    for k in range(1, scan.size):
+        try:
+            cycle = auto(float(scan[k]))
+        except GaitNotFoundError:
+            continue
+        if cycle.stable:
+            first = (k, cycle)
+            break
+        if first is None:
+            first = (k, cycle)  # unstable: kept unless a stable gait turns up further on
+    if first is None:
+        raise GaitNotFoundError(
+            f"no gait found from {np.degrees(start):g} to {np.degrees(stop):g} deg: the "
+            f"automatic gait search found none at any of {scan.size} slopes evenly spaced over "
+            "the range")
+    k, cycle = first
+    family = [(float(scan[k]), cycle)]
+    # continue the gait down the scan while its family exists (the automatic search may have
+    # missed it there)
+    while k > 0:
+        try:
+            cycle = near(float(scan[k - 1]), cycle.fixed_point)
+        except GaitNotFoundError:
+            break
+        k -= 1
+        family.insert(0, (float(scan[k]), cycle))
+    if k == 0:
+        return family
+    lo, hi = float(scan[k - 1]), float(scan[k])  # no gait of the family at lo
+    while hi - lo > _ONSET_TOL:
+        mid = 0.5 * (lo + hi)
+        try:
+            cycle, hi = near(mid, cycle.fixed_point), mid
+            family.insert(0, (mid, cycle))
+        except GaitNotFoundError:
+            lo = mid
+    return family
 
 
 def compass_bifurcation(
@@ -670,6 +967,12 @@ def compass_bifurcation(
     marks the period-doubling slopes, all on one ``backend``. :func:`model_bifurcation` is the
     same for a described walker.
 
+    If there is no gait at the first slope, the range starts where the walker's gaits start:
+    the automatic search scans min(12, K) slopes evenly spaced over the range for the first
+    stable gait (else the first gait), and the slope where that gait's family begins is
+    bisected to 1e-5 rad (Newton from the neighbouring gait). The branch then starts at that
+    slope (``branch.values[0]``) and the diagram's rows below it are NaN (no gait there).
+
     Parameters
     ----------
     walker : CompassGait
@@ -692,7 +995,7 @@ def compass_bifurcation(
     Raises
     ------
     GaitNotFoundError
-        If there is no gait at the first slope.
+        If the automatic search finds no gait at any of the scanned slopes.
     ValueError
         Unknown backend.
     """
@@ -700,32 +1003,86 @@ def compass_bifurcation(
 
     simulator = backend_simulator(walker, backend)  # ValueError: unknown or unsupported backend
     sl = np.asarray(slopes, dtype=float).ravel()
-    # the gait at the first slope (its fixed point seeds the walks and the branch): the
+    method = "compiled" if backend == "compiled" else "scipy"
+    # the first gait of the range (its fixed point seeds the walks and the branch): the
     # automatic search, with Newton on the chosen backend's map
-    first = find_limit_cycle(walker, slope=float(sl[0]), progress=progress,
-                             method="compiled" if backend == "compiled" else "scipy")
+    family = _first_gait(
+        lambda s: find_limit_cycle(walker, slope=s, progress=progress, method=method),
+        lambda s, z: find_limit_cycle(walker, slope=s, guess=z, method=method),
+        float(sl[0]), float(sl[-1]), min(_ONSET_SCAN_POINTS, sl.size),
+    )
     return _diagram_and_branch(
-        walker, sl, first.fixed_point, simulator, transient=transient, record=record,
+        walker, sl, family, simulator, transient=transient, record=record,
         continuation_points=continuation_points, progress=progress, walk_tolerances={},
         branch_tolerances={"rtol": 1e-10, "atol": 1e-10},
     )
 
 
 def _diagram_and_branch(
-    walker: Any, slopes: FloatArray, z0: ArrayLike, simulator: Any, *, transient: int,
-    record: int, continuation_points: int, progress: bool, walk_tolerances: dict[str, Any],
-    branch_tolerances: dict[str, Any],
+    walker: Any, slopes: FloatArray, family: list[tuple[float, LimitCycle]], simulator: Any, *,
+    transient: int, record: int, continuation_points: int, progress: bool,
+    walk_tolerances: dict[str, Any], branch_tolerances: dict[str, Any],
 ) -> tuple[BifurcationDiagram, Continuation]:
-    """The brute-force diagram and the continued period-one branch over ``slopes``, both from
-    the fixed point ``z0`` at the first slope, on ``simulator`` (the bifurcation functions'
-    shared part)."""
-    from heelstrike.analysis.limit_cycle import bifurcation_diagram, continue_limit_cycle
+    """The brute-force diagram over ``slopes`` and the continued period-one branch from the
+    first gait of the range to its last slope, on ``simulator`` (the bifurcation functions'
+    shared part).
 
-    diagram = bifurcation_diagram(walker, slopes, guess=z0, transient=transient, record=record,
-                                  progress=progress, simulator=simulator, **walk_tolerances)
-    branch = continue_limit_cycle(
-        walker, "slope", np.linspace(slopes[0], slopes[-1], max(int(continuation_points), 1)),
-        guess=z0, progress=progress, simulator=simulator, **branch_tolerances,
+    ``family`` is :func:`_first_gait`'s answer: its first gait, at the onset slope, starts the
+    branch; the diagram's rows of slopes below the onset are NaN. The walks start from the
+    family's gait nearest the first slope walked, and (when the onset was searched for) the
+    branch beyond the onset from the family's gait nearest its second slope: near a fold, where
+    families usually start, Newton from the onset gait could land on the fold's other branch.
+    """
+    from heelstrike.analysis.limit_cycle import (
+        BifurcationDiagram,
+        Continuation,
+        bifurcation_diagram,
+        continue_limit_cycle,
+    )
+
+    at = np.array([s for s, _ in family])
+
+    def nearest(slope: float) -> FloatArray:
+        return family[int(np.argmin(np.abs(at - slope)))][1].fixed_point
+
+    onset, z0 = family[0][0], family[0][1].fixed_point
+    k0 = int(np.searchsorted(slopes, onset))  # the first slope of the grid with a gait
+    diagram = bifurcation_diagram(walker, slopes[k0:], guess=nearest(float(slopes[k0])),
+                                  transient=transient, record=record, progress=progress,
+                                  simulator=simulator, **walk_tolerances)
+    if k0 > 0:  # no gait below the onset: nothing to walk or draw there
+        def pad(a: FloatArray) -> FloatArray:
+            return np.concatenate([np.full((k0, a.shape[1]), np.nan), a])
+
+        diagram = BifurcationDiagram(slopes=slopes, impact_angles=pad(diagram.impact_angles),
+                                     periods=pad(diagram.periods))
+    values = np.linspace(onset, slopes[-1], max(int(continuation_points), 1))
+    kw = {"progress": progress, "simulator": simulator, **branch_tolerances}
+    if len(family) == 1 or values.size == 1:
+        branch = continue_limit_cycle(walker, "slope", values, guess=z0, **kw)
+        return diagram, branch
+    head = continue_limit_cycle(walker, "slope", values[:1], guess=z0, **kw)
+    rest = continue_limit_cycle(walker, "slope", values[1:], guess=nearest(float(values[1])),
+                                **kw)
+    if not head.cycles:
+        return diagram, head
+    pd = list(rest.period_doubling)
+    if rest.cycles and float(rest.values[0]) == float(values[1]):
+        # a period doubling between the onset and the next slope
+        ma = _most_negative_real(head.cycles[0].multipliers)
+        mb = _most_negative_real(rest.cycles[0].multipliers)
+        if ma is not None and mb is not None and (ma + 1.0) * (mb + 1.0) < 0:
+
+            def solve(v: float, z: FloatArray) -> tuple[float, FloatArray]:
+                c = find_limit_cycle(walker, slope=v, guess=z, simulator=simulator,
+                                     **branch_tolerances)
+                m = _most_negative_real(c.multipliers)
+                return (np.nan if m is None else m), c.fixed_point
+
+            pd.insert(0, refine_period_doubling(solve, onset, float(values[1]), ma, z0))
+    branch = Continuation(
+        parameter="slope", values=np.concatenate([head.values, rest.values]),
+        cycles=head.cycles + rest.cycles, period_doubling=np.asarray(pd), stopped=rest.stopped,
     )
     return diagram, branch
 
@@ -753,6 +1110,11 @@ def model_bifurcation(
     first slope without a gait), with the slopes where a real multiplier crosses -1
     (:func:`~heelstrike.analysis.limit_cycle.refine_period_doubling`).
 
+    If there is no gait at the first slope (:func:`find_model_gait`'s automatic search), the
+    range starts where the walker's gaits start, as in :func:`compass_bifurcation`: the branch
+    starts at the first slope of the range with a gait (``branch.values[0]``, bisected to
+    1e-5 rad) and the diagram's rows below it are NaN.
+
     Parameters
     ----------
     walker : BuiltWalker
@@ -774,7 +1136,7 @@ def model_bifurcation(
     Raises
     ------
     GaitNotFoundError
-        If there is no gait at the first slope.
+        If the automatic search finds no gait at any of the scanned slopes.
     """
     from heelstrike.analysis.model_gaits import find_model_gait
     from heelstrike.dynamics.backends import simulator as backend_simulator
@@ -784,11 +1146,15 @@ def model_bifurcation(
     simulator = backend_simulator(w, backend)  # ValueError: unknown or unsupported backend
     sl = np.asarray(slopes, dtype=float).ravel()
     _check_slopes(sl)
-    first = find_model_gait(w, slope=float(sl[0]), backend=backend)
+    family = _first_gait(
+        lambda s: find_model_gait(w, slope=s, backend=backend).cycle,
+        lambda s, z: find_model_gait(w, slope=s, guess=z, backend=backend).cycle,
+        float(sl[0]), float(sl[-1]), min(_ONSET_SCAN_POINTS, sl.size),
+    )
     # the branch: each gait by Newton from the previous fixed point with find_model_gait's
     # tolerances
     return _diagram_and_branch(
-        w, sl, first.cycle.fixed_point, simulator, transient=transient, record=record,
+        w, sl, family, simulator, transient=transient, record=record,
         continuation_points=continuation_points, progress=False,
         walk_tolerances={"rtol": rtol, "atol": atol},
         branch_tolerances={"tol": 1e-10, "max_iter": 20, "rtol": 1e-11, "atol": 1e-11},

@@ -309,31 +309,48 @@ def add_bifurcation(sub: Any) -> None:
 def _run_bifurcation(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from heelstrike.outputs import write_bifurcation
+    from heelstrike.analysis.limit_cycle import GaitNotFoundError
+    from heelstrike.outputs import write_bifurcation, write_model_bifurcation
 
     walker = walker_from_args(args) if args.model is None else model_from_args(args)
     start, stop, count = args.slope_range
     if not 0 < start < stop:
         raise CliError("--slope-range needs 0 < START < STOP")
     writable_dir(args.out)
-    if args.model is not None:
-        from heelstrike.analysis.limit_cycle import GaitNotFoundError
-        from heelstrike.outputs import write_model_bifurcation
-
-        try:
+    try:
+        if args.model is not None:
             paths = write_model_bifurcation(
                 walker, start, stop, count or 45, Path(args.out), transient=args.transient,
                 record=args.record, backend=args.backend,
             )
-        except GaitNotFoundError as exc:
-            raise _no_gait(start, exc) from exc
-    else:
-        paths = write_bifurcation(
-            walker, start, stop, count or 45, Path(args.out), transient=args.transient,
-            record=args.record, progress=True, backend=args.backend,
-        )
+        else:
+            paths = write_bifurcation(
+                walker, start, stop, count or 45, Path(args.out), transient=args.transient,
+                record=args.record, progress=True, backend=args.backend,
+            )
+    except GaitNotFoundError as exc:  # no gait anywhere in the range (the message says so)
+        raise CliError(str(exc)) from exc
     print_paths(paths)
+    note = _bifurcation_gap_note(start, paths)
+    if note:
+        print(note)
     return 0
+
+
+def _bifurcation_gap_note(start: float, paths: list[Any]) -> str | None:
+    """The note of a bifurcation range that starts below the walker's first gait, read from the
+    written ``period_one_branch.csv`` (its first slope is where the gaits start), or None."""
+    import pandas as pd
+
+    branch = pd.read_csv(next(p for p in paths if p.name == "period_one_branch.csv"))
+    if branch.empty or float(branch["slope_deg"].iloc[0]) <= math.degrees(start):
+        return None
+    onset = float(branch["slope_deg"].iloc[0])
+    # a stable first gait was preferred to unstable ones further down the range
+    kind = "stable gait" if bool(branch["stable"].iloc[0]) else "gait"
+    return (f"note: no {kind} found from {math.degrees(start):g} to {onset:.4g} deg: the "
+            f"walker's {kind}s start at {onset:.4g} deg (automatic gait search, then bisection "
+            f"to 1e-5 rad); the diagram and the branch are empty below it")
 
 
 def add_basin(sub: Any) -> None:
@@ -485,7 +502,8 @@ def add_map(sub: Any) -> None:
                        "reference", "compiled")
     p.add_argument("--radius", type=parse_range, default=None,
                    help="START:STOP[:COUNT] foot radii in m (default 0:0.6:7; with --model "
-                   "the walker's parameter R)")
+                   "the walker's parameter R, the default stopping at the largest R the walker "
+                   "admits)")
     p.add_argument("--x", type=parse_sweep, default=None, metavar="NAME:START:STOP:COUNT",
                    help="with --model: the swept walker parameter instead of --radius, e.g. "
                    "R:0:0.2:5 (SI units)")
@@ -518,10 +536,13 @@ def _run_map_model(args: argparse.Namespace) -> int:
         raise CliError("--store is not supported with --model yet (the map is not chunked)")
     if args.x is not None and args.radius is not None:
         raise CliError("give --x NAME:START:STOP:COUNT or --radius, not both")
+    option = "--x" if args.x is not None else "--radius"
     if args.x is not None:
         name, x0, x1, nx = args.x
     elif "R" in walker.params:
-        name, (x0, x1, nx) = "R", args.radius or (0.0, 0.6, 7)
+        # the default range stops where the walker's constraints end (kneed: R <= a1 + b1)
+        name, (x0, x1, nx) = "R", args.radius or (
+            0.0, walker.largest_admissible("R", 0.6), 7)
     else:
         raise CliError(f"model {walker.description.name!r} has no parameter 'R': give the swept "
                        f"parameter with --x NAME:START:STOP:COUNT (its parameters: "
@@ -531,6 +552,15 @@ def _run_map_model(args: argparse.Namespace) -> int:
                        f"parameters: {', '.join(sorted(walker.params))})")
     slopes = _map_slopes(args)
     values = np.linspace(x0, x1, nx or 7)
+    for v in values:  # refuse values the walker's constraints reject (never "no gait")
+        try:
+            walker.replace(**{name: float(v)})
+        except ValueError as exc:
+            hint = ""
+            if v > walker.params[name]:
+                hint = f"; the largest admitted {name} is {walker.largest_admissible(name, v):.6g}"
+            raise CliError(f"{option}: {name} = {v:g} is not admitted by model "
+                           f"{walker.description.name!r}: {exc}{hint}") from None
     writable_dir(args.out)
     gmap = model_gait_map(walker, name, values, slopes, backend=args.backend,
                           progress=not args.json and sys.stderr.isatty())

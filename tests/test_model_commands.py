@@ -197,6 +197,8 @@ def test_walk_command_with_model(tmp_path: Path, capsys: pytest.CaptureFixture[s
     (["map", "--backend", "scipy"], "--model compass --backend scipy"),
     (["map", "--model", "kneed", "--x", "nope:0:1:2"], "unknown parameter 'nope'"),
     (["map", "--model", "kneed", "--x", "R:0:0.1:2", "--radius", "0:0.1"], "not both"),
+    (["impact-map", "--model", "compass", "--x", "R:0:0.3:2", "--y", "angle:10deg:20deg:2",
+      "--backend", "compiled"], "impact-map's heel strikes run on the reference"),
 ])
 def test_model_option_errors(
     argv: list[str], message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
@@ -290,3 +292,13 @@ def test_compass_bifurcation_runs_on_either_backend() -> None:
     assert np.degrees(b_c.period_doubling[0]) == pytest.approx(
         np.degrees(b_s.period_doubling[0]), abs=1e-4)
     assert np.degrees(b_c.period_doubling[0]) == pytest.approx(4.391, abs=1e-3)
+
+
+def test_impact_map_backend_scipy_is_its_reference(tmp_path: Path) -> None:
+    """``impact-map`` takes ``--backend`` like every command (issue 9); ``scipy`` is its one
+    computation, the same table as without the option."""
+    grid = ["impact-map", "--model", "compass", "--x", "R:0:0.3:3", "--y", "angle:10deg:25deg:4"]
+    assert main([*grid, "--out", str(tmp_path / "a")]) == 0
+    assert main([*grid, "--backend", "scipy", "--out", str(tmp_path / "b")]) == 0
+    a = (tmp_path / "a" / "impact_map.csv").read_bytes()
+    assert a == (tmp_path / "b" / "impact_map.csv").read_bytes() and len(a) > 100

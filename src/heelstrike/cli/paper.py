@@ -262,6 +262,11 @@ def add_impact_map(sub: Any) -> None:
                    help="impact angle when not swept (default 20deg)")
     p.add_argument("--q3dot", type=float, default=1.0, help="stance rate (rad/s, default 1)")
     p.add_argument("--out", default="impact_map", help="output directory")
+    add_backend_option(p, "heel-strike computation: scipy (default and only: the reference "
+                       "complementarity heel strike of the walker's generated numpy "
+                       "functions; a map of algebraic impacts, no simulation); compiled is "
+                       "refused (the generated numba kernels resolve heel strikes inside their "
+                       "walks only)", "scipy")
     p.set_defaults(func=_run_impact_map)
 
 
@@ -274,6 +279,10 @@ def _run_impact_map(args: argparse.Namespace) -> int:
 
     if args.model is None:
         raise CliError("--model is required (a .toml file or compass, kneed, torso)")
+    if args.backend == "compiled":
+        raise CliError("--backend compiled: impact-map's heel strikes run on the reference "
+                       "(the compiled kernels resolve heel strikes inside their walks only); "
+                       "drop --backend compiled")
     if not math.isfinite(args.q3dot):
         raise CliError(f"--q3dot must be finite, got {args.q3dot:g}")
     if args.q3dot < 0:  # joints at rest: the leading foot's normal velocity is -q3dot * L_S

@@ -38,6 +38,10 @@ def cost_figure(ds: xr.Dataset, variable: str = "cost_of_transport") -> Figure:
             if "branch" in ds:
                 fresh = ds["branch"].sel(actuation=act).isel(radius=k).values == 1
                 ax.plot(ds[tgt].values[fresh], y[fresh], "s", ms=7, mfc="none", color=colour)
+            if "stable" in ds:  # an unstable gait is no walker's steady state: marked
+                unstable = ds["stable"].sel(actuation=act).isel(radius=k).values == 0
+                ax.plot(ds[tgt].values[unstable], y[unstable], "x", ms=7, mew=1.5,
+                        color="tab:red", label="unstable gait" if k == 0 else None)
         ax.set_title(act)
         ax.set_xlabel(f"{tgt.replace('_', ' ')} ({ds[tgt].attrs.get('units', '')})")
         ax.set_ylabel(f"{variable.replace('_', ' ')} ({unit})")
@@ -50,7 +54,8 @@ def cost_figure(ds: xr.Dataset, variable: str = "cost_of_transport") -> Figure:
 #: Figure caption of how the study chose its gaits (see ``cost_study.BRANCH_NOTE``).
 BRANCH_CAPTION = (
     "each point: the cheapest periodic gait found\n(continuation from neighbours and fresh "
-    "searches;\nopen squares: found by a fresh search, not by continuation)"
+    "searches;\nopen squares: found by a fresh search, not by continuation;\nred x: unstable "
+    "gait, a Floquet multiplier |m| > 1)"
 )
 
 
@@ -69,7 +74,11 @@ def paper_comparison_figure(ds: xr.Dataset) -> Figure:
                 label="paper: impact only, q3_dot = 1 rad/s")
         for act in ds["actuation"].values:
             sel = ds.sel(actuation=act).isel({tgt: j})
-            ax.plot(R, sel["work_per_metre"].values, "o-", ms=3, label=f"{act}: W_act / L")
+            y = sel["work_per_metre"].values
+            ax.plot(R, y, "o-", ms=3, label=f"{act}: W_act / L")
+            if "stable" in sel:
+                unstable = sel["stable"].values == 0
+                ax.plot(R[unstable], y[unstable], "x", ms=7, mew=1.5, color="tab:red")
         ax.set_title(f"L = {length:g} m")
         ax.set_xlabel("foot radius R (m)")
         ax.set_yscale("log")

@@ -1010,16 +1010,19 @@ def _family_end(
 
 def _end_message(
     prob: _Problem, target: Target, value: float, unit: str, path: tuple[float, float],
-    end: tuple[float, FloatArray, complex], exc: Exception,
+    end: tuple[float, FloatArray, complex], exc: Exception, note: str = "",
 ) -> str:
     """The error of a search whose family of gaits ends (:func:`_family_end`) short of
     ``value``: a fold (a multiplier at ``+1``) or an end for another reason. ``path``: the
     targets the continuation started and stopped at; only its part on this side of the
-    verified end is reported as gaits found."""
+    verified end is reported as gaits found. ``note`` (what is known of the path's start, the
+    seed) is appended when that start is reported, i.e. when the family ends below the target
+    side's other end (``side`` "below")."""
     v_end, x_end, m = end
     fam = prob.family
     if value > v_end:
         lo, hi, side = min(*path, v_end), v_end, "above"
+        note = ""  # the span reported ends at the verified end, not at the seed
     else:
         lo, hi, side = v_end, max(*path, v_end), "below"
     found = (f"span {lo:.4g} to {hi:.4g} {unit} and end near {v_end:.4g} {unit}"
@@ -1032,12 +1035,13 @@ def _end_message(
             f"({at}), at a fold: a Floquet multiplier reaches +1 there (largest |m| = "
             f"{abs(m):.3f} at that gait) and the family turns back, so none of its gaits has a "
             f"{target} {side} about {v_end:.4g} {unit} (past the fold Newton stalls at the "
-            f"residual's nonzero minimum: {exc}){_other_gains(fam, '; ', ' may reach further')}"
+            f"residual's nonzero minimum: {exc}){note}"
+            f"{_other_gains(fam, '; ', ' may reach further')}"
         )
     largest = f"; largest multiplier |m| = {abs(m):.3f}" if np.isfinite(abs(m)) else ""
     return (
         f"no gait with {target} {value:g} {unit}: the {fam.name} gaits found {found} "
-        f"({at}{largest}); Newton finds none {side} it ({exc})"
+        f"({at}{largest}); Newton finds none {side} it ({exc}){note}"
         f"{_other_gains(fam, '; ', ' may reach further')}"
     )
 
@@ -1204,6 +1208,8 @@ def _find(
         x, res, it = _polish(prob, x, value, tol, J, max_iter, fd_step)
         return _characterise(prob, x, res, its + it, fd_step)
 
+    seed_note = [""]  # what the failure messages say about a seed that is not quite a gait
+
     def end_of_family(
         x: FloatArray, at: float, exc: Exception, path: tuple[float, float]
     ) -> PoweredGaitNotFoundError | None:
@@ -1217,7 +1223,7 @@ def _find(
         if end is None:
             return None
         return PoweredGaitNotFoundError(
-            _end_message(prob, target, value, unit, path, end, exc))
+            _end_message(prob, target, value, unit, path, end, exc, seed_note[0]))
 
     if guess is not None:
         x0 = np.asarray(guess, dtype=float)
@@ -1240,14 +1246,19 @@ def _find(
                 continue
             current = search.measure(st)
             try:
-                x, _, it, J = _newton(search, cand, current, p_tol, max_iter, s_h,
-                                      forward=True, accept=10.0 * p_tol)
+                x, res, it, J = _newton(search, cand, current, p_tol, max_iter, s_h,
+                                        forward=True, accept=10.0 * p_tol)
             except SearchLimitError:
                 raise
             except PoweredGaitNotFoundError as exc:
                 last_error = exc
                 continue
             first = (x, current, it, J)
+            if res > p_tol:  # a Newton stall accepted: near a fold, or just past one
+                seed_note[0] = (
+                    f"; the seed gait at {target} {current:.4g} "
+                    f"{'m/s' if target == 'speed' else 'm'} is periodic only to a residual of "
+                    f"{res:.1e} (it may lie just past a fold, where no gait has its {target})")
             break
     except SearchLimitError as exc:
         raise SearchLimitError(
@@ -1279,7 +1290,8 @@ def _find(
             raise PoweredGaitNotFoundError(
                 f"continuation from {target} {current:.4g} towards {value:.4g} {unit} stopped "
                 f"after {max_continuation} steps at {reached:.4g} {unit}, still advancing (no "
-                f"fold found on the way; the target may be reachable with more steps){via}"
+                f"fold found on the way; the target may be reachable with more steps)"
+                f"{seed_note[0]}{via}"
             )
         f_try = min(1.0, frac + dfrac)
         v_try = current + f_try * (value - current)
@@ -1320,7 +1332,8 @@ def _find(
                          f"(continuation from {current:.4g} stopped there: {exc})")
                 raise PoweredGaitNotFoundError(
                     f"no gait with {target} {value:g} {unit}: the {prob.family.name} gaits "
-                    f"found {found}{via or _other_gains(prob.family, '; ', ' may reach further')}"
+                    f"found {found}{seed_note[0]}"
+                    f"{via or _other_gains(prob.family, '; ', ' may reach further')}"
                 ) from exc
             continue
         total_it += it

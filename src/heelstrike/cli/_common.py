@@ -164,12 +164,13 @@ def model_from_args(args: argparse.Namespace) -> Any:
     params: dict[str, float] = {}
     for item in args.param:
         name, sep, value = item.partition("=")
+        if not sep or not name.strip():
+            raise CliError(f"invalid --param {item!r}: use NAME=VALUE, e.g. R=0.2")
         try:
-            if not sep or not name.strip():
-                raise ValueError
             params[name.strip()] = float(value)
         except ValueError:
-            raise CliError(f"invalid --param {item!r}: use NAME=VALUE, e.g. R=0.2") from None
+            raise CliError(f"invalid --param {item!r}: {value.strip()!r} is not a number "
+                           "(NAME=VALUE in SI units, e.g. R=0.2)") from None
     model = str(args.model)
     if os.path.exists(model) and not os.path.isfile(model):
         raise CliError(f"--model {model!r} is not a regular file")

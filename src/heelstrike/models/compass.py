@@ -150,11 +150,20 @@ class CompassGait(PlanarWalker):
         ]
         for ok, msg in checks:
             if not ok:
-                raise WalkerParameterError(msg)
+                raise WalkerParameterError(f"{msg}; got {self._values_text()}")
         # One state of a walker with scalar parameters: the dynamics run on Python floats.
         object.__setattr__(
             self, "_scalar", all(isinstance(getattr(self, f.name), float) for f in fields(self))
         )
+
+    def _values_text(self) -> str:
+        """The parameter values, for messages (arrays by their range)."""
+
+        def one(v: Any) -> str:
+            a = np.asarray(v, dtype=float)
+            return f"{float(a):g}" if a.ndim == 0 else f"{a.min():g}..{a.max():g}"
+
+        return ", ".join(f"{f.name} = {one(getattr(self, f.name))}" for f in fields(self))
 
     # -- the walker contract -------------------------------------------------------------------
     def replace(self, **changes: Any) -> CompassGait:

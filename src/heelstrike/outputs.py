@@ -34,6 +34,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "COMPASS_ONLY_WALK_FIGURES",
+    "bifurcation_gap_note",
     "reproduce_paper",
     "write_basin",
     "write_bifurcation",
@@ -209,6 +210,17 @@ def write_model_bifurcation(
     )
 
 
+def bifurcation_gap_note(start_deg: float, onset_deg: float, stable: bool) -> str:
+    """The note of a bifurcation range that starts below the walker's first gait.
+
+    ``start_deg``: the range's first slope; ``onset_deg``: the period-one branch's first slope
+    (where the first gait was found; a stable one is preferred); ``stable``: that gait's
+    stability. Used by the figure's title and by ``heelstrike bifurcation``'s output.
+    """
+    kind = "stable gait" if stable else "gait"
+    return f"no {kind} found from {start_deg:.4g} to {onset_deg:.4g} deg"
+
+
 def write_bifurcation_files(
     diagram: BifurcationDiagram, branch: Continuation, out_dir: str | Path, title: str
 ) -> list[Path]:
@@ -243,8 +255,7 @@ def write_bifurcation_files(
     gap = (np.rad2deg([diagram.slopes[0], branch.values[0]]) if branch.values.size
            and branch.values[0] > diagram.slopes[0] else None)
     if gap is not None:
-        kind = "stable gait" if branch.cycles[0].stable else "gait"
-        title += f"\nno {kind} found from {gap[0]:.4g} to {gap[1]:.4g} deg (shaded)"
+        title += f"\n{bifurcation_gap_note(gap[0], gap[1], branch.cycles[0].stable)} (shaded)"
     fig = bifurcation_figure(diagram, branch, title=title)
     if gap is not None:
         for ax in fig.axes:

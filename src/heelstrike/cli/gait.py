@@ -338,19 +338,19 @@ def _run_bifurcation(args: argparse.Namespace) -> int:
 
 
 def _bifurcation_gap_note(start: float, paths: list[Any]) -> str | None:
-    """The note of a bifurcation range that starts below the walker's first gait, read from the
-    written ``period_one_branch.csv`` (its first slope is where the gaits start), or None."""
+    """The note of a range that starts below the walker's first gait, or None; the onset is
+    the first slope of the written ``period_one_branch.csv``."""
     import pandas as pd
+
+    from heelstrike.outputs import bifurcation_gap_note
 
     branch = pd.read_csv(next(p for p in paths if p.name == "period_one_branch.csv"))
     if branch.empty or float(branch["slope_deg"].iloc[0]) <= math.degrees(start):
         return None
     onset = float(branch["slope_deg"].iloc[0])
-    # a stable first gait was preferred to unstable ones further down the range
-    kind = "stable gait" if bool(branch["stable"].iloc[0]) else "gait"
-    return (f"note: no {kind} found from {math.degrees(start):g} to {onset:.4g} deg: the "
-            f"walker's {kind}s start at {onset:.4g} deg (automatic gait search, then bisection "
-            f"to 1e-5 rad); the diagram and the branch are empty below it")
+    note = bifurcation_gap_note(math.degrees(start), onset, bool(branch["stable"].iloc[0]))
+    return (f"note: {note}: the walker's gaits start there (automatic gait search, then "
+            "bisection to 1e-5 rad); the diagram and the branch are empty below it")
 
 
 def add_basin(sub: Any) -> None:

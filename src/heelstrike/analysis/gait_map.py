@@ -401,7 +401,6 @@ def _branch(
         return g, g.z, g.iterations, g.most_negative_real
 
     try:
-        start = _Point(value=anchor_slope, z=anchor, mnr=float("nan"), gait=None)
         g0, z0, _, m0 = solve(anchor_slope, anchor, 20)
         start = _Point(value=anchor_slope, z=z0, mnr=m0, gait=g0)
     except GaitNotFoundError:

@@ -45,6 +45,16 @@ def refuse_model_actuation(actuations: Sequence[str]) -> None:
                        "with the posture law the walker file declares)")
 
 
+def declared_speed(walker: Any, model: str | None) -> float:
+    """The walker's declared target speed (m/s, :attr:`PlanarWalker.powered_speed`), the
+    default target of ``powered`` and ``study cost``; a one-line error if it declares none."""
+    declared = walker.powered_speed
+    if declared is None:
+        raise CliError(f"--model {model} declares no target speed (a [powered] table with "
+                       "speed = ... m/s in its walker file): give --speed or --step-length")
+    return float(declared)
+
+
 def refuse_hip_law_options(args: argparse.Namespace) -> None:
     """The compass hip laws' gains mean nothing for a described walker: refuse them."""
     given = [f"--{k.replace('_', '-')}" for k in ("gain", "kp", "kd", "max_torque")
@@ -100,12 +110,7 @@ def _run_powered(args: argparse.Namespace) -> int:
         refuse_hip_law_options(args)
     walker = walker_from_args(args) if args.model is None else model_from_args(args)
     if args.speed is None and args.step_length is None:
-        declared = walker.powered_speed
-        if declared is None:
-            raise CliError(f"--model {args.model} declares no target speed (a [powered] "
-                           "table with speed = ... m/s in its walker file): give --speed or "
-                           "--step-length")
-        target, value, source = "speed", float(declared), "walker"
+        target, value, source = "speed", declared_speed(walker, args.model), "walker"
         declared_note = " (the walker's declared target)"
     elif args.speed is not None:
         target, value, source, declared_note = "speed", args.speed, "--speed", ""
@@ -240,11 +245,7 @@ def _run_study(args: argparse.Namespace) -> int:
     if min(radii) < 0 or max(radii) > leg_length:
         raise CliError(f"--radius must lie in [0, {leg_length:g}] m")
     if args.speeds is None and args.lengths is None and model is not None:
-        declared = model.powered_speed
-        if declared is None:
-            raise CliError(f"--model {args.model} declares no target speed (a [powered] table "
-                           "with speed = ... m/s in its walker file): give --speed or "
-                           "--step-length")
+        declared = declared_speed(model, args.model)
         args.speeds = (0.95 * declared, 1.05 * declared, 4)
     if args.speeds is not None:
         target, values = "speed", linspace_grid(args.speeds, 4)

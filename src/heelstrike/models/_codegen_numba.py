@@ -52,6 +52,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from heelstrike._version import __version__
 from heelstrike.models._generated import (
     CacheWarning,
     cache_dir,
@@ -109,13 +110,11 @@ _MATH_ATTRS = frozenset({"sin", "cos", "sqrt", "pi"})
 
 
 def _key(desc: WalkerDescription) -> str:
-    from heelstrike.models.builder import _package_version
-
     text = "\n".join(
         (
             "numba-kernels",
             CODEGEN_VERSION,
-            _package_version(),
+            __version__,
             numba_fingerprint(),
             generator_fingerprint("_codegen", "_codegen_numba", "description"),
             desc.structure_key(),

@@ -126,10 +126,6 @@ _HELPERS: Mapping[str, Any] = MappingProxyType({"numpy": np, "zeros": np.zeros, 
 _MEMORY: dict[str, GeneratedModel] = {}
 
 
-def _package_version() -> str:
-    return __version__
-
-
 @dataclass(frozen=True, kw_only=True, eq=False)
 class GeneratedModel:
     """The compiled functions of one walker structure.
@@ -165,7 +161,7 @@ def _key(desc: WalkerDescription) -> str:
     text = "\n".join(
         (
             CODEGEN_VERSION,
-            _package_version(),
+            __version__,
             generator_fingerprint("_codegen", "description"),
             desc.structure_key(),
         )

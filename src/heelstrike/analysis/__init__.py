@@ -18,7 +18,8 @@ Main entry points:
   :func:`~heelstrike.analysis.gait_map.gait_map`: basins of attraction and gait maps;
 - :func:`~heelstrike.analysis.powered.find_powered_gait`,
   :func:`~heelstrike.analysis.cost_study.cost_study`: powered gaits and the cost of transport;
-- :func:`~heelstrike.analysis.model_gaits.find_model_gait`,
+- :func:`~heelstrike.analysis.model_gaits.find_model_gaits`,
+  :func:`~heelstrike.analysis.model_gaits.find_model_gait`,
   :func:`~heelstrike.analysis.model_gaits.impact_map`: gaits and impact maps of described
   walkers;
 - :func:`~heelstrike.analysis.sweep.sweep`: parameter sweeps with a resumable store;
@@ -62,8 +63,8 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "refine_period_doubling",
     ),
     "model_gaits": (
-        "ANGLE", "ImpactMap", "ModelGait", "ModelHeelStrike", "find_model_gait", "impact_map",
-        "model_heel_strike", "symmetric_heel_strike_state",
+        "ANGLE", "ImpactMap", "ModelGait", "ModelHeelStrike", "REFERENCE_SLOPE", "find_model_gait",
+        "find_model_gaits", "impact_map", "model_heel_strike", "symmetric_heel_strike_state",
     ),
     "newton": ("NewtonSolution", "NewtonStatus", "newton_solve"),
     "paper": (

@@ -356,13 +356,26 @@ SEARCH_TIME_LIMIT = 300.0
 SAME_GAIT_TOL = 1e-6
 
 
-def _check_passive_slope(pmap: PoincareMap) -> None:
+def _check_passive_slope(slope: float, *, torque: object = None, push_off: object = None) -> None:
     """A passive walker cannot walk periodically on level or uphill ground: nothing supplies the
-    energy lost at heel strike. Fail at once instead of searching."""
-    if pmap.torque is None and pmap.push_off is None and not pmap.slope > 0.0:
+    energy lost at heel strike. Fail at once instead of searching.
+
+    Parameters
+    ----------
+    slope : float
+        Ground slope (rad), positive downhill.
+    torque, push_off : optional
+        The walk's actuation; with either, any slope may have a gait.
+
+    Raises
+    ------
+    GaitNotFoundError
+        Passive (no torque, no push-off) and ``slope <= 0``.
+    """
+    if torque is None and push_off is None and not slope > 0.0:
         raise GaitNotFoundError(
             f"a passive walker has no periodic gait on a slope of "
-            f"{np.degrees(pmap.slope):g} deg: the energy lost at every heel strike must come "
+            f"{np.degrees(slope):g} deg: the energy lost at every heel strike must come "
             f"from gravity, so the slope must be > 0 (downhill, e.g. 3deg)"
         )
 
@@ -568,7 +581,7 @@ def find_limit_cycles(
         walker=walker, slope=slope, torque=torque, push_off=push_off, rtol=rtol, atol=atol,
         method=method, simulator=simulator,
     )
-    _check_passive_slope(pmap)
+    _check_passive_slope(pmap.slope, torque=pmap.torque, push_off=pmap.push_off)
     deadline = time.monotonic() + float(time_limit)
     if _compiled_ok(pmap):
         gaits = _compiled_seeds(

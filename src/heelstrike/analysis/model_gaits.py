@@ -1,6 +1,7 @@
 """Gaits, energy books and heel-strike maps of described walkers (TOML models).
 
-- :func:`find_model_gait`: a period-one gait of a :class:`~heelstrike.models.builder.BuiltWalker`
+- :func:`find_model_gaits` / :func:`find_model_gait`: the period-one gaits (the stable one
+  first) / a period-one gait of a :class:`~heelstrike.models.builder.BuiltWalker`
   through :func:`~heelstrike.analysis.limit_cycle.find_limit_cycle` with the compiled
   :func:`~heelstrike.dynamics.compiled_phased.simulate_phased_compiled` (default) or the scipy
   reference :func:`~heelstrike.dynamics.phased.simulate_phased` (knee strikes and heel
@@ -29,6 +30,8 @@ from heelstrike.analysis.limit_cycle import (
     GaitNotFoundError,
     LimitCycle,
     PoincareMap,
+    _add_distinct,
+    _check_passive_slope,
     _preference,
     find_limit_cycle,
 )
@@ -48,7 +51,9 @@ __all__ = [
     "ImpactMap",
     "ModelGait",
     "ModelHeelStrike",
+    "REFERENCE_SLOPE",
     "find_model_gait",
+    "find_model_gaits",
     "impact_map",
     "model_heel_strike",
     "symmetric_heel_strike_state",
@@ -125,7 +130,30 @@ def _grid_guesses(walker: PhasedWalker) -> list[FloatArray]:
     ]
 
 
-def find_model_gait(
+#: Slope (rad) of the reference gait that :func:`find_model_gaits` follows to the walker when the
+#: automatic search finds no stable gait: the walker file's own parameters at 3 deg (the slope at
+#: which ``map`` anchors its branches).
+REFERENCE_SLOPE = float(np.deg2rad(3.0))
+
+
+def _energy_book(cycle: LimitCycle) -> ModelGait:
+    """The gait's energy book from its one-step walk (every impact of the period)."""
+    walk = cycle.walk
+    assert isinstance(walk, PhasedWalkResult)
+    impacts = walk.events
+    loss = float(sum(e.kinetic_energy_constrained for e in impacts))
+    rec = walk.impacts[0]
+    return ModelGait(
+        cycle=cycle,
+        impacts=impacts,
+        collision_loss=loss,
+        actuator_work=rec.actuator_work,
+        potential_energy_released=rec.potential_energy_released,
+        energy_residual=rec.actuator_work + rec.potential_energy_released - loss,
+    )
+
+
+def find_model_gaits(
     walker: BuiltWalker,
     *,
     slope: float = 0.0,
@@ -137,19 +165,30 @@ def find_model_gait(
     rtol: float = 1e-11,
     atol: float = 1e-11,
     backend: str = "compiled",
-) -> ModelGait:
-    """Find a period-one gait of a described walker and its energy book.
+    from_reference: bool = True,
+) -> tuple[ModelGait, ...]:
+    """Find the period-one gaits of a described walker, the stable one first, with energy books.
+
+    Without ``guess`` the search has two stages, the same on both backends:
+
+    1. A coarse grid of post-impact states is mapped once; Newton starts from the most nearly
+       periodic ones, until one converges to a stable gait.
+    2. If no stable gait was found and ``from_reference``: the stable gait of the walker file's
+       own parameters at :data:`REFERENCE_SLOPE` (found by stage 1) is followed by
+       natural-parameter continuation with step control (the one ``map`` uses) along the
+       straight line from those parameters and that slope to the walker's, so that ``gait``
+       finds the gait ``map`` reaches. Intermediate walkers the description rejects end the
+       continuation.
 
     Parameters
     ----------
     walker : BuiltWalker
         Any described walker (wrapped in :class:`PhasedWalker` for its section).
     slope : float
-        Ground slope (rad).
+        Ground slope (rad), positive downhill.
     guess : array_like, optional
-        Section coordinates (``PhasedWalker.section_names``) to start Newton from; if None, a
-        coarse grid of post-impact states is mapped once and Newton starts from the most nearly
-        periodic ones.
+        Section coordinates (``PhasedWalker.section_names``) to start Newton from; if given, the
+        one gait Newton converges to is returned.
     torque, push_off : optional
         Actuation (see :func:`~heelstrike.dynamics.phased.simulate_phased`).
     tol, max_iter, rtol, atol
@@ -160,17 +199,23 @@ def find_model_gait(
         :class:`~heelstrike.dynamics.phased.TorsoPD` torque, optionally
         :class:`~heelstrike.dynamics.actuation.PushOff`) or the scipy reference
         :func:`~heelstrike.dynamics.phased.simulate_phased` (any actuation).
+    from_reference : bool
+        Allow stage 2.
 
     Returns
     -------
-    ModelGait
+    tuple of ModelGait
+        The distinct gaits found (fixed points further apart than ``SAME_GAIT_TOL``): stable
+        before unstable, then by increasing spectral radius.
 
     Raises
     ------
     GaitNotFoundError
+        No gait found, or a passive walker (no torque, no push-off) on a slope <= 0.
     ValueError
         Unknown backend, or actuation the compiled backend does not support.
     """
+    _check_passive_slope(slope, torque=torque, push_off=push_off)
     w = PhasedWalker.from_built(walker)
     # the one entry point, checked for this walker and actuation (ValueError if unsupported)
     simulator = backend_simulator(w, backend, torque=torque, push_off=push_off)
@@ -197,36 +242,145 @@ def find_model_gait(
         if mapped.size == 0:
             raise GaitNotFoundError("no step could be completed from any automatic guess")
         starts = [Z[i] for i in mapped[np.argsort(err[mapped], kind="stable")][:5]]
-    # Newton from each start until a stable gait is found; without one, the most attracting
-    # gait found (as find_limit_cycles orders the compass's gaits: stable first)
+    # stage 1: Newton from each start until a stable gait is found
     last: Exception | None = None
     found: list[LimitCycle] = []
+    points: list[FloatArray] = []
+
+    def add(cycle: LimitCycle) -> None:
+        if _add_distinct(points, np.asarray(cycle.fixed_point, dtype=float)):
+            found.append(cycle)
+
     for z0 in starts:
         try:
-            found.append(find_limit_cycle(
+            add(find_limit_cycle(
                 w, guess=z0, tol=tol, max_iter=max_iter, rtol=rtol, atol=atol, **kw
             ))
         except GaitNotFoundError as exc:
             last = exc
             continue
-        if found[-1].stable:
+        if any(c.stable for c in found):
             break
+    # stage 2: the reference gait followed to this walker and slope
+    if guess is None and from_reference and not any(c.stable for c in found):
+        z_end = _follow_reference(w, slope, torque=torque, push_off=push_off,
+                                  backend=backend, rtol=rtol, atol=atol)
+        if z_end is not None:
+            try:
+                add(find_limit_cycle(
+                    w, guess=z_end, tol=tol, max_iter=max_iter, rtol=rtol, atol=atol, **kw
+                ))
+            except GaitNotFoundError as exc:
+                last = exc
     if not found:
-        raise GaitNotFoundError(str(last))
-    cycle = min(found, key=_preference)
-    walk = cycle.walk
-    assert isinstance(walk, PhasedWalkResult)
-    impacts = walk.events
-    loss = float(sum(e.kinetic_energy_constrained for e in impacts))
-    rec = walk.impacts[0]
-    return ModelGait(
-        cycle=cycle,
-        impacts=impacts,
-        collision_loss=loss,
-        actuator_work=rec.actuator_work,
-        potential_energy_released=rec.potential_energy_released,
-        energy_residual=rec.actuator_work + rec.potential_energy_released - loss,
-    )
+        if guess is not None:
+            raise GaitNotFoundError(str(last))
+        tried = (f"; nor did the walker file's own stable gait at {np.degrees(REFERENCE_SLOPE):g}"
+                 " deg continue to these parameters and slope" if from_reference else "")
+        raise GaitNotFoundError(
+            f"Newton converged from none of the {len(starts)} most nearly periodic of "
+            f"{len(Z)} automatic starts (the last: {last}){tried}")
+    return tuple(_energy_book(c) for c in sorted(found, key=_preference))
+
+
+def _follow_reference(
+    w: PhasedWalker,
+    slope: float,
+    *,
+    torque: TorqueLaw | None,
+    push_off: PushOff | None,
+    backend: str,
+    rtol: float,
+    atol: float,
+) -> FloatArray | None:
+    """Stage 2 of :func:`find_model_gaits`: the reference walker's stable gait at
+    :data:`REFERENCE_SLOPE`, continued along ``lam`` in [0, 1] (parameters and slope linear in
+    ``lam``) to ``w`` at ``slope``. Returns the fixed point at ``lam = 1``, or None if there is
+    no stable reference gait, nothing to continue, or the branch ends before ``lam = 1``."""
+    from heelstrike.analysis.gait_map import _PARAMETER_STEP, _SLOPE_STEP, _follow, _Point
+
+    ref_values = w.description.default_params
+    changed = {
+        k: (np.asarray(ref_values[k], dtype=float), np.asarray(v, dtype=float))
+        for k, v in w.params.items()
+        if not np.array_equal(np.asarray(ref_values[k], dtype=float), np.asarray(v, dtype=float))
+    }
+    s0 = REFERENCE_SLOPE
+    if not changed and abs(slope - s0) <= 1e-12:
+        return None  # the reference itself: stage 1 has searched it
+    try:
+        ref = w.replace(**{k: a for k, (a, _) in changed.items()})
+        start = find_model_gaits(ref, slope=s0, torque=torque, push_off=push_off, rtol=rtol,
+                                 atol=atol, backend=backend, from_reference=False)[0]
+    except (GaitNotFoundError, ValueError):
+        return None
+    if not start.cycle.stable:
+        return None
+    # the sub-step bound: at most _SLOPE_STEP of slope and _PARAMETER_STEP (relative) of each
+    # changed parameter per sub-step, as in map
+    h = 1.0
+    if slope != s0:
+        h = min(h, _SLOPE_STEP / abs(slope - s0))
+    for a, b in changed.values():
+        span = float(np.max(np.abs(b - a)))
+        scale = max(1.0, float(np.max(np.abs(a))), float(np.max(np.abs(b))))
+        h = min(h, _PARAMETER_STEP * scale / span)
+
+    def solve(lam: float, z: FloatArray, it: int) -> tuple[Any, FloatArray, int, float]:
+        at_end = lam == 1.0
+        params = {k: b if at_end else a + lam * (b - a) for k, (a, b) in changed.items()}
+        try:
+            wl = w.replace(**params) if params else w
+        except ValueError as exc:  # an intermediate walker the description rejects
+            raise GaitNotFoundError(str(exc)) from exc
+        s = slope if at_end else s0 + lam * (slope - s0)
+        c = find_limit_cycle(wl, guess=z, max_iter=it, rtol=rtol, atol=atol, slope=s,
+                             torque=torque, push_off=push_off,
+                             simulator=backend_simulator(wl, backend, torque=torque,
+                                                         push_off=push_off))
+        return c, np.asarray(c.fixed_point, dtype=float), int(c.iterations), float("nan")
+
+    z0 = np.asarray(start.cycle.fixed_point, dtype=float)
+    (end,), _ = _follow(solve, _Point(value=0.0, z=z0, mnr=float("nan"), gait=start.cycle),
+                        [1.0], h)
+    return None if end is None else end.z
+
+
+def find_model_gait(
+    walker: BuiltWalker,
+    *,
+    slope: float = 0.0,
+    guess: ArrayLike | None = None,
+    torque: TorqueLaw | None = None,
+    push_off: PushOff | None = None,
+    tol: float = 1e-10,
+    max_iter: int = 20,
+    rtol: float = 1e-11,
+    atol: float = 1e-11,
+    backend: str = "compiled",
+) -> ModelGait:
+    """Find a period-one gait of a described walker and its energy book: the first (preferred)
+    gait of :func:`find_model_gaits` (a stable one when one is found).
+
+    Parameters
+    ----------
+    walker : BuiltWalker
+    slope, guess, torque, push_off, tol, max_iter, rtol, atol, backend
+        As :func:`find_model_gaits`.
+
+    Returns
+    -------
+    ModelGait
+
+    Raises
+    ------
+    GaitNotFoundError
+    ValueError
+        Unknown backend, or actuation the compiled backend does not support.
+    """
+    return find_model_gaits(walker, slope=slope, guess=guess, torque=torque, push_off=push_off,
+                            tol=tol, max_iter=max_iter, rtol=rtol, atol=atol,
+                            backend=backend)[0]
 
 
 # -- single heel strike -------------------------------------------------------------------------

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from collections.abc import Sequence
 from typing import Any
 
 from heelstrike.cli._common import (
@@ -65,22 +66,31 @@ def add_gait(sub: Any) -> None:
 
 def _run_gait_model(args: argparse.Namespace) -> int:
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
-    from heelstrike.analysis.model_gaits import find_model_gait
+    from heelstrike.analysis.model_gaits import REFERENCE_SLOPE, find_model_gaits
 
     walker = model_from_args(args)
     guess = None
     if args.guess is not None:
         guess = parse_floats(args.guess, "--guess", len(walker.section_names))
     try:
-        gait = find_model_gait(walker, slope=args.slope, guess=guess, backend=args.backend)
+        gaits = find_model_gaits(walker, slope=args.slope, guess=guess, backend=args.backend)
     except GaitNotFoundError as exc:
         raise _no_gait(args.slope, exc) from exc
+    gait = gaits[0]
     d = gait.to_dict()
     d["model"] = walker.description.name
+    # each gait's collision loss is its step's total (knee strikes included), as in d
+    d["gaits"] = [_gait_summary(g.cycle) | {"collision_loss": g.collision_loss} for g in gaits]
+    if guess is None and not gait.cycle.stable:
+        print(f"heelstrike: note: no stable period-one gait found (the automatic search, and "
+              f"the walker file's own stable gait at {math.degrees(REFERENCE_SLOPE):g} deg "
+              "continued to these parameters and slope, found none); the least unstable gait "
+              "found is shown", file=sys.stderr)
     if args.json:
         print_json(d)
         return 0
     c = gait.cycle
+    _print_gait_list([g.cycle for g in gaits])
     print(f"passive gait of '{d['model']}', slope = {math.degrees(args.slope):g} deg")
     print(f"  fixed point (just after heel strike): {fixed_point_text(d['fixed_point'])}")
     print_step_lines(c)
@@ -107,6 +117,20 @@ def _gait_summary(c: Any) -> dict[str, Any]:
         "stable": bool(c.stable),
         "collision_loss": float(c.collision_loss),
     }
+
+
+def _print_gait_list(gaits: Sequence[Any]) -> None:
+    """With several gaits found, one line each (the first is shown in detail)."""
+    if len(gaits) < 2:
+        return
+    first = gaits[0]
+    print(f"{len(gaits)} period-one gaits found (the first, "
+          f"{'the most attracting stable one' if first.stable else 'the least unstable'}, "
+          "is shown in detail):")
+    for i, c in enumerate(gaits):
+        print(f"  [{i}] step length {c.step_length:.5f} m, period {c.period:.5f} s, "
+              f"|multipliers| {multipliers_text(c.multipliers)}, "
+              f"{'stable' if c.stable else 'unstable'}")
 
 
 def _run_gait(args: argparse.Namespace) -> int:
@@ -145,14 +169,7 @@ def _run_gait(args: argparse.Namespace) -> int:
     if args.json:
         print_json(d)
         return 0
-    if len(gaits) > 1:
-        print(f"{len(gaits)} period-one gaits found (the first, "
-              f"{'the most attracting stable one' if cycle.stable else 'the least unstable'}, "
-              "is shown in detail):")
-        for i, c in enumerate(gaits):
-            print(f"  [{i}] step length {c.step_length:.5f} m, period {c.period:.5f} s, "
-                  f"|multipliers| {multipliers_text(c.multipliers)}, "
-                  f"{'stable' if c.stable else 'unstable'}")
+    _print_gait_list(gaits)
     print(f"passive gait, R = {args.radius:g} m, slope = {math.degrees(args.slope):g} deg")
     print(f"  fixed point (just after impact): {fixed_point_text(d['fixed_point'])}")
     print_step_lines(cycle)

@@ -156,3 +156,27 @@ def test_map_command_default_kneed_radii_stop_at_the_constraint(
     assert values[-1] == pytest.approx(walker.params["a1"] + walker.params["b1"], abs=1e-9)
     for v in values:
         walker.replace(R=float(v))  # admitted: no ValueError
+
+
+def test_compass_map_anchors_large_feet_on_shallow_slopes() -> None:
+    """R = 0.8 m has no gait at the 3 deg anchor slope (the branch ends near R = 0.73 there) but
+    has stable gaits on shallow slopes. The compass map drew its whole row as "no gait"; it now
+    anchors such a radius at the fallback slopes (as the described-walker map does), and finds
+    the gaits ``map --model compass`` finds, which are fixed points of the scipy step map."""
+    from heelstrike.analysis.limit_cycle import PoincareMap
+    from heelstrike.models import load_walker
+
+    slopes = np.radians([0.5, 1.0, 1.5, 3.0])
+    ds = gait_map(CompassGait(), [0.8], slopes).dataset
+    found = ds["gait_found"].values[0]
+    assert found[:2].all()
+    assert not found[-1]  # none at 3 deg: the large-feet branch ends below it
+    ref = model_gait_map(load_walker("compass"), "R", [0.8], slopes).dataset
+    np.testing.assert_array_equal(ref["gait_found"].values[0], found)
+    np.testing.assert_allclose(ds["period"].values[0], ref["period"].values[0], rtol=0,
+                               atol=1e-9, equal_nan=True)
+    for j in np.flatnonzero(found):
+        z = ds["fixed_point"].values[0, j]
+        pmap = PoincareMap(walker=CompassGait(foot_radius=0.8), slope=float(slopes[j]),
+                           rtol=1e-11, atol=1e-11)
+        np.testing.assert_allclose(pmap(z), z, atol=1e-8)

@@ -90,7 +90,9 @@ def test_gait_finds_the_round_foot_gait_that_map_finds(capsys: Capture) -> None:
     """``gait --radius 0.7 --slope 3deg`` said "no gait" where ``map`` (continuation in the
     radius from the point foot) finds one."""
     slope = np.deg2rad(3.0)
-    (z_map,) = _anchors(CompassGait(), np.array([0.7]), slope, None, 1e-11, 1e-11)
+    ((s_map, z_map),) = _anchors(CompassGait(), np.array([0.7]), np.array([slope]), None,
+                                 1e-11, 1e-11)
+    assert s_map == slope
     assert np.all(np.isfinite(z_map))
     assert main(["gait", "--radius", "0.7", "--slope", "3deg", "--json"]) == 0
     d = json.loads(capsys.readouterr().out)

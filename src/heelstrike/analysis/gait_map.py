@@ -456,25 +456,25 @@ def _map_chunk(
     *,
     walker: tuple[tuple[str, float], ...],
     anchors: tuple[tuple[float, ...], ...],
-    anchor_slope: float,
     rtol: float,
     atol: float,
 ) -> dict[str, FloatArray]:
-    """Sweep function: every radius of the chunk, all slopes (see the sweep contract)."""
+    """Sweep function: every radius of the chunk, all slopes (see the sweep contract);
+    ``anchors`` holds ``(radius, anchor slope, fixed point...)`` per radius."""
     radii = np.asarray(foot_radius, dtype=float)[:, 0]
     slopes = np.asarray(slope, dtype=float)[0, :]
-    table = {a[0]: np.array(a[1:]) for a in anchors}
+    table = {a[0]: (a[1], np.array(a[2:])) for a in anchors}
     R_, S_ = radii.size, slopes.size
     res: dict[str, FloatArray] = {k: np.full((R_, S_), np.nan) for k in _OUTPUTS}
     res["fixed_point"] = np.full((R_, S_, 3), np.nan)
     res["most_negative_real_multiplier"] = np.full((R_, S_), np.nan)
     res["period_doubling_slope"] = np.full((R_, S_), np.nan)
     for j, R in enumerate(radii):
-        anchor = table.get(float(R))
-        if anchor is None or not np.all(np.isfinite(anchor)):
+        entry = table.get(float(R))
+        if entry is None or not np.all(np.isfinite(entry[1])):
             continue
         w = CompassGait(foot_radius=float(R), **dict(walker))
-        out, fixed, mnr, pd = _branch(w, slopes, anchor_slope, anchor, rtol, atol)
+        out, fixed, mnr, pd = _branch(w, slopes, entry[0], entry[1], rtol, atol)
         for k in _OUTPUTS:
             res[k][j] = out[k]
         res["fixed_point"][j] = fixed
@@ -514,16 +514,30 @@ def _direct(walker: CompassGait, slope: float, rtol: float, atol: float) -> Floa
         return np.full(3, np.nan)
 
 
+def _fallback_slopes(slopes: FloatArray, anchor_slope: float) -> list[float]:
+    """Further anchor slopes (rad) for a branch without a gait at ``anchor_slope``: about every
+    1 deg of the range (the range only, not the grid), nearest to ``anchor_slope`` first, the
+    anchor slope itself excluded."""
+    n_fb = max(2, int(np.ceil((slopes[-1] - slopes[0]) / np.deg2rad(1.0))) + 1)
+    return [float(s) for s in sorted(np.linspace(slopes[0], slopes[-1], n_fb),
+                                     key=lambda s: abs(s - anchor_slope))
+            if abs(s - anchor_slope) > 1e-12]
+
+
 def _anchors(
-    walker: CompassGait, radii: FloatArray, slope: float, guess: ArrayLike | None,
+    walker: CompassGait, radii: FloatArray, slopes: FloatArray, guess: ArrayLike | None,
     rtol: float, atol: float,
-) -> list[FloatArray]:
-    """Gaits at ``slope`` for every radius (NaNs where none is found), by continuation in the
-    radius in sorted order (:func:`_follow`, sub-steps of at most 0.05 m), from the point
-    foot's preferred gait (or from ``guess`` at the smallest radius). Where the continuation
-    breaks, the automatic search is run at that radius and the continuation restarts from what
-    it finds; radii without a gait get NaNs and never abort the map."""
+) -> list[tuple[float, FloatArray]]:
+    """An anchor (slope, gait) for every radius (NaNs where none is found).
+
+    At the anchor slope :func:`_anchor_slope`: by continuation in the radius in sorted order
+    (:func:`_follow`, sub-steps of at most 0.05 m) from the point foot's preferred gait (or from
+    ``guess`` at the smallest radius). Where the continuation breaks, the automatic search is
+    run at that radius and the continuation restarts from what it finds. A radius with no gait
+    found at the anchor slope is searched at the :func:`_fallback_slopes` (large feet have
+    gaits on shallow slopes only); radii without a gait get NaNs and never abort the map."""
     order = np.argsort(radii)
+    slope = _anchor_slope(slopes)
 
     def solve(R: float, z: FloatArray, max_iter: int) -> tuple[Any, FloatArray, int, float]:
         g = newton_gait(walker.replace(foot_radius=R), slope, z, rtol=rtol, atol=atol,
@@ -540,7 +554,7 @@ def _anchors(
                             rtol=rtol, atol=atol).z
         except GaitNotFoundError:
             z = np.full(3, np.nan)
-    out: list[FloatArray] = [np.full(3, np.nan)] * radii.size
+    out: list[tuple[float, FloatArray]] = [(slope, np.full(3, np.nan))] * radii.size
     for k in order:
         R = float(radii[k])
         zk = np.full(3, np.nan)
@@ -552,9 +566,15 @@ def _anchors(
                 zk = got.z
         if not np.all(np.isfinite(zk)):
             zk = _direct(walker.replace(foot_radius=R), slope, rtol, atol)
-        out[k] = zk
+        out[k] = (slope, zk)
         if np.all(np.isfinite(zk)):
             z, R_prev = zk, R
+            continue
+        for s in _fallback_slopes(slopes, slope):
+            zs = _direct(walker.replace(foot_radius=R), s, rtol, atol)
+            if np.all(np.isfinite(zs)):
+                out[k] = (s, zs)
+                break
     return out
 
 
@@ -606,12 +626,12 @@ def gait_map(
     if np.any(R < 0) or np.any(R > float(walker.leg_length)):
         raise ValueError("radii must satisfy 0 <= R <= leg_length")
     anchor_slope = _anchor_slope(S)
-    anchors = _anchors(walker, R, anchor_slope, guess, rtol, atol)
+    anchors = _anchors(walker, R, S, guess, rtol, atol)
     func = functools.partial(
         _map_chunk,
         walker=tuple(sorted(_walker_kwargs(walker).items())),
-        anchors=tuple((float(r), *map(float, a)) for r, a in zip(R, anchors, strict=True)),
-        anchor_slope=anchor_slope,
+        anchors=tuple((float(r), float(s), *map(float, a))
+                      for r, (s, a) in zip(R, anchors, strict=True)),
         rtol=float(rtol),
         atol=float(atol),
     )

@@ -91,3 +91,29 @@ def test_kneed_command_notes_the_empty_part(
     low = rows["slope_deg"] < branch["slope_deg"].iloc[0]
     assert low.any() and rows.loc[low, "impact_angle_rad"].isna().all()
     assert rows.loc[~low, "impact_angle_rad"].notna().all()
+
+
+@pytest.mark.slow
+def test_an_unstable_gait_that_ends_does_not_start_the_diagram(kneed: PhasedWalker) -> None:
+    """At 2 deg the kneed walker's automatic search finds only a long-period unstable gait
+    (|m| 18.5) whose family ends before the next slope; the diagram used to start from it and
+    its branch had one point. It now starts where the stable family starts (2.158 deg)."""
+    at_two = find_model_gait(kneed, slope=np.deg2rad(2.0))
+    assert not at_two.cycle.stable  # the premise: what the search finds at 2 deg
+    _, branch = model_bifurcation(kneed, np.deg2rad(np.linspace(2.0, 3.0, 9)), transient=10,
+                                  record=2, continuation_points=6)
+    assert 2.1 < float(np.degrees(branch.values[0])) < 2.2
+    assert len(branch.cycles) == 6 and all(c.stable for c in branch.cycles)
+
+
+def test_past_period_doubling_the_unstable_branch_still_starts_the_diagram() -> None:
+    """Above the compass gait's period doubling (4.39 deg) the period-one gait at the range's
+    first slope is unstable and its family goes on: the diagram starts there, as before."""
+    from heelstrike.analysis.gait_map import compass_bifurcation
+    from heelstrike.models import CompassGait
+
+    slopes = np.deg2rad(np.linspace(5.0, 5.5, 3))
+    _, branch = compass_bifurcation(CompassGait(), slopes, transient=10, record=2,
+                                    continuation_points=3)
+    assert branch.values[0] == pytest.approx(slopes[0])
+    assert not branch.cycles[0].stable and len(branch.cycles) == 3

@@ -174,8 +174,8 @@ def test_walk_command_with_model(tmp_path: Path, capsys: pytest.CaptureFixture[s
                  str(tmp_path)]) == 0
     out, err = capsys.readouterr()
     assert "2 steps, status: completed" in out
-    assert "strobe and step figures are drawn for the compass gait only" in err
-    for name in ("walk.gif", "phase_portrait.png", "energy.png"):
+    assert "the step figure is drawn for the compass gait only" in err
+    for name in ("walk.gif", "strobe.png", "phase_portrait.png", "energy.png"):
         assert (tmp_path / name).stat().st_size > 0
     # starts on the gait, and every heel strike drops the energy by its T_c
     portrait = pd.read_csv(tmp_path / "phase_portrait.csv")
@@ -183,7 +183,9 @@ def test_walk_command_with_model(tmp_path: Path, capsys: pytest.CaptureFixture[s
     assert portrait["q3_rad"].iloc[0] == pytest.approx(z[0], abs=1e-9)
     assert portrait["q3_dot_rad_s"].iloc[0] == pytest.approx(z[1], abs=1e-9)
     impacts = pd.read_csv(tmp_path / "impacts.csv")
-    assert len(impacts) == 2
+    # every impact: a knee strike, then the heel strike, in each of the 2 steps
+    assert list(impacts["kind"]) == ["knee_strike", "heel_strike"] * 2
+    assert (impacts["kind"] == "heel_strike").sum() == 2
     np.testing.assert_allclose(impacts["drop_J"], impacts["T_c_J"], rtol=1e-6)
     assert np.all(impacts["T_c_J"] > 0)
 

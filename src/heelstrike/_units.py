@@ -45,6 +45,7 @@ UNITS: dict[str, str | None] = {
     "actuation": None, "target_source": None,
     "parameter_name": None, "parameter_unit": None, "kind": None, "figure": None,
     "data": None, "residual": None, "status": None, "message": None, "gait_found": None,
+    "gait_stable": None,
 }
 
 _POSITION = {"q"}

@@ -50,8 +50,8 @@ __all__ = [
 ]
 
 #: Walk figures drawn for the compass gait only (:func:`write_walk_figures`), not for described
-#: walkers: the strobe and the step figure use the compass gait's two-link geometry.
-COMPASS_ONLY_WALK_FIGURES: tuple[str, ...] = ("strobe", "step")
+#: walkers: the step figure uses the compass gait's two-link coordinates (``q3``, ``q4``).
+COMPASS_ONLY_WALK_FIGURES: tuple[str, ...] = ("step",)
 
 
 def _directory(out_dir: str | Path) -> Path:
@@ -154,7 +154,7 @@ def write_bifurcation(
     *,
     transient: int = 50,
     record: int = 16,
-    continuation_points: int = 12,
+    continuation_points: int | None = None,
     progress: bool = False,
     backend: str = "compiled",
 ) -> list[Path]:
@@ -162,7 +162,9 @@ def write_bifurcation(
 
     Computed by :func:`heelstrike.analysis.gait_map.compass_bifurcation` over ``count`` slopes
     from ``slope_start`` to ``slope_stop`` (rad) on ``backend``; written by
-    :func:`write_bifurcation_files`.
+    :func:`write_bifurcation_files`. The period-one branch is continued over
+    ``continuation_points`` evenly spaced slopes or, by default (None), over the diagram's
+    slopes and refined where it curves, so that the line drawn through its gaits follows it.
 
     Returns
     -------
@@ -192,7 +194,7 @@ def write_model_bifurcation(
     *,
     transient: int = 50,
     record: int = 16,
-    continuation_points: int = 12,
+    continuation_points: int | None = None,
     backend: str = "compiled",
 ) -> list[Path]:
     """:func:`write_bifurcation` for a described walker (a ``BuiltWalker``; same files).
@@ -344,8 +346,9 @@ def write_walk_figures(walker: CompassGait, walk: WalkResult, out_dir: str | Pat
 
     Files: ``strobe.png/.csv`` (stick figures over the first step), ``phase_portrait.png/.csv``,
     ``step.png/.csv`` (joint angles and ground reaction over the first step),
-    ``energy.png/.csv`` (energy over the walk) and ``impacts.csv`` (the energy drops at heel
-    strikes). The tables (and their columns) are those of :mod:`heelstrike.analysis.walk_tables`.
+    ``energy.png/.csv`` (energy over the walk) and ``impacts.csv`` (the energy drop at every
+    impact, in time order: the compass gait's are heel strikes). The tables (and their columns)
+    are those of :mod:`heelstrike.analysis.walk_tables`.
 
     Returns
     -------
@@ -389,12 +392,14 @@ def write_walk_figures(walker: CompassGait, walk: WalkResult, out_dir: str | Pat
 def write_model_walk_figures(walker: Any, walk: WalkResult, out_dir: str | Path) -> list[Path]:
     """Write a described walker's walk figures (PNG) and data (CSV) into ``out_dir``.
 
-    Files: ``phase_portrait.png/.csv``
+    Files: ``strobe.png/.csv`` (stick figures of the walker's own links over the first step,
+    :func:`~heelstrike.analysis.walk_tables.model_strobe_table`), ``phase_portrait.png/.csv``
     (:func:`~heelstrike.analysis.walk_tables.model_phase_portrait_table`), ``energy.png/.csv``
     (:func:`~heelstrike.analysis.walk_tables.walk_energy_table`: every impact, knee strikes
-    included, drops the total) and ``impacts.csv``
-    (:func:`~heelstrike.analysis.walk_tables.walk_impact_table`, the heel strikes). The figures
-    of :data:`COMPASS_ONLY_WALK_FIGURES` are not drawn.
+    included, drops the total; the figure marks heel and knee strikes apart) and
+    ``impacts.csv`` (:func:`~heelstrike.analysis.walk_tables.walk_impact_table`: every impact
+    in time order, knee strikes included, its ``kind`` in a column). The figures of
+    :data:`COMPASS_ONLY_WALK_FIGURES` are not drawn.
 
     Returns
     -------
@@ -403,18 +408,22 @@ def write_model_walk_figures(walker: Any, walk: WalkResult, out_dir: str | Path)
     """
     from heelstrike.analysis.walk_tables import (
         model_phase_portrait_table,
+        model_strobe_table,
         walk_energy_table,
         walk_impact_table,
     )
-    from heelstrike.plots.gait import energy_figure, phase_portrait_figure
+    from heelstrike.plots.gait import energy_figure, model_strobe_figure, phase_portrait_figure
 
     out = _directory(out_dir)
     what = f"{walker.description.name}, slope = {np.rad2deg(walk.slope):.2f} deg"
+    strobe = model_strobe_table(walker, walk, 0)
     portrait = model_phase_portrait_table(walker, walk)
     energy = walk_energy_table(walker, walk)
     impacts = walk_impact_table(walker, walk)
     swing = walker.description.links[walker.joint_index("hip") - 2].name
     figures = {
+        "strobe": (model_strobe_figure(strobe, slope=walk.slope,
+                                       title=f"{what}: one step, strobed"), strobe),
         "phase_portrait": (phase_portrait_figure(
             portrait, title=f"{what}: phase portrait",
             labels=(f"stance ({walker.coordinate_names[2]})", f"swing ({swing}, absolute)")),

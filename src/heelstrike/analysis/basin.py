@@ -12,7 +12,9 @@ is 3-D, so a slice is shown.)
 its post-impact state comes within ``tol`` (Euclidean norm in section coordinates) of ``z*`` within
 those steps (the walk is stopped there); it *keeps walking* if it completes every step without
 doing so (another attractor, or slow convergence); otherwise it failed, with the
-:class:`~heelstrike.dynamics.hybrid.WalkStatus` of the failure.
+:class:`~heelstrike.dynamics.hybrid.WalkStatus` of the failure. The gait's stability is recorded
+with the fixed point (:attr:`Basin.gait_stable`, :attr:`Basin.spectral_radius`): the basin of an
+unstable gait is empty, no initial state converges to it.
 
 **Described walkers** (TOML models): :func:`model_basin_of_attraction` draws the same
 classification on the slice of the walker's post-heel-strike section
@@ -36,7 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
-from heelstrike.analysis.limit_cycle import find_limit_cycle
+from heelstrike.analysis.limit_cycle import LimitCycle, find_limit_cycle
 from heelstrike.dynamics.compiled import ensemble_walk
 from heelstrike.dynamics.hybrid import WalkStatus
 from heelstrike.models.compass import CompassGait
@@ -140,6 +142,12 @@ class Basin(ResultDictMixin):
         Indices in ``fixed_point`` of the slice's two coordinates (the dataset's two dims).
     walker_steps : int
         Heel strikes taken by all initial states together (the ensemble's work).
+    gait_stable : bool or None
+        Whether the period-one gait the basin is built around is stable (all Floquet
+        multipliers inside the unit circle); None if unknown (the fixed point was given). An
+        unstable gait attracts no initial state: its basin is empty (0 % converging).
+    spectral_radius : float or None
+        Largest ``|multiplier|`` of that gait (1), None if unknown.
     """
 
     dataset: xr.Dataset
@@ -148,6 +156,8 @@ class Basin(ResultDictMixin):
     elapsed: float
     axes: tuple[int, int] = (0, 1)
     walker_steps: int = 0
+    gait_stable: bool | None = None
+    spectral_radius: float | None = None
 
     def fractions(self) -> dict[str, float]:
         """Fraction of the grid in every outcome."""
@@ -193,9 +203,12 @@ def _walk_slice(
 def _make_basin(
     coords: dict[str, Any], attrs: dict[str, Any], outcome: NDArray[np.int8],
     taken: NDArray[np.int64], dist: FloatArray, zstar: FloatArray, elapsed: float,
-    axes: tuple[int, int] = (0, 1),
+    axes: tuple[int, int] = (0, 1), gait: LimitCycle | None = None,
 ) -> Basin:
-    """The :class:`Basin` of a walked slice (compass and described walkers alike)."""
+    """The :class:`Basin` of a walked slice (compass and described walkers alike); ``gait``:
+    the period-one gait found at ``zstar`` (its stability goes into the result and the
+    dataset's ``gait_stable`` (0/1) and ``gait_spectral_radius`` attributes), None if the
+    fixed point was given."""
     dims = tuple(coords)
     shape = tuple(len(coords[d][1]) for d in dims)
     ds = xr.Dataset(
@@ -221,8 +234,14 @@ def _make_basin(
     )
     frac = float(np.mean(outcome == 0))
     ds.attrs["converging_fraction"] = frac
+    stable = rho = None
+    if gait is not None:
+        stable, rho = bool(gait.stable), float(gait.spectral_radius)
+        ds.attrs["gait_stable"] = np.int8(stable)  # netCDF attributes have no booleans
+        ds.attrs["gait_spectral_radius"] = rho
     return Basin(dataset=ds, fixed_point=zstar, converging_fraction=frac, elapsed=elapsed,
-                 axes=axes, walker_steps=int(taken.sum()))
+                 axes=axes, walker_steps=int(taken.sum()), gait_stable=stable,
+                 spectral_radius=rho)
 
 
 def _walk_chunk(
@@ -279,7 +298,7 @@ def basin_of_attraction(
         Convergence radius around the fixed point (section norm, rad and rad/s mixed).
     fixed_point : array_like, shape (3,), optional
         The gait's section point; found with Newton (compiled map) from the automatic search if
-        omitted.
+        omitted (and then its stability is recorded: :attr:`Basin.gait_stable`).
     rtol, atol : float
         Integrator tolerances of the ensemble.
     chunks : int
@@ -307,8 +326,10 @@ def basin_of_attraction(
     (a0, a1), (b0, b1) = ranges
     if not (a0 < a1 and b0 < b1):
         raise ValueError(f"ranges must be increasing (min < max), got {ranges}")
+    gait = None
     if fixed_point is None:
-        zstar = find_limit_cycle(walker, slope=slope, method="compiled").fixed_point
+        gait = find_limit_cycle(walker, slope=slope, method="compiled")
+        zstar = gait.fixed_point
     else:
         zstar = np.asarray(fixed_point, dtype=float).reshape(3)
     q3 = np.linspace(a0, a1, n3)
@@ -347,7 +368,7 @@ def basin_of_attraction(
             "rtol": float(rtol),
             "atol": float(atol),
         },
-        outcome, taken, dist, zstar, elapsed,
+        outcome, taken, dist, zstar, elapsed, gait=gait,
     )
 
 
@@ -442,7 +463,8 @@ def model_basin_of_attraction(
         Convergence radius around the fixed point (section norm, rad and rad/s mixed).
     fixed_point : array_like, shape (d,), optional
         The gait's section point; found with
-        :func:`~heelstrike.analysis.model_gaits.find_model_gait` if omitted.
+        :func:`~heelstrike.analysis.model_gaits.find_model_gait` if omitted (and then its
+        stability is recorded: :attr:`Basin.gait_stable`).
     backend : {"compiled", "scipy"}
         :func:`~heelstrike.dynamics.compiled_phased.ensemble_walk_phased` (default) or a loop
         of the scipy reference :func:`~heelstrike.dynamics.phased.simulate_phased`.
@@ -469,8 +491,10 @@ def model_basin_of_attraction(
     n1, n2 = _check_grid(grid, steps)
     names = w.section_names
     d = len(names)
+    gait = None
     if fixed_point is None:
-        zstar = np.asarray(find_model_gait(w, slope=slope, backend=backend).cycle.fixed_point)
+        gait = find_model_gait(w, slope=slope, backend=backend).cycle
+        zstar = np.asarray(gait.fixed_point)
     else:
         zstar = np.asarray(fixed_point, dtype=float).reshape(d)
     ia, ib = model_slice_axes(w)
@@ -516,7 +540,8 @@ def model_basin_of_attraction(
                       "long_name": f"post-heel-strike stance angular velocity {yn}",
                       "label": f"post-impact stance velocity {yn} (rad/s)"}),
     }
-    return _make_basin(coords, attrs, outcome, taken, dist, zstar, elapsed, axes=(ia, ib))
+    return _make_basin(coords, attrs, outcome, taken, dist, zstar, elapsed, axes=(ia, ib),
+                       gait=gait)
 
 
 def _model_basin_chunk(

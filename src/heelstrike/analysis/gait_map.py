@@ -902,12 +902,15 @@ def _first_gait(
     """The first slope of ``[start, stop]`` (rad) with a gait, and that gait.
 
     ``auto(slope)`` is the walker's automatic gait search and ``near(slope, z)`` Newton from
-    ``z``; both raise :class:`GaitNotFoundError`. If ``auto`` finds a gait at ``start``, that is
-    the answer. Otherwise ``auto`` scans ``points`` slopes evenly spaced over the
-    range for the first stable gait (else, if it finds none stable, the first gait), the gait
-    is continued down the scan (``near``) while it exists, and the slope where its family starts
-    is bisected to ``_ONSET_TOL`` between the last slope without it and the first with it: the
-    returned slope has a gait (the one returned), ``_ONSET_TOL`` below it the family has none.
+    ``z``; both raise :class:`GaitNotFoundError`. If ``auto`` finds a stable gait at ``start``,
+    that is the answer, as is an unstable one whose family continues (``near``) to the next
+    scanned slope (past a period doubling). Otherwise ``auto`` scans ``points`` slopes evenly
+    spaced over the range for the first stable gait, the gait is continued down the scan
+    (``near``) while it exists, and the slope where its family starts is bisected to
+    ``_ONSET_TOL`` between the last slope without it and the first with it: the returned slope
+    has a gait (the one returned), ``_ONSET_TOL`` below it the family has none. If the scan
+    finds no stable gait, the unstable gait at ``start`` is the answer, else the first gait of
+    the scan.
 
     Returns
     -------
@@ -920,12 +923,20 @@ def _first_gait(
     GaitNotFoundError
         If ``auto`` finds no gait at any scanned slope.
     """
+    scan = np.linspace(start, stop, max(points, 2))
+    at_start: LimitCycle | None = None
     try:
-        return [(start, auto(start))]
+        at_start = auto(start)
+        if at_start.stable:
+            return [(start, at_start)]
+        near(float(scan[1]), at_start.fixed_point)  # its family goes on into the range
+        return [(start, at_start)]
     except GaitNotFoundError:
         pass
-    scan = np.linspace(start, stop, max(points, 2))
-    first: tuple[int, LimitCycle] | None = None
+    # an unstable gait at the start whose family ends before the next scanned slope is kept
+    # only if no stable gait turns up further on (the kneed walker below 2.16 deg: a
+    # long-period unstable gait, where the stable family has not started)
+    first: tuple[int, LimitCycle] | None = None if at_start is None else (0, at_start)
     for k in range(1, scan.size):
         try:
             cycle = auto(float(scan[k]))
@@ -971,7 +982,7 @@ def compass_bifurcation(
     *,
     transient: int = 50,
     record: int = 16,
-    continuation_points: int = 12,
+    continuation_points: int | None = 12,
     progress: bool = False,
     backend: str = "compiled",
 ) -> tuple[BifurcationDiagram, Continuation]:
@@ -983,8 +994,10 @@ def compass_bifurcation(
     discarded, ``record`` impact angles and step periods kept per slope) and the continuation of
     the period-one gait over ``continuation_points`` slopes evenly spaced over the same range
     (:func:`~heelstrike.analysis.limit_cycle.continue_limit_cycle`, tolerances 1e-10), which
-    marks the period-doubling slopes, all on one ``backend``. :func:`model_bifurcation` is the
-    same for a described walker.
+    marks the period-doubling slopes, all on one ``backend``. With ``continuation_points=None``
+    the branch is continued over the diagram's slopes and refined where it curves, so that
+    straight lines between its gaits follow it (what ``heelstrike bifurcation`` draws).
+    :func:`model_bifurcation` is the same for a described walker.
 
     If there is no gait at the first slope, the range starts where the walker's gaits start:
     the automatic search scans min(12, K) slopes evenly spaced over the range for the first
@@ -999,8 +1012,11 @@ def compass_bifurcation(
         Increasing slopes (rad), > 0.
     transient, record : int
         Steps discarded and recorded per slope.
-    continuation_points : int
-        Slopes of the branch.
+    continuation_points : int or None
+        Slopes of the branch, evenly spaced over the range; None: the slopes of the diagram
+        (from the onset), with gaits added between them where straight segments would miss
+        the branch by more than 0.2 % of its span in impact angle or period (halving a segment
+        at most 8 times).
     progress : bool
         Report progress on stderr.
     backend : {"compiled", "scipy"}
@@ -1039,12 +1055,16 @@ def compass_bifurcation(
 
 def _diagram_and_branch(
     walker: Any, slopes: FloatArray, family: list[tuple[float, LimitCycle]], simulator: Any, *,
-    transient: int, record: int, continuation_points: int, progress: bool,
+    transient: int, record: int, continuation_points: int | None, progress: bool,
     walk_tolerances: dict[str, Any], branch_tolerances: dict[str, Any],
 ) -> tuple[BifurcationDiagram, Continuation]:
     """The brute-force diagram over ``slopes`` and the continued period-one branch from the
     first gait of the range to its last slope, on ``simulator`` (the bifurcation functions'
     shared part).
+
+    The branch's slopes: ``continuation_points`` evenly spaced from the onset to the last
+    slope, or (None) the onset and every slope of the diagram above it, refined where the
+    branch curves (:func:`_refine_branch`).
 
     ``family`` is :func:`_first_gait`'s answer: its first gait, at the onset slope, starts the
     branch; the diagram's rows of slopes below the onset are NaN. The walks start from the
@@ -1075,11 +1095,22 @@ def _diagram_and_branch(
 
         diagram = BifurcationDiagram(slopes=slopes, impact_angles=pad(diagram.impact_angles),
                                      periods=pad(diagram.periods))
-    values = np.linspace(onset, slopes[-1], max(int(continuation_points), 1))
+    if continuation_points is None:  # the diagram's slopes: the line meets every column of dots
+        values = np.concatenate([[onset], slopes[slopes > onset]])
+    else:
+        values = np.linspace(onset, slopes[-1], max(int(continuation_points), 1))
     kw = {"progress": progress, "simulator": simulator, **branch_tolerances}
+
+    def gait_at(v: float, z: FloatArray) -> LimitCycle:
+        return find_limit_cycle(walker, slope=v, guess=z, simulator=simulator,
+                                **branch_tolerances)
+
+    def refined(c: Continuation) -> Continuation:
+        return c if continuation_points is not None else _refine_branch(c, gait_at)
+
     if len(family) == 1 or values.size == 1:
         branch = continue_limit_cycle(walker, "slope", values, guess=z0, **kw)
-        return diagram, branch
+        return diagram, refined(branch)
     head = continue_limit_cycle(walker, "slope", values[:1], guess=z0, **kw)
     rest = continue_limit_cycle(walker, "slope", values[1:], guess=nearest(float(values[1])),
                                 **kw)
@@ -1103,7 +1134,109 @@ def _diagram_and_branch(
         parameter="slope", values=np.concatenate([head.values, rest.values]),
         cycles=head.cycles + rest.cycles, period_doubling=np.asarray(pd), stopped=rest.stopped,
     )
-    return diagram, branch
+    return diagram, refined(branch)
+
+
+#: Largest miss of the branch's drawn polyline (straight segments between its gaits), as a
+#: fraction of the branch's span in impact angle and in period: :func:`_refine_branch` adds
+#: gaits until no segment's midpoint misses the branch by more (0.2 %: under a pixel of the
+#: figure's axes).
+_BRANCH_TOL = 2e-3
+#: Halvings of a segment of the diagram's slope grid at most (near a fold, where the branch
+#: starts, it behaves as a square root of the slope: each halving divides the miss by sqrt 2).
+_BRANCH_DEPTH = 8
+#: Gaits added at most per gait of the branch (a bound on the cost, should the misses not shrink
+#: by halving, e.g. at a kink of the branch), plus 16.
+_BRANCH_EXTRA = 4
+
+
+def _chord_miss(a: LimitCycle, m: LimitCycle, b: LimitCycle, scale: FloatArray) -> float:
+    """The miss of the chord from ``a`` to ``b`` at the gait ``m`` halfway (in slope), in
+    ``scale`` units of impact angle and period (the larger of the two)."""
+    mid = 0.5 * (np.array([a.impact_angle, a.period]) + np.array([b.impact_angle, b.period]))
+    return float(np.max(np.abs(np.array([m.impact_angle, m.period]) - mid) / scale))
+
+
+def _refine_branch(
+    branch: Continuation, gait_at: Callable[[float, FloatArray], LimitCycle], *,
+    tol: float = _BRANCH_TOL, depth: int = _BRANCH_DEPTH,
+) -> Continuation:
+    """The branch with gaits added where straight segments between its gaits would miss it.
+
+    A segment is halved (``gait_at(slope, z)``: Newton from the mean of its ends' fixed
+    points) where the second differences of the impact angle or the period over the
+    neighbouring gaits predict a miss above ``tol / 4`` of the branch's span, and the halves
+    again while the gait found halfway misses the chord by more than ``tol`` of the span, at
+    most ``depth`` times, and at most ``4 K + 16`` gaits are added to a branch of ``K``. A gait
+    not found, or farther from that mean than the ends are from each other (another branch),
+    ends the segment's refinement. The period doublings are kept.
+
+    Parameters
+    ----------
+    branch : Continuation
+        A period-one branch in the slope, by increasing slope.
+    gait_at : callable
+        ``gait_at(slope, z) -> LimitCycle`` from the section point ``z``; may raise
+        :class:`~heelstrike.analysis.limit_cycle.GaitNotFoundError`.
+    tol : float
+        Largest miss, as a fraction of the branch's span in impact angle and in period.
+    depth : int
+        Largest number of halvings of a segment.
+
+    Returns
+    -------
+    Continuation
+    """
+    from heelstrike.analysis.limit_cycle import Continuation
+
+    x = np.asarray(branch.values, dtype=float)
+    cycles = list(branch.cycles)
+    if x.size < 2:
+        return branch
+    y = np.array([[c.impact_angle, c.period] for c in cycles])
+    scale = np.ptp(y, axis=0)
+    scale = np.where(scale > 0, scale, np.maximum(np.abs(y).max(axis=0), 1e-12))
+    # predicted miss of each segment: |second divided difference| h^2 / 4 over the triples
+    # that contain it (the chord of a parabola misses it by |y''| h^2 / 8 at the middle)
+    predicted = np.zeros(x.size - 1)
+    for i in range(1, x.size - 1):
+        d2 = ((y[i + 1] - y[i]) / (x[i + 1] - x[i]) - (y[i] - y[i - 1]) / (x[i] - x[i - 1])) \
+            / (x[i + 1] - x[i - 1])
+        for k in (i - 1, i):
+            miss = float(np.max(np.abs(d2) * (x[k + 1] - x[k]) ** 2 / 4 / scale))
+            predicted[k] = max(predicted[k], miss)
+
+    budget = [_BRANCH_EXTRA * x.size + 16]  # gaits that may still be added
+
+    def between(a: float, ca: LimitCycle, b: float, cb: LimitCycle, level: int
+                ) -> list[tuple[float, LimitCycle]]:
+        if budget[0] <= 0:
+            return []
+        budget[0] -= 1
+        m = 0.5 * (a + b)
+        guess = 0.5 * (ca.fixed_point + cb.fixed_point)
+        try:
+            cm = gait_at(m, guess)
+        except GaitNotFoundError:
+            return []
+        if np.linalg.norm(cm.fixed_point - guess) > np.linalg.norm(cb.fixed_point
+                                                                   - ca.fixed_point):
+            return []  # Newton went to another branch
+        if level <= 1 or _chord_miss(ca, cm, cb, scale) <= tol:
+            return [(m, cm)]
+        return [*between(a, ca, m, cm, level - 1), (m, cm), *between(m, cm, b, cb, level - 1)]
+
+    xs: list[float] = [float(x[0])]
+    out: list[LimitCycle] = [cycles[0]]
+    for k in range(x.size - 1):
+        if predicted[k] > tol / 4 or x.size == 2:
+            for v, c in between(float(x[k]), cycles[k], float(x[k + 1]), cycles[k + 1], depth):
+                xs.append(v)
+                out.append(c)
+        xs.append(float(x[k + 1]))
+        out.append(cycles[k + 1])
+    return Continuation(parameter=branch.parameter, values=np.asarray(xs), cycles=tuple(out),
+                        period_doubling=branch.period_doubling, stopped=branch.stopped)
 
 
 def model_bifurcation(
@@ -1112,7 +1245,7 @@ def model_bifurcation(
     *,
     transient: int = 50,
     record: int = 16,
-    continuation_points: int = 12,
+    continuation_points: int | None = 12,
     backend: str = "compiled",
     rtol: float = 1e-9,
     atol: float = 1e-10,
@@ -1141,8 +1274,9 @@ def model_bifurcation(
         Increasing slopes (rad), > 0.
     transient, record : int
         Steps discarded and recorded per slope.
-    continuation_points : int
-        Slopes of the branch, evenly spaced over the same range.
+    continuation_points : int or None
+        Slopes of the branch, evenly spaced over the same range; None: the diagram's slopes,
+        refined where the branch curves (as :func:`compass_bifurcation`).
     backend : {"compiled", "scipy"}
         Step simulator.
     rtol, atol : float

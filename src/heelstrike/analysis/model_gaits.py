@@ -48,10 +48,10 @@ from heelstrike.models.builder import BuiltWalker
 
 __all__ = [
     "ANGLE",
+    "REFERENCE_SLOPE",
     "ImpactMap",
     "ModelGait",
     "ModelHeelStrike",
-    "REFERENCE_SLOPE",
     "find_model_gait",
     "find_model_gaits",
     "impact_map",

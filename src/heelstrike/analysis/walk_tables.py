@@ -1,5 +1,5 @@
-"""Tables of a simulated walk: energy, heel strikes, one step's kinematics and ground reaction,
-the phase portrait and a strobe of stick figures.
+"""Tables of a simulated walk: energy, impacts (heel and knee strikes), one step's kinematics
+and ground reaction, the phase portrait and a strobe of stick figures.
 
 Each function turns a :class:`~heelstrike.dynamics.hybrid.WalkResult` into a
 :class:`pandas.DataFrame` in SI units, one column per quantity with its unit in the name
@@ -13,14 +13,17 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from numpy.typing import NDArray
 
 from heelstrike._frames import slope_to_world
-from heelstrike.dynamics.hybrid import WalkResult, ground_reaction
+from heelstrike.dynamics.hybrid import ImpactKind, PhasedImpact, WalkResult, ground_reaction
+from heelstrike.models.base import PlanarWalker
 from heelstrike.models.compass import CompassGait
 
 __all__ = [
     "WalkResult",
     "model_phase_portrait_table",
+    "model_strobe_table",
     "phase_portrait_table",
     "step_table",
     "strobe_table",
@@ -37,13 +40,14 @@ def _check_walk(walk: WalkResult, step: int | None = None) -> None:
         raise ValueError(f"the walk has no samples in step {step} (steps 0..{walk.step.max()})")
 
 
-def walk_energy_table(walker: CompassGait, walk: WalkResult) -> pd.DataFrame:
+def walk_energy_table(walker: PlanarWalker, walk: WalkResult) -> pd.DataFrame:
     """Kinetic, potential and total mechanical energy at every sample of a walk.
 
     Parameters
     ----------
-    walker : CompassGait
-        The walker the walk was simulated with.
+    walker : PlanarWalker
+        The walker the walk was simulated with (a :class:`~heelstrike.models.CompassGait` or a
+        described walker).
     walk : WalkResult
         A passive walk (:func:`heelstrike.dynamics.simulate`).
 
@@ -64,48 +68,96 @@ def walk_energy_table(walker: CompassGait, walk: WalkResult) -> pd.DataFrame:
     )
 
 
-def walk_impact_table(walker: CompassGait, walk: WalkResult) -> pd.DataFrame:
-    """Mechanical energy just before and just after every heel strike of a walk.
+def walk_impact_table(walker: PlanarWalker, walk: WalkResult) -> pd.DataFrame:
+    """Mechanical energy just before and just after every impact of a walk, in time order.
+
+    Every impact the walk records: its heel strikes and, for a described walker with knees
+    (a :class:`~heelstrike.dynamics.hybrid.PhasedWalkResult`), its knee strikes
+    (:attr:`~heelstrike.dynamics.hybrid.PhasedWalkResult.events`). Consecutive rows chain: the
+    total after one impact is the total before the next, up to the integrator's energy drift
+    in between (the walk is passive and conservative between impacts).
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+        The walker the walk was simulated with (a :class:`~heelstrike.models.CompassGait` or a
+        described walker).
+    walk : WalkResult
+        A passive walk.
 
     Returns
     -------
     pandas.DataFrame
-        One row per impact: ``step`` (the step it ends), ``time_s`` (s), ``impact_angle_rad``,
-        ``total_before_J`` and ``total_after_J`` (J, from the walk's samples on either side of
-        the impact; after the last impact from the walk's final state), ``drop_J`` (their
-        difference) and ``T_c_J``, the constrained kinetic energy of the impact (paper eq. 10),
-        which an inert impact destroys: ``drop_J`` equals it.
+        One row per impact, in time order: ``step`` (the step it belongs to: a heel strike
+        ends it, a knee strike falls within it), ``kind`` (``"heel_strike"`` or
+        ``"knee_strike"``, the :data:`~heelstrike.dynamics.hybrid.ImpactKind` of the
+        impact), ``time_s`` (s), ``impact_angle_rad`` (the stance leg's angle ``q3`` at the
+        impact, rad), ``total_before_J`` and ``total_after_J`` (J, from the walk's samples on
+        either side of the impact; after the last impact, if no sample follows it, from the
+        walk's final state), ``drop_J`` (their difference) and ``T_c_J``, the constrained
+        kinetic energy of the impact (paper eq. 10), which an inert impact destroys:
+        ``drop_J`` equals it.
+
+    Raises
+    ------
+    ValueError
+        If the walk has no samples, or its samples do not split into one stretch per impact.
     """
     _check_walk(walk)
     E = np.asarray(
         walker.kinetic_energy(walk.q, walk.q_dot) + walker.potential_energy(walk.q, walk.slope),
         dtype=float,
     )
+    impacts = _impacts(walk)
+    # the samples split into stretches between impacts: a heel strike starts a new step, a
+    # knee strike a new phase of the same step (both sides of an impact are sampled)
+    change = walk.step[1:] != walk.step[:-1]
+    phase = getattr(walk, "phase", None)
+    if phase is not None and len(phase) == walk.t.size:
+        change |= np.asarray(phase)[1:] != np.asarray(phase)[:-1]
+    last = np.nonzero(change)[0]  # last sample before each impact that samples follow
+    if last.size not in (len(impacts), len(impacts) - 1):
+        raise ValueError(f"the walk's samples split into {last.size + 1} stretches, which do "
+                         f"not match its {len(impacts)} impacts")
     rows = []
-    for r in walk.impacts:
-        before = E[np.nonzero(walk.step == r.step)[0][-1]]
-        nxt = np.nonzero(walk.step == r.step + 1)[0]
-        if nxt.size:
-            after = float(E[nxt[0]])
-        else:
+    for i, (kind, step, time, angle, T_c) in enumerate(impacts):
+        if i < last.size:
+            before, after = float(E[last[i]]), float(E[last[i] + 1])
+        else:  # nothing sampled after the walk's last impact
+            before = float(E[-1])
             after = float(
                 walker.kinetic_energy(walk.final_q, walk.final_q_dot)
                 + walker.potential_energy(walk.final_q, walk.slope)
             )
         rows.append(
             {
-                "step": r.step,
-                "time_s": r.time,
-                "impact_angle_rad": r.impact_angle,
-                "total_before_J": float(before),
+                "step": step,
+                "kind": kind,
+                "time_s": time,
+                "impact_angle_rad": angle,
+                "total_before_J": before,
                 "total_after_J": after,
-                "drop_J": float(before) - after,
-                "T_c_J": r.kinetic_energy_constrained,
+                "drop_J": before - after,
+                "T_c_J": T_c,
             }
         )
-    cols = ["step", "time_s", "impact_angle_rad", "total_before_J", "total_after_J", "drop_J",
-            "T_c_J"]
+    cols = ["step", "kind", "time_s", "impact_angle_rad", "total_before_J", "total_after_J",
+            "drop_J", "T_c_J"]
     return pd.DataFrame(rows, columns=cols)
+
+
+def _impacts(walk: WalkResult) -> list[tuple[ImpactKind, int, float, float, float]]:
+    """``(kind, step, time, stance angle, T_c)`` of every impact of ``walk``, in time order:
+    the events of a phased walk (knee strikes too), else its heel strikes."""
+    events: tuple[PhasedImpact, ...] = getattr(walk, "events", ())
+    if len(events) >= len(walk.impacts) and events:
+        out = [(e.kind, int(e.step), float(e.time), float(e.q[2]),
+                float(e.kinetic_energy_constrained)) for e in events]
+    else:
+        heel: ImpactKind = "heel_strike"
+        out = [(heel, int(r.step), float(r.time), float(r.impact_angle),
+                float(r.kinetic_energy_constrained)) for r in walk.impacts]
+    return sorted(out, key=lambda row: row[2])  # stable: simultaneous impacts keep their order
 
 
 def step_table(walker: CompassGait, walk: WalkResult, step: int = 0) -> pd.DataFrame:
@@ -173,6 +225,18 @@ def phase_portrait_table(walk: WalkResult) -> pd.DataFrame:
     )
 
 
+def _strobe_samples(walk: WalkResult, step: int, frames: int) -> tuple[NDArray[np.int_], float]:
+    """Indices of the samples nearest ``frames`` evenly spaced instants of step ``step`` (the
+    last: the sample just before its impact) and the step's start time (s)."""
+    if frames < 2:
+        raise ValueError(f"frames must be >= 2, got {frames}")
+    _check_walk(walk, step)
+    ids = np.nonzero(walk.step == step)[0]
+    t = walk.t[ids]
+    want = np.linspace(t[0], t[-1], frames)
+    return ids[np.clip(np.searchsorted(t, want), 0, ids.size - 1)], float(t[0])
+
+
 def strobe_table(
     walker: CompassGait, walk: WalkResult, step: int = 0, frames: int = 7
 ) -> pd.DataFrame:
@@ -187,13 +251,7 @@ def strobe_table(
         ``swing_rad`` (leg angles from the slope's normal) and ``stance_leg`` (which physical
         leg stands: 0 or 1). The last frame is the instant of heel strike.
     """
-    if frames < 2:
-        raise ValueError(f"frames must be >= 2, got {frames}")
-    _check_walk(walk, step)
-    ids = np.nonzero(walk.step == step)[0]
-    t = walk.t[ids]
-    want = np.linspace(t[0], t[-1], frames)
-    pick = ids[np.clip(np.searchsorted(t, want), 0, ids.size - 1)]
+    pick, t0 = _strobe_samples(walk, step, frames)
     q = walk.q[pick]
     pos = walker.positions(q)
     hip = slope_to_world(pos.hip, walk.slope)
@@ -201,7 +259,7 @@ def strobe_table(
     sw = slope_to_world(pos.left_foot_centre, walk.slope)
     return pd.DataFrame(
         {
-            "t_s": walk.t[pick] - t[0],
+            "t_s": walk.t[pick] - t0,
             "hip_x_m": hip[:, 0], "hip_y_m": hip[:, 1],
             "stance_foot_x_m": st[:, 0], "stance_foot_y_m": st[:, 1],
             "swing_foot_x_m": sw[:, 0], "swing_foot_y_m": sw[:, 1],
@@ -238,3 +296,90 @@ def model_phase_portrait_table(walker: Any, walk: WalkResult) -> pd.DataFrame:
             "swing_dot_rad_s": walker.link_angles(walk.q_dot)[swing],
         }
     )
+
+
+def _link_sides(walker: Any) -> dict[str, int | None]:
+    """Side of every link of a described walker: 0 on the stance side, 1 on the swing side
+    (the link hanging from the hip joint and its descendants), None for a link without a mirror
+    (a torso)."""
+    links = walker.description.links
+    swing = {links[walker.joint_index("hip") - 2].name}
+    for lk in links:  # tree order: parents first
+        if lk.parent in swing:
+            swing.add(lk.name)
+    return {lk.name: None if lk.mirror is None else int(lk.name in swing) for lk in links}
+
+
+def model_strobe_table(
+    walker: Any, walk: WalkResult, step: int = 0, frames: int = 7
+) -> pd.DataFrame:
+    """:func:`strobe_table` of a described walker: its own links, feet and point masses at
+    ``frames`` evenly spaced instants of one step.
+
+    Parameters
+    ----------
+    walker : BuiltWalker
+        With a joint named ``hip`` (the swing side hangs from it).
+    walk : WalkResult
+        Its walk.
+    step : int
+        Which step (0-based).
+    frames : int
+        Number of instants (>= 2); the last is the sample just before the step's heel strike.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per frame and drawn element, world frame (x along the horizontal, y up; m):
+        ``frame`` (0-based), ``t_s`` (time since the step began, s), ``element`` (``"link"``,
+        ``"foot"`` or ``"mass"``), ``name`` (the link's, foot's or point mass's name in the
+        walker file), ``leg`` (the physical leg a link or foot belongs to, 0: the initial
+        stance leg, 1: the other; -1 for a link of neither leg, e.g. a torso, and for the
+        point masses),
+        ``x0_m``, ``y0_m``, ``x1_m``, ``y1_m`` and ``radius_m``. A link runs from its proximal
+        point ``(x0, y0)`` to its distal point ``(x1, y1)``; a foot is the arc of radius
+        ``radius_m`` about its centre ``(x0, y0)``, ``(x1, y1)`` the arc's point on the axis of
+        the foot's link (the foot's end of the leg); a point mass sits at ``(x0, y0)`` (equal
+        to ``(x1, y1)``).
+    """
+    pick, t0 = _strobe_samples(walk, step, frames)
+    pos = {k: slope_to_world(np.asarray(v), walk.slope)
+           for k, v in walker.positions(walk.q[pick]).items()}
+    desc = walker.description
+    links = {lk.name: lk for lk in desc.links}
+    sides = _link_sides(walker)
+    stance = np.asarray(walk.stance_leg[pick], dtype=int)
+    t = walk.t[pick] - t0
+    radii = [float(np.asarray(r)) for r in walker.foot_radii]
+
+    def leg(side: int | None, f: int) -> int:
+        return -1 if side is None else int(stance[f] if side == 0 else 1 - stance[f])
+
+    rows: list[dict[str, Any]] = []
+    for f in range(pick.size):
+        head = {"frame": f, "t_s": float(t[f])}
+        for lk in desc.links:
+            a, b = pos[f"{lk.name}.proximal"][f], pos[f"{lk.name}.distal"][f]
+            rows.append({**head, "element": "link", "name": lk.name,
+                         "leg": leg(sides[lk.name], f), "x0_m": a[0], "y0_m": a[1],
+                         "x1_m": b[0], "y1_m": b[1], "radius_m": 0.0})
+        for foot, r in zip(desc.feet, radii, strict=True):
+            lk = links[foot.link]
+            c = pos[f"{foot.name}_foot.centre"][f]
+            prox, dist = pos[f"{lk.name}.proximal"][f], pos[f"{lk.name}.distal"][f]
+            # the root link's foot is at its proximal end, any other link's at its distal end
+            end, other = (prox, dist) if lk.parent is None else (dist, prox)
+            axis = (end - other) / np.linalg.norm(end - other)
+            tip = c + r * axis
+            rows.append({**head, "element": "foot", "name": f"{foot.name}_foot",
+                         "leg": leg(sides[lk.name], f), "x0_m": c[0], "y0_m": c[1],
+                         "x1_m": tip[0], "y1_m": tip[1], "radius_m": r})
+        for pm in desc.point_masses:
+            if pm.name in pos:
+                m = pos[pm.name][f]
+                rows.append({**head, "element": "mass", "name": pm.name, "leg": -1,
+                             "x0_m": m[0], "y0_m": m[1], "x1_m": m[0], "y1_m": m[1],
+                             "radius_m": 0.0})
+    cols = ["frame", "t_s", "element", "name", "leg", "x0_m", "y0_m", "x1_m", "y1_m",
+            "radius_m"]
+    return pd.DataFrame(rows, columns=cols)

@@ -190,8 +190,8 @@ def add_walk(sub: Any) -> None:
         "an animation (.gif, or .mp4 where ffmpeg exists). With --out DIR, also write figures "
         "and their CSV data into DIR: a stick-figure strobe of one step, the phase portrait, "
         "joint angles and ground reaction over a step, and the energy over the walk. With "
-        "--model: the animation, phase portrait, energy and impacts (the strobe and step "
-        "figures are drawn for the compass gait only).",
+        "--model: the animation, strobe, phase portrait, energy and impacts (the step figure "
+        "is drawn for the compass gait only).",
     )
     add_walker_options(p)
     add_model_options(p)
@@ -245,13 +245,15 @@ def _walk_model(args: argparse.Namespace, out: Any, to_dir: bool) -> int:
     q, qd = walker.section_to_state(z)
     walk = simulate(walker, q, qd, backend=backend, slope=args.slope, steps=args.steps,
                     rtol=1e-9, atol=1e-9, max_step=0.5 / args.fps)
-    path = animate_model_walk(walker, walk, out / "walk.gif" if to_dir else out, fps=args.fps)
+    path = animate_model_walk(walker, walk, out / "walk.gif" if to_dir else out, fps=args.fps,
+                              progress=True)
     print(f"{walk.n_steps} steps, status: {walk.status.value} ({walk.message})")
     print(path)
     if to_dir:
         print_paths(write_model_walk_figures(walker, walk, out))
-        print(f"heelstrike: the {' and '.join(COMPASS_ONLY_WALK_FIGURES)} figures are drawn for "
-              "the compass gait only (without --model); not written", file=sys.stderr)
+        only = COMPASS_ONLY_WALK_FIGURES
+        print(f"heelstrike: the {' and '.join(only)} figure{'s are' if len(only) > 1 else ' is'} "
+              "drawn for the compass gait only (without --model); not written", file=sys.stderr)
     return 0 if walk.ok else 1
 
 
@@ -287,14 +289,15 @@ def _run_walk(args: argparse.Namespace) -> int:
     z = parse_guess(args.guess)
     if z is None:
         try:
-            cycle = find_limit_cycle(walker, slope=args.slope)
+            cycle = find_limit_cycle(walker, slope=args.slope, progress=True)
         except GaitNotFoundError as exc:
             raise CliError(f"no gait found to start from: {exc}") from exc
         z = list(cycle.fixed_point)
         _note_unstable_start(cycle.stable, cycle.multipliers)
     walk = PoincareMap(walker=walker, slope=args.slope, rtol=1e-9, atol=1e-9,
                        max_step=0.5 / args.fps).walk(z, args.steps)
-    path = animate_walk(walker, walk, out / "walk.gif" if to_dir else out, fps=args.fps)
+    path = animate_walk(walker, walk, out / "walk.gif" if to_dir else out, fps=args.fps,
+                        progress=True)
     print(f"{walk.n_steps} steps, status: {walk.status.value} ({walk.message})")
     print(path)
     if to_dir:
@@ -420,16 +423,24 @@ def _basin(args: argparse.Namespace, compute: Any) -> Any:
 
 def _render_basin(basin: Any, args: argparse.Namespace, grid: tuple[int, int],
                   head: dict[str, Any], names: Any, title: str, fp: str, work: str) -> int:
-    """Write the basin's figure and data and report it (JSON ``head`` keys first)."""
+    """Write the basin's figure and data and report it (JSON ``head`` keys first); say on
+    stderr when the gait is unstable (then nothing converges to it)."""
     from heelstrike.outputs import write_basin
 
     png, nc = write_basin(basin, args.out)
+    if basin.gait_stable is False:
+        print(f"heelstrike: note: the period-one gait the basin is built around is unstable "
+              f"(largest |multiplier| {basin.spectral_radius:.4g} > 1): no start converges to "
+              "it, its basin is empty (see 'heelstrike bifurcation' for the slopes where it is "
+              "stable)", file=sys.stderr)
     if args.json:
         print_json({
             **head,
             "converging_fraction": basin.converging_fraction,
             "fractions": basin.fractions(),
             "fixed_point": dict(zip(names, map(float, basin.fixed_point), strict=True)),
+            "gait_stable": basin.gait_stable,
+            "spectral_radius": basin.spectral_radius,
             "grid": list(grid),
             "steps": args.steps,
             "slope": args.slope,
@@ -440,6 +451,9 @@ def _render_basin(basin: Any, args: argparse.Namespace, grid: tuple[int, int],
         return 0
     print(title)
     print(f"  {'fixed point':20s} {fp}")
+    if basin.gait_stable is not None:
+        print(f"  {'gait':20s} {'stable' if basin.gait_stable else 'unstable'} (largest "
+              f"|multiplier| {basin.spectral_radius:.4g})")
     print(f"  {'converging':20s} {100 * basin.converging_fraction:.3f} % of the grid")
     for name, frac in basin.fractions().items():
         if frac > 0 and name != "converged":
@@ -645,11 +659,14 @@ def _render_gait_map(gmap: Any, args: argparse.Namespace, head: dict[str, Any], 
             "data": str(nc),
         })
         return 0
-    print(f"{title}: {int(stable.sum())} of {stable.size} {points} points; no gait found at "
-          f"{int((~found).sum())} (NaN in the data, blank in the figure)")
+    # counts of grid points, written "K of N grid points" / "K/N slopes" so that no count
+    # reads as a parameter value ("no gait at 0" read as "at R = 0")
+    print(f"{title}: stable at {int(stable.sum())} of {stable.size} {points} grid points; no "
+          f"gait found at {int((~found).sum())} of {found.size} grid points (NaN in the data, "
+          "blank in the figure)")
     for label, v, row, frow in zip(rows, pd, stable, found, strict=True):
         pd_text = "none in range" if v is None else f"{math.degrees(v):.3f} deg"
         print(f"  {label}: stable at {int(row.sum()):3d}/{row.size} slopes, "
-              f"no gait at {int((~frow).sum()):3d}, period doubling {pd_text}")
+              f"no gait at {int((~frow).sum()):3d}/{frow.size} slopes, period doubling {pd_text}")
     print_paths((png, nc))
     return 0

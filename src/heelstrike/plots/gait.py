@@ -11,6 +11,7 @@ with the Agg canvas (no global pyplot state).
 from __future__ import annotations
 
 import shutil
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -38,6 +39,7 @@ __all__ = [
     "energy_figure",
     "gait_map_figure",
     "model_diagram",
+    "model_strobe_figure",
     "phase_portrait_figure",
     "resample_walk",
     "step_figure",
@@ -97,24 +99,51 @@ def _animation_file(path: str | Path) -> Path:
     return out
 
 
-def _save_animation(fig: Figure, draw: Any, frames: int, fps: float, out: Path) -> Path:
+class _SavedAnimation(FuncAnimation):
+    """A :class:`~matplotlib.animation.FuncAnimation` that is only saved: the writer renders
+    every frame when it grabs it, so the canvas is not also redrawn after each frame is set up
+    (that second full draw per frame doubled the rendering time)."""
+
+    def _post_draw(self, framedata: Any, blit: bool) -> None:
+        pass
+
+
+def _save_animation(
+    fig: Figure, draw: Any, frames: int, fps: float, out: Path, progress: bool = False
+) -> Path:
     """Render ``frames`` frames of ``draw`` at ``fps`` into ``out`` (GIF by Pillow, MP4 by
-    ffmpeg, after the suffix); returns ``out``."""
-    anim = FuncAnimation(fig, draw, frames=frames, interval=1000.0 / fps, blit=False)
+    ffmpeg, after the suffix); returns ``out``. With ``progress``, count the rendered frames in
+    a progress bar on stderr (shown once rendering takes more than 2 s)."""
+    anim = _SavedAnimation(fig, draw, frames=frames, interval=1000.0 / fps, blit=False)
     suffix = out.suffix.lower()
     writer = PillowWriter(fps=round(fps)) if suffix == ".gif" else FFMpegWriter(fps=round(fps))
     out.parent.mkdir(parents=True, exist_ok=True)
-    anim.save(str(out), writer=writer)
+    if not progress:
+        anim.save(str(out), writer=writer)
+        return out
+    from tqdm.auto import tqdm
+
+    with tqdm(total=frames, desc=f"heelstrike: rendering {out.name}", unit="frame",
+              delay=2.0, file=sys.stderr, leave=False) as bar:
+
+        def tick(done: int, total: int) -> None:
+            bar.update(1)
+            if done + 1 == total:  # the writer encodes the file after the last frame
+                bar.set_description(f"heelstrike: encoding {out.name}")
+
+        anim.save(str(out), writer=writer, progress_callback=tick)
     return out
 
 
 def animate_walk(
-    walker: CompassGait, walk: WalkResult, path: str | Path, *, fps: float = 30.0
+    walker: CompassGait, walk: WalkResult, path: str | Path, *, fps: float = 30.0,
+    progress: bool = False,
 ) -> Path:
     """Animate a compass-gait walk to a GIF (or MP4 where ffmpeg exists).
 
     Draws the ground, both legs (each physical leg keeps its colour), both feet's arcs, the hip
-    mass, and a step counter. The file type follows the suffix of ``path``.
+    mass, and a step counter. The file type follows the suffix of ``path``. With ``progress``,
+    a progress bar on stderr counts the frames rendered (shown after 2 s).
 
     Returns
     -------
@@ -157,7 +186,7 @@ def animate_walk(
         label.set_text(f"step {int(walk.step[i]) + 1}   t = {walk.t[i]:.2f} s")
         return [*legs, *feet, hip_dot, label]
 
-    return _save_animation(fig, draw, len(times), fps, out)
+    return _save_animation(fig, draw, len(times), fps, out, progress)
 
 
 def _branch_piece(
@@ -243,6 +272,9 @@ _COLOURS = (
 def basin_figure(basin: Basin) -> Figure:
     """Image of the basin: outcome per initial state, the fixed point marked.
 
+    The title says so when the gait is unstable (the dataset's ``gait_stable`` attribute is 0,
+    with ``gait_spectral_radius``): nothing converges to it.
+
     Returns a :class:`matplotlib.figure.Figure` (Agg canvas attached).
     """
     from matplotlib.colors import BoundaryNorm, ListedColormap
@@ -284,9 +316,13 @@ def basin_figure(basin: Basin) -> Figure:
         head = (f"basin of attraction, R = {ds.attrs['foot_radius']:g} m, slope = "
                 f"{np.degrees(ds.attrs['slope']):g} deg, $\\dot q_4$ = "
                 f"{ds.attrs['q4_dot']:.4f} rad/s")
+    tail = ""
+    if int(ds.attrs.get("gait_stable", 1)) == 0:  # recorded where the fixed point was found
+        tail = (f"\nthe period-one gait is unstable (largest |multiplier| "
+                f"{float(ds.attrs['gait_spectral_radius']):.4g}): no start converges to it")
     ax.set_title(
         f"{head}\n{100 * basin.converging_fraction:.2f} % of the grid converges within "
-        f"{ds.attrs['max_steps']} steps",
+        f"{ds.attrs['max_steps']} steps{tail}",
         fontsize=10,
     )
     return fig
@@ -395,6 +431,60 @@ def strobe_figure(
     return fig
 
 
+def model_strobe_figure(strobe: Any, *, slope: float = 0.0, title: str = "") -> Figure:
+    """Stick-figure strobe of one step of a described walker, drawn with its own links.
+
+    Parameters
+    ----------
+    strobe : pandas.DataFrame
+        From :func:`~heelstrike.analysis.walk_tables.model_strobe_table`.
+    slope : float
+        Ground slope (rad), to draw the ground.
+    title : str
+        Figure title (a default names the step).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Every frame fainter the earlier it is: links as segments (blue and red: the two legs;
+        grey: links of neither leg), feet as arcs, point masses as black dots, their paths
+        dotted.
+    """
+    fig = _new_figure(8.0, 3.6, dpi=110)
+    ax = fig.add_subplot()
+    ax.set_aspect("equal")
+    n = int(strobe["frame"].max()) + 1
+    alphas = np.linspace(0.25, 1.0, n)
+    for r in strobe.itertuples(index=False):
+        alpha = float(alphas[int(r.frame)])
+        colour = LEG_COLOURS[int(r.leg)] if int(r.leg) in (0, 1) else "0.3"
+        if r.element == "link":
+            ax.plot([r.x0_m, r.x1_m], [r.y0_m, r.y1_m], color=colour, lw=2, alpha=alpha,
+                    solid_capstyle="round")
+        elif r.element == "foot" and r.radius_m > 0:
+            mid = np.arctan2(r.y1_m - r.y0_m, r.x1_m - r.x0_m)  # the arc's middle, on the leg
+            phi = mid + np.linspace(-np.pi / 3, np.pi / 3, 25)
+            ax.plot(r.x0_m + r.radius_m * np.cos(phi), r.y0_m + r.radius_m * np.sin(phi),
+                    color=colour, lw=1.5, alpha=alpha)
+        elif r.element == "mass":
+            ax.plot(r.x0_m, r.y0_m, "o", color="k", ms=6, alpha=alpha)
+    for name, d in strobe[strobe["element"] == "mass"].groupby("name", sort=False):
+        ax.plot(d["x0_m"], d["y0_m"], ":", color="0.4", lw=1, label=f"{name} path")
+    xs = strobe[["x0_m", "x1_m"]].to_numpy()
+    pad = float(strobe["radius_m"].max()) + 0.1
+    x0, x1 = float(xs.min()) - pad, float(xs.max()) + pad
+    ground = _to_world(np.array([[x0 / np.cos(slope), 0.0], [x1 / np.cos(slope), 0.0]]), slope)
+    ax.plot(ground[:, 0], ground[:, 1], color="0.3", lw=2, label="ground")
+    ax.set_xlim(x0, x1)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.legend(loc="upper right", fontsize=8)
+    dt = float(strobe["t_s"].max())
+    ax.set_title(title or f"one step, {n} frames over {dt:.3f} s (darkest: heel strike); "
+                 f"blue and red: the two legs", fontsize=10)
+    return fig
+
+
 def phase_portrait_figure(
     portrait: Any, *, title: str = "", labels: tuple[str, str] | None = None
 ) -> Figure:
@@ -487,14 +577,16 @@ def step_figure(step: Any, *, title: str = "") -> Figure:
 
 
 def energy_figure(energy: Any, impacts: Any, *, title: str = "") -> Figure:
-    """Kinetic, potential and total energy over a walk, the heel-strike drops marked.
+    """Kinetic, potential and total energy over a walk, the impacts' drops marked.
 
     Parameters
     ----------
     energy : pandas.DataFrame
         From :func:`~heelstrike.analysis.walk_tables.walk_energy_table`.
     impacts : pandas.DataFrame
-        From :func:`~heelstrike.analysis.walk_tables.walk_impact_table`.
+        From :func:`~heelstrike.analysis.walk_tables.walk_impact_table`: one row per impact;
+        a row whose ``kind`` is ``"knee_strike"`` is a knee strike, any other row (or a table
+        without ``kind``) a heel strike.
     title : str
         Figure title.
 
@@ -502,8 +594,9 @@ def energy_figure(energy: Any, impacts: Any, *, title: str = "") -> Figure:
     -------
     matplotlib.figure.Figure
         Potential and total energy are drawn relative to the initial potential energy ``U(0)``.
-        Between impacts the total is constant; at each heel strike (dashed lines) it drops by
-        the impact's ``T_c``.
+        Between impacts the total is constant; at each heel strike (grey dashed lines, orange
+        arrows) and each knee strike (purple dotted lines and arrows) it drops by the impact's
+        ``T_c``.
     """
     fig = _new_figure(7.5, 4.6, dpi=110)
     ax = fig.add_subplot()
@@ -512,21 +605,32 @@ def energy_figure(energy: Any, impacts: Any, *, title: str = "") -> Figure:
     ax.plot(t, energy["kinetic_J"], color="tab:red", label="kinetic $T$")
     ax.plot(t, energy["potential_J"] - U0, color="tab:blue", label="potential $U - U(0)$")
     ax.plot(t, energy["total_J"] - U0, color="k", lw=2, label="total $T + U - U(0)$")
-    for i, r in enumerate(impacts.itertuples(index=False)):
-        ax.axvline(r.time_s, color="0.5", ls="--", lw=0.8,
-                   label="heel strike" if i == 0 else None)
+    # (line colour, line style, drop colour, label) of each kind of impact
+    styles = {"heel_strike": ("0.5", "--", "tab:orange", "heel strike"),
+              "knee_strike": ("tab:purple", ":", "tab:purple", "knee strike")}
+    labelled: set[str] = set()
+    knees = False
+    for r in impacts.itertuples(index=False):
+        kind = "knee_strike" if getattr(r, "kind", "heel_strike") == "knee_strike" else (
+            "heel_strike")
+        knees |= kind == "knee_strike"
+        line, ls, drop, label = styles[kind]
+        ax.axvline(r.time_s, color=line, ls=ls, lw=0.8 if kind == "heel_strike" else 1.0,
+                   label=None if kind in labelled else label)
+        labelled.add(kind)
         ax.annotate(
             "", xy=(r.time_s, r.total_after_J - U0), xytext=(r.time_s, r.total_before_J - U0),
-            arrowprops={"arrowstyle": "->", "color": "tab:orange", "lw": 1.5},
+            arrowprops={"arrowstyle": "->", "color": drop, "lw": 1.5},
         )
         ax.text(r.time_s, r.total_before_J - U0, f" $T_c$ = {r.T_c_J:.3g} J", fontsize=7,
-                va="bottom", ha="left", color="tab:orange")
+                va="bottom" if kind == "heel_strike" else "top", ha="left", color=drop)
     ax.set_xlabel("time (s)")
     ax.set_ylabel("energy (J)")
     ax.grid(alpha=0.3)
     ax.legend(loc="best", fontsize=8)
     ax.set_title(title or "energy over the walk: constant between impacts, "
-                 "dropping by $T_c$ at heel strike", fontsize=10)
+                 f"dropping by $T_c$ at {'every heel and knee strike' if knees else 'heel strike'}",
+                 fontsize=10)
     return fig
 
 
@@ -659,7 +763,7 @@ def model_diagram(
 
 # -- walks of described walkers (TOML models) ----------------------------------------------------
 def animate_model_walk(walker: Any, walk: WalkResult, path: str | Path, *,
-                       fps: float = 30.0) -> Path:
+                       fps: float = 30.0, progress: bool = False) -> Path:
     """Animate a described walker's walk to a GIF (or MP4 where ffmpeg exists).
 
     Draws the ground, every link as a segment (stance-side links blue, the others red, by the
@@ -673,6 +777,8 @@ def animate_model_walk(walker: Any, walk: WalkResult, path: str | Path, *,
         Output file, ``.gif`` or ``.mp4``.
     fps : float
         Frames per second.
+    progress : bool
+        Count the frames rendered in a progress bar on stderr (shown after 2 s).
 
     Returns
     -------
@@ -717,4 +823,4 @@ def animate_model_walk(walker: Any, walk: WalkResult, path: str | Path, *,
         label.set_text(f"step {int(walk.step[i]) + 1}   t = {walk.t[i]:.2f} s")
         return [*links, *feet, dots, label]
 
-    return _save_animation(fig, draw, len(times), fps, out)
+    return _save_animation(fig, draw, len(times), fps, out, progress)

@@ -4,7 +4,7 @@ For every foot radius the period-one gait is followed along the slope by natural
 continuation (Newton's method on the compiled Poincare map
 :func:`~heelstrike.dynamics.compiled.step_map_compiled`, central-difference Jacobian) with step
 control: secant-predicted sub-steps of at most 0.25 deg between the grid's slopes, halved when
-Newton fails, is slow or lands far from the prediction (:func:`_follow`), so the branch, and
+Newton fails, is slow or lands far from the prediction (``follow``), so the branch, and
 the gaits at the grid's slopes, do not depend on the grid. Each radius's branch starts from an
 *anchor* gait at 3 deg (or the nearest end of the slope range), obtained by continuation in the
 radius from the point-foot gait (found by the automatic attractor search). At every point the
@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import functools
 import itertools
-import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,6 +28,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
+from heelstrike.analysis._continuation import (
+    PARAMETER_STEP,
+    SLOPE_STEP,
+    Point,
+    Solve,
+    follow,
+    follow_both_ways,
+)
 from heelstrike.analysis.limit_cycle import (
     GaitNotFoundError,
     _most_negative_real,
@@ -245,119 +252,15 @@ def _add_derived(ds: xr.Dataset) -> None:
         long_name="a period-one gait was found (else every output is NaN)")
 
 
-#: Natural-parameter continuation of the maps: the largest sub-step along the slope (rad; the
-#: grid's slopes are reached through sub-steps no longer than this whatever the grid), the
-#: smallest sub-step as a fraction of the largest (below it the branch ends: a fold or a lost
-#: gait), the Newton iterations allowed per sub-step, the iterations above which the next
-#: sub-step is halved, and the largest corrector distance ``|z - z_predicted|`` (section units,
-#: rad and rad/s) of an accepted sub-step (a larger one is a jump to another gait family).
-_SLOPE_STEP = float(np.deg2rad(0.25))
-_MIN_STEP_FRACTION = 1.0 / 32.0
-_STEP_MAX_ITER = 10
-_SLOW_ITER = 5
-_MAX_JUMP = 0.05
 #: Largest sub-step of the continuation in the compass walker's foot radius (m).
 _RADIUS_STEP = 0.05
-#: Largest sub-step of the continuation in a described walker's parameter, relative to
-#: ``max(1, |base value|, max |values|)`` (SI units).
-_PARAMETER_STEP = 0.05
 #: Absolute precision (rad) of the period-doubling slope refined between two sub-steps.
 _PD_TOL = 1e-9
 
 
-@dataclass(frozen=True, kw_only=True)
-class _Point:
-    """An accepted point of a continuation: parameter value, fixed point, most negative real
-    multiplier (NaN if none is real) and the solver's gait object."""
-
-    value: float
-    z: FloatArray
-    mnr: float
-    gait: Any
-
-
-#: ``solve(value, guess, max_iter) -> (gait, fixed point, Newton iterations, most negative real
-#: multiplier)``; raises :class:`GaitNotFoundError`.
-_Solve = Callable[[float, FloatArray, int], tuple[Any, FloatArray, int, float]]
-
-
-def _follow(
-    solve: _Solve, start: _Point, targets: Sequence[float], h_max: float
-) -> tuple[list[_Point | None], list[_Point]]:
-    """Natural-parameter continuation from ``start`` through ``targets`` with step control.
-
-    ``targets`` lie on one side of ``start.value``, ordered away from it. Sub-steps are at most
-    ``h_max``; each is predicted by the secant through the last two accepted points (the last
-    point for the first sub-step) and corrected by ``solve``. A sub-step is retried at half the
-    length when Newton fails, needs more than ``_STEP_MAX_ITER`` iterations, or lands farther
-    than ``_MAX_JUMP`` from the prediction; the length doubles again (up to ``h_max``) after
-    fast sub-steps and halves after slow ones. The branch ends where the sub-step would fall
-    below ``h_max * _MIN_STEP_FRACTION``. So the gaits at the targets are those of one branch,
-    whatever the targets are.
-
-    Returns
-    -------
-    (list of _Point or None, list of _Point)
-        Per target its gait (None past the end of the branch); every accepted point in order,
-        ``start`` first.
-    """
-    path = [start]
-    out: list[_Point | None] = [None] * len(targets)
-    h, h_min = h_max, h_max * _MIN_STEP_FRACTION
-    for k, t in enumerate(targets):
-        while True:
-            cur = path[-1]
-            rem = float(t) - cur.value
-            if abs(rem) <= 1e-12 * max(1.0, abs(float(t))):
-                out[k] = cur
-                break
-            v = float(t) if abs(rem) <= h else cur.value + math.copysign(h, rem)
-            pred = cur.z
-            if len(path) >= 2 and path[-2].value != cur.value:
-                prev = path[-2]
-                pred = cur.z + (cur.z - prev.z) * ((v - cur.value) / (cur.value - prev.value))
-            try:
-                gait, z, it, mnr = solve(v, pred, _STEP_MAX_ITER)
-                ok = bool(np.all(np.isfinite(z))) and float(np.linalg.norm(z - pred)) <= _MAX_JUMP
-            except GaitNotFoundError:
-                ok = False
-            length = abs(v - cur.value)
-            if not ok:
-                h = 0.5 * length
-                if h < h_min:
-                    return out, path
-                continue
-            path.append(_Point(value=v, z=np.asarray(z, dtype=float), mnr=mnr, gait=gait))
-            h = min(h_max, 2.0 * length) if it <= 3 else (0.5 * length if it > _SLOW_ITER
-                                                          else length)
-            h = max(h, h_min)
-    return out, path
-
-
-def _follow_both_ways(
-    solve: _Solve, start: _Point, targets: FloatArray, h_max: float
-) -> tuple[list[_Point | None], list[_Point]]:
-    """:func:`_follow` from ``start`` up and down through ``targets`` (any order); returns per
-    target its gait (None where the branch does not reach) and every accepted point sorted by
-    value."""
-    T = np.asarray(targets, dtype=float)
-    up = [i for i in np.argsort(T, kind="stable") if T[i] >= start.value]
-    down = [i for i in np.argsort(-T, kind="stable") if T[i] < start.value]
-    out: list[_Point | None] = [None] * T.size
-    points = [start]
-    for idx in (up, down):
-        if not idx:
-            continue
-        got, path = _follow(solve, start, [float(T[i]) for i in idx], h_max)
-        for i, g in zip(idx, got, strict=True):
-            out[i] = g
-        points += path[1:]
-    return out, sorted(points, key=lambda p: p.value)
-
-
 def _pd_bracket(
-    points: Sequence[_Point], any_sign: bool = True
-) -> tuple[_Point, _Point] | None:
+    points: Sequence[Point], any_sign: bool = True
+) -> tuple[Point, Point] | None:
     """The first pair of consecutive continuation points (by increasing value) between which the
     most negative real multiplier crosses -1 (with ``any_sign`` False: from above -1 to -1 or
     below), or None."""
@@ -384,7 +287,7 @@ def _branch(
     atol: float,
 ) -> tuple[dict[str, FloatArray], FloatArray, FloatArray, float]:
     """Continue the gait of one walker from the anchor (its fixed point at ``anchor_slope``)
-    up and down through ``slopes`` (:func:`_follow`: sub-steps of at most ``_SLOPE_STEP``, so
+    up and down through ``slopes`` (``follow``: sub-steps of at most ``SLOPE_STEP``, so
     the branch does not depend on the grid).
 
     Returns per-slope outputs, fixed points (S, 3), most negative real multiplier (S,) and the
@@ -402,10 +305,10 @@ def _branch(
 
     try:
         g0, z0, _, m0 = solve(anchor_slope, anchor, 20)
-        start = _Point(value=anchor_slope, z=z0, mnr=m0, gait=g0)
+        start = Point(value=anchor_slope, z=z0, mnr=m0, gait=g0)
     except GaitNotFoundError:
         return out, fixed, mnr, float("nan")
-    got, points = _follow_both_ways(solve, start, slopes, _SLOPE_STEP)
+    got, points = follow_both_ways(solve, start, slopes, SLOPE_STEP)
     for i, p in enumerate(got):
         if p is None:
             continue  # the branch ends (fold or failure) before this slope: NaN
@@ -531,7 +434,7 @@ def _anchors(
     """An anchor (slope, gait) for every radius (NaNs where none is found).
 
     At the anchor slope :func:`_anchor_slope`: by continuation in the radius in sorted order
-    (:func:`_follow`, sub-steps of at most 0.05 m) from the point foot's preferred gait (or from
+    (``follow``, sub-steps of at most 0.05 m) from the point foot's preferred gait (or from
     ``guess`` at the smallest radius). Where the continuation breaks, the automatic search is
     run at that radius and the continuation restarts from what it finds. A radius with no gait
     found at the anchor slope is searched at the :func:`_fallback_slopes` (large feet have
@@ -560,7 +463,7 @@ def _anchors(
         zk = np.full(3, np.nan)
         if np.all(np.isfinite(z)):
             # continuation in the radius with step control (sub-steps of at most 0.05 m)
-            (got,), _ = _follow(solve, _Point(value=R_prev, z=z, mnr=np.nan, gait=None), [R],
+            (got,), _ = follow(solve, Point(value=R_prev, z=z, mnr=np.nan, gait=None), [R],
                                 _RADIUS_STEP)
             if got is not None:
                 zk = got.z
@@ -765,7 +668,7 @@ def model_gait_map(
     n_fb = max(2, int(np.ceil((S[-1] - S[0]) / np.deg2rad(1.0))) + 1)
     fallback = sorted(np.linspace(S[0], S[-1], n_fb), key=lambda s: abs(s - s_a))
     base = float(w0.params[parameter])
-    h_param = _PARAMETER_STEP * max(1.0, abs(base), float(np.max(np.abs(P))))
+    h_param = PARAMETER_STEP * max(1.0, abs(base), float(np.max(np.abs(P))))
 
     def gait_of(w: PhasedWalker, slope: float, guess: FloatArray | None,
                 max_iter: int = 20) -> tuple[Any, FloatArray, int, float]:
@@ -777,13 +680,13 @@ def model_gait_map(
         return (g, np.asarray(g.cycle.fixed_point, dtype=float), int(g.cycle.iterations),
                 float("nan") if m is None else float(m))
 
-    def point(value: float, found: tuple[Any, FloatArray, int, float]) -> _Point:
-        return _Point(value=value, z=found[1], mnr=found[3], gait=found[0])
+    def point(value: float, found: tuple[Any, FloatArray, int, float]) -> Point:
+        return Point(value=value, z=found[1], mnr=found[3], gait=found[0])
 
-    def in_parameter(slope: float) -> _Solve:
+    def in_parameter(slope: float) -> Solve:
         return lambda v, z, it: gait_of(w0.replace(**{parameter: v}), slope, z, it)
 
-    def search(w: PhasedWalker, slope: float) -> _Point | None:
+    def search(w: PhasedWalker, slope: float) -> Point | None:
         try:
             return point(slope, gait_of(w, slope, None))
         except GaitNotFoundError:
@@ -793,20 +696,20 @@ def model_gait_map(
     # the parameter up and down from its value, so every map over the same ranges continues the
     # same branches
     first = search(w0, s_a)
-    chain0 = None if first is None else _Point(value=base, z=first.z, mnr=first.mnr,
+    chain0 = None if first is None else Point(value=base, z=first.z, mnr=first.mnr,
                                                gait=first.gait)
     order = [i for i in np.argsort(P, kind="stable") if P[i] >= base]
     order_down = [i for i in np.argsort(-P, kind="stable") if P[i] < base]
     for idx in (order, order_down):
         chain = chain0  # the last gait at s_a, as a point in the parameter
-        prev: tuple[float, list[_Point]] | None = None  # the last value's slope branch
+        prev: tuple[float, list[Point]] | None = None  # the last value's slope branch
         for i in idx:
             value, w = float(P[i]), walkers[i]
-            start: _Point | None = None
+            start: Point | None = None
             if chain is not None:  # 1. continuation in the parameter at s_a
-                (got,), _ = _follow(in_parameter(s_a), chain, [value], h_param)
+                (got,), _ = follow(in_parameter(s_a), chain, [value], h_param)
                 if got is not None:
-                    chain, start = got, _Point(value=s_a, z=got.z, mnr=got.mnr, gait=got.gait)
+                    chain, start = got, Point(value=s_a, z=got.z, mnr=got.mnr, gait=got.gait)
             if start is None and prev is not None:
                 # 2. from the last value's gaits at the other anchor slopes
                 tried: list[float] = []
@@ -815,17 +718,17 @@ def model_gait_map(
                     if near.value in tried or len(tried) >= 3:
                         continue
                     tried.append(near.value)
-                    pt = _Point(value=prev[0], z=near.z, mnr=near.mnr, gait=near.gait)
-                    (got,), _ = _follow(in_parameter(near.value), pt, [value], h_param)
+                    pt = Point(value=prev[0], z=near.z, mnr=near.mnr, gait=near.gait)
+                    (got,), _ = follow(in_parameter(near.value), pt, [value], h_param)
                     if got is not None:
-                        start = _Point(value=near.value, z=got.z, mnr=got.mnr, gait=got.gait)
+                        start = Point(value=near.value, z=got.z, mnr=got.mnr, gait=got.gait)
                         break
             if start is None:  # 3. the automatic search, at s_a then at the other slopes
                 for s in fallback if s_a in fallback else [s_a, *fallback]:
                     start = search(w, float(s))
                     if start is not None:
                         if start.value == s_a:
-                            chain = _Point(value=value, z=start.z, mnr=start.mnr,
+                            chain = Point(value=value, z=start.z, mnr=start.mnr,
                                            gait=start.gait)
                         break
             if start is None:
@@ -836,7 +739,7 @@ def model_gait_map(
                       ) -> tuple[Any, FloatArray, int, float]:
                 return gait_of(w, s, z, it)
 
-            got_s, points = _follow_both_ways(solve, start, S, _SLOPE_STEP)
+            got_s, points = follow_both_ways(solve, start, S, SLOPE_STEP)
             for j, at in enumerate(got_s):
                 if at is None:
                     continue

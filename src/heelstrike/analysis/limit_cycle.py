@@ -352,6 +352,9 @@ def _progress(items: Sequence[Any], enabled: bool, desc: str) -> Iterable[Any]:
 
 #: Time bound (s) of the automatic search for gaits (seeding and Newton from every seed).
 SEARCH_TIME_LIMIT = 300.0
+#: Smallest sub-step of :func:`continue_limit_cycle`, as a fraction of its values' spacing.
+_CONTINUATION_MIN_STEP = 1.0 / 1024.0
+
 #: Two fixed points closer than this (Euclidean norm in section coordinates) are the same gait.
 SAME_GAIT_TOL = 1e-6
 
@@ -849,7 +852,12 @@ def continue_limit_cycle(
 ) -> Continuation:
     """Natural-parameter continuation of a period-one gait.
 
-    Each gait is found by Newton's method started from the previous one. Period doubling is
+    Each gait is found by Newton's method from the secant prediction of the previous ones, with
+    step control (the one continuation, ``heelstrike.analysis._continuation.follow``): where
+    Newton fails, is slow or lands far from the prediction (another gait family), the step to
+    the next value is halved, so the branch does not depend on how finely ``values`` sample
+    it; the continuation stops where the sub-step would fall below 1/1024 of the values'
+    largest spacing (a fold, or the end of the walker's gaits). Period doubling is
     detected where the most negative real multiplier crosses -1 between consecutive values,
     and located by :func:`refine_period_doubling` (bisection, 12 halvings of the bracket).
 
@@ -884,28 +892,61 @@ def continue_limit_cycle(
             f"cannot continue a gait of {walker!r}: {exc} (for a described walker use "
             "heelstrike.dynamics.phased.PhasedWalker.from_built(walker))"
         ) from None
+    from heelstrike.analysis._continuation import Point, follow
+
+    def at(v: float) -> tuple[PlanarWalker, float]:
+        if parameter == "slope":
+            return walker, float(v)
+        try:
+            return walker.replace(**{parameter: float(v)}), slope
+        except TypeError as exc:  # a dataclass walker without that field
+            raise ValueError(f"{parameter!r} is not a parameter of {walker!r}: {exc}") from None
+
+    def where(v: float) -> str:
+        return f"slope {np.rad2deg(v):.4g} deg" if parameter == "slope" else f"{parameter} = {v:g}"
+
+    last_error: list[GaitNotFoundError] = []
+
+    def correct(v: float, z: FloatArray, it: int) -> tuple[LimitCycle, FloatArray, int, float]:
+        w, s = at(v)
+        try:
+            c = find_limit_cycle(w, slope=s, guess=z, **{**kwargs, "max_iter": it})
+        except GaitNotFoundError as exc:
+            last_error[:] = [exc]
+            raise
+        return c, c.fixed_point, c.iterations, float("nan")
+
     cycles: list[LimitCycle] = []
     found: list[float] = []
     stopped = None
-    z = None if guess is None else np.asarray(guess, dtype=float)
+    max_iter = int(kwargs.get("max_iter", 20))
+    # sub-steps of at most the values' largest spacing: on a well-resolved grid one per value,
+    # halved where Newton fails, is slow or jumps (the branch does not depend on the grid),
+    # down to 1/1024 of it (a coarse grid's first sub-step, predicted without a secant, may
+    # need many halvings)
+    h_max = float(np.max(np.abs(np.diff(vals)))) if vals.size > 1 else 1.0
+    point: Point | None = None
     for v in _progress(list(vals), progress, f"continuation in {parameter}"):
-        if parameter == "slope":
-            w, s = walker, float(v)
-        else:
+        if point is None:
+            w, s = at(v)
             try:
-                w, s = walker.replace(**{parameter: float(v)}), slope
-            except TypeError as exc:  # a dataclass walker without that field
-                raise ValueError(f"{parameter!r} is not a parameter of {walker!r}: {exc}") from None
-        try:
-            c = find_limit_cycle(w, slope=s, guess=z, **kwargs)
-        except GaitNotFoundError as exc:
-            where = (f"slope {np.rad2deg(v):.4g} deg" if parameter == "slope"
-                     else f"{parameter} = {v:g}")
-            stopped = f"no gait at {where}: {exc}"
-            break
-        cycles.append(c)
+                c = find_limit_cycle(w, slope=s, guess=guess, **kwargs)
+            except GaitNotFoundError as exc:
+                stopped = f"no gait at {where(v)}: {exc}"
+                break
+            point = Point(value=float(v), z=c.fixed_point, mnr=float("nan"), gait=c)
+        else:
+            (got,), path = follow(correct, point, [float(v)], h_max, max_iter=max_iter,
+                                  h_min=h_max * _CONTINUATION_MIN_STEP)
+            if got is None:
+                why = f": {last_error[0]}" if last_error else ""
+                stopped = (f"no gait at {where(v)}: the branch ends after {where(path[-1].value)} "
+                           f"(Newton failed, was slow or jumped to another gait on every "
+                           f"shorter sub-step{why})")
+                break
+            point = got
+        cycles.append(point.gait)
         found.append(float(v))
-        z = c.fixed_point
     pd: list[float] = []
     for a, b, ca, cb in zip(found[:-1], found[1:], cycles[:-1], cycles[1:], strict=True):
         ma, mb = _most_negative_real(ca.multipliers), _most_negative_real(cb.multipliers)

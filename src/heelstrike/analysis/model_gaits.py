@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
+from heelstrike.analysis._continuation import PARAMETER_STEP, SLOPE_STEP, Point, follow
 from heelstrike.analysis.heel_strike import trailing_foot_lifts
 from heelstrike.analysis.limit_cycle import (
     GaitNotFoundError,
@@ -297,7 +298,6 @@ def _follow_reference(
     :data:`REFERENCE_SLOPE`, continued along ``lam`` in [0, 1] (parameters and slope linear in
     ``lam``) to ``w`` at ``slope``. Returns the fixed point at ``lam = 1``, or None if there is
     no stable reference gait, nothing to continue, or the branch ends before ``lam = 1``."""
-    from heelstrike.analysis.gait_map import _PARAMETER_STEP, _SLOPE_STEP, _follow, _Point
 
     ref_values = w.description.default_params
     changed = {
@@ -316,15 +316,15 @@ def _follow_reference(
         return None
     if not start.cycle.stable:
         return None
-    # the sub-step bound: at most _SLOPE_STEP of slope and _PARAMETER_STEP (relative) of each
+    # the sub-step bound: at most SLOPE_STEP of slope and PARAMETER_STEP (relative) of each
     # changed parameter per sub-step, as in map
     h = 1.0
     if slope != s0:
-        h = min(h, _SLOPE_STEP / abs(slope - s0))
+        h = min(h, SLOPE_STEP / abs(slope - s0))
     for a, b in changed.values():
         span = float(np.max(np.abs(b - a)))
         scale = max(1.0, float(np.max(np.abs(a))), float(np.max(np.abs(b))))
-        h = min(h, _PARAMETER_STEP * scale / span)
+        h = min(h, PARAMETER_STEP * scale / span)
 
     def solve(lam: float, z: FloatArray, it: int) -> tuple[Any, FloatArray, int, float]:
         at_end = lam == 1.0
@@ -341,7 +341,7 @@ def _follow_reference(
         return c, np.asarray(c.fixed_point, dtype=float), int(c.iterations), float("nan")
 
     z0 = np.asarray(start.cycle.fixed_point, dtype=float)
-    (end,), _ = _follow(solve, _Point(value=0.0, z=z0, mnr=float("nan"), gait=start.cycle),
+    (end,), _ = follow(solve, Point(value=0.0, z=z0, mnr=float("nan"), gait=start.cycle),
                         [1.0], h)
     return None if end is None else end.z
 

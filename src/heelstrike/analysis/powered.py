@@ -760,7 +760,9 @@ def _continue_scalar(
     target continuation of :func:`_find` (a fresh forward-difference Jacobian, Broyden
     updates; the last gait's Broyden Jacobian made Newton stall near folds); a step Newton
     does not solve quickly is halved, and below ``resolution`` the continuation stops (a fold
-    of the family, or a step the walker cannot take).
+    of the family, or a step the walker cannot take). The steps are the one continuation's
+    (``heelstrike.analysis._continuation.follow``): the first ``first_step``, each accepted one
+    doubling the next up to ``max_step``.
 
     Returns
     -------
@@ -774,36 +776,40 @@ def _continue_scalar(
     error : Exception or None
         Why the last failed step failed (None if none failed).
     """
+    from heelstrike.analysis._continuation import Point, follow
+
     lower = problem_at(start).family.lower
-    path = [(start, x, J)]
-    lam, x_prev, lam_prev = start, None, None
-    d, its = first_step, 0
-    error: Exception | None = None
-    while lam != end:
-        lam_try = end if abs(end - lam) <= d else lam + float(np.sign(end - lam)) * d
-        x_pred = x.copy()
-        if x_prev is not None and lam_prev is not None:
-            x_pred = x + (x - x_prev) * ((lam_try - lam) / (lam - lam_prev))
-            x_pred[-1] = max(x_pred[-1], lower)
+    state: dict[str, Any] = {"its": 0, "error": None}
+
+    class _StepFailed(Exception):
+        """A sub-step Newton did not solve (a :class:`SearchLimitError` propagates)."""
+
+    def correct(lam: float, x_pred: FloatArray, _: int) -> tuple[Any, FloatArray, int, float]:
         try:
-            x_new, _, it, J_new = _newton(
-                problem_at(lam_try), x_pred, value_at(lam_try), tol, CONTINUATION_ITERATIONS,
-                h, forward=True, accept=10.0 * tol, min_step=CONTINUATION_MIN_STEP,
+            x_new, _res, it, J_new = _newton(
+                problem_at(lam), x_pred, value_at(lam), tol, CONTINUATION_ITERATIONS, h,
+                forward=True, accept=10.0 * tol, min_step=CONTINUATION_MIN_STEP,
                 min_rate=CONTINUATION_MIN_RATE)
         except SearchLimitError:
             raise
         except PoweredGaitNotFoundError as exc:
-            error = exc
-            d = 0.5 * abs(lam_try - lam)
-            if d < resolution:
-                break
-            continue
-        its += it
-        x_prev, lam_prev = x, lam
-        x, lam, J = x_new, lam_try, J_new
-        path.append((lam, x, J))
-        d = min(2.0 * d, max_step)
-    return path, its, error
+            state["error"] = exc
+            raise _StepFailed from exc
+        state["its"] += it
+        return J_new, x_new, it, float("nan")
+
+    def bound(x_pred: FloatArray) -> FloatArray:
+        out = x_pred.copy()
+        out[-1] = max(out[-1], lower)
+        return out
+
+    # every accepted step doubles the next (fast_iter=None), no jump test: the augmented
+    # problem's unknowns mix section coordinates and the parameter
+    _, points = follow(correct, Point(value=start, z=x, mnr=float("nan"), gait=J), [end],
+                       max_step, h_min=resolution, first_step=first_step, fast_iter=None,
+                       slow_iter=None, max_jump=float("inf"), bound=bound,
+                       failures=(_StepFailed,), reach_tol=0.0)
+    return [(p.value, p.z, p.gait) for p in points], int(state["its"]), state["error"]
 
 
 def _slope_homotopy(

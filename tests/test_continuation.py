@@ -38,7 +38,7 @@ def _fold_problem(fold: float = 2.5) -> tuple[list[float], object]:
 
 
 def test_follow_reaches_targets_on_the_branch_and_stops_at_the_fold() -> None:
-    calls, solve = _fold_problem()
+    _calls, solve = _fold_problem()
     start = Point(value=0.0, z=np.array([np.sqrt(2.5)]), mnr=float("nan"), gait=None)
     got, path = follow(solve, start, [1.0, 2.0, 2.45, 3.0], 0.5)
     for t, p in zip([1.0, 2.0, 2.45], got[:3], strict=True):

@@ -61,9 +61,9 @@ def test_follow_rejects_a_jump_and_halves_the_step() -> None:
         return None, np.array([z_new]), 1, float("nan")
 
     start = Point(value=0.0, z=np.array([0.0]), mnr=float("nan"), gait=None)
-    # one sub-step of 1.0 from the guess z = 0 would land on the other branch (z = 1.0 + 1?)
-    # the first sub-step predicts z = 0 (no secant yet); at v = 0.9 the lower branch (0.9) is
-    # nearer than the jump limit allows, so the step is halved until |z - pred| <= max_jump
+    # the first sub-step (to v = 1) predicts z = 0 (no secant yet): Newton lands on the lower
+    # branch at z = 1, 1.0 from the prediction, more than max_jump: refused, and the sub-step
+    # halved until the corrector stays within 0.3 of its prediction
     got, path = follow(solve, start, [1.0], 1.0, max_jump=0.3)
     assert got[0] is not None and got[0].z[0] == pytest.approx(1.0)
     assert len(path) > 2  # sub-steps were taken

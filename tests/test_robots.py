@@ -668,7 +668,7 @@ def test_readme_robot_example_runs(tmp_path) -> None:
     assert "talos" in outputs[0] and (tmp_path / "state.json").is_file()
     d = json.loads(outputs[-1])
     keys = {"robot", "nq", "nv", "T", "T_c", "T_a", "T_plus", "energy_lost", "qdot_plus",
-            "impulse", "contacts", "units"}
+            "impulse", "contacts", "units", "loss_beyond_T_c", "admissible", "pulling_contacts"}
     assert set(d) == keys  # the keys the README lists, no more
     assert d["T"] == pytest.approx(d["T_c"] + d["T_a"], rel=1e-12)
     shares = sum(c["T_c_normal"] + c["T_c_tangential"] for c in d["contacts"])

@@ -46,6 +46,11 @@ UNITS: dict[str, str | None] = {
     "parameter_name": None, "parameter_unit": None, "kind": None, "figure": None,
     "data": None, "residual": None, "status": None, "message": None, "gait_found": None,
     "gait_stable": None,
+    # robots (heelstrike.cli.robot writes its own units maps with these)
+    "loss_beyond_T_c": "J", "normal_impulse": "N s", "admissible": None, "frame": None,
+    "joint": None, "unit": None,
+    # a joint outside its limits: rad (m for a prismatic joint, its "unit" says which)
+    "position": "rad", "lower": "rad", "upper": "rad",
 }
 
 _POSITION = {"q"}

@@ -168,6 +168,8 @@ def _run_robot_state(args: argparse.Namespace) -> int:
     q, v = gait_state(robot, args.step_length, args.strike_speed,
                       forward_speed=args.forward_speed,
                       swing_forward_speed=args.swing_forward_speed, leading=args.leading)
+    _require_finite_state(robot, q, v)
+    violations = _limit_violations(robot, q)
     lead, trail = robot.feet if args.leading == "left" else robot.feet[::-1]
     q_units, v_units = _joint_units(robot.model)
     state = {
@@ -175,10 +177,13 @@ def _run_robot_state(args: argparse.Namespace) -> int:
         "leading_foot": lead, "trailing_foot": trail, "foot_contact": robot.foot_contact,
         "step_length": args.step_length, "strike_speed": args.strike_speed,
         "forward_speed": args.forward_speed, "swing_forward_speed": args.swing_forward_speed,
+        "joint_limit_violations": violations,
     }
     units = {"robot": None, "q": q_units, "v": v_units, "leading_foot": None,
              "trailing_foot": None, "foot_contact": None, "step_length": "m",
-             "strike_speed": "m/s", "forward_speed": "m/s", "swing_forward_speed": "m/s"}
+             "strike_speed": "m/s", "forward_speed": "m/s", "swing_forward_speed": "m/s",
+             "joint_limit_violations": _violation_units(violations)}
+    _note_limit_violations(violations, f"robot state {robot.name}")
     if args.out is None:
         _print_json(state, units)
         return 0
@@ -189,9 +194,11 @@ def _run_robot_state(args: argparse.Namespace) -> int:
         raise RobotCliError(f"cannot write {str(args.out)!r}: {exc.strerror or exc}") from None
     if args.json:
         _print_json({"out": str(args.out), "robot": robot.name, "nq": robot.nq, "nv": robot.nv,
-                     "leading_foot": lead, "trailing_foot": trail},
+                     "leading_foot": lead, "trailing_foot": trail,
+                     "joint_limit_violations": violations},
                     {"out": None, "robot": None, "nq": "1", "nv": "1", "leading_foot": None,
-                     "trailing_foot": None})
+                     "trailing_foot": None,
+                     "joint_limit_violations": _violation_units(violations)})
         return 0
     print(f"wrote {args.out}: {robot.name} (nq={robot.nq}, nv={robot.nv}), leading foot "
           f"{lead} {args.step_length:g} m ahead of {trail}, descending at "
@@ -199,9 +206,52 @@ def _run_robot_state(args: argparse.Namespace) -> int:
     return 0
 
 
+def _require_finite_state(robot: Any, q: Any, v: Any) -> None:
+    """Refuse a state whose coordinates or kinetic energy ``1/2 v^T M v`` are not finite."""
+    import numpy as np
+
+    with np.errstate(all="ignore"):
+        ok = bool(np.all(np.isfinite(q)) and np.all(np.isfinite(v)))
+        if ok:
+            vv = np.asarray(v, dtype=float)
+            ok = math.isfinite(0.5 * float(vv @ robot.mass_matrix(q) @ vv))
+    if not ok:
+        raise RobotCliError("the state is not finite (its kinetic energy overflows): use "
+                            "smaller speeds")
+
+
+def _limit_violations(robot: Any, q: Any) -> list[dict[str, Any]]:
+    """:func:`heelstrike.robots.states.joint_limit_violations` as JSON-ready objects."""
+    from heelstrike.robots.states import joint_limit_violations
+
+    return [x.to_dict() for x in joint_limit_violations(robot, q)]
+
+
+def _violation_units(violations: list[dict[str, Any]]) -> dict[str, Any]:
+    """Units of the ``joint_limit_violations`` entries (rad; m when all are prismatic)."""
+    units = {x["unit"] for x in violations}
+    u = units.pop() if len(units) == 1 else ("rad" if not units else None)  # mixed: see "unit"
+    return {"joint": None, "position": u, "lower": u, "upper": u, "unit": None}
+
+
+def _note_limit_violations(violations: list[dict[str, Any]], where: str) -> None:
+    """One ``heelstrike: note:`` line on stderr per joint outside its limits."""
+    for x in violations:
+        print(f"heelstrike: note: {where}: joint {x['joint']!r} at {x['position']:.3f} "
+              f"{x['unit']} is outside its limits [{x['lower']:.3f}, {x['upper']:.3f}] "
+              f"{x['unit']}: the robot cannot reach this pose", file=sys.stderr)
+
+
 def add_robot_impact_options(p: argparse.ArgumentParser) -> None:
     """Add ``--robot/--urdf/--mjcf``, ``--strike``, ``--keep`` and ``--friction`` to ``impact``."""
-    g = p.add_argument_group("robots (heelstrike[robots]; --state is then a STATE.json file)")
+    g = p.add_argument_group(
+        "robots (heelstrike[robots]; --state is then a STATE.json file)",
+        "Energy books: T = T_c + T_a, and energy_lost = T - T_plus. energy_lost equals T_c for "
+        "sticking inert contacts; a slipping contact's friction also dissipates admissible "
+        "energy, loss_beyond_T_c = energy_lost - T_c = T_a - T_plus (with --restitution the "
+        "rebound's returned energy is subtracted too). admissible is false, with a note on "
+        "stderr, when a --keep contact pulls on the ground (negative normal impulse): released, "
+        "it would lift; pass it as --strike (complementarity decides) or drop it.")
     g.add_argument("--robot", default=None, metavar="NAME",
                    help="a shipped robot (see 'heelstrike robot list')")
     g.add_argument("--urdf", default=None, metavar="FILE", help="a URDF robot (floating base)")
@@ -248,6 +298,9 @@ def _read_state(path: str, nq: int, nv: int) -> tuple[list[float], list[float]]:
 
 def run_robot_impact(args: argparse.Namespace) -> int:
     """``heelstrike impact --robot NAME | --urdf FILE | --mjcf FILE --state STATE.json ...``."""
+    import numpy as np
+
+    from heelstrike.cli._render import require_finite
     from heelstrike.robots import load_mjcf, load_robot, load_urdf, parse_contact, robot_impact
 
     given = [k for k in ("robot", "urdf", "mjcf") if getattr(args, k, None) is not None]
@@ -270,10 +323,20 @@ def run_robot_impact(args: argparse.Namespace) -> int:
     for c in (*strike, *keep):
         robot.frame_id(c.frame)
     q, v = _read_state(args.state, robot.nq, robot.nv)
-    res = robot_impact(robot, q, v, strike=strike, keep=keep, friction=args.friction,
-                       restitution=args.restitution)
-    d = res.to_dict()
+    violations = _limit_violations(robot, q)
+    with np.errstate(all="ignore"):  # overflow is refused below, as one error line
+        res = robot_impact(robot, q, v, strike=strike, keep=keep, friction=args.friction,
+                           restitution=args.restitution)
+        d = res.to_dict()
     d = {"robot": robot.name, "nq": robot.nq, "nv": robot.nv, **d}
+    require_finite(d)
+    _note_limit_violations(violations, f"state {args.state}")
+    keep_text = dict(zip([c.frame for c in keep], args.keep or [], strict=True))
+    for frame, lam_n in res.pulling_contacts():
+        print(f"heelstrike: note: the kept contact {frame} pulls on the ground (normal impulse "
+              f"{lam_n:.4g} N s < 0), so this impact is not admissible: released, it would "
+              f"lift; pass it as --strike {keep_text.get(frame, frame)} (complementarity then "
+              "decides whether it lifts) or drop it", file=sys.stderr)
     if args.json:
         _, v_units = _joint_units(robot.model)
         impulse_units = [u for c in res.contacts
@@ -286,15 +349,30 @@ def run_robot_impact(args: argparse.Namespace) -> int:
         }
         units = {
             "robot": None, "nq": "1", "nv": "1", "T": "J", "T_c": "J", "T_a": "J",
-            "T_plus": "J", "energy_lost": "J", "qdot_plus": v_units, "impulse": impulse_units,
-            "contacts": contact_units,
+            "T_plus": "J", "energy_lost": "J", "loss_beyond_T_c": "J", "qdot_plus": v_units,
+            "impulse": impulse_units, "contacts": contact_units, "admissible": None,
+            "pulling_contacts": {"frame": None, "normal_impulse": "N s"},
         }
         _print_json(d, {k: units[k] for k in d})
         return 0
     print(f"impact of '{robot.name}' (nq={robot.nq}, nv={robot.nv})")
-    for key in ("T", "T_c", "T_a", "T_plus", "energy_lost"):
-        print(f"  {key:<12} {d[key]:12.6f} J")
+    extra = d["loss_beyond_T_c"]
+    extra_shown = abs(extra) > 1e-9 * max(d["T"], 1e-300)  # beyond round-off
+    for key in ("T", "T_c", "T_a", "T_plus", "energy_lost", "loss_beyond_T_c"):
+        value = d[key] if key != "loss_beyond_T_c" or extra_shown else 0.0
+        print(f"  {key:<15} {value:12.6f} J")
     for c in d["contacts"]:
         print(f"  {c['role']:<6} {c['frame']:<24} {c['type']:<5} {c['mode']:<8} "
               f"T_c normal {c['T_c_normal']:.6f} J, tangential {c['T_c_tangential']:.6f} J")
+    if extra_shown:
+        slipping = [c["frame"] for c in d["contacts"] if c["mode"] == "slip"]
+        causes = []
+        if slipping:
+            causes.append(f"friction at the slipping {', '.join(slipping)} dissipates "
+                          "admissible energy (its tangential rows are not in T_c)")
+        if args.restitution > 0.0:
+            causes.append(f"restitution e = {args.restitution:g} returns energy")
+        print(f"  energy_lost - T_c = {extra:+.6f} J (the energy lost is not T_c here): "
+              f"{' and '.join(causes) or 'see impact --help'}")
+    print(f"  admissible      {'yes' if d['admissible'] else 'no (a kept contact pulls)'}")
     return 0

@@ -8,6 +8,7 @@ from heelstrike.robots.contacts import (
     ContactSpec,
     RobotImpact,
     contact_jacobian,
+    ground_admissible,
     inert_energy_split_batch,
     inert_impact_batch,
     mass_matrices_and_jacobians,
@@ -26,12 +27,19 @@ from heelstrike.robots.loading import (
     load_urdf,
     robot_data_dir,
 )
-from heelstrike.robots.states import gait_configuration, gait_state, gait_velocity
+from heelstrike.robots.states import (
+    JointLimitViolation,
+    gait_configuration,
+    gait_state,
+    gait_velocity,
+    joint_limit_violations,
+)
 from heelstrike.robots.study import RobotStudy, plot_robot_study, robot_heel_strike_study
 
 __all__ = [
     "SHIPPED_ROBOTS",
     "ContactSpec",
+    "JointLimitViolation",
     "Robot",
     "RobotError",
     "RobotImpact",
@@ -41,8 +49,10 @@ __all__ = [
     "gait_configuration",
     "gait_state",
     "gait_velocity",
+    "ground_admissible",
     "inert_energy_split_batch",
     "inert_impact_batch",
+    "joint_limit_violations",
     "list_robots",
     "load_mjcf",
     "load_robot",

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
@@ -56,6 +56,7 @@ __all__ = [
     "ContactSpec",
     "RobotImpact",
     "contact_jacobian",
+    "ground_admissible",
     "inert_energy_split_batch",
     "inert_impact_batch",
     "mass_matrices_and_jacobians",
@@ -203,6 +204,42 @@ class _RowPlan:
                 out[start:start + 3] = J6[:3] - skew @ J6[3:]
 
 
+def ground_admissible(
+    value: ArrayLike, *, kept: bool, scale: ArrayLike = 0.0
+) -> NDArray[np.bool_]:
+    """The paper's admissibility of a foot that does not strike: the ground can only push.
+
+    The one rule used by :func:`heelstrike.robots.study.robot_heel_strike_study` (trailing foot
+    left free) and :meth:`RobotImpact.pulling_contacts` (trailing foot kept).
+
+    - A foot left **free** is admissible when it lifts: ``value`` is the vertical velocity of
+      its sole after impact (m/s), admissible when ``> 0``.
+    - A foot **kept** on the ground (bilateral, inert) is admissible when the ground pushes on
+      it: ``value`` is its normal (vertical) impulse (N s), admissible when ``>= 0`` up to
+      round-off (``-1e-9 * scale``). A negative impulse means the ground would have to pull:
+      released, the foot would lift (for one normal row exactly; the two tests are the two sides
+      of the same complementarity).
+
+    Parameters
+    ----------
+    value : array_like, shape (...)
+        Lift velocity (m/s, free) or normal impulse (N s, kept).
+    kept : bool
+        Whether the foot is kept on the ground.
+    scale : array_like, shape (...)
+        Kept feet: impulse scale of the impact (N s, e.g. the largest impulse) for the round-off
+        tolerance.
+
+    Returns
+    -------
+    ndarray of bool, shape (...)
+    """
+    x = np.asarray(value, dtype=float)
+    if not kept:
+        return np.asarray(x > 0.0)
+    return np.asarray(x >= -1e-9 * np.abs(np.asarray(scale, dtype=float)))
+
+
 @dataclass(frozen=True, kw_only=True)
 class RobotImpact(ResultDictMixin):
     """Impact of a robot with per-contact laws.
@@ -227,8 +264,41 @@ class RobotImpact(ResultDictMixin):
     M: FloatArray
     jacobians: tuple[FloatArray, ...]
 
+    def pulling_contacts(self) -> list[tuple[str, float]]:
+        """Kept contacts the ground would have to pull on: ``(frame, normal impulse (N s))``.
+
+        The impact is admissible (:func:`ground_admissible`) when this is empty. A kept
+        contact's normal impulse is its principal normal row (the vertical force impulse).
+        Striking contacts are unilateral, so their normal impulse is never negative.
+        """
+        lam = self.result.impulse
+        scale = float(np.max(np.abs(lam), initial=0.0))
+        out: list[tuple[str, float]] = []
+        start = 0
+        for c, kept in zip(self.contacts, self.bilateral, strict=True):
+            lam_n = float(lam[start + c.normal[0]])
+            start += c.rows
+            if kept and not bool(ground_admissible(lam_n, kept=True, scale=scale)):
+                out.append((c.frame, lam_n))
+        return out
+
+    @property
+    def loss_beyond_T_c(self) -> float:
+        """``energy_lost - T_c = T_a - T_plus`` (J).
+
+        ``T_c`` counts the rows active in the resolved impact, and a slipping contact's
+        tangential rows are not active: the admissible energy its friction dissipates is this
+        (``>= 0`` without restitution, 0 to round-off when nothing slips). With restitution the
+        energy the rebound returns is subtracted too, so it can be negative.
+        """
+        return float(self.result.energy_lost - self.result.T_c)
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary: ``T``, ``T_c``, ``T_a``, ``qdot_plus``, ``impulse``, ``contacts``.
+
+        Also ``loss_beyond_T_c`` (J, :attr:`loss_beyond_T_c`), ``admissible`` (no kept contact
+        pulls on the ground) and ``pulling_contacts`` (``frame``, ``normal_impulse`` in N s, of
+        :meth:`pulling_contacts`).
 
         Per contact: ``frame``, ``type``, ``role`` (strike/keep), ``mode``, ``T_c_normal``,
         ``T_c_tangential`` (J), ``force_impulse`` (N s, world axes), ``moment_impulse`` (N m s
@@ -236,6 +306,7 @@ class RobotImpact(ResultDictMixin):
         ``slip_speed_post`` (m/s, of the contact point).
         """
         r = self.result
+        pulling = self.pulling_contacts()
         contacts = []
         start = 0
         for i, c in enumerate(self.contacts):
@@ -263,9 +334,12 @@ class RobotImpact(ResultDictMixin):
             "T_a": r.T_a,
             "T_plus": r.T_post,
             "energy_lost": r.energy_lost,
+            "loss_beyond_T_c": self.loss_beyond_T_c,
             "qdot_plus": [float(x) for x in r.velocity_post],
             "impulse": [float(x) for x in r.impulse],
             "contacts": contacts,
+            "admissible": not pulling,
+            "pulling_contacts": [{"frame": f, "normal_impulse": lam_n} for f, lam_n in pulling],
         }
 
 

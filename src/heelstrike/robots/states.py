@@ -14,14 +14,23 @@ base moving forward at ``forward_speed`` without sideways or angular velocity (5
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
 from heelstrike.robots.loading import Robot, RobotError, _pin
 
-__all__ = ["gait_configuration", "gait_state", "gait_velocity"]
+__all__ = [
+    "JointLimitViolation",
+    "gait_configuration",
+    "gait_state",
+    "gait_velocity",
+    "joint_limit_violations",
+]
 
 Leading = Literal["left", "right"]
 
@@ -150,3 +159,74 @@ def gait_state(
     v = gait_velocity(robot, q, strike_speed=strike_speed, forward_speed=forward_speed,
                       swing_forward_speed=swing_forward_speed, leading=leading)
     return q, v
+
+
+@dataclass(frozen=True, kw_only=True)
+class JointLimitViolation(ResultDictMixin):
+    """A joint of a configuration outside the model's position limits.
+
+    Attributes
+    ----------
+    joint : str
+        Joint name in the model.
+    position : float
+        Its coordinate in the configuration (rad, or m for a prismatic joint).
+    lower, upper : float
+        The model's position limits (same unit).
+    unit : {"rad", "m"}
+        Unit of ``position``, ``lower`` and ``upper``.
+    """
+
+    joint: str
+    position: float
+    lower: float
+    upper: float
+    unit: str
+
+
+#: Limits beyond this magnitude mean "unbounded" (URDF files without limits get huge ones).
+_UNBOUNDED = 1e10
+
+
+def joint_limit_violations(
+    robot: Robot, q: ArrayLike, *, tol: float = 1e-9
+) -> list[JointLimitViolation]:
+    """Joints of ``q`` outside the model's ``lowerPositionLimit``/``upperPositionLimit``.
+
+    Only one-coordinate joints are checked (revolute in rad, prismatic in m); the free flyer,
+    continuous (unbounded) revolute joints, spherical joints and joints with infinite, huge
+    (``> 1e10``) or empty limits are skipped.
+
+    Parameters
+    ----------
+    robot : Robot
+    q : array_like, shape (nq,)
+        Configuration (Pinocchio conventions).
+    tol : float
+        Tolerance (rad or m) beyond the limits before a joint counts as outside them.
+
+    Returns
+    -------
+    list of JointLimitViolation
+        In joint order; empty when the configuration is within the limits.
+    """
+    q_, _ = robot.check_state(q)
+    model = robot.model
+    lo_all, hi_all = np.asarray(model.lowerPositionLimit), np.asarray(model.upperPositionLimit)
+    out: list[JointLimitViolation] = []
+    for jid in range(1, model.njoints):
+        joint = model.joints[jid]
+        if int(joint.nq) != 1 or int(joint.nv) != 1:
+            continue
+        i = int(joint.idx_q)
+        lo, hi = float(lo_all[i]), float(hi_all[i])
+        if not (abs(lo) < _UNBOUNDED and abs(hi) < _UNBOUNDED and lo < hi):
+            continue
+        x = float(q_[i])
+        if lo - tol <= x <= hi + tol:
+            continue
+        kind = joint.shortname()
+        prismatic = kind.startswith("JointModelP") and kind != "JointModelPlanar"
+        out.append(JointLimitViolation(joint=str(model.names[jid]), position=x, lower=lo,
+                                       upper=hi, unit="m" if prismatic else "rad"))
+    return out

@@ -6,8 +6,10 @@ gait_configuration`; for every strike speed the pre-impact velocity is
 :func:`heelstrike.robots.states.gait_velocity` (trailing sole at rest, leading sole descending,
 base moving forward). The leading foot strikes with the paper's inert law (all its rows, no slip,
 no rebound) and the trailing foot is left free, as in the paper; the impact is *admissible* when
-the trailing foot lifts (its sole's vertical velocity after impact is positive). All impacts of
-the grid are resolved in one batched call of :func:`heelstrike.core.impact.impact`.
+the trailing foot lifts (its sole's vertical velocity after impact is positive: the rule of
+:func:`heelstrike.robots.contacts.ground_admissible`, which ``impact --robot`` applies to a kept
+trailing foot). All impacts of the grid are resolved in one batched call of
+:func:`heelstrike.core.impact.impact`.
 """
 
 from __future__ import annotations
@@ -21,7 +23,11 @@ from numpy.typing import ArrayLike, NDArray
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
 from heelstrike.core.impact import impact
-from heelstrike.robots.contacts import ContactSpec, mass_matrices_and_jacobians
+from heelstrike.robots.contacts import (
+    ContactSpec,
+    ground_admissible,
+    mass_matrices_and_jacobians,
+)
 from heelstrike.robots.loading import Robot, RobotError
 from heelstrike.robots.states import Leading, gait_configuration, gait_velocity
 
@@ -53,7 +59,7 @@ class RobotStudy(ResultDictMixin):
     trailing_lift_speed : ndarray
         Vertical velocity of the trailing sole after impact (m/s).
     admissible : ndarray of bool
-        ``trailing_lift_speed > 0``.
+        ``trailing_lift_speed > 0`` (:func:`heelstrike.robots.contacts.ground_admissible`).
     """
 
     robot: str
@@ -133,7 +139,7 @@ def robot_heel_strike_study(
         T_c_tangential=np.asarray(res.kinetic_energy_constrained) - T_cn,
         loss_per_metre=np.asarray(per_m),
         trailing_lift_speed=np.asarray(lift),
-        admissible=np.asarray(lift > 0.0),
+        admissible=ground_admissible(lift, kept=False),
     )
 
 

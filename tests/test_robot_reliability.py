@@ -319,3 +319,14 @@ def test_joint_limit_violations_library(g1) -> None:
     assert bad.lower == float(m.lowerPositionLimit[i])
     q[i] = float(m.upperPositionLimit[i]) + 1e-12  # round-off at a limit is not a violation
     assert joint_limit_violations(g1, q) == []
+
+
+def test_a_directory_given_as_urdf_is_named_as_such(tmp_path: Path,
+                                                    capsys: pytest.CaptureFixture[str]) -> None:
+    state = tmp_path / "s.json"
+    assert main(["robot", "state", "talos", "--out", str(state)]) == 0
+    capsys.readouterr()
+    assert main(["impact", "--urdf", str(tmp_path), "--state", str(state),
+                 "--strike", "base_link:point"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "is a directory" in err[0]

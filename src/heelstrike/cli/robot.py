@@ -256,10 +256,14 @@ def add_robot_impact_options(p: argparse.ArgumentParser) -> None:
                    help="a shipped robot (see 'heelstrike robot list')")
     g.add_argument("--urdf", default=None, metavar="FILE", help="a URDF robot (floating base)")
     g.add_argument("--mjcf", default=None, metavar="FILE", help="an MJCF robot (floating base)")
-    g.add_argument("--strike", action="append", default=None, metavar="FRAME:point|flat",
-                   help="striking contact (repeatable; FRAME:arc:RADIUS for an arc heel); "
+    g.add_argument("--strike", action="append", default=None,
+                   metavar="FRAME:point|flat|arc:RADIUS",
+                   help="striking contact (repeatable; FRAME:arc:RADIUS: an arc heel of radius "
+                   "RADIUS m whose centre is the frame's origin, the contact point RADIUS below "
+                   "it along the ground normal); "
                    "unilateral, with --friction and --restitution, its lift is decided")
-    g.add_argument("--keep", action="append", default=None, metavar="FRAME:point|flat",
+    g.add_argument("--keep", action="append", default=None,
+                   metavar="FRAME:point|flat|arc:RADIUS",
                    help="persistent contact (repeatable): bilateral and inert, stays fixed")
     g.add_argument("--friction", type=float, default=math.inf, metavar="MU",
                    help="Coulomb coefficient of the striking contacts (default inf: no slip)")
@@ -311,7 +315,7 @@ def run_robot_impact(args: argparse.Namespace) -> int:
     if args.state is None:
         raise RobotCliError("robots need --state STATE.json with {\"q\": [...], \"v\": [...]}")
     if not args.strike:
-        raise RobotCliError("robots need at least one --strike FRAME:point|flat")
+        raise RobotCliError("robots need at least one --strike FRAME:point|flat|arc:RADIUS")
     strike = [parse_contact(s) for s in args.strike]
     keep = [parse_contact(s) for s in (args.keep or [])]
     if args.robot is not None:

@@ -310,6 +310,8 @@ def _finish(model: Any, name: str, source: Path, q_ref: FloatArray | None,
 
 def _checked_path(path: str | Path, kind: str) -> Path:
     p = Path(path)
+    if p.is_dir():
+        raise RobotError(f"{kind} file {str(p)!r} is a directory, not a {kind} file")
     if not p.is_file():
         raise RobotError(f"{kind} file {str(p)!r} does not exist")
     return p

@@ -90,7 +90,7 @@ def walk_impact_table(walker: PlanarWalker, walk: WalkResult) -> pd.DataFrame:
     pandas.DataFrame
         One row per impact, in time order: ``step`` (the step it belongs to: a heel strike
         ends it, a knee strike falls within it), ``kind`` (``"heel_strike"`` or
-        ``"knee_strike"``, the :data:`~heelstrike.dynamics.hybrid.ImpactKind` of the
+        ``"knee_strike"``, the ``ImpactKind`` of the
         impact), ``time_s`` (s), ``impact_angle_rad`` (the stance leg's angle ``q3`` at the
         impact, rad), ``total_before_J`` and ``total_after_J`` (J, from the walk's samples on
         either side of the impact; after the last impact, if no sample follows it, from the

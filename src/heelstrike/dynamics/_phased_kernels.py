@@ -23,7 +23,9 @@ from typing import Any
 import numpy as np
 from numba import njit
 from numba import types as nbt
+from numba.core import cgutils
 from numba.core.errors import NumbaExperimentalFeatureWarning
+from numba.extending import intrinsic
 
 from heelstrike._typing import FloatArray, IntArray
 from heelstrike.dynamics import _dp5 as dp5
@@ -108,6 +110,11 @@ def _gauss(A: FloatArray, B: FloatArray, k: int, r: int) -> None:
             B[i, j] = s / A[i, i]
 
 
+#: :func:`_gauss` inlined into the right-hand side (every array crossing a call costs two
+#: atomic reference-count updates: ~20% of ``_rhs``)
+_gauss_inline: Any = njit(cache=True, nogil=True, inline="always")(_gauss.py_func)
+
+
 @njit(cache=True, nogil=True)
 def _impact(
     M: FloatArray, A: FloatArray, k: int, qd: FloatArray, v_c: FloatArray, lam: FloatArray
@@ -143,6 +150,28 @@ def _impact(
 
 
 _EPS = float(np.finfo(np.float64).eps)
+
+
+def _borrow_typer(typingctx: Any, arr: Any) -> Any:
+    """A view of ``arr`` without a memory-info pointer: passing it costs no atomic reference
+    counting (``NRT_incref``/``NRT_decref`` on every array crossing a call were ~60% of the
+    kernel's time). The caller must keep ``arr`` itself alive while the view is used, and no
+    view may be returned or stored. Built from numba internals (``make_array``, ``cgutils``):
+    checked with the numba version pinned in ``.ci/constraints.txt``
+    (``tests/test_kernel_work_arrays.py``: runs are bit-identical, serial and threaded)."""
+    if not isinstance(arr, nbt.Array):
+        return None
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        out = context.make_array(signature.args[0])(context, builder, value=args[0])
+        out.meminfo = cgutils.get_null_value(out.meminfo.type)
+        out.parent = cgutils.get_null_value(out.parent.type)
+        return out._getvalue()
+
+    return arr(arr), codegen
+
+
+_borrow: Any = intrinsic(_borrow_typer)
 
 
 @njit(cache=True, nogil=True)
@@ -210,7 +239,7 @@ def _quad(M: FloatArray, v: FloatArray) -> float:
 # ---------------------------------------------------------------------------------------------
 # single support
 # ---------------------------------------------------------------------------------------------
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _unpack(
     x: FloatArray, free: IntArray, qref: FloatArray, R: float, q: FloatArray, qd: FloatArray
 ) -> None:
@@ -235,7 +264,7 @@ def _pack(q: FloatArray, qd: FloatArray, free: IntArray, work: float, x: FloatAr
     x[2 * m] = work
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _forces(
     dyn: Any, p: FloatArray, cfg: FloatArray, q: FloatArray, qd: FloatArray, M: FloatArray,
     h: FloatArray,
@@ -280,7 +309,7 @@ def _rhs(
             if a == 0 and b == 0:
                 v += R * R * M[0, 0]
             Mr[a, b] = v
-    _gauss(Mr, Fr, m, 1)
+    _gauss_inline(Mr, Fr, m, 1)
     for a in range(m):
         dx[a] = x[m + a]
         dx[m + a] = Fr[a, 0]
@@ -288,26 +317,27 @@ def _rhs(
 
 
 @njit(cache=True, nogil=True)
+def _event_work(n: int) -> Any:
+    """Work space of :func:`_event_value`: ``(q, qd, M, h, A, rate, c, X, W, b)``."""
+    return (np.empty(n), np.empty(n), np.empty((n, n)), np.empty(n), np.empty((2, 2, n)),
+            np.empty((2, 2)), np.empty((2, 2)), np.empty((n, 3)), np.empty((2, 2)),
+            np.empty((2, 1)))
+
+
+@njit(cache=True, nogil=True)
 def _reaction(
-    dyn: Any, con: Any, p: FloatArray, cfg: FloatArray, q: FloatArray, qd: FloatArray,
+    dyn: Any, con: Any, p: FloatArray, cfg: FloatArray, q: FloatArray, qd: FloatArray, ew: Any,
 ) -> tuple[float, float]:
     """Ground force on the stance foot ``(A M^-1 A^T)^-1 A M^-1 (h - B u)`` (N)."""
     n = q.shape[0]
-    M = np.empty((n, n))
-    h = np.empty(n)
-    A = np.empty((2, 2, n))
-    rate = np.empty((2, 2))
-    c = np.empty((2, 2))
+    M, h, A, rate, c, X, W, b = ew[2], ew[3], ew[4], ew[5], ew[6], ew[7], ew[8], ew[9]
     _forces(dyn, p, cfg, q, qd, M, h)
     con(q, qd, p, A, rate, c)
-    X = np.empty((n, 3))
     for i in range(n):
         X[i, 0] = A[0, 0, i]
         X[i, 1] = A[0, 1, i]
         X[i, 2] = h[i]
     _gauss(M, X, n, 3)
-    W = np.empty((2, 2))
-    b = np.empty((2, 1))
     for r in range(2):
         for j in range(3):
             s = 0.0
@@ -324,7 +354,7 @@ def _reaction(
 @njit(cache=True, nogil=True)
 def _event_value(
     kind: int, dyn: Any, con: Any, p: FloatArray, cfg: FloatArray, free: IntArray,
-    qref: FloatArray, swing_idx: IntArray, lockv: FloatArray, x: FloatArray,
+    qref: FloatArray, swing_idx: IntArray, lockv: FloatArray, x: FloatArray, ew: Any,
 ) -> float:
     m = free.shape[0]
     if kind == _EV_FWD:
@@ -337,20 +367,16 @@ def _event_value(
             a = swing_idx[i]
             g = min(g, x[a] - lockv[free[a]])
         return g - cfg[_C_THR] if kind == _EV_FLEXED else g
-    n = qref.shape[0]
-    q = np.empty(n)
-    qd = np.empty(n)
+    q, qd = ew[0], ew[1]
     _unpack(x, free, qref, cfg[_C_RST], q, qd)
     if kind == _EV_ARMED or kind == _EV_STRIKE:
-        A = np.empty((2, 2, n))
-        rate = np.empty((2, 2))
-        c = np.empty((2, 2))
+        A, rate, c = ew[4], ew[5], ew[6]
         con(q, qd, p, A, rate, c)
         clearance = c[1, 1] - cfg[_C_RSW]
         if kind == _EV_STRIKE:
             return -clearance
         return min(x[0], min(c[0, 0] - c[1, 0], clearance))
-    lam_t, lam_n = _reaction(dyn, con, p, cfg, q, qd)
+    lam_t, lam_n = _reaction(dyn, con, p, cfg, q, qd, ew)
     if kind == _EV_LOST:
         return lam_n
     return cfg[_C_MU] * lam_n - abs(lam_t)
@@ -358,18 +384,18 @@ def _event_value(
 
 # ---------------------------------------------------------------------------------------------
 # integrator: the drivers of heelstrike.dynamics._dp5 (starting step, event location) with the
-# context tuple ``(dyn, con, p, cfg, free, qref, swing_idx, lockv, q, qd, M, h, Mr, Fr)``
+# context tuple ``(dyn, con, p, cfg, free, qref, swing_idx, lockv, q, qd, M, h, Mr, Fr, ew)``
 # ---------------------------------------------------------------------------------------------
 @njit(nogil=True, inline="always")
 def _ctx_rhs(ctx: Any, x: FloatArray, dx: FloatArray) -> None:
-    dyn, _, p, cfg, free, qref, _, _, q, qd, M, h, Mr, Fr = ctx
+    dyn, _, p, cfg, free, qref, _, _, q, qd, M, h, Mr, Fr, _ = ctx
     _rhs(dyn, p, cfg, free, qref, x, dx, q, qd, M, h, Mr, Fr)
 
 
 @njit(nogil=True, inline="always")
 def _ctx_event(ctx: Any, x: FloatArray, kind: int) -> float:
     dyn, con, p, cfg, free, qref, swing_idx, lockv = ctx[:8]
-    return _event_value(kind, dyn, con, p, cfg, free, qref, swing_idx, lockv, x)
+    return _event_value(kind, dyn, con, p, cfg, free, qref, swing_idx, lockv, x, ctx[14])
 
 
 _ode = dp5.integrator(_ctx_rhs, _ctx_event)
@@ -414,17 +440,12 @@ def _push(
         S2 = np.empty((2 * S.shape[0], S.shape[1]))
         S2[:ns] = S[:ns]
         S = S2
-    q = np.empty(n)
-    qd = np.empty(n)
-    _unpack(x, free, qref, R, q, qd)
+    _unpack(x, free, qref, R, S[ns, 5:5 + n], S[ns, 5 + n:5 + 2 * n])  # into the row
     S[ns, 0] = t
     S[ns, 1] = x[2 * free.shape[0]]
     S[ns, 2] = step
     S[ns, 3] = leg
     S[ns, 4] = phase
-    for i in range(n):
-        S[ns, 5 + i] = q[i]
-        S[ns, 5 + n + i] = qd[i]
     return S, ns + 1
 
 
@@ -448,23 +469,53 @@ def _segment(
     S, ns = _push(S, ns, t, y, free, qref, R, step, leg, phase)
     if t_limit <= t:
         return _EV_NONE, t, S, ns
-    q = np.empty(n)
-    qd = np.empty(n)
-    M = np.empty((n, n))
-    hv = np.empty(n)
-    Mr = np.empty((m, m))
-    Fr = np.empty((m, 1))
-    ctx = (dyn, con, p, cfg, free, qref, swing_idx, lockv, q, qd, M, hv, Mr, Fr)
-    k = np.empty((7, d))
-    ktry = np.empty((7, d))
-    tmp = np.empty(d)
-    ynew = np.empty(d)
-    ytry = np.empty(d)
-    g_old = np.empty(n_ev)
-    g_new = np.empty(n_ev)
+    qo = np.empty(n)
+    qdo = np.empty(n)
+    Mo = np.empty((n, n))
+    hvo = np.empty(n)
+    Mro = np.empty((m, m))
+    Fro = np.empty((m, 1))
+    ewo = _event_work(n)
+    ko = np.empty((7, d))
+    ktryo = np.empty((7, d))
+    wo = np.empty((5, d))
+    go = np.empty((2, n_ev))
+    ew = (_borrow(ewo[0]), _borrow(ewo[1]), _borrow(ewo[2]), _borrow(ewo[3]), _borrow(ewo[4]),
+          _borrow(ewo[5]), _borrow(ewo[6]), _borrow(ewo[7]), _borrow(ewo[8]), _borrow(ewo[9]))
+    # the owners stay referenced (``keep``) while the borrowed views are in use
+    keep = (qo, qdo, Mo, hvo, Mro, Fro, ewo, ko, ktryo, wo, go)
+    return _integrate(
+        dyn, con, _borrow(p), _borrow(cfg), _borrow(free), _borrow(qref), _borrow(swing_idx),
+        _borrow(lockv), _borrow(y), t, t_limit, _borrow(kinds), _borrow(dirs), rtol, atol,
+        max_step, S, ns, step, leg, phase, _borrow(qo), _borrow(qdo), _borrow(Mo), _borrow(hvo),
+        _borrow(Mro), _borrow(Fro), ew, _borrow(ko), _borrow(ktryo), _borrow(wo), _borrow(go),
+        keep,
+    )
+
+
+@njit(cache=True, nogil=True)
+def _integrate(
+    dyn: Any, con: Any, p: FloatArray, cfg: FloatArray, free: IntArray, qref: FloatArray,
+    swing_idx: IntArray, lockv: FloatArray, y: FloatArray, t: float, t_limit: float,
+    kinds: IntArray, dirs: IntArray, rtol: float, atol: float, max_step: float, S: FloatArray,
+    ns: int, step: int, leg: int, phase: int, q: FloatArray, qd: FloatArray, M: FloatArray,
+    hv: FloatArray, Mr: FloatArray, Fr: FloatArray, ew: Any, k: FloatArray, ktry: FloatArray,
+    w: FloatArray, g: FloatArray, keep: Any,
+) -> tuple[int, float, FloatArray, int]:
+    """The body of :func:`_segment` on borrowed work arrays (see :func:`_borrow`)."""
+    d = y.shape[0]
+    R = cfg[_C_RST]
+    n_ev = kinds.shape[0]
+    ctx = (dyn, con, p, cfg, free, qref, swing_idx, lockv, q, qd, M, hv, Mr, Fr, ew)
+    tmp = w[0]
+    ynew = w[1]
+    ytry = w[2]
+    g_old = g[0]
+    g_new = g[1]
     _rhs(dyn, p, cfg, free, qref, y, k[0], q, qd, M, hv, Mr, Fr)
     for j in range(n_ev):
-        g_old[j] = _event_value(kinds[j], dyn, con, p, cfg, free, qref, swing_idx, lockv, y)
+        g_old[j] = _event_value(kinds[j], dyn, con, p, cfg, free, qref, swing_idx, lockv, y,
+                                ew)
     for j in range(n_ev):
         # contact already lost at the start: no sign change to detect (hybrid.CONTACT_EVENTS)
         if (kinds[j] == _EV_LOST or kinds[j] == _EV_SLIP) and g_old[j] <= 0.0:
@@ -493,7 +544,7 @@ def _segment(
         h_next = min(hh * dp5.grow_factor(en), max_step)
         for j in range(n_ev):
             g_new[j] = _event_value(kinds[j], dyn, con, p, cfg, free, qref, swing_idx, lockv,
-                                    ynew)
+                                    ynew, ew)
         if dp5.any_crossed(g_old, g_new, dirs, n_ev):
             best, tau = _ode.first_event(ctx, y, hh, t, k, ktry, tmp, ynew, ytry, kinds, dirs,
                                          n_ev, g_old, g_new)
@@ -639,6 +690,7 @@ def _walk_py(
             if free_knee[a] == swing_locks[c]:
                 swing_idx[c] = a
     none_idx = np.empty(0, dtype=np.int64)
+    ew = _event_work(n)
     for kstep in range(steps):
         t_step = t
         starts[kstep, 0] = t
@@ -688,7 +740,7 @@ def _walk_py(
                 y = np.empty(2 * free.shape[0] + 1)
                 _pack(q, qd, free, work, y)
                 if want == _EV_ARMED and _event_value(_EV_ARMED, dyn, con, p, cfg, free, qref,
-                                                      none_idx, lockv, y) > 0.0:
+                                                      none_idx, lockv, y, ew) > 0.0:
                     continue
                 kinds, dirs = _kinds(want, friction)
                 ev, t, S, ns = _segment(dyn, con, p, cfg, free, qref, none_idx, lockv, y, t,

@@ -16,7 +16,12 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from heelstrike._frames import slope_to_world
-from heelstrike.dynamics.hybrid import ImpactKind, PhasedImpact, WalkResult, ground_reaction
+from heelstrike.dynamics.hybrid import (
+    ImpactKind,
+    PhasedWalkResult,
+    WalkResult,
+    ground_reaction,
+)
 from heelstrike.models.base import PlanarWalker
 from heelstrike.models.compass import CompassGait
 
@@ -112,9 +117,8 @@ def walk_impact_table(walker: PlanarWalker, walk: WalkResult) -> pd.DataFrame:
     # the samples split into stretches between impacts: a heel strike starts a new step, a
     # knee strike a new phase of the same step (both sides of an impact are sampled)
     change = walk.step[1:] != walk.step[:-1]
-    phase = getattr(walk, "phase", None)
-    if phase is not None and len(phase) == walk.t.size:
-        change |= np.asarray(phase)[1:] != np.asarray(phase)[:-1]
+    if isinstance(walk, PhasedWalkResult) and len(walk.phase) == walk.t.size:
+        change |= np.asarray(walk.phase)[1:] != np.asarray(walk.phase)[:-1]
     last = np.nonzero(change)[0]  # last sample before each impact that samples follow
     if last.size not in (len(impacts), len(impacts) - 1):
         raise ValueError(f"the walk's samples split into {last.size + 1} stretches, which do "
@@ -149,7 +153,7 @@ def walk_impact_table(walker: PlanarWalker, walk: WalkResult) -> pd.DataFrame:
 def _impacts(walk: WalkResult) -> list[tuple[ImpactKind, int, float, float, float]]:
     """``(kind, step, time, stance angle, T_c)`` of every impact of ``walk``, in time order:
     the events of a phased walk (knee strikes too), else its heel strikes."""
-    events: tuple[PhasedImpact, ...] = getattr(walk, "events", ())
+    events = walk.events if isinstance(walk, PhasedWalkResult) else ()
     if len(events) >= len(walk.impacts) and events:
         out = [(e.kind, int(e.step), float(e.time), float(e.q[2]),
                 float(e.kinetic_energy_constrained)) for e in events]

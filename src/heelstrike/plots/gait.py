@@ -585,8 +585,8 @@ def energy_figure(energy: Any, impacts: Any, *, title: str = "") -> Figure:
         From :func:`~heelstrike.analysis.walk_tables.walk_energy_table`.
     impacts : pandas.DataFrame
         From :func:`~heelstrike.analysis.walk_tables.walk_impact_table`: one row per impact;
-        a row whose ``kind`` is ``"knee_strike"`` is a knee strike, any other row (or a table
-        without ``kind``) a heel strike.
+        a row whose ``kind`` is ``"knee_strike"`` is a knee strike, any other row a heel
+        strike.
     title : str
         Figure title.
 
@@ -611,8 +611,7 @@ def energy_figure(energy: Any, impacts: Any, *, title: str = "") -> Figure:
     labelled: set[str] = set()
     knees = False
     for r in impacts.itertuples(index=False):
-        kind = "knee_strike" if getattr(r, "kind", "heel_strike") == "knee_strike" else (
-            "heel_strike")
+        kind = "knee_strike" if r.kind == "knee_strike" else "heel_strike"
         knees |= kind == "knee_strike"
         line, ls, drop, label = styles[kind]
         ax.axvline(r.time_s, color=line, ls=ls, lw=0.8 if kind == "heel_strike" else 1.0,

@@ -1613,7 +1613,9 @@ def energy_book_tables(walker: PlanarWalker, gait: PoweredGait) -> tuple[Any, An
         back to its start value on the periodic gait). Between them the torque law's work
         changes the total.
     impacts : pandas.DataFrame
-        One row: ``step``, ``time_s``, ``impact_angle_rad``, ``total_before_J`` (after the
+        One row, the columns of
+        :func:`~heelstrike.analysis.walk_tables.walk_impact_table`: ``step``, ``kind``
+        (``"heel_strike"``), ``time_s``, ``impact_angle_rad``, ``total_before_J`` (after the
         push-off), ``total_after_J``, ``drop_J`` and ``T_c_J`` (J).
     """
     import pandas as pd
@@ -1630,8 +1632,9 @@ def energy_book_tables(walker: PlanarWalker, gait: PoweredGait) -> tuple[Any, An
                            "potential_J": U, "total_J": T + U})
     before, after = float(T[-2] + U[-2]), float(T[-1] + U[-1])
     impacts = pd.DataFrame([{
-        "step": 0, "time_s": rec.time, "impact_angle_rad": rec.impact_angle,
-        "total_before_J": before, "total_after_J": after, "drop_J": before - after,
+        "step": 0, "kind": "heel_strike", "time_s": rec.time,
+        "impact_angle_rad": rec.impact_angle, "total_before_J": before,
+        "total_after_J": after, "drop_J": before - after,
         "T_c_J": gait.collision_loss,
     }])
     return energy, impacts

@@ -953,8 +953,7 @@ def continue_limit_cycle(
         if ma is not None and mb is not None and (ma + 1.0) * (mb + 1.0) < 0:
 
             def solve(v: float, z0: FloatArray) -> tuple[float, FloatArray]:
-                w, s = (walker, v) if parameter == "slope" else \
-                    (walker.replace(**{parameter: v}), slope)
+                w, s = at(v)
                 c = find_limit_cycle(w, slope=s, guess=z0, **kwargs)
                 m = _most_negative_real(c.multipliers)
                 return (np.nan if m is None else m), c.fixed_point

@@ -153,7 +153,7 @@ def test_basin_command_with_model(tmp_path: Path, capsys: pytest.CaptureFixture[
 
 @pytest.mark.parametrize("argv, message", [
     (["basin", "--param", "R=0.1"], "--param needs --model"),
-    (["basin", "--backend", "scipy"], "--model compass --backend scipy"),
+    (["basin", "--backend", "scipy", "--q3-range=-0.1:-0.2"], "need MIN < MAX"),
     (["basin", "--model", "kneed", "--leg-length", "2"], "does not have"),
     (["basin", "--model", "kneed", "--q3-range=-0.3:-0.2"], "both --q3-range"),
 ])
@@ -191,12 +191,12 @@ def test_walk_command_with_model(tmp_path: Path, capsys: pytest.CaptureFixture[s
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["walk", "--backend", "compiled"], "use --model compass"),
+    (["walk", "--guess", "1,2"], "--guess"),
     (["walk", "--param", "R=0.1"], "--param needs --model"),
     (["walk", "--model", "kneed", "--guess", "1,2"], "--guess"),
     (["bifurcation", "--model", "kneed", "--slope-range", "0.5deg:1deg:2"], "no gait found"),
     (["map", "--x", "R:0:0.1:2"], "--x needs --model"),
-    (["map", "--backend", "scipy"], "--model compass --backend scipy"),
+    (["map", "--backend", "scipy", "--radius", "0:2:3"], "--radius needs 0 <= START <= STOP"),
     (["map", "--model", "kneed", "--x", "nope:0:1:2"], "unknown parameter 'nope'"),
     (["map", "--model", "kneed", "--x", "R:0:0.1:2", "--radius", "0:0.1"], "not both"),
     (["impact-map", "--model", "compass", "--x", "R:0:0.3:2", "--y", "angle:10deg:20deg:2",

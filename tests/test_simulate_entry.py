@@ -202,11 +202,15 @@ def test_compiled_backends_refuse_actuation_they_cannot_run(described: dict[str,
     def law(t: float, q: Any, qd: Any) -> Any:
         return np.zeros(1)
 
-    for kw in ({"torque": law}, {"push_off": PushOff(impulse=1.0)}, {"friction": 0.6},
-               {"restitution": 0.2}):
+    for kw in ({"torque": law}, {"restitution": 0.2}):
         with pytest.raises(ValueError, match=r"backend='scipy'"):
             simulate(compass, q, qd, slope=COMPASS_SLOPE, backend="compiled", **kw)
         check_backend(compass, "scipy", **kw)  # the reference runs anything
+    # a push-off and a friction limit run on the compass's generated kernel (compass.toml;
+    # tests/test_compass_backends.py checks those walks against the reference)
+    for kw in ({"push_off": PushOff(impulse=1.0)}, {"friction": 0.6}):
+        check_backend(compass, "compiled", **kw)
+        check_backend(compass, "scipy", **kw)
     kneed = described["kneed"]
     with pytest.raises(ValueError, match=r"backend='scipy'"):
         check_backend(kneed, "compiled", torque=law)
@@ -220,7 +224,7 @@ def test_simulator_is_simulate_bound_to_a_backend() -> None:
     _assert_same_walk(sim(walker, q, qd, slope=COMPASS_SLOPE, steps=2),
                       simulate_compiled(walker, q, qd, slope=COMPASS_SLOPE, steps=2))
     with pytest.raises(ValueError, match=r"backend='scipy'"):
-        simulator(walker, "compiled", friction=0.5)
+        simulator(walker, "compiled", restitution=0.5)
 
 
 # -- step length: one definition ----------------------------------------------------------------

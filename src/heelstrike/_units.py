@@ -42,7 +42,7 @@ UNITS: dict[str, str | None] = {
     # not quantities
     "trailing_foot_lifts": None, "degenerate_wheel": None, "stable": None,
     "trailing_foot_grazes": None, "model": None, "torque_joint": None, "coordinates": None,
-    "actuation": None, "target_source": None,
+    "actuation": None, "target_source": None, "backend": None,
     "parameter_name": None, "parameter_unit": None, "kind": None, "figure": None,
     "data": None, "residual": None, "status": None, "message": None, "gait_found": None,
     "gait_stable": None,

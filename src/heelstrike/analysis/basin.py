@@ -41,10 +41,10 @@ from heelstrike._typing import FloatArray
 from heelstrike.analysis.limit_cycle import LimitCycle, find_limit_cycle
 from heelstrike.dynamics.compiled import ensemble_walk
 from heelstrike.dynamics.hybrid import WalkStatus
+from heelstrike.models.base import PlanarWalker
 from heelstrike.models.compass import CompassGait
 
 if TYPE_CHECKING:
-    from heelstrike.dynamics.phased import PhasedWalker
     from heelstrike.models.builder import BuiltWalker
     from heelstrike.models.description import WalkerDescription
 
@@ -279,6 +279,7 @@ def basin_of_attraction(
     parallel: bool | None = None,
     progress: bool = False,
     store: str | os.PathLike[str] | None = None,
+    backend: str = "compiled",
 ) -> Basin:
     """Basin of attraction of the passive period-one gait on the ``(q3, q3_dot)`` slice.
 
@@ -311,6 +312,10 @@ def basin_of_attraction(
     store : path, optional
         Zarr store of the ensemble run (:func:`~heelstrike.analysis.sweep.sweep`): every
         finished block is kept, and an interrupted run with the same arguments resumes there.
+    backend : {"compiled", "scipy"}
+        The compiled ensemble (default; :func:`~heelstrike.dynamics.compiled.ensemble_walk`)
+        or the scipy reference, walker by walker and step by step (slow: hours for the
+        default grid).
 
     Returns
     -------
@@ -321,14 +326,18 @@ def basin_of_attraction(
     MemoryError
         Before any computing, if :func:`basin_memory_estimate` exceeds
         :func:`available_memory`; the message gives both.
+    ValueError
+        Unknown backend, or decreasing ranges.
     """
+    if backend not in ("compiled", "scipy"):
+        raise ValueError(f"backend must be 'compiled' or 'scipy', got {backend!r}")
     n3, nd = _check_grid(grid, steps)
     (a0, a1), (b0, b1) = ranges
     if not (a0 < a1 and b0 < b1):
         raise ValueError(f"ranges must be increasing (min < max), got {ranges}")
     gait = None
     if fixed_point is None:
-        gait = find_limit_cycle(walker, slope=slope, method="compiled")
+        gait = find_limit_cycle(walker, slope=slope, method=backend)
         zstar = gait.fixed_point
     else:
         zstar = np.asarray(fixed_point, dtype=float).reshape(3)
@@ -337,6 +346,7 @@ def basin_of_attraction(
     func = functools.partial(
         _basin_chunk, walker=walker, slope=float(slope), zstar=tuple(map(float, zstar)),
         steps=int(steps), tol=float(tol), rtol=float(rtol), atol=float(atol), parallel=parallel,
+        backend=backend,
     )
     outcome, taken, dist, elapsed = _walk_slice(
         func, {"q3": q3, "q3_dot": q3d}, ("rad", "rad s-1"), zstar, tol, chunks, store, progress)
@@ -367,6 +377,7 @@ def basin_of_attraction(
             "tol": float(tol),
             "rtol": float(rtol),
             "atol": float(atol),
+            "backend": backend,
         },
         outcome, taken, dist, zstar, elapsed, gait=gait,
     )
@@ -396,11 +407,15 @@ def _basin_chunk(
     rtol: float,
     atol: float,
     parallel: bool | None,
+    backend: str = "compiled",
 ) -> dict[str, NDArray[np.generic]]:
     """Sweep function: walk every ``(q3, q3_dot)`` point of the chunk (see the sweep contract
     and :func:`_walk_chunk`)."""
 
     def walk(z0: FloatArray) -> tuple[Any, Any, Any]:
+        if backend != "compiled":
+            return _walk_points_scipy(walker, z0, slope, steps, np.asarray(zstar), tol, rtol,
+                                      atol)
         res = ensemble_walk(walker, z0, slope, steps=steps, rtol=rtol, atol=atol, record=False,
                             stop_near=(np.asarray(zstar), tol), parallel=parallel)
         return res.status, res.steps, res.z
@@ -579,11 +594,12 @@ def _model_basin_chunk(
 
 
 def _walk_points_scipy(
-    walker: PhasedWalker, Z: FloatArray, slope: float, steps: int, zstar: FloatArray,
+    walker: PlanarWalker, Z: FloatArray, slope: float, steps: int, zstar: FloatArray,
     tol: float, rtol: float, atol: float,
 ) -> tuple[NDArray[np.int64], NDArray[np.int64], FloatArray]:
-    """The ensemble with the scipy reference, one step at a time (stops on arrival)."""
-    from heelstrike.dynamics.phased import simulate_phased
+    """The ensemble with the scipy reference, one step at a time (stops on arrival); any
+    walker with a Poincare section."""
+    from heelstrike.dynamics.hybrid import simulate
 
     n = Z.shape[0]
     status = np.zeros(n, dtype=np.int64)
@@ -594,7 +610,7 @@ def _walk_points_scipy(
         k = 0
         code = WalkStatus.COMPLETED.code
         while k < steps:
-            r = simulate_phased(walker, q, qd, slope=slope, steps=1, rtol=rtol, atol=atol)
+            r = simulate(walker, q, qd, slope=slope, steps=1, rtol=rtol, atol=atol)
             k += r.n_steps
             q, qd = r.final_q, r.final_q_dot
             if not r.ok:

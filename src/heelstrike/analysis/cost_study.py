@@ -45,6 +45,7 @@ from heelstrike.analysis.powered import (
     PoweredGait,
     PoweredGaitNotFoundError,
     actuation_family,
+    family_simulator,
     find_model_powered_gait,
     find_powered_gait,
 )
@@ -132,7 +133,7 @@ def cost_study(
     actuations: Sequence[str] = ("pushoff",),
     walker: CompassGait | None = None,
     model: Any | None = None,
-    backend: str = "compiled",
+    backend: str | None = None,
     actuation_options: dict[str, float] | None = None,
     radius_step: float = 0.05,
     progress: bool = False,
@@ -157,8 +158,11 @@ def cost_study(
         A described walker with a foot radius parameter ``R`` (m) instead of the compass gait
         (:func:`~heelstrike.analysis.powered.find_model_powered_gait`: ``actuations`` must be
         ``("pushoff",)``, no ``actuation_options``); its other parameters are kept.
-    backend : {"compiled", "scipy"}
-        Step simulator of ``model`` (ignored for the compass gait, which runs on scipy).
+    backend : {"compiled", "scipy"} or None
+        Step simulator (:func:`~heelstrike.analysis.powered.family_simulator`). None (default):
+        compiled where its kernels run the actuation and walker (push-off, a model's posture
+        law), else the scipy reference (the compass hip laws, McGeer's wheel ``R = l``); the
+        ``backend`` variable records which ran.
     actuation_options : dict, optional
         Gains and torque limit for :func:`~heelstrike.analysis.powered.actuation_family`.
     radius_step : float
@@ -178,15 +182,18 @@ def cost_study(
     xarray.Dataset
         Dimensions ``actuation`` x ``radius`` x ``step_length`` (or ``speed``) with the
         :data:`GAIT_VARIABLES` but the target itself (NaN where no gait was found),
-        ``found`` (1 where a gait was found, else 0), ``failure`` messages, and the paper's
-        impact-only ``eta_paper`` and ``collision_loss_paper`` over ``radius`` x target (only
-        for the compass gait and ``target="step_length"``).
+        ``found`` (1 where a gait was found, else 0), ``failure`` messages, ``backend`` (per
+        actuation and radius: the step simulator that ran, ``"compiled"`` or ``"scipy"``), and
+        the paper's impact-only ``eta_paper`` and ``collision_loss_paper`` over ``radius`` x
+        target (only for the compass gait and ``target="step_length"``).
 
     Raises
     ------
     ValueError
-        Bad target or actuation; with ``model``: no parameter ``R``, a radius the walker file
-        rejects, another actuation than push-off, ``actuation_options`` or ``walker`` given.
+        Bad target or actuation, ``backend="compiled"`` with a compass hip law or McGeer's
+        wheel; with
+        ``model``: no parameter ``R``, a radius the walker file rejects, another actuation than
+        push-off, ``actuation_options`` or ``walker`` given.
     """
     if target not in ("step_length", "speed"):
         raise ValueError("target must be 'step_length' or 'speed'")
@@ -197,7 +204,16 @@ def cost_study(
     R = np.asarray(radii, dtype=float).ravel()
     T = np.asarray(targets, dtype=float).ravel()
     if model is not None:
+        backend = backend or "compiled"
         _check_model(model, R, actuations, actuation_options, walker, backend)
+        backends = [[backend] * R.size for _ in actuations]
+    else:  # the step simulator of each actuation and radius (ValueError: compiled with a hip
+        # law, or with McGeer's wheel, which the generated kernel does not walk)
+        backends = [
+            ["scipy" if family_simulator(base.replace(foot_radius=float(r)), actuation_family(
+                act, **(actuation_options or {})), backend) is None else "compiled" for r in R]
+            for act in actuations
+        ]
     shape = (len(actuations), R.size, T.size)
     data = {k: np.full(shape, np.nan) for k in GAIT_VARIABLES}
     branch = np.full(shape, np.nan)
@@ -217,7 +233,7 @@ def cost_study(
                 actuation_options=tuple(sorted((actuation_options or {}).items())),
                 walker=base, radii=tuple(map(float, R)), i=i, previous=previous, kind=target,
                 radius_step=float(radius_step), options=tuple(sorted(kwargs.items())),
-                model=model, backend=backend,
+                model=model, backend=backends[a][i],
                 model_key="" if model is None else _model_key(model),
             )
             row = _run_row(func, T, target,
@@ -253,6 +269,8 @@ def cost_study(
         "flag_values": "0 1", "flag_meanings": "continuation fresh_search"})
     ds["gaits_found"] = (dims, n_found, {
         "units": "1", "long_name": "distinct periodic gaits found meeting the target"})
+    ds["backend"] = (("actuation", "radius"), np.asarray(backends, dtype=str), {
+        "long_name": "step simulator of the gaits (compiled or scipy)"})
     if target == "step_length" and model is None:
         eta_p = np.full((R.size, T.size), np.nan)
         tc_p = np.full((R.size, T.size), np.nan)
@@ -384,8 +402,9 @@ def _study_row(
 
     def solve(radius: float, **opts: Any) -> PoweredGait:
         if model is None:
-            return find_powered_gait(base.replace(foot_radius=radius), actuation=family,
-                                     **opts)
+            w = base.replace(foot_radius=radius)
+            return find_powered_gait(w, actuation=family,
+                                     simulator=family_simulator(w, family, backend), **opts)
         return find_model_powered_gait(model.replace(R=radius), backend=backend, **opts)
 
     found: dict[tuple[int, int], FloatArray] = {

@@ -109,9 +109,51 @@ class NewtonGait(ResultDictMixin):
         return float("nan") if m is None else float(m)
 
 
-def _map_many(
+@dataclass(frozen=True, kw_only=True)
+class _Steps:
+    """One step from each of ``B`` section points: the fields of
+    :class:`~heelstrike.dynamics.compiled.EnsembleResult` the map reads, shapes (B, 1)."""
+
+    step_time: FloatArray
+    step_length: FloatArray
+    collision_loss: FloatArray
+    impact_angle: FloatArray
+
+
+def _scipy_steps(
     walker: CompassGait, Z: FloatArray, slope: float, rtol: float, atol: float
+) -> tuple[FloatArray, _Steps]:
+    """``P`` at every row of ``Z`` on the scipy reference (rows of NaN where the step fails)
+    and the step of each row."""
+    from heelstrike.dynamics.hybrid import simulate
+
+    out = np.full_like(Z, np.nan)
+    cols = {k: np.full((Z.shape[0], 1), np.nan)
+            for k in ("step_time", "step_length", "collision_loss", "impact_angle")}
+    for i, z in enumerate(Z):
+        q, qd = walker.section_to_state(z)
+        walk = simulate(walker, q, qd, slope=slope, steps=1, rtol=rtol, atol=atol)
+        if not walk.ok:
+            continue
+        rec = walk.impacts[0]
+        out[i] = walker.state_to_section(walk.final_q, walk.final_q_dot)
+        cols["step_time"][i, 0] = rec.time
+        cols["step_length"][i, 0] = rec.step_length
+        cols["collision_loss"][i, 0] = rec.kinetic_energy_constrained
+        cols["impact_angle"][i, 0] = rec.impact_angle
+    return out, _Steps(**cols)
+
+
+def _map_many(
+    walker: CompassGait, Z: FloatArray, slope: float, rtol: float, atol: float,
+    backend: str = "compiled",
 ) -> tuple[FloatArray, Any]:
+    """``P`` at every row of ``Z`` (NaN rows where the step fails) and the steps: one compiled
+    ensemble call, or the scipy reference row by row."""
+    if backend == "scipy":
+        return _scipy_steps(walker, Z, slope, rtol, atol)
+    if backend != "compiled":
+        raise ValueError(f"backend must be 'compiled' or 'scipy', got {backend!r}")
     res = ensemble_walk(walker, Z, slope, steps=1, rtol=rtol, atol=atol, parallel=False)
     out = np.where((res.status == COMPLETED)[:, None], res.z, np.nan)
     return out, res
@@ -128,6 +170,7 @@ def newton_gaits(
     rtol: float = 1e-11,
     atol: float = 1e-11,
     deadline: float | None = None,
+    backend: str = "compiled",
 ) -> list[NewtonGait | str]:
     """Newton's method for ``P(z) = z`` on the compiled map, from many guesses at once.
 
@@ -155,6 +198,8 @@ def newton_gaits(
         Integrator tolerances.
     deadline : float, optional
         ``time.monotonic()`` value after which unconverged guesses are given up.
+    backend : {"compiled", "scipy"}
+        The map: the compiled ensemble (default) or the scipy reference, row by row.
 
     Returns
     -------
@@ -164,13 +209,13 @@ def newton_gaits(
     from heelstrike.analysis.newton import NewtonStatus, newton_solve
 
     Z = np.atleast_2d(np.asarray(guesses, dtype=float)).reshape(-1, 3)
-    sol = newton_solve(lambda X: _map_many(walker, X, slope, rtol, atol)[0] - X, Z, tol=tol,
-                       max_iter=max_iter, fd_step=fd_step, deadline=deadline)
+    sol = newton_solve(lambda X: _map_many(walker, X, slope, rtol, atol, backend)[0] - X, Z,
+                       tol=tol, max_iter=max_iter, fd_step=fd_step, deadline=deadline)
     out: list[NewtonGait | str] = [sol.message(k) for k in range(Z.shape[0])]
     done = np.flatnonzero(sol.converged)
     if done.size == 0:
         return out
-    _, res = _map_many(walker, sol.x[done], slope, rtol, atol)  # the step of each gait
+    _, res = _map_many(walker, sol.x[done], slope, rtol, atol, backend)  # each gait's step
     for j, k in enumerate(done):
         jac = sol.jacobian[k] + np.eye(3)  # DP = D(P - id) + I
         if not np.all(np.isfinite(jac)):
@@ -200,9 +245,10 @@ def newton_gait(
     fd_step: float = 1e-6,
     rtol: float = 1e-11,
     atol: float = 1e-11,
+    backend: str = "compiled",
 ) -> NewtonGait:
-    """Newton's method for ``P(z) = z`` on the compiled map, from ``guess`` (one start of
-    :func:`newton_gaits`).
+    """Newton's method for ``P(z) = z`` on the compiled map (or ``backend="scipy"``: the
+    reference), from ``guess`` (one start of :func:`newton_gaits`).
 
     Raises
     ------
@@ -218,6 +264,7 @@ def newton_gait(
         fd_step=fd_step,
         rtol=rtol,
         atol=atol,
+        backend=backend,
     )
     if isinstance(result, str):
         raise GaitNotFoundError(result)
@@ -285,6 +332,7 @@ def _branch(
     anchor: FloatArray,
     rtol: float,
     atol: float,
+    backend: str = "compiled",
 ) -> tuple[dict[str, FloatArray], FloatArray, FloatArray, float]:
     """Continue the gait of one walker from the anchor (its fixed point at ``anchor_slope``)
     up and down through ``slopes`` (``follow``: sub-steps of at most ``SLOPE_STEP``, so
@@ -300,7 +348,8 @@ def _branch(
     mnr = np.full(S, np.nan)
 
     def solve(slope: float, z: FloatArray, max_iter: int) -> tuple[Any, FloatArray, int, float]:
-        g = newton_gait(walker, slope, z, rtol=rtol, atol=atol, max_iter=max_iter)
+        g = newton_gait(walker, slope, z, rtol=rtol, atol=atol, max_iter=max_iter,
+                        backend=backend)
         return g, g.z, g.iterations, g.most_negative_real
 
     try:
@@ -324,7 +373,8 @@ def _branch(
     bracket = _pd_bracket([p for p in points if slopes[0] <= p.value <= slopes[-1]])
     if bracket is not None:
         a, b = bracket
-        pd = _refine_period_doubling(walker, a.value, b.value, a.gait, a.mnr, rtol, atol)
+        pd = _refine_period_doubling(walker, a.value, b.value, a.gait, a.mnr, rtol, atol,
+                                     backend)
     return out, fixed, mnr, pd
 
 
@@ -336,12 +386,13 @@ def _refine_period_doubling(
     m0: float,
     rtol: float,
     atol: float,
+    backend: str = "compiled",
 ) -> float:
-    """:func:`~heelstrike.analysis.limit_cycle.refine_period_doubling` on the compiled map, to
-    ``_PD_TOL``."""
+    """:func:`~heelstrike.analysis.limit_cycle.refine_period_doubling` on the map of
+    ``backend``, to ``_PD_TOL``."""
 
     def solve(slope: float, z: FloatArray) -> tuple[float, FloatArray]:
-        g = newton_gait(walker, slope, z, rtol=rtol, atol=atol)
+        g = newton_gait(walker, slope, z, rtol=rtol, atol=atol, backend=backend)
         return g.most_negative_real, g.z
 
     return refine_period_doubling(solve, s0, s1, m0, g0.z, iterations=_pd_iterations(s0, s1))
@@ -361,6 +412,7 @@ def _map_chunk(
     anchors: tuple[tuple[float, ...], ...],
     rtol: float,
     atol: float,
+    backend: str = "compiled",
 ) -> dict[str, FloatArray]:
     """Sweep function: every radius of the chunk, all slopes (see the sweep contract);
     ``anchors`` holds ``(radius, anchor slope, fixed point...)`` per radius."""
@@ -377,7 +429,7 @@ def _map_chunk(
         if entry is None or not np.all(np.isfinite(entry[1])):
             continue
         w = CompassGait(foot_radius=float(R), **dict(walker))
-        out, fixed, mnr, pd = _branch(w, slopes, entry[0], entry[1], rtol, atol)
+        out, fixed, mnr, pd = _branch(w, slopes, entry[0], entry[1], rtol, atol, backend)
         for k in _OUTPUTS:
             res[k][j] = out[k]
         res["fixed_point"][j] = fixed
@@ -408,10 +460,11 @@ class GaitMap(ResultDictMixin):
         return np.asarray(self.dataset["period_doubling_slope"].values)
 
 
-def _direct(walker: CompassGait, slope: float, rtol: float, atol: float) -> FloatArray:
+def _direct(walker: CompassGait, slope: float, rtol: float, atol: float,
+            backend: str = "compiled") -> FloatArray:
     """The preferred gait of the automatic search at one radius, or NaNs if there is none."""
     try:
-        return find_limit_cycle(walker, slope=slope, method="compiled", rtol=rtol,
+        return find_limit_cycle(walker, slope=slope, method=backend, rtol=rtol,
                                 atol=atol).fixed_point
     except GaitNotFoundError:
         return np.full(3, np.nan)
@@ -429,7 +482,7 @@ def _fallback_slopes(slopes: FloatArray, anchor_slope: float) -> list[float]:
 
 def _anchors(
     walker: CompassGait, radii: FloatArray, slopes: FloatArray, guess: ArrayLike | None,
-    rtol: float, atol: float,
+    rtol: float, atol: float, backend: str = "compiled",
 ) -> list[tuple[float, FloatArray]]:
     """An anchor (slope, gait) for every radius (NaNs where none is found).
 
@@ -444,17 +497,17 @@ def _anchors(
 
     def solve(R: float, z: FloatArray, max_iter: int) -> tuple[Any, FloatArray, int, float]:
         g = newton_gait(walker.replace(foot_radius=R), slope, z, rtol=rtol, atol=atol,
-                        max_iter=max_iter)
+                        max_iter=max_iter, backend=backend)
         return g, g.z, g.iterations, g.most_negative_real
 
     if guess is None:
         R_prev = 0.0
-        z = _direct(walker.replace(foot_radius=0.0), slope, rtol, atol)
+        z = _direct(walker.replace(foot_radius=0.0), slope, rtol, atol, backend)
     else:
         R_prev = float(radii[order[0]])
         try:
             z = newton_gait(walker.replace(foot_radius=R_prev), slope, guess,
-                            rtol=rtol, atol=atol).z
+                            rtol=rtol, atol=atol, backend=backend).z
         except GaitNotFoundError:
             z = np.full(3, np.nan)
     out: list[tuple[float, FloatArray]] = [(slope, np.full(3, np.nan))] * radii.size
@@ -468,13 +521,13 @@ def _anchors(
             if got is not None:
                 zk = got.z
         if not np.all(np.isfinite(zk)):
-            zk = _direct(walker.replace(foot_radius=R), slope, rtol, atol)
+            zk = _direct(walker.replace(foot_radius=R), slope, rtol, atol, backend)
         out[k] = (slope, zk)
         if np.all(np.isfinite(zk)):
             z, R_prev = zk, R
             continue
         for s in _fallback_slopes(slopes, slope):
-            zs = _direct(walker.replace(foot_radius=R), s, rtol, atol)
+            zs = _direct(walker.replace(foot_radius=R), s, rtol, atol, backend)
             if np.all(np.isfinite(zs)):
                 out[k] = (s, zs)
                 break
@@ -492,6 +545,7 @@ def gait_map(
     store: str | Path | None = None,
     scheduler: str | None = None,
     progress: bool = False,
+    backend: str = "compiled",
 ) -> GaitMap:
     """Period-one gaits, their stability and period doubling over (foot radius, slope).
 
@@ -514,6 +568,9 @@ def gait_map(
         Dask scheduler of :func:`~heelstrike.analysis.sweep.sweep` (default threads).
     progress : bool
         Progress bar over radii.
+    backend : {"compiled", "scipy"}
+        The step map: the compiled compass ensemble (default) or the scipy reference (the same
+        continuation; about a hundred times slower).
 
     Returns
     -------
@@ -529,7 +586,9 @@ def gait_map(
     if np.any(R < 0) or np.any(R > float(walker.leg_length)):
         raise ValueError("radii must satisfy 0 <= R <= leg_length")
     anchor_slope = _anchor_slope(S)
-    anchors = _anchors(walker, R, S, guess, rtol, atol)
+    if backend not in ("compiled", "scipy"):
+        raise ValueError(f"backend must be 'compiled' or 'scipy', got {backend!r}")
+    anchors = _anchors(walker, R, S, guess, rtol, atol, backend)
     func = functools.partial(
         _map_chunk,
         walker=tuple(sorted(_walker_kwargs(walker).items())),
@@ -537,6 +596,7 @@ def gait_map(
                       for r, (s, a) in zip(R, anchors, strict=True)),
         rtol=float(rtol),
         atol=float(atol),
+        backend=backend,
     )
     ds = sweep(
         func,
@@ -560,7 +620,7 @@ def gait_map(
     _add_derived(ds)
     ds.attrs.update(
         {f"walker_{k}": v for k, v in _walker_kwargs(walker).items()}
-        | {"anchor_slope": anchor_slope, "rtol": rtol, "atol": atol}
+        | {"anchor_slope": anchor_slope, "rtol": rtol, "atol": atol, "backend": backend}
     )
     return GaitMap(dataset=ds)
 

@@ -129,28 +129,35 @@ class PoincareMap:
     def many(self, Z: ArrayLike) -> FloatArray:
         """``P`` at every row of ``Z`` (shape (B, d)); rows of NaN where the step fails.
 
-        One batched compiled call where the walker's kernel runs the map: the compass map
+        One batched compiled call where a kernel runs the map: the compass map
         (``method="compiled"``, or the passive compass with the compiled backend as
         ``simulator``), or a described walker whose ``simulator`` is the compiled backend
-        (:class:`~heelstrike.dynamics.backends.BoundSimulator`); otherwise row by row.
+        (:class:`~heelstrike.dynamics.backends.BoundSimulator`), the compass gait with a
+        push-off included (its description's kernel,
+        :meth:`~heelstrike.models.base.PlanarWalker.as_described`); otherwise row by row.
         Each row equals ``self(Z[i])`` (the same kernel, walker by walker).
         """
         Z_ = np.atleast_2d(np.asarray(Z, dtype=float))
         compiled = isinstance(self.simulator, BoundSimulator) and \
             self.simulator.backend == "compiled"
-        if self.method == "compiled" or (compiled and self.walker.compiled_kernel == "compass"
-                                         and self.torque is None and self.push_off is None):
+        passive = self.torque is None and self.push_off is None
+        kernel_walker = self.walker
+        if compiled and self.walker.compiled_kernel == "compass" and not passive:
+            # the compass kernel is passive: the compiled backend walks the described compass
+            kernel_walker = self.walker.as_described() or self.walker
+        if self.method == "compiled" or (compiled and kernel_walker.compiled_kernel == "compass"
+                                         and passive):
             from heelstrike.dynamics.compiled import COMPLETED, ensemble_walk
 
             ens = ensemble_walk(self.walker, Z_, self.slope, steps=1,  # type: ignore[arg-type]
                                 rtol=self.rtol, atol=self.atol,
                                 max_step_duration=self.max_step_duration, parallel=False)
             return np.where((ens.status == COMPLETED)[:, None], ens.z, np.nan)
-        if compiled and self.walker.compiled_kernel == "generated":
+        if compiled and kernel_walker.compiled_kernel == "generated":
             from heelstrike.dynamics.compiled_phased import ensemble_walk_phased
 
             ens_p = ensemble_walk_phased(
-                self.walker, Z_, slope=self.slope,  # type: ignore[arg-type]
+                kernel_walker, Z_, slope=self.slope,  # type: ignore[arg-type]
                 torque=cast(Any, self.torque), push_off=cast(Any, self.push_off),
                 rtol=self.rtol, atol=self.atol, max_step_duration=self.max_step_duration,
                 max_step=self.max_step, parallel=False,

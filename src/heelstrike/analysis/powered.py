@@ -91,6 +91,7 @@ __all__ = [
     "actuation_family",
     "declared_posture_law",
     "energy_book_tables",
+    "family_simulator",
     "find_model_powered_gait",
     "find_powered_gait",
     "max_walking_speed",
@@ -162,6 +163,47 @@ class ActuationFamily:
     seed: Callable[[PlanarWalker], tuple[float, ...]]
     lower: float = -np.inf
     torque_joint: str = "hip"
+
+
+def family_simulator(
+    walker: PlanarWalker, family: ActuationFamily, backend: str | None
+) -> Callable[..., WalkResult] | None:
+    """The step simulator of :func:`find_powered_gait` for an actuation family on a backend.
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+    family : ActuationFamily
+    backend : {"compiled", "scipy"} or None
+        ``"compiled"``: :func:`heelstrike.dynamics.simulate` on the compiled backend, checked
+        for the family's laws (built at its first seed value). ``"scipy"``: None, i.e.
+        :func:`~heelstrike.dynamics.hybrid.simulate` (the reference). None: compiled if its
+        kernels evaluate the family's laws (push-off; the hip laws are the reference's only),
+        else the reference.
+
+    Returns
+    -------
+    callable or None
+        For the ``simulator`` argument of :func:`find_powered_gait`.
+
+    Raises
+    ------
+    ValueError
+        ``backend="compiled"`` for laws its kernels do not evaluate, or an unknown backend.
+    """
+    from heelstrike.dynamics.backends import simulator
+
+    if backend == "scipy":
+        return None
+    if backend not in (None, "compiled"):
+        raise ValueError(f"backend must be 'compiled' or 'scipy', got {backend!r}")
+    torque, push_off = family.build(walker, family.seed(walker)[0])
+    try:
+        return simulator(walker, "compiled", torque=torque, push_off=push_off)
+    except ValueError:
+        if backend is None:
+            return None
+        raise
 
 
 _SEED_SECTIONS = (

@@ -94,12 +94,6 @@ def explicit_options(args: argparse.Namespace) -> set[str]:
     return set(vars(args).get("explicit", ()))
 
 
-#: Compass-gait options (``dest``) and the description parameter each one sets with ``--model``
-#: (the names of the shipped compass and torso walkers).
-COMPASS_PARAMS = {"radius": "R", "hip_mass": "mH", "leg_mass": "m", "leg_length": "l",
-                   "com_from_hip": "b", "leg_inertia": "I", "gravity": "g"}
-
-
 #: Compass-gait options: ``dest``, the :class:`~heelstrike.models.compass.CompassGait` field it
 #: sets, and its help text. The defaults are the model's own (read from the dataclass).
 _COMPASS_OPTIONS = (
@@ -111,6 +105,15 @@ _COMPASS_OPTIONS = (
     ("leg_inertia", "leg_inertia", "leg inertia about its COM (kg m^2)"),
     ("gravity", "gravity", "gravity g (m/s^2)"),
 )
+
+
+def compass_params() -> dict[str, str]:
+    """Compass-gait options (``dest``) and the description parameter each one sets with
+    ``--model`` (:data:`~heelstrike.models.compass.DESCRIBED_PARAMETERS`: the names of the
+    shipped compass and torso walkers)."""
+    from heelstrike.models.compass import DESCRIBED_PARAMETERS
+
+    return {dest: DESCRIBED_PARAMETERS[field] for dest, field, _ in _COMPASS_OPTIONS}
 
 
 def add_walker_options(p: argparse.ArgumentParser) -> None:
@@ -148,14 +151,10 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
 
 
 def add_backend_option(
-    p: argparse.ArgumentParser, help: str | None = None, default: str | None = None,
-    compass: str = "runs",
+    p: argparse.ArgumentParser, help: str, default: str | None = None
 ) -> None:
-    """``--backend compiled|scipy``. The default help is that of the commands whose compass gait
-    (without ``--model``) ``compass`` on the scipy reference only."""
-    p.add_argument("--backend", choices=("compiled", "scipy"), default=default, help=help or (
-        "step simulator with --model: compiled (default; generated from the walker file) or the "
-        f"scipy reference; the compass gait without --model {compass} on the scipy reference"))
+    """``--backend compiled|scipy`` with the command's help (what runs on each backend)."""
+    p.add_argument("--backend", choices=("compiled", "scipy"), default=default, help=help)
 
 
 def model_from_args(args: argparse.Namespace) -> Any:
@@ -179,8 +178,9 @@ def model_from_args(args: argparse.Namespace) -> Any:
     except OSError as exc:
         raise CliError(f"cannot read model {model!r}: {exc.strerror or exc}") from exc
     known = walker.params
-    for dest in sorted(explicit_options(args) & set(COMPASS_PARAMS)):
-        name, option = COMPASS_PARAMS[dest], "--" + dest.replace("_", "-")
+    by_option = compass_params()
+    for dest in sorted(explicit_options(args) & set(by_option)):
+        name, option = by_option[dest], "--" + dest.replace("_", "-")
         if name not in known:
             raise CliError(
                 f"{option} sets the compass parameter {name!r}, which model "

@@ -195,7 +195,9 @@ def add_walk(sub: Any) -> None:
     )
     add_walker_options(p)
     add_model_options(p)
-    add_backend_option(p, compass="walks")
+    add_backend_option(p, "step simulator: compiled (default; the walker file's generated "
+                       "kernel, for the compass gait that of compass.toml) or the scipy reference "
+                       "(the default for McGeer's wheel, --radius equal to --leg-length)")
     p.add_argument("--slope", type=parse_angle, default=parse_angle("3deg"),
                    help="slope angle (default 3deg)")
     p.add_argument("--steps", type=positive_int, default=6, help="number of steps (default 6)")
@@ -261,12 +263,10 @@ def _run_walk(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from heelstrike.analysis.limit_cycle import GaitNotFoundError, PoincareMap, find_limit_cycle
+    from heelstrike.dynamics.backends import simulator
     from heelstrike.outputs import write_walk_figures
     from heelstrike.plots.gait import animate_walk
 
-    if args.model is None and args.backend == "compiled":
-        raise CliError("the compass walk (without --model) runs on the scipy reference; for "
-                       "the compiled backend use --model compass")
     walker = None if args.model is not None else walker_from_args(args)
     if not (math.isfinite(args.fps) and 0 < args.fps <= 240):
         raise CliError(f"--fps must satisfy 0 < fps <= 240 (frames per second), got {args.fps:g}")
@@ -286,16 +286,19 @@ def _run_walk(args: argparse.Namespace) -> int:
     writable_dir(out if to_dir else out.parent)
     if walker is None:
         return _walk_model(args, out, to_dir)
+    # compiled by default; McGeer's wheel (no description to run dense samples on): scipy
+    backend = args.backend or ("compiled" if walker.as_described() is not None else "scipy")
     z = parse_guess(args.guess)
     if z is None:
         try:
-            cycle = find_limit_cycle(walker, slope=args.slope, progress=True)
+            cycle = find_limit_cycle(walker, slope=args.slope, progress=True, method=backend)
         except GaitNotFoundError as exc:
             raise CliError(f"no gait found to start from: {exc}") from exc
         z = list(cycle.fixed_point)
         _note_unstable_start(cycle.stable, cycle.multipliers)
     walk = PoincareMap(walker=walker, slope=args.slope, rtol=1e-9, atol=1e-9,
-                       max_step=0.5 / args.fps).walk(z, args.steps)
+                       max_step=0.5 / args.fps,
+                       simulator=simulator(walker, backend)).walk(z, args.steps)
     path = animate_walk(walker, walk, out / "walk.gif" if to_dir else out, fps=args.fps,
                         progress=True)
     print(f"{walk.n_steps} steps, status: {walk.status.value} ({walk.message})")
@@ -385,8 +388,9 @@ def add_basin(sub: Any) -> None:
     )
     add_walker_options(p)
     add_model_options(p)
-    add_backend_option(p, "step simulator: the compiled ensemble (default) or, with --model, "
-                       "the scipy reference (slow)", "compiled")
+    add_backend_option(p, "step simulator: the compiled ensemble (default) or the scipy "
+                       "reference, walker by walker (slow: about 10,000 walker-steps a minute, "
+                       "hours for the compass gait's default 400x400 grid)", "compiled")
     p.add_argument("--slope", type=parse_angle, default=parse_angle("3deg"),
                    help="slope angle (default 3deg)")
     p.add_argument("--grid", type=parse_grid, default=None,
@@ -497,9 +501,6 @@ def _run_basin(args: argparse.Namespace) -> int:
 
     if args.model is not None:
         return _run_basin_model(args)
-    if args.backend != "compiled":
-        raise CliError("the compass basin runs on the compiled ensemble only; for the scipy "
-                       "reference use --model compass --backend scipy")
     walker = walker_from_args(args)
     a0, a1, _ = args.q3_range or (-0.5, -0.05, None)
     b0, b1, _ = args.q3dot_range or (0.3, 2.3, None)
@@ -509,6 +510,7 @@ def _run_basin(args: argparse.Namespace) -> int:
     basin = _basin(args, lambda: basin_of_attraction(
         walker, args.slope, grid=grid, ranges=((a0, a1), (b0, b1)), steps=args.steps,
         tol=args.tol, progress=not args.json and sys.stderr.isatty(), store=args.store,
+        backend=args.backend,
     ))
     z = basin.fixed_point
     return _render_basin(
@@ -529,8 +531,8 @@ def add_map(sub: Any) -> None:
     )
     add_walker_options(p)
     add_model_options(p)
-    add_backend_option(p, "step simulator: compiled (default) or, with --model, the scipy "
-                       "reference", "compiled")
+    add_backend_option(p, "step simulator: compiled (default) or the scipy reference (the same "
+                       "continuation, minutes)", "compiled")
     p.add_argument("--radius", type=parse_range, default=None,
                    help="START:STOP[:COUNT] foot radii in m (default 0:0.6:7; with --model "
                    "the walker's parameter R, the default stopping at the largest R the walker "
@@ -611,9 +613,6 @@ def _run_map(args: argparse.Namespace) -> int:
         return _run_map_model(args)
     if args.x is not None:
         raise CliError("--x needs --model (the compass gait's map sweeps --radius)")
-    if args.backend != "compiled":
-        raise CliError("the compass map runs on the compiled step map only; for the scipy "
-                       "reference use --model compass --backend scipy")
     r0, r1, nr = args.radius or (0.0, 0.6, 7)
     if not 0 <= r0 <= r1 <= args.leg_length:
         raise CliError("--radius needs 0 <= START <= STOP <= leg length")
@@ -624,7 +623,7 @@ def _run_map(args: argparse.Namespace) -> int:
     try:
         gmap = run_with_store(args.store, lambda: gait_map(
             base, radii, slopes, progress=not args.json and sys.stderr.isatty(),
-            store=args.store))
+            store=args.store, backend=args.backend))
     except GaitNotFoundError as exc:
         raise CliError(f"no starting gait found: {exc}") from exc
     return _render_gait_map(gmap, args, {"foot_radius": radii.tolist()}, "stable passive gaits",

@@ -9,12 +9,12 @@ from typing import Any
 
 from heelstrike.cli import robot as cli_robot
 from heelstrike.cli._common import (
-    COMPASS_PARAMS,
     CliError,
     Explicit,
     add_backend_option,
     add_model_options,
     add_walker_options,
+    compass_params,
     explicit_options,
     model_from_args,
     parse_angle,
@@ -166,7 +166,7 @@ def _run_impact(args: argparse.Namespace) -> int:
                        "walker's (--model) or a robot's heel strike (complementarity) runs on the "
                        "reference: drop --backend compiled")
     if cli_robot.robot_requested(args):
-        ignored = [f"--{d.replace('_', '-')}" for d in sorted(given & {*COMPASS_PARAMS,
+        ignored = [f"--{d.replace('_', '-')}" for d in sorted(given & {*compass_params(),
                                                                       "q3dot", "q4dot"})]
         ignored += [o for o, v in (("--model", args.model), ("--param", args.param),
                                    ("--angle", args.angle), ("--velocity", args.velocity)) if v]

@@ -55,6 +55,30 @@ def declared_speed(walker: Any, model: str | None) -> float:
     return float(declared)
 
 
+#: ``--backend`` of ``powered`` and ``study cost``.
+BACKEND_HELP = ("step simulator: compiled (the default where its kernels evaluate the actuation: "
+                "push-off, and with --model the walker file's posture law; for the compass gait "
+                "the kernel generated from compass.toml) or the scipy reference (the default "
+                "for the compass hip laws hip-energy and hip-pd, which only it evaluates)")
+
+
+def compass_simulator(walker: Any, family: Any, backend: str | None) -> Any:
+    """The compass search's step simulator on ``--backend`` (None: the reference), see
+    :func:`heelstrike.analysis.powered.family_simulator`; a one-line error for
+    ``--backend compiled`` with a hip law."""
+    from heelstrike.analysis.powered import family_simulator
+
+    try:
+        return family_simulator(walker, family, backend)
+    except ValueError as exc:
+        if family.name != "pushoff":
+            raise CliError(f"--backend compiled: the compiled kernels evaluate the push-off, not "
+                           f"the {family.name} hip law; use --backend scipy (the default for "
+                           "the hip laws)") from None
+        reason = str(exc).replace("backend='scipy'", "--backend scipy (the default there)")
+        raise CliError(f"--backend compiled: {reason}") from None
+
+
 def refuse_hip_law_options(args: argparse.Namespace) -> None:
     """The compass hip laws' gains mean nothing for a described walker: refuse them."""
     given = [f"--{k.replace('_', '-')}" for k in ("gain", "kp", "kd", "max_torque")
@@ -77,7 +101,7 @@ def add_powered(sub: Any) -> None:
     )
     add_walker_options(p)
     add_model_options(p)
-    add_backend_option(p)
+    add_backend_option(p, BACKEND_HELP)
     tgt = p.add_mutually_exclusive_group()
     tgt.add_argument("--speed", type=float, default=None,
                      help="target mean speed (m/s); default: the walker's declared target "
@@ -102,9 +126,6 @@ def _run_powered(args: argparse.Namespace) -> int:
         find_powered_gait,
     )
 
-    if args.model is None and args.backend == "compiled":
-        raise CliError("the compass powered search (without --model) runs on the scipy "
-                       "reference; for the compiled backend use --model compass")
     if args.model is not None:
         refuse_model_actuation([args.actuation])
         refuse_hip_law_options(args)
@@ -121,13 +142,18 @@ def _run_powered(args: argparse.Namespace) -> int:
     speed, step_length = (value, None) if target == "speed" else (None, value)
     radius = float(walker.foot_radii[0]) if args.model is not None else args.radius
     out = None if args.out is None else writable_dir(args.out)
+    backend = args.backend or "compiled"
+    if args.model is None:
+        family = family_from_args(args)
+        step_simulator = compass_simulator(walker, family, args.backend)
+        backend = "scipy" if step_simulator is None else "compiled"
     try:
         if args.model is None:
-            gait = find_powered_gait(walker, actuation=family_from_args(args), progress=True,
+            gait = find_powered_gait(walker, actuation=family, progress=True,
                                      time_limit=DEFAULT_TIME_LIMIT, speed=speed,
-                                     step_length=step_length)
+                                     step_length=step_length, simulator=step_simulator)
         else:
-            gait = find_model_powered_gait(walker, backend=args.backend or "compiled",
+            gait = find_model_powered_gait(walker, backend=backend,
                                            progress=True, time_limit=DEFAULT_TIME_LIMIT,
                                            speed=speed, step_length=step_length)
     except PoweredGaitNotFoundError as exc:
@@ -136,7 +162,7 @@ def _run_powered(args: argparse.Namespace) -> int:
             f"{declared_note} at R = {radius:g} m: {exc}"
         ) from exc
     d = {**gait.to_dict(), "target_speed": speed, "target_step_length": step_length,
-         "target_source": source}
+         "target_source": source, "backend": backend}
     if out is not None:
         from heelstrike.analysis.powered import energy_book_tables
         from heelstrike.outputs import write_powered_energy
@@ -147,8 +173,8 @@ def _run_powered(args: argparse.Namespace) -> int:
     if args.json:
         print_json(d)
         return 0
-    label = args.actuation if gait.model is None else \
-        f"{args.actuation}, model {gait.model}, {args.backend or 'compiled'} backend"
+    label = f"{args.actuation}, {backend} backend" if gait.model is None else \
+        f"{args.actuation}, model {gait.model}, {backend} backend"
     print(f"powered gait ({label}), R = {radius:g} m, level ground")
     unit = "m/s" if target == "speed" else "m"
     given = "the walker's declared target" if source == "walker" else source
@@ -190,7 +216,7 @@ def add_study(sub: Any) -> None:
     )
     add_walker_options(c)  # its --radius is replaced by the range below
     add_model_options(c)
-    add_backend_option(c)
+    add_backend_option(c, BACKEND_HELP)
     c.add_argument("--radius", dest="radii", type=parse_range, default=None,
                    help="foot radii START:STOP:COUNT (m); default 0 to 0.9 x the largest foot "
                    "radius the walker admits, 4 values (0:0.9:4 for the paper's compass gait, "
@@ -215,16 +241,13 @@ def _run_study(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from heelstrike.analysis.cost_study import cost_study, save_study
+    from heelstrike.analysis.powered import actuation_family
     from heelstrike.outputs import write_cost_figures
 
     model = None
     if args.model is None:
         if args.param:
             raise CliError("--param sets a described walker's parameter: give --model too")
-        if args.backend == "compiled":
-            raise CliError("--backend compiled is not supported by the compass cost study "
-                           "without --model (it runs on the scipy reference); for the compiled "
-                           "backend use --model compass")
         walker = walker_from_args(args)  # validates the other walker parameters
         leg_length = float(args.leg_length)
     else:
@@ -255,11 +278,16 @@ def _run_study(args: argparse.Namespace) -> int:
         raise CliError(f"--{target.replace('_', '-')} values must be > 0")
     acts = args.actuation or ["pushoff"]
     options = actuation_options(args)
+    if walker is not None:  # --backend compiled with a hip law or McGeer's wheel: one line
+        for act in acts:
+            for r in radii:
+                compass_simulator(walker.replace(foot_radius=r),
+                                  actuation_family(act, **options), args.backend)
     writable_dir(args.out)
     try:
         ds = run_with_store(args.store, lambda: cost_study(
             radii, values, target=target, actuations=acts, walker=walker, model=model,
-            backend=args.backend or "compiled", actuation_options=options, progress=True,
+            backend=args.backend, actuation_options=options, progress=True,
             store=args.store))
     except ValueError as exc:  # e.g. a radius the walker file's constraints reject
         raise CliError(str(exc)) from exc

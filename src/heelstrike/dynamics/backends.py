@@ -16,7 +16,9 @@ kind          backend     implementation
 ============  ==========  =================================================================
 ``planar``    ``scipy``   :func:`heelstrike.dynamics.hybrid.simulate` (any hand-written walker)
 ``compass``   ``scipy``   :func:`heelstrike.dynamics.hybrid.simulate`
-``compass``   compiled    :func:`heelstrike.dynamics.compiled.simulate_compiled` (passive)
+``compass``   compiled    :func:`heelstrike.dynamics.compiled.simulate_compiled` (passive;
+                          push-off, friction, dense samples: the generated kernel of
+                          :meth:`~heelstrike.models.base.PlanarWalker.as_described`)
 described     ``scipy``   :func:`heelstrike.dynamics.hybrid.simulate`
 described     compiled    :func:`heelstrike.dynamics.compiled_phased.simulate_phased_compiled`
 ============  ==========  =================================================================
@@ -100,7 +102,8 @@ def _check_compass_compiled(
 ) -> None:
     from heelstrike.dynamics.compiled import check_compiled_compass
 
-    check_compiled_compass(torque, push_off, friction, options.get("restitution", 0.0))
+    check_compiled_compass(torque, push_off, friction, options.get("restitution", 0.0),
+                           walker=walker, max_step=options.get("max_step", float("inf")))
 
 
 def _check_described_compiled(

@@ -36,6 +36,10 @@ on a slope (no torque, no push-off, inert impact):
   :mod:`heelstrike.models._contact` compiled); then ``q3 <- q3 + q4``, ``q4 <- -q4`` and the
   velocities alike.
 
+A push-off, a friction limit or dense samples are not this kernel's: :func:`simulate_compiled`
+runs them on the kernel generated from the walker's description (``compass.toml``, the same
+equations and coordinates; :meth:`~heelstrike.models.base.PlanarWalker.as_described`).
+
 The numba functions are in :mod:`heelstrike.dynamics._compass_kernels`. Serial calls run them
 from an extension module compiled ahead of time from that same source (:data:`AOT_EXPORTS`,
 :mod:`heelstrike.dynamics._aot`; identical results, and a process that loads it imports no
@@ -50,7 +54,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -63,6 +67,9 @@ from heelstrike.dynamics.hybrid import ImpactRecord, WalkResult, WalkStatus
 from heelstrike.models import _contact
 from heelstrike.models.base import PlanarWalker
 from heelstrike.models.compass import CompassGait
+
+if TYPE_CHECKING:
+    from heelstrike.dynamics.actuation import PushOff
 
 __all__ = [
     "STATUS_NAMES",
@@ -480,27 +487,40 @@ def single_support_compiled(
 
 def check_compiled_compass(
     torque: Any = None, push_off: Any = None, friction: float | None = None,
-    restitution: float = 0.0,
+    restitution: float = 0.0, *, walker: PlanarWalker | None = None,
+    max_step: float = np.inf,
 ) -> None:
-    """Raise ``ValueError`` unless the compass kernel supports this actuation and contact.
+    """Raise ``ValueError`` unless the compiled backend runs this compass-gait actuation.
 
-    The kernel walks the *passive* compass gait with an inert heel strike: no torque law, no
-    push-off, no friction limit (``slipped``) and ``restitution = 0``.
+    The compass kernel walks the *passive* compass gait with an inert heel strike; a
+    :class:`~heelstrike.dynamics.actuation.PushOff` impulse, a friction limit (``slipped``) or
+    dense samples (finite ``max_step``) run on the kernel generated from the walker's
+    description (:meth:`~heelstrike.models.base.PlanarWalker.as_described`, see
+    :func:`simulate_compiled`), which ``walker`` (if given) must have. No torque law (the hip
+    laws are evaluated by the scipy reference only) and ``restitution = 0``.
     """
+    from heelstrike.dynamics.actuation import PushOff
+
     unsupported = [
         name
         for name, given in (
             ("torque", torque is not None),
-            ("push_off", push_off is not None),
-            ("friction", friction is not None),
+            ("push_off other than PushOff", push_off is not None and type(push_off) is not PushOff),
             ("restitution", float(restitution) != 0.0),
         )
         if given
     ]
     if unsupported:
         raise ValueError(
-            "the compiled compass-gait kernel walks the passive walker with an inert impact "
-            f"only ({', '.join(unsupported)} given); use backend='scipy'"
+            "the compiled backend walks the compass gait passive or with a PushOff impulse, "
+            f"with an inert impact ({', '.join(unsupported)} given); use backend='scipy'"
+        )
+    generated = push_off is not None or friction is not None or bool(np.isfinite(max_step))
+    if generated and walker is not None and walker.as_described() is None:
+        raise ValueError(
+            "the compiled backend runs a push-off, a friction limit or dense samples of the "
+            "compass gait on the kernel generated from its description, and this walker has "
+            "none (McGeer's wheel R = l, or a batch of walkers); use backend='scipy'"
         )
 
 
@@ -512,20 +532,25 @@ def simulate_compiled(
     slope: float = 0.0,
     steps: int = 1,
     torque: None = None,
-    push_off: None = None,
-    friction: None = None,
+    push_off: PushOff | None = None,
+    friction: float | None = None,
     restitution: float = 0.0,
     max_step_duration: float = 5.0,
     rtol: float = 1e-10,
     atol: float = 1e-10,
     max_step: float = np.inf,
 ) -> WalkResult:
-    """Compiled :func:`~heelstrike.dynamics.hybrid.simulate` of one passive compass gait.
+    """Compiled :func:`~heelstrike.dynamics.hybrid.simulate` of one compass gait.
 
-    The steps are this module's kernel, phase by phase (the integrator, events, impact and
-    swap of :func:`ensemble_walk`, so impacts equal :func:`step_map_compiled`'s); the impact
-    records are completed from the walker contract (impulse, trailing-foot velocity, energies,
-    :meth:`~heelstrike.models.base.PlanarWalker.step_length`).
+    The passive walk without ``max_step`` runs this module's kernel, phase by phase (the
+    integrator, events, impact and swap of :func:`ensemble_walk`, so impacts equal
+    :func:`step_map_compiled`'s); the impact records are completed from the walker contract
+    (impulse, trailing-foot velocity, energies,
+    :meth:`~heelstrike.models.base.PlanarWalker.step_length`). A push-off, a friction limit or
+    dense samples (finite ``max_step``) run on the kernel generated from the walker's
+    description instead (:meth:`~heelstrike.models.base.PlanarWalker.as_described`, the same
+    equations and coordinates;
+    :func:`~heelstrike.dynamics.compiled_phased.simulate_phased_compiled`).
 
     Parameters
     ----------
@@ -537,8 +562,12 @@ def simulate_compiled(
         Ground slope (rad).
     steps : int
         Number of heel strikes to simulate.
-    torque, push_off, friction : None
-        Not supported (passive walking only; :func:`check_compiled_compass`).
+    torque : None
+        Not supported (:func:`check_compiled_compass`).
+    push_off : PushOff, optional
+        Push-off impulse just before each heel strike (generated kernel).
+    friction : float, optional
+        Coulomb coefficient of the stance foot (generated kernel).
     restitution : float
         Must be 0 (the inert impact).
     max_step_duration : float
@@ -546,26 +575,35 @@ def simulate_compiled(
     rtol, atol : float
         Integrator (DP5) tolerances.
     max_step : float
-        Must be ``inf``: the kernel's steps are set by the tolerances alone (a cap on the step
-        asks for dense samples: use the scipy backend).
+        Largest integrator step (s); finite asks for dense samples (generated kernel).
 
     Returns
     -------
     WalkResult
-        Samples are the phase boundaries only: the start of every step, mid-stance and the
-        state just before heel strike (use the scipy backend for dense trajectories).
+        The compass kernel's samples are the phase boundaries only: the start of every step,
+        mid-stance and the state just before heel strike. The generated kernel's
+        (:class:`~heelstrike.dynamics.hybrid.PhasedWalkResult`) are its integrator's steps.
 
     Raises
     ------
     ValueError
         On an invalid initial state, batched parameters or unsupported actuation.
     """
-    check_compiled_compass(torque, push_off, friction, restitution)
+    check_compiled_compass(torque, push_off, friction, restitution, walker=walker,
+                           max_step=max_step)
     if steps < 1:
         raise ValueError("steps must be >= 1")
-    if np.isfinite(max_step):
-        raise ValueError("the compiled compass kernel takes no max_step (it records the phase "
-                         "boundaries only); use backend='scipy' for dense samples")
+    described = walker.as_described()
+    if described is not None and (
+        push_off is not None or friction is not None or np.isfinite(max_step)
+    ):
+        from heelstrike.dynamics.compiled_phased import simulate_phased_compiled
+
+        return simulate_phased_compiled(
+            described,  # type: ignore[arg-type]
+            q0, q_dot0, slope=slope, steps=steps, push_off=push_off, friction=friction,
+            max_step_duration=max_step_duration, rtol=rtol, atol=atol, max_step=max_step,
+        )
     p = walker_parameters(walker, slope)
     if p.shape != (8,):
         raise ValueError("the compiled compass kernel walks one walker (scalar parameters)")

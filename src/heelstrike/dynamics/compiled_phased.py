@@ -238,6 +238,7 @@ def _configuration(
     friction: float | None, knee_flex_threshold: float,
 ) -> tuple[FloatArray, FloatArray]:
     """The kernel's parameter values ``p`` and float configuration ``cfg`` (``_C_*``)."""
+    walker.check_heel_strike_detectable()  # the kernel's guard is the swing foot's clearance
     values = [np.asarray(walker.params[k], dtype=float) for k in walker.description.param_names]
     if any(v.ndim != 0 for v in values):
         raise ValueError("the compiled backend needs scalar parameter values (one walker)")

@@ -217,6 +217,16 @@ class PlanarWalker(ABC):
         """The description the walker was built from, or None (a hand-written model)."""
         return None
 
+    def as_described(self) -> PlanarWalker | None:
+        """The same walker built from a description, or None (the default: there is none).
+
+        A hand-written walker whose equations a shipped walker file also states returns that
+        walker with its parameter values (e.g. the compass gait's ``compass.toml``). The compiled
+        backend runs it on the kernel generated from the description where the walker's own
+        kernel cannot: push-off, a friction limit, dense samples (:mod:`heelstrike.dynamics`).
+        """
+        return None
+
     @property
     def powered_speed(self) -> float | None:
         """The walker's declared target mean speed (m/s) for a powered gait on level ground.

@@ -630,6 +630,31 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
                 swing.append(j)
         return tuple(stance), tuple(swing)
 
+    def check_heel_strike_detectable(self) -> None:
+        """Raise ``ValueError`` if the swing foot's clearance cannot detect its heel strike.
+
+        That is so when the two feet are one circle in every posture: equal radii and the
+        same arc centre, e.g. McGeer's wheel ``R = l`` of the compass and torso walkers (both
+        arcs about the hip). The clearance is then zero to round-off throughout the step, and
+        a walk would strike anywhere (the compass walker struck at 0.39 s with its legs nearly
+        upright). Checked at two generic postures; the equations of motion and the impact
+        algebra stay valid there, only walking is refused.
+        """
+        q = np.zeros((2, self._n))
+        q[:, 2:] = np.linspace(0.3, 0.7, self._n - 2) * np.array([[1.0], [-1.3]])
+        R_st, R_sw = (np.asarray(r, dtype=float) for r in self.foot_radii)
+        gap = np.linalg.norm(self.foot_centre(q, "left") - self.foot_centre(q, "right"),
+                             axis=-1)
+        tol = 1e-9 * np.asarray(self.scale.leg_length, dtype=float)
+        if np.any(np.all(gap < tol, axis=-1) & (np.abs(R_st - R_sw) < tol)):
+            raise ValueError(
+                f"model {self.description.name!r} cannot walk with these parameter values: its "
+                "two feet are one circle in every posture (the same radius and arc centre, e.g. "
+                "McGeer's wheel R = l), so the swing foot's clearance is zero throughout a step "
+                "and cannot detect its heel strike (the compass gait without --model, "
+                "--radius 1, walks the wheel: its heel strike is 2 q3 + q4 = 0)"
+            )
+
     def step_schedule(self, *, knee_flex_threshold: float = 1e-6) -> StepSchedule:
         """The hybrid schedule of one step of a described walker.
 
@@ -650,7 +675,13 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         ----------
         knee_flex_threshold : float
             How far (rad) the swing knee must flex before its strike is looked for.
+
+        Raises
+        ------
+        ValueError
+            If the heel strike cannot be detected (:meth:`check_heel_strike_detectable`).
         """
+        self.check_heel_strike_detectable()
         stance_locks, swing_locks = self.stance_and_swing_locks()
         angle = {j: float(a) for j, a in zip(self.lockable_joints, self.lock_angles,
                                               strict=True)}

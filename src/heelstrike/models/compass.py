@@ -36,7 +36,14 @@ from heelstrike.models.base import (
     gravity_vector,
 )
 
-__all__ = ["CompassGait", "CompassPositions", "heel_strike_state"]
+__all__ = ["DESCRIBED_PARAMETERS", "CompassGait", "CompassPositions", "heel_strike_state"]
+
+#: The compass gait's parameters (field names) and their names in the shipped walker file
+#: ``compass.toml`` (:meth:`CompassGait.as_described`).
+DESCRIBED_PARAMETERS: Mapping[str, str] = MappingProxyType({
+    "hip_mass": "mH", "leg_mass": "m", "leg_length": "l", "leg_com_from_hip": "b",
+    "foot_radius": "R", "leg_inertia": "I", "gravity": "g",
+})
 
 
 class WalkerParameterError(ValueError):
@@ -194,6 +201,25 @@ class CompassGait(PlanarWalker):
             and type(self).heel_strike_function is CompassGait.heel_strike_function
         )
         return "compass" if standard else None
+
+    def as_described(self) -> PlanarWalker | None:
+        """This walker as the shipped description ``compass.toml`` with the same parameter
+        values (``mH, m, l, b, R, I, g``): the same equations (its conformance tests check them
+        to round-off) and the same coordinates ``q``. None for a subclass with its own step
+        (no :attr:`compiled_kernel`), a batch of walkers, or McGeer's wheel (``R = l`` to
+        1e-9 l): there both foot arcs are one circle about the hip, so the description's
+        swing foot never leaves the ground and its heel-strike guard (the foot's clearance) is
+        round-off, where this walker's (``2 q3 + q4``) is not.
+        """
+        if self.compiled_kernel is None or self.is_batched:
+            return None
+        if math.isclose(float(self.foot_radius), float(self.leg_length), rel_tol=1e-9):
+            return None
+        from heelstrike.models.builder import load_walker
+
+        values: dict[str, Any] = {name: float(getattr(self, field))
+                                  for field, name in DESCRIBED_PARAMETERS.items()}
+        return load_walker("compass", **values)
 
     @property
     def powered_speed(self) -> float | None:

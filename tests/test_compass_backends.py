@@ -84,6 +84,13 @@ def test_described_compass_has_the_same_equations() -> None:
                                            w.contact_jacobian(q, foot), atol=1e-12)
 
 
+def test_the_description_is_built_once_per_parameter_values() -> None:
+    # a walk on the generated kernel must not rebuild the description (1-2 ms) every step
+    a, b = CompassGait(foot_radius=0.3), CompassGait(foot_radius=0.3)
+    assert a.as_described() is b.as_described()
+    assert a.as_described() is not CompassGait(foot_radius=0.31).as_described()
+
+
 def test_a_batch_of_walkers_has_no_single_description() -> None:
     assert CompassGait(foot_radius=np.array([0.0, 0.2])).as_described() is None
 

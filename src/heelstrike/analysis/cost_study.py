@@ -191,9 +191,8 @@ def cost_study(
     ------
     ValueError
         Bad target or actuation, ``backend="compiled"`` with a compass hip law or McGeer's
-        wheel; with
-        ``model``: no parameter ``R``, a radius the walker file rejects, another actuation than
-        push-off, ``actuation_options`` or ``walker`` given.
+        wheel; with ``model``: no parameter ``R``, a radius the walker file rejects, another
+        actuation than push-off, ``actuation_options`` or ``walker`` given.
     """
     if target not in ("step_length", "speed"):
         raise ValueError("target must be 'step_length' or 'speed'")

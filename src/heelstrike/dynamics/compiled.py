@@ -593,14 +593,11 @@ def simulate_compiled(
                            max_step=max_step)
     if steps < 1:
         raise ValueError("steps must be >= 1")
-    described = walker.as_described()
-    if described is not None and (
-        push_off is not None or friction is not None or np.isfinite(max_step)
-    ):
+    if push_off is not None or friction is not None or np.isfinite(max_step):
         from heelstrike.dynamics.compiled_phased import simulate_phased_compiled
 
         return simulate_phased_compiled(
-            described,  # type: ignore[arg-type]
+            walker.as_described(),  # type: ignore[arg-type]  # checked above: not None
             q0, q_dot0, slope=slope, steps=steps, push_off=push_off, friction=friction,
             max_step_duration=max_step_duration, rtol=rtol, atol=atol, max_step=max_step,
         )

@@ -17,6 +17,7 @@ over array-valued parameters (e.g. a grid of foot radii).
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, fields, replace
@@ -206,20 +207,16 @@ class CompassGait(PlanarWalker):
         """This walker as the shipped description ``compass.toml`` with the same parameter
         values (``mH, m, l, b, R, I, g``): the same equations (its conformance tests check them
         to round-off) and the same coordinates ``q``. None for a subclass with its own step
-        (no :attr:`compiled_kernel`), a batch of walkers, or McGeer's wheel (``R = l`` to
-        1e-9 l): there both foot arcs are one circle about the hip, so the description's
-        swing foot never leaves the ground and its heel-strike guard (the foot's clearance) is
-        round-off, where this walker's (``2 q3 + q4``) is not.
+        (no :attr:`compiled_kernel`), a batch of walkers, or a description that cannot walk
+        (:meth:`~heelstrike.models.builder.BuiltWalker.check_heel_strike_detectable`: McGeer's
+        wheel ``R = l``, where both foot arcs are one circle about the hip and the description's
+        heel-strike guard, the swing foot's clearance, is round-off; this walker's guard
+        ``2 q3 + q4`` is not). Built once per parameter values (the result is frozen).
         """
         if self.compiled_kernel is None or self.is_batched:
             return None
-        if math.isclose(float(self.foot_radius), float(self.leg_length), rel_tol=1e-9):
-            return None
-        from heelstrike.models.builder import load_walker
-
-        values: dict[str, Any] = {name: float(getattr(self, field))
-                                  for field, name in DESCRIBED_PARAMETERS.items()}
-        return load_walker("compass", **values)
+        return _described_compass(tuple(float(getattr(self, field))
+                                        for field in DESCRIBED_PARAMETERS))
 
     @property
     def powered_speed(self) -> float | None:
@@ -617,3 +614,18 @@ def heel_strike_state(
     q = np.stack((np.zeros_like(q3), R, q3, -2.0 * q3), axis=-1)
     q_dot = np.stack((-R * w3, np.zeros_like(q3), w3, w4), axis=-1)
     return q, q_dot
+
+
+@functools.lru_cache(maxsize=64)
+def _described_compass(values: tuple[float, ...]) -> PlanarWalker | None:
+    """``compass.toml`` with these values of :data:`DESCRIBED_PARAMETERS` (in its order), or
+    None if the description cannot walk with them (see :meth:`CompassGait.as_described`)."""
+    from heelstrike.models.builder import load_walker
+
+    params: dict[str, Any] = dict(zip(DESCRIBED_PARAMETERS.values(), values, strict=True))
+    walker = load_walker("compass", **params)
+    try:
+        walker.check_heel_strike_detectable()
+    except ValueError:
+        return None
+    return walker

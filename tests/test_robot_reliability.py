@@ -163,6 +163,34 @@ def test_readme_example_reports_the_pulling_kept_sole(talos, tmp_path, capsys) -
     assert "admissible      no" in cap.out and len(_notes(cap.err)) == 1
 
 
+def test_a_strike_moving_away_is_noted_and_round_off_does_not_pull(talos, tmp_path,
+                                                                    capsys) -> None:
+    """QA P3: a --strike contact moving away before the impact gave mode 'separate' and T_c 0
+    with no note; the kept sole's round-off impulse (-1e-15 N s) was reported as pulling."""
+    q, v = gait_state(talos, 0.3, -0.1)  # the leading sole rises at 0.1 m/s
+    state = _state_file(tmp_path / "away.json", q, v)
+    assert main(["impact", "--robot", "talos", "--state", state, *README_KEEP, "--friction",
+                 "0.8", "--json"]) == 0
+    cap = capsys.readouterr()
+    d = json.loads(cap.out)
+    strike = d["contacts"][0]
+    assert strike["mode"] == "separate"
+    assert strike["normal_velocity_pre"] == pytest.approx(0.1, abs=1e-12)
+    assert d["T_c"] == pytest.approx(0.0, abs=1e-12)
+    assert d["T"] == pytest.approx(d["T_plus"], rel=1e-12)  # nothing happened
+    assert abs(d["contacts"][1]["force_impulse"][2]) < 1e-12
+    assert d["admissible"] is True and d["pulling_contacts"] == []
+    notes = _notes(cap.err)
+    assert len(notes) == 1 and cap.err.strip() == notes[0]
+    assert "left_sole_link moves away from the ground" in notes[0] and "+0.1 m/s" in notes[0]
+    # approaching: no such note (the README example)
+    q, v = gait_state(talos, 0.3, 0.3)
+    state = _state_file(tmp_path / "toward.json", q, v)
+    assert main(["impact", "--robot", "talos", "--state", state, "--strike",
+                 "left_sole_link:flat", "--friction", "0.8"]) == 0
+    assert _notes(capsys.readouterr().err) == []
+
+
 def test_pulling_contacts_follow_the_sign_of_the_kept_normal_impulse(talos) -> None:
     """Random states: a kept contact is listed exactly when its vertical impulse is < 0."""
     rng = np.random.default_rng(7)

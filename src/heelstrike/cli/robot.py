@@ -12,6 +12,7 @@ import argparse
 import json
 import math
 import sys
+import textwrap
 from pathlib import Path
 from typing import Any
 
@@ -141,7 +142,9 @@ def _run_robot_info(args: argparse.Namespace) -> int:
     print(f"  source  {r.source}")
     print(f"  feet    {', '.join(r.feet)} ({r.foot_contact} contact)")
     print(f"  joints  {len(joints)} (root: {joints[0]}, free flyer)")
-    print(f"  frames  {len(frames)}")
+    print(f"  frames  {len(frames)}:")
+    print(textwrap.fill(", ".join(frames), width=96, initial_indent="    ",
+                        subsequent_indent="    ", break_on_hyphens=False))
     return 0
 
 
@@ -300,6 +303,18 @@ def _read_state(path: str, nq: int, nv: int) -> tuple[list[float], list[float]]:
     return out[0], out[1]
 
 
+def _note_separating_strikes(contacts: list[dict[str, Any]]) -> None:
+    """Say on stderr which ``--strike`` contacts strike nothing: moving away from the ground
+    before the impact (normal velocity above round-off) and separate after it."""
+    scale = max((abs(c["normal_velocity_pre"]) for c in contacts), default=0.0)
+    for c in contacts:
+        u = c["normal_velocity_pre"]
+        if c["role"] == "strike" and c["mode"] == "separate" and u > 1e-9 * max(scale, 1.0):
+            print(f"heelstrike: note: the striking contact {c['frame']} moves away from the "
+                  f"ground before the impact (normal velocity {u:+.4g} m/s) and stays separate: "
+                  "it strikes nothing (no impulse, no share of T_c)", file=sys.stderr)
+
+
 def run_robot_impact(args: argparse.Namespace) -> int:
     """``heelstrike impact --robot NAME | --urdf FILE | --mjcf FILE --state STATE.json ...``."""
     import numpy as np
@@ -341,6 +356,7 @@ def run_robot_impact(args: argparse.Namespace) -> int:
               f"{lam_n:.4g} N s < 0), so this impact is not admissible: released, it would "
               f"lift; pass it as --strike {keep_text.get(frame, frame)} (complementarity then "
               "decides whether it lifts) or drop it", file=sys.stderr)
+    _note_separating_strikes(d["contacts"])
     if args.json:
         _, v_units = _joint_units(robot.model)
         impulse_units = [u for c in res.contacts

@@ -269,10 +269,15 @@ class RobotImpact(ResultDictMixin):
 
         The impact is admissible (:func:`ground_admissible`) when this is empty. A kept
         contact's normal impulse is its principal normal row (the vertical force impulse).
-        Striking contacts are unilateral, so their normal impulse is never negative.
+        Striking contacts are unilateral, so their normal impulse is never negative. Round-off
+        is judged against the largest impulse or the robot's momentum scale
+        ``sqrt(2 T m)`` (N s, ``m`` the largest diagonal entry of ``M``), whichever is larger:
+        when nothing strikes, every impulse is round-off (1e-15 N s) and none pulls.
         """
         lam = self.result.impulse
-        scale = float(np.max(np.abs(lam), initial=0.0))
+        momentum = float(np.sqrt(2.0 * max(float(self.result.T), 0.0)
+                                 * float(np.max(np.diag(self.M), initial=0.0))))
+        scale = max(float(np.max(np.abs(lam), initial=0.0)), momentum)
         out: list[tuple[str, float]] = []
         start = 0
         for c, kept in zip(self.contacts, self.bilateral, strict=True):

@@ -161,20 +161,29 @@ def plot_robot_study(study: RobotStudy, fig: Any = None) -> Any:
     matplotlib.figure.Figure
     """
     from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
 
-    fig = Figure(figsize=(10, 4)) if fig is None else fig
+    fig = Figure(figsize=(10, 4.6), layout="constrained") if fig is None else fig
     ax1, ax2 = fig.subplots(1, 2)
     L, S = study.step_length, study.strike_speed
     colours = [f"C{i % 10}" for i in range(S.size)]
-    for j, s in enumerate(S):
-        ax1.plot(L, study.T_c[:, j], "-", color=colours[j], label=f"T_c, {s:g} m/s")
-        ax1.plot(L, study.T_a[:, j], "--", color=colours[j], label=f"T_a, {s:g} m/s")
+    for j in range(S.size):
+        ax1.plot(L, study.T_c[:, j], "-", color=colours[j])
+        ax1.plot(L, study.T_a[:, j], "--", color=colours[j])
         bad = ~study.admissible[:, j]
         ax1.plot(L[bad], study.T_c[bad, j], "x", color=colours[j])
     ax1.set_xlabel("step length (m)")
     ax1.set_ylabel("energy (J)")
     ax1.set_title(f"{study.robot}: {study.contact} strike")
-    ax1.legend(fontsize="small")
+    # one legend below the panels (inside, it covered curves): line style = energy, colour =
+    # strike speed
+    handles = [Line2D([], [], color="k", ls="-", label="T_c (lost)"),
+               Line2D([], [], color="k", ls="--", label="T_a (kept)"),
+               Line2D([], [], color="k", ls="none", marker="x", label="inadmissible"),
+               *(Line2D([], [], color=c, label=f"{s:g} m/s")
+                 for c, s in zip(colours, S, strict=True))]
+    fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 9),
+               fontsize="small")
     if L.size > 1 and S.size > 1:
         mesh = ax2.pcolormesh(L, S, study.loss_per_metre.T, shading="nearest")
         fig.colorbar(mesh, ax=ax2, label="T_c / L (J/m)")

@@ -322,6 +322,8 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
             for j in self.lockable_joints
         )
         self.point_names: tuple[str, ...] = description.point_names
+        # a batch of walkers does not walk (its parameters broadcast against states instead)
+        self._feet_one_circle = not self.is_batched and self._feet_are_one_circle()
         if "swap_coordinates" in self.model.namespace and all(
             np.ndim(v) == 0 for v in values.values()
         ):
@@ -630,6 +632,17 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
                 swing.append(j)
         return tuple(stance), tuple(swing)
 
+    def _feet_are_one_circle(self) -> bool:
+        """Whether the two feet are one circle in every posture (equal radii, the same arc
+        centre; checked at two generic postures; one walker)."""
+        q = np.zeros((2, self._n))
+        q[:, 2:] = np.linspace(0.3, 0.7, self._n - 2) * np.array([[1.0], [-1.3]])
+        R_st, R_sw = (np.asarray(r, dtype=float) for r in self.foot_radii)
+        gap = np.linalg.norm(self.foot_centre(q, "left") - self.foot_centre(q, "right"),
+                             axis=-1)
+        tol = 1e-9 * float(self.scale.leg_length)
+        return bool(np.all(gap < tol) and abs(float(R_st) - float(R_sw)) < tol)
+
     def check_heel_strike_detectable(self) -> None:
         """Raise ``ValueError`` if the swing foot's clearance cannot detect its heel strike.
 
@@ -637,16 +650,10 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         same arc centre, e.g. McGeer's wheel ``R = l`` of the compass and torso walkers (both
         arcs about the hip). The clearance is then zero to round-off throughout the step, and
         a walk would strike anywhere (the compass walker struck at 0.39 s with its legs nearly
-        upright). Checked at two generic postures; the equations of motion and the impact
-        algebra stay valid there, only walking is refused.
+        upright). Decided once, when the walker is built (two generic postures); the
+        equations of motion and the impact algebra stay valid there, only walking is refused.
         """
-        q = np.zeros((2, self._n))
-        q[:, 2:] = np.linspace(0.3, 0.7, self._n - 2) * np.array([[1.0], [-1.3]])
-        R_st, R_sw = (np.asarray(r, dtype=float) for r in self.foot_radii)
-        gap = np.linalg.norm(self.foot_centre(q, "left") - self.foot_centre(q, "right"),
-                             axis=-1)
-        tol = 1e-9 * np.asarray(self.scale.leg_length, dtype=float)
-        if np.any(np.all(gap < tol, axis=-1) & (np.abs(R_st - R_sw) < tol)):
+        if self._feet_one_circle:
             raise ValueError(
                 f"model {self.description.name!r} cannot walk with these parameter values: its "
                 "two feet are one circle in every posture (the same radius and arc centre, e.g. "

@@ -191,6 +191,31 @@ def test_a_strike_moving_away_is_noted_and_round_off_does_not_pull(talos, tmp_pa
     assert _notes(capsys.readouterr().err) == []
 
 
+def test_keep_only_impact_is_the_papers_inert_law(talos, tmp_path, capsys) -> None:
+    """QA P3: the CLI refused impacts with --keep contacts only (the paper's inert law)."""
+    q, v = gait_state(talos, 0.3, 0.3)
+    state = _state_file(tmp_path / "state.json", q, v)
+    keep = ["--keep", "left_sole_link:flat", "--keep", "right_sole_link:flat"]
+    assert main(["impact", "--robot", "talos", "--state", state, *keep, "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    feet = [ContactSpec(frame=f, kind="flat") for f in ("left_sole_link", "right_sole_link")]
+    ref = robot_impact(talos, q, v, keep=feet)  # strike defaults to none
+    assert d["T_c"] == pytest.approx(ref.result.T_c, rel=1e-12)
+    np.testing.assert_allclose(d["qdot_plus"], ref.result.velocity_post, atol=1e-12)
+    # inert: A v+ = 0 at every kept contact, T = T_c + T_a, and the loss is exactly T_c
+    for J in ref.jacobians:
+        np.testing.assert_allclose(J @ np.asarray(d["qdot_plus"]), 0.0, atol=1e-12)
+    assert d["T"] == pytest.approx(d["T_c"] + d["T_a"], rel=1e-12)
+    assert d["energy_lost"] == pytest.approx(d["T_c"], rel=1e-12)
+    assert [c["role"] for c in d["contacts"]] == ["keep", "keep"]
+    # the striking contacts' laws mean nothing here; nothing at all is an error
+    for extra in (["--friction", "0.5"], ["--restitution", "0.3"]):
+        assert main(["impact", "--robot", "talos", "--state", state, *keep, *extra]) == 2
+        assert "--keep contacts only is inert" in _one_error_line(capsys.readouterr().err)
+    assert main(["impact", "--robot", "talos", "--state", state]) == 2
+    assert "at least one --strike or --keep" in _one_error_line(capsys.readouterr().err)
+
+
 def test_pulling_contacts_follow_the_sign_of_the_kept_normal_impulse(talos) -> None:
     """Random states: a kept contact is listed exactly when its vertical impulse is < 0."""
     rng = np.random.default_rng(7)

@@ -267,7 +267,8 @@ def add_robot_impact_options(p: argparse.ArgumentParser) -> None:
                    "unilateral, with --friction and --restitution, its lift is decided")
     g.add_argument("--keep", action="append", default=None,
                    metavar="FRAME:point|flat|arc:RADIUS",
-                   help="persistent contact (repeatable): bilateral and inert, stays fixed")
+                   help="persistent contact (repeatable): bilateral and inert, stays fixed; "
+                   "with --keep contacts only, the paper's inert impact")
     g.add_argument("--friction", type=float, default=math.inf, metavar="MU",
                    help="Coulomb coefficient of the striking contacts (default inf: no slip)")
 
@@ -329,9 +330,14 @@ def run_robot_impact(args: argparse.Namespace) -> int:
         raise RobotCliError("--model and --angle do not apply to robots")
     if args.state is None:
         raise RobotCliError("robots need --state STATE.json with {\"q\": [...], \"v\": [...]}")
-    if not args.strike:
-        raise RobotCliError("robots need at least one --strike FRAME:point|flat|arc:RADIUS")
-    strike = [parse_contact(s) for s in args.strike]
+    if not args.strike and not args.keep:
+        raise RobotCliError("robots need at least one --strike or --keep "
+                            "FRAME:point|flat|arc:RADIUS")
+    if not args.strike and (math.isfinite(args.friction) or args.restitution != 0.0):
+        raise RobotCliError("--friction and --restitution set the laws of --strike contacts; "
+                            "an impact with --keep contacts only is inert (the paper's law): "
+                            "give a --strike or drop them")
+    strike = [parse_contact(s) for s in (args.strike or [])]
     keep = [parse_contact(s) for s in (args.keep or [])]
     if args.robot is not None:
         robot = load_robot(args.robot)

@@ -364,7 +364,7 @@ def robot_impact(
     q: ArrayLike,
     v: ArrayLike,
     *,
-    strike: Sequence[ContactSpec],
+    strike: Sequence[ContactSpec] = (),
     keep: Sequence[ContactSpec] = (),
     friction: float = float("inf"),
     restitution: float = 0.0,
@@ -380,6 +380,7 @@ def robot_impact(
         Pre-impact velocity ``v-``.
     strike : sequence of ContactSpec
         Unilateral contacts with ``friction`` and ``restitution`` (their lift is decided).
+        None (only ``keep``): every contact kept, the paper's inert impact.
     keep : sequence of ContactSpec
         Persistent bilateral inert contacts.
     friction : float

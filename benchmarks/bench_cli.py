@@ -11,9 +11,9 @@ compiled command pays at least). Targets (issue 9):
 - ``gait --radius 0.3 --slope 3deg`` within 3x of ``impact --json``;
 - ``gait --model kneed``: compiled backend >= 10x faster than ``--backend scipy``, same answer
   to 1e-8 (checked here on the JSON fixed points);
-- ``powered`` for each actuation at R = 0 and 0.3, 0.5 m/s: under 10 s each (push-off runs
-  compiled by default, on the kernel generated from ``compass.toml``; the rows with
-  ``--backend scipy`` are the reference; the hip laws run on the reference).
+- ``powered`` for each actuation at R = 0 and 0.3, 0.5 m/s: under 10 s each (every actuation
+  runs compiled by default, on the kernel generated from ``compass.toml``; the rows with
+  ``--backend scipy`` are the reference).
 
 Every child process runs as a default Python does: ``PYTHONDONTWRITEBYTECODE`` is removed from
 its environment, so imports use the bytecode caches that an installed package has (this
@@ -36,6 +36,7 @@ Run ``python benchmarks/bench_cli.py`` (``--quick``: 1 timed round, no cold runs
 
 from __future__ import annotations
 
+import itertools
 import json
 import os
 import shutil
@@ -89,11 +90,12 @@ COMMANDS: dict[str, tuple[str, list[str]]] = {
         for R in ("0", "0.3")
     },
     **{
-        f"powered --radius {R} --speed 0.5 --actuation pushoff --backend scipy": (
+        f"powered --radius {R} --speed 0.5 --actuation {act} --backend scipy": (
             "heelstrike",
-            ["powered", "--radius", R, "--speed", "0.5", "--actuation", "pushoff", "--json",
+            ["powered", "--radius", R, "--speed", "0.5", "--actuation", act, "--json",
              "--backend", "scipy"],
         )
+        for act in ("pushoff", "hip-energy", "hip-pd")
         for R in ("0", "0.3")
     },
 }  # fmt: skip
@@ -230,8 +232,8 @@ def run(quick: bool = False) -> dict[str, Any]:
                   outputs.get("gait --model kneed --backend scipy"))
     if d is not None:
         notes.append(f"kneed fixed point, compiled vs scipy: max |difference| {d:.2g}")
-    for R in ("0", "0.3"):
-        name = f"powered --radius {R} --speed 0.5 --actuation pushoff"
+    for act, R in itertools.product(("pushoff", "hip-energy", "hip-pd"), ("0", "0.3")):
+        name = f"powered --radius {R} --speed 0.5 --actuation {act}"
         ref = f"{name} --backend scipy"
         line = (f"{name}: backend {(outputs.get(name) or {}).get('backend')} (the default), "
                 f"scipy / compiled {med[ref] / med[name]:.2f}x")

@@ -160,8 +160,8 @@ def cost_study(
         ``("pushoff",)``, no ``actuation_options``); its other parameters are kept.
     backend : {"compiled", "scipy"} or None
         Step simulator (:func:`~heelstrike.analysis.powered.family_simulator`). None (default):
-        compiled where its kernels run the actuation and walker (push-off, a model's posture
-        law), else the scipy reference (the compass hip laws, McGeer's wheel ``R = l``); the
+        compiled where its kernels run the actuation and walker (push-off, the compass hip
+        laws, a model's posture law), else the scipy reference (McGeer's wheel ``R = l``); the
         ``backend`` variable records which ran.
     actuation_options : dict, optional
         Gains and torque limit for :func:`~heelstrike.analysis.powered.actuation_family`.
@@ -190,9 +190,9 @@ def cost_study(
     Raises
     ------
     ValueError
-        Bad target or actuation, ``backend="compiled"`` with a compass hip law or McGeer's
-        wheel; with ``model``: no parameter ``R``, a radius the walker file rejects, another
-        actuation than push-off, ``actuation_options`` or ``walker`` given.
+        Bad target or actuation, ``backend="compiled"`` with McGeer's wheel; with ``model``:
+        no parameter ``R``, a radius the walker file rejects, another actuation than push-off,
+        ``actuation_options`` or ``walker`` given.
     """
     if target not in ("step_length", "speed"):
         raise ValueError("target must be 'step_length' or 'speed'")

@@ -178,8 +178,8 @@ def family_simulator(
         ``"compiled"``: :func:`heelstrike.dynamics.simulate` on the compiled backend, checked
         for the family's laws (built at its first seed value). ``"scipy"``: None, i.e.
         :func:`~heelstrike.dynamics.hybrid.simulate` (the reference). None: compiled if its
-        kernels evaluate the family's laws (push-off; the hip laws are the reference's only),
-        else the reference.
+        kernels walk this walker with the family's laws (push-off, the compass hip laws, a
+        declared posture law; not McGeer's wheel), else the reference.
 
     Returns
     -------

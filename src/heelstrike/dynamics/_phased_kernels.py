@@ -40,8 +40,11 @@ from heelstrike.dynamics.compiled import (
     TRAILING_FOOT_STAYS,
 )
 from heelstrike.dynamics.compiled_phased import (
+    _C_EREF,
+    _C_GAIN,
     _C_KD,
     _C_KP,
+    _C_LAW,
     _C_LEG,
     _C_MU,
     _C_PUSH,
@@ -51,6 +54,7 @@ from heelstrike.dynamics.compiled_phased import (
     _C_TANG,
     _C_THR,
     _C_TJ,
+    _C_UMAX,
     _EV_ARMED,
     _EV_BACK,
     _EV_FAIL,
@@ -64,6 +68,8 @@ from heelstrike.dynamics.compiled_phased import (
     _I_HEAD,
     _KIND_HEEL,
     _KIND_KNEE,
+    _LAW_ENERGY,
+    _LAW_POSTURE,
     _NO_CONSISTENT_ASSIGNMENT,
     _NO_SWAP,
     SLIPPED,
@@ -269,15 +275,31 @@ def _forces(
     dyn: Any, p: FloatArray, cfg: FloatArray, q: FloatArray, qd: FloatArray, M: FloatArray,
     h: FloatArray,
 ) -> float:
-    """``M``, ``h`` and the actuator torque ``u`` of the torso law; ``h <- h - B u``.
+    """``M``, ``h`` and the actuator torque ``u`` of the joint law; ``h <- h - B u``.
 
+    The law (``cfg[_C_LAW]``, see :mod:`heelstrike.dynamics.compiled_phased`) acts across
+    joint ``j = cfg[_C_TJ]`` (none if ``j < 0``), saturated at ``cfg[_C_UMAX]``: the posture
+    law ``-kp (q_2 + q_j - ref) - kd (q_2_dot + q_j_dot)`` (torso), the joint PD law
+    ``-kp (q_j - ref) - kd q_j_dot`` (swing-leg PD) or energy tracking
+    ``-k (T + V - E_ref) q_j_dot`` (``V`` returned by the generated ``dynamics``).
     Returns the actuator power ``(B u) . q_dot`` (W).
     """
-    dyn(q, qd, p, cfg[_C_SLOPE], M, h)
+    V = dyn(q, qd, p, cfg[_C_SLOPE], M, h)
     tj = int(cfg[_C_TJ])
     if tj < 0:
         return 0.0
-    u = -cfg[_C_KP] * (q[2] + q[tj] - cfg[_C_TANG]) - cfg[_C_KD] * (qd[2] + qd[tj])
+    law = int(cfg[_C_LAW])
+    if law == _LAW_POSTURE:
+        u = -cfg[_C_KP] * (q[2] + q[tj] - cfg[_C_TANG]) - cfg[_C_KD] * (qd[2] + qd[tj])
+    elif law == _LAW_ENERGY:
+        u = -cfg[_C_GAIN] * (_quad(M, qd) + V - cfg[_C_EREF]) * qd[tj]
+    else:
+        u = -cfg[_C_KP] * (q[tj] - cfg[_C_TANG]) - cfg[_C_KD] * qd[tj]
+    umax = cfg[_C_UMAX]
+    if u > umax:
+        u = umax
+    elif u < -umax:
+        u = -umax
     h[tj] -= u
     return u * qd[tj]
 

@@ -17,8 +17,8 @@ kind          backend     implementation
 ``planar``    ``scipy``   :func:`heelstrike.dynamics.hybrid.simulate` (any hand-written walker)
 ``compass``   ``scipy``   :func:`heelstrike.dynamics.hybrid.simulate`
 ``compass``   compiled    :func:`heelstrike.dynamics.compiled.simulate_compiled` (passive;
-                          push-off, friction, dense samples: the generated kernel of
-                          :meth:`~heelstrike.models.base.PlanarWalker.as_described`)
+                          hip laws, push-off, friction, dense samples: the generated kernel
+                          of :meth:`~heelstrike.models.base.PlanarWalker.as_described`)
 described     ``scipy``   :func:`heelstrike.dynamics.hybrid.simulate`
 described     compiled    :func:`heelstrike.dynamics.compiled_phased.simulate_phased_compiled`
 ============  ==========  =================================================================
@@ -236,7 +236,11 @@ def simulate(
         Number of heel strikes to simulate.
     torque : callable, optional
         Actuator law ``(t since step start, q, q_dot) -> u`` (N m); the compiled backends take
-        :class:`~heelstrike.dynamics.phased.TorsoPD` only (described walkers) or none (compass).
+        :class:`~heelstrike.dynamics.phased.TorsoPD` (a walker with a torso joint) and the hip
+        laws :class:`~heelstrike.dynamics.actuation.SwingLegPD` (constant set point) and
+        :class:`~heelstrike.dynamics.actuation.EnergyTracking` (the compass gait and its
+        description), see
+        :func:`~heelstrike.dynamics.compiled_phased.check_compiled_actuation`.
     push_off : callable, optional
         Impulsive actuation just before each heel strike: a
         :data:`~heelstrike.dynamics.hybrid.PushOff` callable (scipy), or the

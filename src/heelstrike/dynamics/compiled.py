@@ -2,7 +2,8 @@
 
 This module re-implements, in numba-compiled code, exactly the hybrid model of
 :func:`heelstrike.dynamics.hybrid.simulate` for the passive :class:`~heelstrike.models.CompassGait`
-on a slope (no torque, no push-off, inert impact):
+on a slope (no torque, no push-off, inert impact; :func:`simulate_compiled` runs those on the
+kernel generated from the walker's description):
 
 - **Single support.** The stance foot rolls (``q1 = c - R q3``, ``q2 = R``); the free coordinates
   ``theta = (q3, q4)`` obey ``J^T M J theta_dd = -J^T h`` with the constant null-space basis ``J``
@@ -69,7 +70,7 @@ from heelstrike.models.base import PlanarWalker
 from heelstrike.models.compass import CompassGait
 
 if TYPE_CHECKING:
-    from heelstrike.dynamics.actuation import PushOff
+    from heelstrike.dynamics.actuation import EnergyTracking, PushOff, SwingLegPD
 
 __all__ = [
     "STATUS_NAMES",
@@ -492,19 +493,21 @@ def check_compiled_compass(
 ) -> None:
     """Raise ``ValueError`` unless the compiled backend runs this compass-gait actuation.
 
-    The compass kernel walks the *passive* compass gait with an inert heel strike; a
+    The compass kernel walks the *passive* compass gait with an inert heel strike; a hip law
+    (:class:`~heelstrike.dynamics.actuation.SwingLegPD` with a constant set point,
+    :class:`~heelstrike.dynamics.actuation.EnergyTracking` of this walker's energy), a
     :class:`~heelstrike.dynamics.actuation.PushOff` impulse, a friction limit (``slipped``) or
     dense samples (finite ``max_step``) run on the kernel generated from the walker's
     description (:meth:`~heelstrike.models.base.PlanarWalker.as_described`, see
-    :func:`simulate_compiled`), which ``walker`` (if given) must have. No torque law (the hip
-    laws are evaluated by the scipy reference only) and ``restitution = 0``.
+    :func:`simulate_compiled`), which ``walker`` (if given) must have. ``restitution = 0``.
     """
-    from heelstrike.dynamics.actuation import PushOff
+    from heelstrike.dynamics.actuation import EnergyTracking, PushOff, SwingLegPD
 
     unsupported = [
         name
         for name, given in (
-            ("torque", torque is not None),
+            ("torque other than SwingLegPD or EnergyTracking",
+             torque is not None and type(torque) not in (SwingLegPD, EnergyTracking)),
             ("push_off other than PushOff", push_off is not None and type(push_off) is not PushOff),
             ("restitution", float(restitution) != 0.0),
         )
@@ -512,16 +515,24 @@ def check_compiled_compass(
     ]
     if unsupported:
         raise ValueError(
-            "the compiled backend walks the compass gait passive or with a PushOff impulse, "
-            f"with an inert impact ({', '.join(unsupported)} given); use backend='scipy'"
+            "the compiled backend walks the compass gait passive, with the SwingLegPD or "
+            "EnergyTracking hip law or with a PushOff impulse, with an inert impact "
+            f"({', '.join(unsupported)} given); use backend='scipy'"
         )
-    generated = push_off is not None or friction is not None or bool(np.isfinite(max_step))
-    if generated and walker is not None and walker.as_described() is None:
-        raise ValueError(
-            "the compiled backend runs a push-off, a friction limit or dense samples of the "
-            "compass gait on the kernel generated from its description, and this walker has "
-            "none (McGeer's wheel R = l, or a batch of walkers); use backend='scipy'"
-        )
+    generated = (torque is not None or push_off is not None or friction is not None
+                 or bool(np.isfinite(max_step)))
+    if generated and walker is not None:
+        described = walker.as_described()
+        if described is None:
+            raise ValueError(
+                "the compiled backend runs a hip law, a push-off, a friction limit or dense "
+                "samples of the compass gait on the kernel generated from its description, "
+                "and this walker has none (McGeer's wheel R = l, or a batch of walkers); use "
+                "backend='scipy'"
+            )
+        from heelstrike.dynamics.compiled_phased import check_compiled_actuation
+
+        check_compiled_actuation(described, torque, push_off)  # type: ignore[arg-type]
 
 
 def simulate_compiled(
@@ -531,7 +542,7 @@ def simulate_compiled(
     *,
     slope: float = 0.0,
     steps: int = 1,
-    torque: None = None,
+    torque: SwingLegPD | EnergyTracking | None = None,
     push_off: PushOff | None = None,
     friction: float | None = None,
     restitution: float = 0.0,
@@ -546,10 +557,11 @@ def simulate_compiled(
     integrator, events, impact and swap of :func:`ensemble_walk`, so impacts equal
     :func:`step_map_compiled`'s); the impact records are completed from the walker contract
     (impulse, trailing-foot velocity, energies,
-    :meth:`~heelstrike.models.base.PlanarWalker.step_length`). A push-off, a friction limit or
-    dense samples (finite ``max_step``) run on the kernel generated from the walker's
-    description instead (:meth:`~heelstrike.models.base.PlanarWalker.as_described`, the same
-    equations and coordinates;
+    :meth:`~heelstrike.models.base.PlanarWalker.step_length`). A hip law, a push-off, a
+    friction limit or dense samples (finite ``max_step``) run on the kernel generated from the
+    walker's description instead
+    (:meth:`~heelstrike.models.base.PlanarWalker.as_described`, the same equations and
+    coordinates;
     :func:`~heelstrike.dynamics.compiled_phased.simulate_phased_compiled`).
 
     Parameters
@@ -562,8 +574,9 @@ def simulate_compiled(
         Ground slope (rad).
     steps : int
         Number of heel strikes to simulate.
-    torque : None
-        Not supported (:func:`check_compiled_compass`).
+    torque : SwingLegPD or EnergyTracking, optional
+        Hip law, evaluated in the generated kernel (:func:`check_compiled_compass`); None:
+        passive hip.
     push_off : PushOff, optional
         Push-off impulse just before each heel strike (generated kernel).
     friction : float, optional
@@ -593,12 +606,14 @@ def simulate_compiled(
                            max_step=max_step)
     if steps < 1:
         raise ValueError("steps must be >= 1")
-    if push_off is not None or friction is not None or np.isfinite(max_step):
+    if torque is not None or push_off is not None or friction is not None \
+            or np.isfinite(max_step):
         from heelstrike.dynamics.compiled_phased import simulate_phased_compiled
 
         return simulate_phased_compiled(
             walker.as_described(),  # type: ignore[arg-type]  # checked above: not None
-            q0, q_dot0, slope=slope, steps=steps, push_off=push_off, friction=friction,
+            q0, q_dot0, slope=slope, steps=steps, torque=torque, push_off=push_off,
+            friction=friction,
             max_step_duration=max_step_duration, rtol=rtol, atol=atol, max_step=max_step,
         )
     p = walker_parameters(walker, slope)

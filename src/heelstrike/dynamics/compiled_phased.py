@@ -26,8 +26,11 @@ contact Jacobians and the swap generated from the walker's sympy expressions
 norm and step control; an event's time is located by the Illinois method on the exact
 Runge-Kutta step, to ``1e-13 s``), for any number of free coordinates.
 
-Actuation: passive or :class:`~heelstrike.dynamics.phased.TorsoPD` torques and the
-:class:`~heelstrike.dynamics.actuation.PushOff` impulse (all evaluated in the kernel); other
+Actuation (all evaluated in the kernel; see :func:`check_compiled_actuation`): passive, the
+:class:`~heelstrike.dynamics.phased.TorsoPD` posture law, on a walker whose one actuated joint
+is coordinate 3 (the compass gait's hip) the :class:`~heelstrike.dynamics.actuation.SwingLegPD`
+set point and :class:`~heelstrike.dynamics.actuation.EnergyTracking` hip laws (``T + V`` from the
+generated ``dynamics``), and the :class:`~heelstrike.dynamics.actuation.PushOff` impulse; other
 torque laws and push-off models need the ``"scipy"`` backend.
 
 The numba functions are in :mod:`heelstrike.dynamics._phased_kernels`. Through numba's JIT the
@@ -58,7 +61,7 @@ from heelstrike._typing import FloatArray, IntArray
 from heelstrike.core._parallel import use_parallel
 from heelstrike.core.impact import ImpactInputError
 from heelstrike.dynamics._aot import AotExport, AotLibrary, aot_mode, load_library
-from heelstrike.dynamics.actuation import PushOff
+from heelstrike.dynamics.actuation import EnergyTracking, PushOff, SwingLegPD
 from heelstrike.dynamics.compiled import STATUS_NAMES, EnsembleStatus
 from heelstrike.dynamics.hybrid import ImpactRecord, WalkStatus
 from heelstrike.dynamics.phased import (
@@ -94,9 +97,18 @@ _EV_NONE = -1  # time limit reached
 _EV_FAIL = -2  # integrator failure
 
 # float configuration: slope, stance foot radius, swing foot radius, knee flex threshold,
-# friction coefficient (nan: none), torso joint (-1: passive), torso angle, kp, kd, push-off
-# impulse (nan: none), leg length of the walker's scale (the lift rule's velocity scale)
+# friction coefficient (nan: none), the joint law's joint (-1: passive), its reference angle,
+# kp, kd, push-off impulse (nan: none), leg length of the walker's scale (the lift rule's
+# velocity scale), the joint law (_LAW_*), its torque limit (N m, inf: none), the energy gain
+# and the target energy (J)
 _C_SLOPE, _C_RST, _C_RSW, _C_THR, _C_MU, _C_TJ, _C_TANG, _C_KP, _C_KD, _C_PUSH, _C_LEG = range(11)
+_C_LAW, _C_UMAX, _C_GAIN, _C_EREF = range(11, 15)
+# joint laws: TorsoPD (absolute angle q_2 + q_j), SwingLegPD (relative q_j), EnergyTracking
+_LAW_POSTURE, _LAW_JOINT_PD, _LAW_ENERGY = 0, 1, 2
+#: The coordinate of the compass gait's hip (``q4``), which the hip laws read.
+_HIP = 3
+#: The torque laws the kernel evaluates (:func:`check_compiled_actuation`).
+JointLaw = TorsoPD | SwingLegPD | EnergyTracking
 
 # impact row layout: kind, step, time, T, T_c, T_a, v_trail, mode, rows, work, push-off work,
 # then q, q_dot-, q_dot+ and the impulses (n each)
@@ -204,24 +216,91 @@ def numba_model(walker: BuiltWalker) -> NumbaModel:
     return build_numba(walker.description)
 
 
+def _same_walker(law_walker: Any, walker: BuiltWalker) -> bool:
+    """``law_walker`` (an energy law's) has ``walker``'s equations: it is ``walker``, or its
+    description (:meth:`~heelstrike.models.base.PlanarWalker.as_described`) has the same
+    structure and parameter values."""
+    if law_walker is walker:
+        return True
+    described = law_walker.as_described()
+    if described is None:
+        return False
+    if described is walker:
+        return True
+    names = walker.description.param_names
+    return bool(
+        described.description.structure_key() == walker.description.structure_key()
+        and all(np.array_equal(np.asarray(described.params[k], dtype=float),
+                               np.asarray(walker.params[k], dtype=float)) for k in names)
+    )
+
+
 def check_compiled_actuation(walker: BuiltWalker, torque: Any, push_off: Any) -> None:
     """Raise ``ValueError`` unless the compiled backend supports this actuation.
 
-    Supported: passive (``torque=None``) or a :class:`~heelstrike.dynamics.phased.TorsoPD`
-    torque on a walker with a ``torso`` joint, and no push-off or a
-    :class:`~heelstrike.dynamics.actuation.PushOff`.
+    Supported: no push-off or a :class:`~heelstrike.dynamics.actuation.PushOff`, and
+
+    - passive (``torque=None``);
+    - a :class:`~heelstrike.dynamics.phased.TorsoPD` torque on a walker with a ``torso`` joint;
+    - on a walker whose one actuated joint is coordinate 3 (the hip of the compass gait and of
+      its description ``compass.toml``): a :class:`~heelstrike.dynamics.actuation.SwingLegPD`
+      set point (no time profile), or :class:`~heelstrike.dynamics.actuation.EnergyTracking`
+      whose walker has this walker's equations (the walker itself, or the compass gait it
+      describes with the same parameter values; its slope must be the walk's).
     """
     if push_off is not None and type(push_off) is not PushOff:
         raise ValueError(
             "the compiled backend supports the PushOff impulse only; use backend='scipy'"
         )
-    if torque is not None and not (
-        type(torque) is TorsoPD and "torso" in walker.coordinate_names
-    ):
+    if torque is None or (type(torque) is TorsoPD and "torso" in walker.coordinate_names):
+        return
+    hip_laws = "TorsoPD, SwingLegPD and EnergyTracking"
+    if type(torque) is TorsoPD:
+        raise ValueError("TorsoPD acts across a joint named 'torso', and this walker has none")
+    if type(torque) not in (SwingLegPD, EnergyTracking):
         raise ValueError(
-            "the compiled backend supports passive walking and TorsoPD torques only; "
-            "use backend='scipy' for other torque laws"
+            f"the compiled backend evaluates passive walking and the {hip_laws} torque laws "
+            "only; use backend='scipy' for other torque laws"
         )
+    if tuple(walker.actuated_joints) != (_HIP,):
+        raise ValueError(
+            f"the compiled backend evaluates {type(torque).__name__} on a walker whose one "
+            f"actuated joint is coordinate {_HIP} (the compass gait's hip); this walker's are "
+            f"{tuple(walker.actuated_joints)}: use backend='scipy'"
+        )
+    if type(torque) is SwingLegPD and torque.profile is not None:
+        raise ValueError(
+            "the compiled backend evaluates SwingLegPD with a constant set point (profile=None); "
+            "use backend='scipy' for a time profile"
+        )
+    if type(torque) is EnergyTracking and not _same_walker(torque.walker, walker):
+        raise ValueError(
+            "EnergyTracking's walker must be the walker simulated (its energy T + V is "
+            "evaluated in the kernel from the simulated walker's equations)"
+        )
+
+
+def _joint_law(walker: BuiltWalker, torque: JointLaw | None, slope: float) -> tuple[float, ...]:
+    """``(law, joint, reference angle, kp, kd, torque limit, gain, target energy)`` of the
+    kernel's configuration for a torque checked by :func:`check_compiled_actuation` (joint -1:
+    passive)."""
+    if torque is None:
+        return (_LAW_POSTURE, -1.0, 0.0, 0.0, 0.0, math.inf, 0.0, 0.0)
+    if isinstance(torque, SwingLegPD):
+        return (_LAW_JOINT_PD, float(_HIP), torque.reference(0.0), float(torque.kp),
+                float(torque.kd), float(torque.max_torque), 0.0, 0.0)
+    if isinstance(torque, EnergyTracking):
+        if float(torque.slope) != float(slope):
+            raise ValueError(
+                f"the compiled backend evaluates EnergyTracking's potential energy on the "
+                f"walk's slope ({slope} rad); the law's is {torque.slope} rad: use "
+                "backend='scipy'"
+            )
+        return (_LAW_ENERGY, float(_HIP), 0.0, 0.0, 0.0, float(torque.max_torque),
+                float(torque.gain), float(torque.energy))
+    joint = float(walker.joint_index("torso"))
+    return (_LAW_POSTURE, joint, float(torque.angle), float(torque.kp), float(torque.kd),
+            math.inf, 0.0, 0.0)
 
 
 def _locks(walker: BuiltWalker) -> tuple[tuple[int, ...], tuple[int, ...], FloatArray]:
@@ -234,7 +313,7 @@ def _locks(walker: BuiltWalker) -> tuple[tuple[int, ...], tuple[int, ...], Float
 
 
 def _configuration(
-    walker: BuiltWalker, slope: float, torque: TorsoPD | None, push_off: PushOff | None,
+    walker: BuiltWalker, slope: float, torque: JointLaw | None, push_off: PushOff | None,
     friction: float | None, knee_flex_threshold: float,
 ) -> tuple[FloatArray, FloatArray]:
     """The kernel's parameter values ``p`` and float configuration ``cfg`` (``_C_*``)."""
@@ -242,15 +321,12 @@ def _configuration(
     values = [np.asarray(walker.params[k], dtype=float) for k in walker.description.param_names]
     if any(v.ndim != 0 for v in values):
         raise ValueError("the compiled backend needs scalar parameter values (one walker)")
-    tj, tang, kp, kd = -1.0, 0.0, 0.0, 0.0
-    if isinstance(torque, TorsoPD):
-        tj = float(walker.joint_index("torso"))
-        tang, kp, kd = float(torque.angle), float(torque.kp), float(torque.kd)
+    law, tj, tang, kp, kd, umax, gain, eref = _joint_law(walker, torque, slope)
     cfg = np.array(
         [slope, float(np.asarray(walker.foot_radii[0])), float(np.asarray(walker.foot_radii[1])),
          knee_flex_threshold, math.nan if friction is None else float(friction), tj, tang, kp,
          kd, math.nan if push_off is None else float(push_off.impulse),
-         float(walker.scale.leg_length)],
+         float(walker.scale.leg_length), law, umax, gain, eref],
         dtype=float,
     )
     return np.array([float(v) for v in values]), cfg
@@ -263,7 +339,7 @@ def simulate_phased_compiled(
     *,
     slope: float = 0.0,
     steps: int = 1,
-    torque: TorsoPD | None = None,
+    torque: JointLaw | None = None,
     push_off: PushOff | None = None,
     friction: float | None = None,
     max_step_duration: float = 5.0,
@@ -284,8 +360,8 @@ def simulate_phased_compiled(
         Ground slope (rad).
     steps : int
         Number of heel strikes to simulate.
-    torque : TorsoPD, optional
-        Torso posture law (evaluated in the kernel); None: passive.
+    torque : TorsoPD, SwingLegPD or EnergyTracking, optional
+        Joint law evaluated in the kernel (:func:`check_compiled_actuation`); None: passive.
     push_off : PushOff, optional
         Push-off impulse just before each heel strike (evaluated in the kernel).
     friction : float, optional
@@ -473,7 +549,7 @@ def ensemble_walk_phased(
     states: tuple[ArrayLike, ArrayLike] | None = None,
     slope: float = 0.0,
     steps: int = 1,
-    torque: TorsoPD | None = None,
+    torque: JointLaw | None = None,
     push_off: PushOff | None = None,
     friction: float | None = None,
     max_step_duration: float = 5.0,

@@ -191,6 +191,33 @@ def test_a_strike_moving_away_is_noted_and_round_off_does_not_pull(talos, tmp_pa
     assert _notes(capsys.readouterr().err) == []
 
 
+def test_a_non_unit_base_quaternion_is_noted_and_normalised(talos, tmp_path, capsys) -> None:
+    """QA P3: a base quaternion of norm 0.5-1.5 was normalised silently. The impact is that
+    of the normalised pose (the same as the unit state's), and stderr says so once; a unit
+    quaternion (to round-off) is silent, and one outside (0.5, 1.5) is refused."""
+    q, v = gait_state(talos, 0.3, 0.3)
+    runs = {}
+    for name, scale in (("unit", 1.0), ("scaled", 1.2)):
+        qs = np.array(q, dtype=float)
+        qs[3:7] *= scale
+        state = _state_file(tmp_path / f"{name}.json", qs, v)
+        assert main(["impact", "--robot", "talos", "--state", state, *README_KEEP, "--friction",
+                     "0.8", "--json"]) == 0
+        cap = capsys.readouterr()
+        runs[name] = (json.loads(cap.out), _notes(cap.err))
+    quat_notes = [n for n in runs["scaled"][1] if "quaternion" in n]
+    assert len(quat_notes) == 1 and "norm 1.2;" in quat_notes[0]
+    assert not [n for n in runs["unit"][1] if "quaternion" in n]
+    assert runs["scaled"][0]["T_c"] == pytest.approx(runs["unit"][0]["T_c"], rel=1e-12)
+    np.testing.assert_allclose(runs["scaled"][0]["qdot_plus"], runs["unit"][0]["qdot_plus"],
+                               atol=1e-12)
+    qs = np.array(q, dtype=float)
+    qs[3:7] *= 2.0
+    state = _state_file(tmp_path / "bad.json", qs, v)
+    assert main(["impact", "--robot", "talos", "--state", state, *README_KEEP]) == 2
+    assert "unit quaternion" in _one_error_line(capsys.readouterr().err)
+
+
 def test_keep_only_impact_is_the_papers_inert_law(talos, tmp_path, capsys) -> None:
     """QA P3: the CLI refused impacts with --keep contacts only (the paper's inert law)."""
     q, v = gait_state(talos, 0.3, 0.3)

@@ -304,6 +304,16 @@ def _read_state(path: str, nq: int, nv: int) -> tuple[list[float], list[float]]:
     return out[0], out[1]
 
 
+def _note_normalised_quaternion(q: list[float], where: str) -> None:
+    """Say on stderr when the base quaternion ``q[3:7]`` is not a unit quaternion to
+    round-off: the robot functions normalise it (:meth:`Robot.check_state`), so the pose
+    computed is ``q[3:7] / |q[3:7]|`` (pinocchio's order x, y, z, w)."""
+    norm = math.sqrt(sum(x * x for x in q[3:7]))
+    if abs(norm - 1.0) > 1e-9 and 0.5 < norm < 1.5:  # outside: refused by check_state
+        print(f"heelstrike: note: {where}: the base quaternion q[3:7] has norm {norm:.9g}; it "
+              "is normalised (order x, y, z, w, pinocchio's)", file=sys.stderr)
+
+
 def _note_separating_strikes(contacts: list[dict[str, Any]]) -> None:
     """Say on stderr which ``--strike`` contacts strike nothing: moving away from the ground
     before the impact (normal velocity above round-off) and separate after it."""
@@ -356,6 +366,7 @@ def run_robot_impact(args: argparse.Namespace) -> int:
     d = {"robot": robot.name, "nq": robot.nq, "nv": robot.nv, **d}
     require_finite(d)
     _note_limit_violations(violations, f"state {args.state}")
+    _note_normalised_quaternion(q, f"state {args.state}")
     keep_text = dict(zip([c.frame for c in keep], args.keep or [], strict=True))
     for frame, lam_n in res.pulling_contacts():
         print(f"heelstrike: note: the kept contact {frame} pulls on the ground (normal impulse "

@@ -525,6 +525,30 @@ def test_gait_state_has_stance_at_rest_and_swing_descending(robots, name) -> Non
         np.testing.assert_allclose(data.oMf[lead].rotation, np.eye(3), atol=1e-9)
 
 
+@pytest.mark.parametrize("name", ROBOTS)
+def test_gait_state_feet_are_on_the_ground_plane(robots, name) -> None:
+    """QA P3: the feet of the gait states were at the reference pose's height (g1's soles at
+    z = -0.728 m, talos's at -2e-6 m); now on z = 0 for every robot. The impact does not
+    depend on that height: lifting the whole robot leaves T_c and q_dot+ unchanged."""
+    robot = robots[name]
+    q, v = gait_state(robot, 0.1, 0.3)
+    data = robot.model.createData()
+    pin.framesForwardKinematics(robot.model, data, q)
+    for frame in robot.feet:
+        assert data.oMf[robot.model.getFrameId(frame)].translation[2] == pytest.approx(
+            0.0, abs=1e-9)
+    kind = "point" if robot.foot_contact == "point" else "flat"
+    strike = [ContactSpec(frame=robot.feet[0], kind=kind)]
+    keep = [ContactSpec(frame=robot.feet[1], kind=kind)]
+    lifted = np.array(q)
+    lifted[2] += 0.7
+    a = robot_impact(robot, q, v, strike=strike, keep=keep).result
+    b = robot_impact(robot, lifted, v, strike=strike, keep=keep).result
+    assert a.T_c > 0
+    assert b.T_c == pytest.approx(a.T_c, rel=1e-10)
+    np.testing.assert_allclose(b.velocity_post, a.velocity_post, atol=1e-10)
+
+
 def test_study_is_batched_and_scales_with_strike_speed(robots) -> None:
     talos = robots["talos"]
     L = np.array([0.1, 0.3, 0.5])

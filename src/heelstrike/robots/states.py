@@ -54,6 +54,10 @@ def gait_configuration(
 ) -> FloatArray:
     """Configuration (nq,) with both feet flat, the leading one ``step_length`` (m) ahead.
 
+    The feet are on the ground plane ``z = 0`` (the base is placed above it), for every robot
+    alike; the impact itself does not depend on that height (a translation of the whole robot
+    leaves ``M`` and the contact Jacobians unchanged).
+
     Raises
     ------
     RobotError
@@ -95,7 +99,9 @@ def gait_configuration(
             pin.getJointJacobian(model, data, 1, pin.ReferenceFrame.LOCAL))[base_rows])
         err, J = np.concatenate(errs), np.vstack(jacs)
         if np.max(np.abs(err)) < tol:
-            return np.asarray(q)
+            q = np.array(q, dtype=float)
+            q[2] -= z0  # the feet at z = z0 -> on the ground plane z = 0
+            return q
         dq = J.T @ np.linalg.solve(J @ J.T + 1e-10 * np.eye(J.shape[0]), err)
         q = pin.integrate(model, q, dq)
     raise RobotError(

@@ -132,8 +132,8 @@ class PoincareMap:
         One batched compiled call where a kernel runs the map: the compass map
         (``method="compiled"``, or the passive compass with the compiled backend as
         ``simulator``), or a described walker whose ``simulator`` is the compiled backend
-        (:class:`~heelstrike.dynamics.backends.BoundSimulator`), the compass gait with a
-        push-off included (its description's kernel,
+        (:class:`~heelstrike.dynamics.backends.BoundSimulator`), the compass gait with a hip
+        law or a push-off included (its description's kernel,
         :meth:`~heelstrike.models.base.PlanarWalker.as_described`); otherwise row by row.
         Each row equals ``self(Z[i])`` (the same kernel, walker by walker).
         """
@@ -144,6 +144,7 @@ class PoincareMap:
         kernel_walker = self.walker
         if compiled and self.walker.compiled_kernel == "compass" and not passive:
             # the compass kernel is passive: the compiled backend walks the described compass
+        # (hip laws, push-off)
             kernel_walker = self.walker.as_described() or self.walker
         if self.method == "compiled" or (compiled and kernel_walker.compiled_kernel == "compass"
                                          and passive):

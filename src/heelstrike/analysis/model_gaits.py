@@ -600,6 +600,8 @@ def impact_map(
             )
     xa, ya = np.asarray(xv, dtype=float), np.asarray(yv, dtype=float)
     shape = (ya.size, xa.size)
+    # the section walker: replace() keeps it, so each point builds one walker, not two
+    walker = PhasedWalker.from_built(walker)
     out = {k: np.full(shape, np.nan) for k in ("T", "T_c", "T_a", "eta", "L", "v")}
     lifts = np.zeros(shape, dtype=bool)
     for i, yy in enumerate(ya):

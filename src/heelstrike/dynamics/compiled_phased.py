@@ -222,14 +222,14 @@ def _same_walker(law_walker: Any, walker: BuiltWalker) -> bool:
     structure and parameter values."""
     if law_walker is walker:
         return True
-    described = law_walker.as_described()
+    described = law_walker if law_walker.description is not None else law_walker.as_described()
     if described is None:
         return False
     if described is walker:
         return True
     names = walker.description.param_names
     return bool(
-        described.description.structure_key() == walker.description.structure_key()
+        described.model.key == walker.model.key  # the same structure (its code's key)
         and all(np.array_equal(np.asarray(described.params[k], dtype=float),
                                np.asarray(walker.params[k], dtype=float)) for k in names)
     )

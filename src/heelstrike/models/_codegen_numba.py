@@ -56,6 +56,7 @@ from typing import Any
 from heelstrike._version import __version__
 from heelstrike.models._generated import (
     CacheWarning,
+    IdentityCache,
     cache_dir,
     generator_fingerprint,
     numba_fingerprint,
@@ -124,27 +125,14 @@ def _key(desc: WalkerDescription) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-class _KeyCache:
-    """Keys computed in this process by description identity (a cache, an object: module-level
-    dicts are data to :func:`heelstrike.analysis.sweep.sweep`'s identity)."""
-
-    def __init__(self) -> None:
-        self.by_id: dict[int, tuple[WalkerDescription, str]] = {}
-
-
-_KEYS = _KeyCache()
+_KEYS = IdentityCache(_key)
 
 
 def numba_source_key(desc: WalkerDescription) -> str:
     """The key of a walker structure's generated numba code (computed once a process per
     description; imports no numba). It names the cached source and the walker's ahead-of-time
     kernels."""
-    hit = _KEYS.by_id.get(id(desc))
-    if hit is not None and hit[0] is desc:
-        return hit[1]
-    key = _key(desc)
-    _KEYS.by_id[id(desc)] = (desc, key)
-    return key
+    return _KEYS(desc)
 
 
 def _param_symbols(d: Mapping[str, Any], desc: WalkerDescription) -> list[Any]:

@@ -30,12 +30,13 @@ import os
 import stat
 import tempfile
 import warnings
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
 __all__ = [
     "CacheWarning",
+    "IdentityCache",
     "UnsafeGeneratedCode",
     "cache_dir",
     "generator_fingerprint",
@@ -53,6 +54,28 @@ class UnsafeGeneratedCode(ValueError):
 
 class CacheWarning(UserWarning):
     """A cache entry was refused (unsafe permissions, failed verification) and rebuilt."""
+
+
+class IdentityCache:
+    """``compute(obj)`` once per object in this process, by identity (e.g. a walker
+    description's cache key, which hashes its whole structure: about 0.8 ms).
+
+    The objects are kept alive, so an ``id`` is never reused for another object. A cache is an
+    object rather than a module-level dict (module-level dicts are data to
+    :func:`heelstrike.analysis.sweep.sweep`'s identity).
+    """
+
+    def __init__(self, compute: Callable[[Any], str]) -> None:
+        self._compute = compute
+        self._by_id: dict[int, tuple[Any, str]] = {}
+
+    def __call__(self, obj: Any) -> str:
+        hit = self._by_id.get(id(obj))
+        if hit is not None and hit[0] is obj:
+            return hit[1]
+        value = self._compute(obj)
+        self._by_id[id(obj)] = (obj, value)
+        return value
 
 
 def cache_dir() -> Path:

@@ -49,6 +49,7 @@ from heelstrike._typing import FloatArray
 from heelstrike._version import __version__
 from heelstrike.models._generated import (
     CacheWarning,
+    IdentityCache,
     UnsafeGeneratedCode,
     cache_dir,
     generator_fingerprint,
@@ -157,7 +158,7 @@ class GeneratedModel:
         return f
 
 
-def _key(desc: WalkerDescription) -> str:
+def _compute_key(desc: WalkerDescription) -> str:
     text = "\n".join(
         (
             CODEGEN_VERSION,
@@ -167,6 +168,10 @@ def _key(desc: WalkerDescription) -> str:
         )
     )
     return hashlib.sha256(text.encode()).hexdigest()
+
+
+#: The cache key of a walker structure's generated numpy code, once a process per description.
+_key = IdentityCache(_compute_key)
 
 
 def _compile(source: str, path: Path | str) -> dict[str, Any]:

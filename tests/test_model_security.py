@@ -219,9 +219,13 @@ def test_symlinked_cache_entry_is_not_used(tmp_path: Path) -> None:
 
 def test_cache_key_covers_the_generator(monkeypatch: pytest.MonkeyPatch) -> None:
     desc = read_description(WALKERS / "compass.toml")
-    key = builder_mod._key(desc)
+    key = builder_mod._compute_key(desc)
+    # the key a process uses (computed once per description) is this computation's
+    assert builder_mod._key(desc) == key
     monkeypatch.setattr(builder_mod, "generator_fingerprint", lambda *_: "changed-generator")
-    assert builder_mod._key(desc) != key
+    assert builder_mod._compute_key(desc) != key
+    # a new description object (e.g. the next process's) gets the new generator's key
+    assert builder_mod._key(read_description(WALKERS / "compass.toml")) != key
 
 
 def test_generated_modules_verify_and_run_without_builtins() -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from typing import Any
 
 from heelstrike.cli import robot as cli_robot
@@ -313,7 +314,8 @@ def _run_impact_map(args: argparse.Namespace) -> int:
         raise CliError(f"--angle must satisfy 0 < angle < 90deg, got "
                        f"{math.degrees(args.angle):g} deg")
     out = writable_dir(args.out)
-    m = impact_map(walker, axes[0], axes[1], angle=args.angle, stance_rate=args.q3dot)
+    m = impact_map(walker, axes[0], axes[1], angle=args.angle, stance_rate=args.q3dot,
+                   progress=sys.stderr.isatty())
     bad = ~np.isfinite(m.T_c) | ~np.isfinite(m.T_a) | ~np.isfinite(m.eta)
     if np.any(bad):
         i, j = (int(k[0]) for k in np.nonzero(bad))

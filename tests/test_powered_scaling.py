@@ -4,6 +4,10 @@
   scaled by the walker's ``sqrt(g / l)``. On the Moon-like ``g = 3.7`` the unscaled seeds made
   the walker leave the ground at once and ``heelstrike powered --gravity 3.7`` found no gait
   at any speed (while ``--model compass --gravity 3.7``, seeded by its passive gaits, did).
+- The hip-energy seed energies are those of the scaled seed section too: computed from the
+  unscaled one, the target energies on ``g = 3.7`` were far above the walker's gaits and
+  ``powered --actuation hip-energy --gravity 3.7 --speed 0.3`` (Froude-equivalent to 0.5 m/s
+  on Earth) found none, on both backends.
 - A failure message suggests "other gains" only for actuations with gains (the hip laws, a
   posture law), not for the push-off alone.
 """
@@ -28,6 +32,23 @@ def test_gait_found_at_other_gravity(gravity: float) -> None:
     m_total = float(w.total_mass)
     assert g.cost_of_transport == pytest.approx(
         g.actuator_work / (m_total * gravity * g.step_length), rel=1e-12)
+
+
+def test_hip_energy_gait_found_on_the_moon() -> None:
+    from heelstrike.analysis.powered import actuation_family, family_simulator
+
+    w = CompassGait(gravity=3.7)
+    family = actuation_family("hip-energy")
+    sim = family_simulator(w, family, None)
+    g = find_powered_gait(w, actuation=family, speed=0.3, simulator=sim)
+    assert abs(g.speed - 0.3) < 1e-8 and g.residual < 1e-8
+    assert g.actuator_work == pytest.approx(g.collision_loss, abs=1e-8)  # eqs. 14-15
+    # the seeds of the reference walker are unchanged (scale factor 1)
+    ref = CompassGait()
+    q, qd = ref.section_to_state(np.asarray((-0.25, 1.1, -0.45)))
+    E = float(ref.mechanical_energy(q, qd))
+    assert family.seed(ref)[0] == pytest.approx(E + 0.005 * float(ref.total_mass) * 9.81,
+                                                rel=1e-12)
 
 
 def test_reference_walker_seeds_are_unchanged() -> None:

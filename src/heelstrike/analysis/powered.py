@@ -272,8 +272,9 @@ def actuation_family(
     -----
     Seeds (parameter values whose attractor or near-periodic motion starts the search):
     push-off impulses of 0.03-0.08 ``m_total sqrt(g l)``; target energies a little above the
-    energy of the first seed section (0.1-1 % of ``m_total g l``: the law must inject a
-    collision loss of that order per step); PD amplitudes of 0.1-0.25 rad, the half inter-leg
+    energy of the first seed section, its rates scaled by the walker's ``sqrt(g / l)``
+    (0.1-1 % of ``m_total g l``: the law must inject a collision loss of that order per
+    step); PD amplitudes of 0.1-0.25 rad, the half inter-leg
     angle at heel strike of slow to moderate steps (with the default stiffness the set point,
     not gravity, places the swing foot). The search then continues in the target from
     whichever seed gait it finds first.
@@ -293,7 +294,7 @@ def actuation_family(
     if name == "hip-energy":
 
         def seed_energy(w: PlanarWalker) -> tuple[float, ...]:
-            q, qd = w.section_to_state(np.asarray(_SEED_SECTIONS[0]))
+            q, qd = w.section_to_state(np.asarray(_scaled_seed_sections(w)[0]))
             m, g, l = _scale(w)
             E = float(mechanical_energy(w, q, qd))
             return tuple(E + c * m * g * l for c in (0.005, 0.0025, 0.01, 0.001))

@@ -8,6 +8,11 @@
   unscaled one, the target energies on ``g = 3.7`` were far above the walker's gaits and
   ``powered --actuation hip-energy --gravity 3.7 --speed 0.3`` (Froude-equivalent to 0.5 m/s
   on Earth) found none, on both backends.
+- A compass gait with a light hip (``mH = 4 kg``) has no push-off seed gait on level ground:
+  ``powered --hip-mass 4`` found no gait at 0.3-0.5 m/s, while ``powered --model compass
+  --param mH=4`` (the same walker, with a slope homotopy from its passive gait) did. The
+  compass search now has that homotopy too (:func:`passive_gait_finder`), and both commands
+  give the same gait.
 - A failure message suggests "other gains" only for actuations with gains (the hip laws, a
   posture law), not for the push-off alone.
 """
@@ -49,6 +54,43 @@ def test_hip_energy_gait_found_on_the_moon() -> None:
     E = float(ref.mechanical_energy(q, qd))
     assert family.seed(ref)[0] == pytest.approx(E + 0.005 * float(ref.total_mass) * 9.81,
                                                 rel=1e-12)
+
+
+def test_light_hip_compass_reaches_level_ground_by_the_slope_homotopy() -> None:
+    from heelstrike.analysis.powered import (
+        actuation_family,
+        family_simulator,
+        find_model_powered_gait,
+        passive_gait_finder,
+    )
+    from heelstrike.models.builder import load_walker
+
+    w = CompassGait(hip_mass=4.0)
+    family = actuation_family("pushoff")
+    sim = family_simulator(w, family, None)
+    with pytest.raises(PoweredGaitNotFoundError, match="none of the 3 seed impulse"):
+        find_powered_gait(w, actuation=family, speed=0.5, simulator=sim)  # no homotopy
+    g = find_powered_gait(w, actuation=family, speed=0.5, simulator=sim,
+                          passive_gait=passive_gait_finder(w, family, sim))
+    ref = find_model_powered_gait(load_walker("compass", mH=4.0), speed=0.5)
+    np.testing.assert_allclose(g.fixed_point, ref.fixed_point, atol=1e-8)
+    assert g.parameter == pytest.approx(ref.parameter, abs=1e-8)
+    assert g.actuator_work == pytest.approx(g.collision_loss, abs=1e-8)  # eqs. 14-15
+    # the hip laws act at every parameter value: no passive start for them
+    for name in ("hip-energy", "hip-pd"):
+        fam = actuation_family(name)
+        assert passive_gait_finder(w, fam, family_simulator(w, fam, None)) is None
+
+
+def test_cli_powered_light_hip_finds_the_gait(capsys: pytest.CaptureFixture[str]) -> None:
+    import json
+
+    from heelstrike.cli import main
+
+    assert main(["powered", "--hip-mass", "4", "--speed", "0.5", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["speed"] == pytest.approx(0.5, abs=1e-8)
+    assert d["actuator_work"] == pytest.approx(d["collision_loss"], abs=1e-8)
 
 
 def test_reference_walker_seeds_are_unchanged() -> None:

@@ -76,7 +76,8 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "ACTUATIONS", "ActuationFamily", "PoweredGait", "PoweredGaitNotFoundError",
         "SearchLimitError", "actuation_family", "declared_posture_law", "energy_book_tables",
         "family_simulator",
-        "find_model_powered_gait", "find_powered_gait", "max_walking_speed", "powered_step",
+        "find_model_powered_gait", "find_powered_gait", "max_walking_speed",
+        "passive_gait_finder", "powered_step",
     ),
     "sweep": (
         "KNOWN_UNITS", "SweepError", "SweepFunction", "SweepStoreLockedError",

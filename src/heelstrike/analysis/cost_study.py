@@ -48,6 +48,7 @@ from heelstrike.analysis.powered import (
     family_simulator,
     find_model_powered_gait,
     find_powered_gait,
+    passive_gait_finder,
 )
 from heelstrike.io import write_netcdf
 from heelstrike.models.compass import CompassGait
@@ -402,8 +403,9 @@ def _study_row(
     def solve(radius: float, **opts: Any) -> PoweredGait:
         if model is None:
             w = base.replace(foot_radius=radius)
-            return find_powered_gait(w, actuation=family,
-                                     simulator=family_simulator(w, family, backend), **opts)
+            sim = family_simulator(w, family, backend)
+            opts.setdefault("passive_gait", passive_gait_finder(w, family, sim))
+            return find_powered_gait(w, actuation=family, simulator=sim, **opts)
         return find_model_powered_gait(model.replace(R=radius), backend=backend, **opts)
 
     found: dict[tuple[int, int], FloatArray] = {

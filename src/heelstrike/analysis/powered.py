@@ -36,7 +36,9 @@ seeds converge to nothing on level ground. Given its passive gaits (``passive_ga
 search then reaches level ground by a homotopy (:func:`_slope_homotopy`): from the passive gait
 on a slope, a continuation in the slope lowers it to 0 with the target held and the push-off
 free, raising the target where that continuation folds; the level gait it ends at starts the
-continuation in the target as a seed gait would.
+continuation in the target as a seed gait would. The compass gait's push-off search has the
+same fallback (:func:`passive_gait_finder`, which ``heelstrike powered`` and the cost study
+pass): with a light hip (``mH = 4 kg``) it has no seed gait on level ground either.
 
 McGeer's wheel (``R = l``)
 --------------------------
@@ -95,6 +97,7 @@ __all__ = [
     "find_model_powered_gait",
     "find_powered_gait",
     "max_walking_speed",
+    "passive_gait_finder",
     "powered_step",
 ]
 
@@ -1535,6 +1538,46 @@ def _model_seed_sections(walker: Any) -> tuple[tuple[float, ...], ...]:
 #: Newton tolerance of the passive gait a described walker's slope homotopy starts from (it only
 #: starts a continuation on the search's map).
 PASSIVE_TOLERANCE = 1e-7
+
+
+def passive_gait_finder(
+    walker: PlanarWalker, family: ActuationFamily, simulator: Callable[..., WalkResult] | None,
+) -> Callable[[float], FloatArray] | None:
+    """The ``passive_gait`` of :func:`find_powered_gait` (its slope homotopy) for a walker
+    without a description of its own (the compass gait).
+
+    The homotopy starts where the family's parameter at its lower bound leaves the walker
+    passive: the push-off alone (zero impulse, no torque law). A hip law acts at every
+    parameter value, so for the hip laws there is none.
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+    family : ActuationFamily
+    simulator : callable or None
+        The search's step simulator (:func:`family_simulator`): its passive gaits are found
+        on the compiled compass map when it is compiled, else on the scipy reference.
+
+    Returns
+    -------
+    callable or None
+        ``slope -> section point`` of the walker's passive gait on that slope (rad)
+        (:func:`~heelstrike.analysis.limit_cycle.find_limit_cycle`, to
+        :data:`PASSIVE_TOLERANCE`), or None.
+    """
+    torque, _ = family.build(walker, max(0.0, family.lower))
+    if family.name != "pushoff" or torque is not None:
+        return None
+    method = "compiled" if simulator is not None and walker.compiled_kernel == "compass" \
+        else "scipy"
+
+    def passive_gait(slope: float) -> FloatArray:
+        from heelstrike.analysis.limit_cycle import find_limit_cycle
+
+        gait = find_limit_cycle(walker, slope=slope, method=method, tol=PASSIVE_TOLERANCE)
+        return np.asarray(gait.fixed_point, dtype=float)
+
+    return passive_gait
 
 
 def find_model_powered_gait(

@@ -121,6 +121,7 @@ def _run_powered(args: argparse.Namespace) -> int:
         PoweredGaitNotFoundError,
         find_model_powered_gait,
         find_powered_gait,
+        passive_gait_finder,
     )
 
     if args.model is not None:
@@ -148,7 +149,9 @@ def _run_powered(args: argparse.Namespace) -> int:
         if args.model is None:
             gait = find_powered_gait(walker, actuation=family, progress=True,
                                      time_limit=DEFAULT_TIME_LIMIT, speed=speed,
-                                     step_length=step_length, simulator=step_simulator)
+                                     step_length=step_length, simulator=step_simulator,
+                                     passive_gait=passive_gait_finder(walker, family,
+                                                                      step_simulator))
         else:
             gait = find_model_powered_gait(walker, backend=backend,
                                            progress=True, time_limit=DEFAULT_TIME_LIMIT,

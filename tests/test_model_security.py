@@ -228,6 +228,30 @@ def test_cache_key_covers_the_generator(monkeypatch: pytest.MonkeyPatch) -> None
     assert builder_mod._key(read_description(WALKERS / "compass.toml")) != key
 
 
+def test_keys_are_computed_once_per_description_and_the_cache_is_bounded() -> None:
+    from heelstrike.models._generated import IdentityCache
+
+    calls: list[object] = []
+
+    def compute(obj: object) -> str:
+        calls.append(obj)
+        return f"key-{len(calls)}"
+
+    cache = IdentityCache(compute, maxsize=3)
+    a, b = object(), object()
+    assert cache(a) == "key-1" and cache(a) == "key-1" and cache(b) == "key-2"
+    assert len(calls) == 2  # a's key was computed once
+    others = [object() for _ in range(5)]
+    for o in others:
+        cache(o)
+    assert len(cache) == 3  # bounded: the least recently used entries were dropped
+    assert cache(a) == "key-8"  # a was dropped, so its key is computed again
+    # load_walker reads a new description every call: the builder's cache stays bounded
+    for _ in range(140):
+        load_walker("compass")
+    assert len(builder_mod._key) <= 128
+
+
 def test_generated_modules_verify_and_run_without_builtins() -> None:
     for name in ("compass", "kneed", "torso"):
         model = build(read_description(WALKERS / f"{name}.toml"))

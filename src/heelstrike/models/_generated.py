@@ -57,25 +57,35 @@ class CacheWarning(UserWarning):
 
 
 class IdentityCache:
-    """``compute(obj)`` once per object in this process, by identity (e.g. a walker
-    description's cache key, which hashes its whole structure: about 0.8 ms).
+    """``compute(obj)`` once per object, by identity, for the ``maxsize`` objects used last
+    (e.g. a walker description's cache key, which hashes its whole structure: about 0.8 ms).
 
-    The objects are kept alive, so an ``id`` is never reused for another object. A cache is an
-    object rather than a module-level dict (module-level dicts are data to
+    The cached objects are kept alive, so an ``id`` is never reused for another object while
+    its entry exists; the size bound keeps a loop that reads a new description every time
+    (``load_walker`` in a loop) from keeping them all. A cache is an object rather than a
+    module-level dict (module-level dicts are data to
     :func:`heelstrike.analysis.sweep.sweep`'s identity).
     """
 
-    def __init__(self, compute: Callable[[Any], str]) -> None:
+    def __init__(self, compute: Callable[[Any], str], maxsize: int = 128) -> None:
         self._compute = compute
-        self._by_id: dict[int, tuple[Any, str]] = {}
+        self._maxsize = maxsize
+        self._by_id: dict[int, tuple[Any, str]] = {}  # insertion order = least recent first
 
     def __call__(self, obj: Any) -> str:
-        hit = self._by_id.get(id(obj))
+        key = id(obj)
+        hit = self._by_id.get(key)
         if hit is not None and hit[0] is obj:
+            self._by_id[key] = self._by_id.pop(key)  # most recently used last
             return hit[1]
         value = self._compute(obj)
-        self._by_id[id(obj)] = (obj, value)
+        self._by_id[key] = (obj, value)
+        while len(self._by_id) > self._maxsize:
+            del self._by_id[next(iter(self._by_id))]
         return value
+
+    def __len__(self) -> int:
+        return len(self._by_id)
 
 
 def cache_dir() -> Path:

@@ -329,14 +329,12 @@ def test_numba_source_cache_round_trip_and_tampering(
 
     monkeypatch.setenv("HEELSTRIKE_CACHE_DIR", str(tmp_path))
     monkeypatch.setattr(cg, "_MEMORY", {})
-    monkeypatch.setattr(cg, "_BY_DESCRIPTION", {})
     desc = walkers["compass"].description
     first = cg.build_numba(desc)
     assert not first.from_cache
     assert first.path is not None and first.path.parent == tmp_path / "numba"
     assert first.path.stat().st_mode & 0o077 == 0
     monkeypatch.setattr(cg, "_MEMORY", {})
-    monkeypatch.setattr(cg, "_BY_DESCRIPTION", {})
     again = cg.build_numba(desc)
     assert again.from_cache and again.key == first.key
     n = 4
@@ -349,7 +347,6 @@ def test_numba_source_cache_round_trip_and_tampering(
     # a tampered cache entry is refused, rebuilt and replaced
     first.path.write_text("import os\n" + first.path.read_text())
     monkeypatch.setattr(cg, "_MEMORY", {})
-    monkeypatch.setattr(cg, "_BY_DESCRIPTION", {})
     with pytest.warns(CacheWarning, match="failed verification"):
         rebuilt = cg.build_numba(desc)
     assert not rebuilt.from_cache

@@ -99,9 +99,7 @@ def signatures() -> dict[str, Any]:
 #: The only name generated code uses without defining it (injected; no builtins).
 _HELPERS: Mapping[str, Any] = types.MappingProxyType({"math": math})
 
-_MEMORY: dict[str, NumbaModel] = {}
-# descriptions seen in this process (the key hashes files and metadata: not per call)
-_BY_DESCRIPTION: dict[int, tuple[WalkerDescription, NumbaModel]] = {}
+_MEMORY: dict[str, NumbaModel] = {}  # one per walker structure (by its key)
 
 _ALLOWED_NODES: tuple[type[ast.AST], ...] = (
     ast.Module, ast.FunctionDef, ast.arguments, ast.arg, ast.Assign, ast.Return, ast.Name,
@@ -340,13 +338,9 @@ def build_numba(desc: WalkerDescription, *, use_cache: bool = True) -> NumbaMode
     -------
     NumbaModel
     """
-    if use_cache:
-        hit = _BY_DESCRIPTION.get(id(desc))
-        if hit is not None and hit[0] is desc:
-            return hit[1]
+    # the key is computed once per description (numba_source_key), not per call
     key = numba_source_key(desc) if use_cache else _key(desc)
     if use_cache and key in _MEMORY:
-        _BY_DESCRIPTION[id(desc)] = (desc, _MEMORY[key])
         return _MEMORY[key]
     path = cache_dir() / "numba" / f"{key}.py"
     source: str | None = read_cached(path) if use_cache else None
@@ -381,5 +375,4 @@ def build_numba(desc: WalkerDescription, *, use_cache: bool = True) -> NumbaMode
     )
     if use_cache:
         _MEMORY[key] = model
-        _BY_DESCRIPTION[id(desc)] = (desc, model)
     return model

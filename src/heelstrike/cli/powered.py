@@ -59,8 +59,8 @@ def declared_speed(walker: Any, model: str | None) -> float:
 BACKEND_HELP = ("step simulator: compiled (the default; it evaluates the push-off, the compass "
                 "hip laws hip-energy and hip-pd, and with --model the walker file's posture "
                 "law; for the compass gait the kernel generated from compass.toml) or the scipy "
-                "reference (the default for McGeer's wheel, --radius 1, which has no generated "
-                "kernel)")
+                "reference (the default for McGeer's wheel, --radius equal to --leg-length, "
+                "which has no generated kernel)")
 
 
 def compass_simulator(walker: Any, family: Any, backend: str | None) -> Any:

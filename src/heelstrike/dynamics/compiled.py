@@ -37,9 +37,10 @@ kernel generated from the walker's description):
   :mod:`heelstrike.models._contact` compiled); then ``q3 <- q3 + q4``, ``q4 <- -q4`` and the
   velocities alike.
 
-A push-off, a friction limit or dense samples are not this kernel's: :func:`simulate_compiled`
-runs them on the kernel generated from the walker's description (``compass.toml``, the same
-equations and coordinates; :meth:`~heelstrike.models.base.PlanarWalker.as_described`).
+A hip law, a push-off, a friction limit or dense samples are not this kernel's:
+:func:`simulate_compiled` runs them on the kernel generated from the walker's description
+(``compass.toml``, the same equations and coordinates;
+:meth:`~heelstrike.models.base.PlanarWalker.as_described`).
 
 The numba functions are in :mod:`heelstrike.dynamics._compass_kernels`. Serial calls run them
 from an extension module compiled ahead of time from that same source (:data:`AOT_EXPORTS`,
@@ -486,6 +487,15 @@ def single_support_compiled(
     return out[:n].copy()
 
 
+def _on_generated_kernel(torque: Any, push_off: Any, friction: float | None,
+                         max_step: float) -> bool:
+    """A compiled compass walk runs on the kernel generated from the walker's description
+    (not the passive compass kernel): a hip law, a push-off, a friction limit or dense
+    samples (finite ``max_step``)."""
+    return (torque is not None or push_off is not None or friction is not None
+            or bool(np.isfinite(max_step)))
+
+
 def check_compiled_compass(
     torque: Any = None, push_off: Any = None, friction: float | None = None,
     restitution: float = 0.0, *, walker: PlanarWalker | None = None,
@@ -519,9 +529,7 @@ def check_compiled_compass(
             "EnergyTracking hip law or with a PushOff impulse, with an inert impact "
             f"({', '.join(unsupported)} given); use backend='scipy'"
         )
-    generated = (torque is not None or push_off is not None or friction is not None
-                 or bool(np.isfinite(max_step)))
-    if generated and walker is not None:
+    if _on_generated_kernel(torque, push_off, friction, max_step) and walker is not None:
         described = walker.as_described()
         if described is None:
             raise ValueError(
@@ -606,8 +614,7 @@ def simulate_compiled(
                            max_step=max_step)
     if steps < 1:
         raise ValueError("steps must be >= 1")
-    if torque is not None or push_off is not None or friction is not None \
-            or np.isfinite(max_step):
+    if _on_generated_kernel(torque, push_off, friction, max_step):
         from heelstrike.dynamics.compiled_phased import simulate_phased_compiled
 
         return simulate_phased_compiled(

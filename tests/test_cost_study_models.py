@@ -105,7 +105,7 @@ def test_torso_step_length_grid_meets_targets(tmp_path: Path) -> None:
     ("argv", "needle"),
     [
         (["--model", "torso", "--actuation", "hip-energy"],
-         "--actuation hip-energy is not supported with --model"),
+         "model 'torso' actuates hip, torso"),
         (["--model", "torso", "--param", "R=0.1"], "--param R=... is swept by --radius"),
         (["--model", "torso", "--radius", "0:2:2"], "--radius must lie in [0, 1] m"),
         (["--param", "m=2"], "give --model too"),
@@ -121,7 +121,7 @@ def test_refusals_are_one_line(argv: list[str], needle: str, tmp_path: Path,
 
 
 def test_model_study_refuses_in_library() -> None:
-    with pytest.raises(ValueError, match="pushoff actuation only"):
+    with pytest.raises(ValueError, match="the hip law hip-pd needs a walker whose one actuated"):
         cost_study(RADII, LENGTHS, model=load_walker("torso"), actuations=("hip-pd",))
     with pytest.raises(ValueError, match=r"R = 2 m outside \[0, 1\] m"):
         cost_study((0.0, 2.0), LENGTHS, model=load_walker("torso"))

@@ -74,8 +74,8 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
     ),
     "powered": (
         "ACTUATIONS", "ActuationFamily", "PoweredGait", "PoweredGaitNotFoundError",
-        "SearchLimitError", "actuation_family", "declared_posture_law", "energy_book_tables",
-        "family_simulator",
+        "SearchLimitError", "actuation_family", "check_model_actuation", "declared_posture_law",
+        "energy_book_tables", "family_simulator",
         "find_model_powered_gait", "find_powered_gait", "max_walking_speed",
         "passive_gait_finder", "powered_step",
     ),

@@ -20,7 +20,8 @@ real gait's own pre-impact velocities this is exactly the gait's ``eta``.
 Described walkers (``model``, a walker file with a foot radius parameter ``R``: the shipped
 compass, kneed and torso walkers) are studied the same way with
 :func:`~heelstrike.analysis.powered.find_model_powered_gait`: push-off actuation plus the posture
-law the file declares, the cost of transport with the walker's own scale (total mass, gravity,
+law the file declares, or a hip law on a walker whose one actuated joint is its hip (compass,
+kneed), the cost of transport with the walker's own scale (total mass, gravity,
 leg length). Their energy book per step is ``push_off_work + torque_work = collision_loss`` (the
 paper's impact-only measure is for the compass gait only and is not evaluated for them).
 """
@@ -45,6 +46,7 @@ from heelstrike.analysis.powered import (
     PoweredGait,
     PoweredGaitNotFoundError,
     actuation_family,
+    check_model_actuation,
     family_simulator,
     find_model_powered_gait,
     find_powered_gait,
@@ -157,15 +159,19 @@ def cost_study(
         Other parameters of the walker (paper defaults).
     model : BuiltWalker, optional
         A described walker with a foot radius parameter ``R`` (m) instead of the compass gait
-        (:func:`~heelstrike.analysis.powered.find_model_powered_gait`: ``actuations`` must be
-        ``("pushoff",)``, no ``actuation_options``); its other parameters are kept.
+        (:func:`~heelstrike.analysis.powered.find_model_powered_gait`: the push-off with its
+        posture law, or the hip laws where
+        :func:`~heelstrike.analysis.powered.check_model_actuation` admits them); its other
+        parameters are kept.
     backend : {"compiled", "scipy"} or None
         Step simulator (:func:`~heelstrike.analysis.powered.family_simulator`). None (default):
-        compiled where its kernels run the actuation and walker (push-off, the compass hip
-        laws, a model's posture law), else the scipy reference (McGeer's wheel ``R = l``); the
+        compiled where its kernels run the actuation and walker (push-off, the hip laws, a
+        model's posture law), else the scipy reference (McGeer's wheel ``R = l``); the
         ``backend`` variable records which ran.
     actuation_options : dict, optional
-        Gains and torque limit for :func:`~heelstrike.analysis.powered.actuation_family`.
+        Gains and torque limit of the hip laws for
+        :func:`~heelstrike.analysis.powered.actuation_family` (default: the walker's
+        :func:`~heelstrike.dynamics.actuation.default_gains`).
     radius_step : float
         Largest radius increment (m) of the continuation between grid radii.
     progress : bool
@@ -192,8 +198,8 @@ def cost_study(
     ------
     ValueError
         Bad target or actuation, ``backend="compiled"`` with McGeer's wheel; with ``model``:
-        no parameter ``R``, a radius the walker file rejects, another actuation than push-off,
-        ``actuation_options`` or ``walker`` given.
+        no parameter ``R``, a radius the walker file rejects, a hip law on a walker with other
+        actuated joints, ``actuation_options`` with the push-off alone, or ``walker`` given.
     """
     if target not in ("step_length", "speed"):
         raise ValueError("target must be 'step_length' or 'speed'")
@@ -312,12 +318,11 @@ def _check_model(
     name = str(model.description.name)
     if walker is not None:
         raise ValueError("give either walker (the compass gait) or model, not both")
-    if tuple(actuations) != ("pushoff",):
-        raise ValueError(
-            f"described walkers support the pushoff actuation only (with the posture law the "
-            f"walker file declares), not {', '.join(a for a in actuations if a != 'pushoff')}")
-    if actuation_options:
-        raise ValueError("actuation_options set the compass hip laws, not used with a model")
+    for actuation in actuations:
+        check_model_actuation(model, actuation)
+    if actuation_options and set(actuations) == {"pushoff"}:
+        raise ValueError("actuation_options set the hip laws, not the push-off (a posture "
+                         "law's gains are declared in the walker file)")
     if backend not in ("compiled", "scipy"):
         raise ValueError(f"backend must be 'compiled' or 'scipy', got {backend!r}")
     if "R" not in model.params:
@@ -406,7 +411,10 @@ def _study_row(
             sim = family_simulator(w, family, backend)
             opts.setdefault("passive_gait", passive_gait_finder(w, family, sim))
             return find_powered_gait(w, actuation=family, simulator=sim, **opts)
-        return find_model_powered_gait(model.replace(R=radius), backend=backend, **opts)
+        return find_model_powered_gait(
+            model.replace(R=radius), actuation=actuation, backend=backend,
+            actuation_options=None if actuation == "pushoff" else dict(actuation_options),
+            **opts)
 
     found: dict[tuple[int, int], FloatArray] = {
         (i - 1, j): np.asarray(x, dtype=float) for j, x in enumerate(previous) if len(x)

@@ -56,7 +56,7 @@ from __future__ import annotations
 import dataclasses
 import sys
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal, TypeVar
 
@@ -68,13 +68,10 @@ from heelstrike._typing import FloatArray
 from heelstrike.core.impact import kinetic_energy
 from heelstrike.dynamics._aot import compile_seconds
 from heelstrike.dynamics.actuation import (
-    DEFAULT_ENERGY_GAIN,
-    DEFAULT_MAX_TORQUE,
-    DEFAULT_PD_KD,
-    DEFAULT_PD_KP,
     EnergyTracking,
     PushOff,
     SwingLegPD,
+    default_gains,
     mechanical_energy,
 )
 from heelstrike.dynamics.hybrid import ImpactRecord, WalkResult, WalkStatus, simulate
@@ -91,6 +88,7 @@ __all__ = [
     "PoweredGaitNotFoundError",
     "SearchLimitError",
     "actuation_family",
+    "check_model_actuation",
     "declared_posture_law",
     "energy_book_tables",
     "family_simulator",
@@ -227,13 +225,15 @@ def _other_gains(family: ActuationFamily, before: str, after: str) -> str:
 
 
 def _scaled_seed_sections(walker: PlanarWalker) -> tuple[tuple[float, ...], ...]:
-    """:data:`_SEED_SECTIONS` (chosen for ``g = 9.81 m/s^2``, ``l = 1 m``) for this walker:
-    angles as they are, rates scaled by the walker's ``sqrt(g / l)`` (its inverse time scale),
-    so a walker on the Moon or with long legs starts near its own gaits; unchanged for the
-    reference walker (a factor of exactly 1)."""
+    """:data:`_SEED_SECTIONS` (chosen for ``g = 9.81 m/s^2``, ``l = 1 m``) on this walker's
+    Poincare section (:meth:`~heelstrike.models.base.PlanarWalker.section_point`: further
+    links upright): angles as they are, rates scaled by the walker's ``sqrt(g / l)`` (its
+    inverse time scale), so a walker on the Moon or with long legs starts near its own gaits;
+    unchanged for the reference walker (a factor of exactly 1)."""
     _, g, l = _scale(walker)
     k = float(np.sqrt((g / l) / 9.81))
-    return tuple((q, k * qd3, k * qd4) for q, qd3, qd4 in _SEED_SECTIONS)
+    return tuple(tuple(float(v) for v in walker.section_point(q, k * qd3, k * qd4))
+                 for q, qd3, qd4 in _SEED_SECTIONS)
 
 
 def _scale(walker: PlanarWalker) -> tuple[float, float, float]:
@@ -242,19 +242,30 @@ def _scale(walker: PlanarWalker) -> tuple[float, float, float]:
     return float(s.total_mass), float(s.gravity), float(s.leg_length)
 
 
+def _gains(walker: PlanarWalker, **given: float | None) -> dict[str, float]:
+    """The gains named in ``given``: the value given, else the walker's default
+    (:func:`~heelstrike.dynamics.actuation.default_gains`)."""
+    defaults = default_gains(walker.scale)
+    return {k: defaults[k] if v is None else float(v) for k, v in given.items()}
+
+
 def actuation_family(
     name: str,
     *,
-    gain: float = DEFAULT_ENERGY_GAIN,
-    kp: float = DEFAULT_PD_KP,
-    kd: float = DEFAULT_PD_KD,
-    max_torque: float = DEFAULT_MAX_TORQUE,
+    gain: float | None = None,
+    kp: float | None = None,
+    kd: float | None = None,
+    max_torque: float | None = None,
 ) -> ActuationFamily:
     """One of the built-in actuation models.
 
     The defaults of the gains are those of :mod:`heelstrike.dynamics.actuation` (their physical
-    reasons are given there); with them ``find_powered_gait(walker, actuation=name,
-    speed=0.5)`` succeeds for the paper's walker with ``R = 0`` and ``R = 0.3`` m.
+    reasons are given there) for the paper's walker, and the same dimensionless gains for
+    another (:func:`~heelstrike.dynamics.actuation.default_gains`: torques scaled by its
+    ``m g l``, times by its ``sqrt(l / g)``); with them ``find_powered_gait(walker,
+    actuation=name, speed=0.5)`` succeeds for the paper's walker with ``R = 0`` and
+    ``R = 0.3`` m. The hip laws act across the walker's
+    :attr:`~heelstrike.models.base.PlanarWalker.hip_joint`.
 
     Parameters
     ----------
@@ -264,11 +275,11 @@ def actuation_family(
         :class:`~heelstrike.dynamics.actuation.EnergyTracking`, parameter the target energy
         ``E_ref`` (J, ``T + V`` with ``V`` zero at ground level). ``hip-pd``:
         :class:`~heelstrike.dynamics.actuation.SwingLegPD`, parameter the amplitude ``A`` (rad).
-    gain : float
+    gain : float, optional
         Energy-tracking gain (hip-energy), s/rad.
-    kp, kd : float
+    kp, kd : float, optional
         PD gains (hip-pd), N m/rad and N m s/rad.
-    max_torque : float
+    max_torque : float, optional
         Hip torque limit (N m) of the hip laws.
 
     Notes
@@ -296,6 +307,11 @@ def actuation_family(
         )
     if name == "hip-energy":
 
+        def energy_law(w: PlanarWalker, energy: float) -> EnergyTracking:
+            g = _gains(w, gain=gain, max_torque=max_torque)
+            return EnergyTracking(walker=w, energy=energy, gain=g["gain"],
+                                  max_torque=g["max_torque"])
+
         def seed_energy(w: PlanarWalker) -> tuple[float, ...]:
             q, qd = w.section_to_state(np.asarray(_scaled_seed_sections(w)[0]))
             m, g, l = _scale(w)
@@ -306,21 +322,21 @@ def actuation_family(
             name=name,
             parameter_name="energy",
             parameter_unit="J",
-            build=lambda w, a: (
-                EnergyTracking(walker=w, energy=float(a), gain=gain, max_torque=max_torque),
-                None,
-            ),
+            build=lambda w, a: (energy_law(w, float(a)), None),
             seed=seed_energy,
         )
     if name == "hip-pd":
+
+        def pd_law(w: PlanarWalker, amplitude: float) -> SwingLegPD:
+            g = _gains(w, kp=kp, kd=kd, max_torque=max_torque)
+            return SwingLegPD(amplitude=amplitude, kp=g["kp"], kd=g["kd"],
+                              max_torque=g["max_torque"], joint=w.hip_joint)
+
         return ActuationFamily(
             name=name,
             parameter_name="amplitude",
             parameter_unit="rad",
-            build=lambda w, a: (
-                SwingLegPD(amplitude=float(a), kp=kp, kd=kd, max_torque=max_torque),
-                None,
-            ),
+            build=lambda w, a: (pd_law(w, float(a)), None),
             seed=lambda w: (0.15, 0.2, 0.1, 0.25),  # rad
         )
     raise ValueError(f"unknown actuation {name!r}: choose from {', '.join(ACTUATIONS)}")
@@ -1529,12 +1545,6 @@ def declared_posture_law(walker: Any) -> Any:
                    angle=ev(law.angle, "angle"))
 
 
-def _model_seed_sections(walker: Any) -> tuple[tuple[float, ...], ...]:
-    """The compass seeds ``(q3, q3_dot, q4_dot)`` laid out on any walker's section
-    (:meth:`~heelstrike.models.base.PlanarWalker.section_point`: further links upright)."""
-    return tuple(tuple(float(v) for v in walker.section_point(*s)) for s in _SEED_SECTIONS)
-
-
 #: Newton tolerance of the passive gait a described walker's slope homotopy starts from (it only
 #: starts a continuation on the search's map).
 PASSIVE_TOLERANCE = 1e-7
@@ -1588,9 +1598,11 @@ def find_model_powered_gait(
     step_length: float | None = None,
     backend: str = "compiled",
     posture: bool = True,
+    actuation_options: Mapping[str, float] | None = None,
     **options: Any,
 ) -> PoweredGait:
-    """Level-ground powered gait of a described walker: push-off plus its posture law.
+    """Level-ground powered gait of a described walker: push-off plus its posture law, or a
+    hip law.
 
     The same two-stage search as :func:`find_powered_gait` (Newton on the walker's section
     (:class:`~heelstrike.dynamics.phased.PhasedWalker`) augmented with the push-off impulse
@@ -1613,13 +1625,18 @@ def find_model_powered_gait(
     reached this way span about 1.22-1.41 m/s (a fold at the slow end, a step the walker
     cannot take at the fast end): a slower target fails with a message saying what was tried.
 
+    The hip laws of :func:`actuation_family` (``"hip-energy"``, ``"hip-pd"``) act across the
+    walker's hip (:attr:`~heelstrike.models.base.PlanarWalker.hip_joint`) and need a walker
+    whose one actuator is its hip (``compass.toml``, ``kneed.toml``; not ``torso.toml``,
+    which also drives its torso). They act at every parameter value, so the search has no
+    passive start and no slope homotopy: it starts from the law's seeds on level ground.
+
     Parameters
     ----------
     walker : BuiltWalker
         Any described walker (scalar parameters).
-    actuation : {"pushoff"}
-        The hip laws of :func:`actuation_family` are written for the compass gait's
-        coordinates; described walkers take the push-off only.
+    actuation : {"pushoff", "hip-energy", "hip-pd"}
+        Push-off (with the declared posture law) or a hip law of :func:`actuation_family`.
     speed, step_length : float, optional
         Target (m/s or m); exactly one.
     backend : {"compiled", "scipy"}
@@ -1627,6 +1644,9 @@ def find_model_powered_gait(
         or the scipy reference.
     posture : bool
         Apply the declared posture law (default); False: push-off only.
+    actuation_options : mapping, optional
+        The hip law's gains (``gain``, ``kp``, ``kd``, ``max_torque`` of
+        :func:`actuation_family`); refused with the push-off.
     **options
         Passed to :func:`find_powered_gait` (``tol``, ``rtol``, ``time_limit``, ``guess``...;
         ``passive_gait=None`` turns the slope homotopy off).
@@ -1634,24 +1654,27 @@ def find_model_powered_gait(
     Returns
     -------
     PoweredGait
-        ``torque_joint`` names the posture law's joint (``"hip"`` without a law: zero work).
+        ``torque_joint`` names the law's joint: the posture law's, ``"hip"`` for a hip law or
+        without a law (zero work).
 
     Raises
     ------
     ValueError
-        Unknown backend or an actuation other than ``"pushoff"``.
+        Unknown backend or actuation, a hip law on a walker with other actuators, or gains
+        with the push-off.
     PoweredGaitNotFoundError
     """
     from heelstrike.dynamics.backends import simulator as backend_simulator
     from heelstrike.dynamics.phased import PhasedWalker
 
-    if actuation != "pushoff":
-        raise ValueError(
-            f"described walkers (--model) support --actuation pushoff only (with the posture "
-            f"law the walker file declares), not {actuation!r}: the hip laws are written for "
-            "the compass gait's coordinates"
-        )
     w = PhasedWalker.from_built(walker)
+    if actuation != "pushoff":
+        return _find_model_hip_law_gait(w, actuation, dict(actuation_options or {}), speed=speed,
+                                        step_length=step_length, backend=backend, **options)
+    if actuation_options:
+        raise ValueError(f"actuation options {', '.join(sorted(actuation_options))} set the "
+                         "hip laws, not the push-off (a posture law's gains are declared in "
+                         "the walker file)")
     law = declared_posture_law(w) if posture else None
     # the one entry point, checked for this walker and actuation (ValueError if unsupported)
     simulator = backend_simulator(w, backend, torque=law, push_off=PushOff(impulse=0.0))
@@ -1676,8 +1699,51 @@ def find_model_powered_gait(
 
     options.setdefault("passive_gait", passive_gait)
     return find_powered_gait(w, actuation=family, speed=speed, step_length=step_length,
-                             simulator=simulator, seed_sections=_model_seed_sections(w),
+                             simulator=simulator,
                              **options)
+
+
+def check_model_actuation(walker: Any, actuation: str) -> None:
+    """Raise ``ValueError`` (one line) unless a described walker takes this actuation.
+
+    The push-off (with the posture law the walker file declares) suits every walker; a hip law
+    of :func:`actuation_family` needs a walker whose one actuated joint is its
+    :attr:`~heelstrike.models.base.PlanarWalker.hip_joint` (the law is its only torque).
+
+    Parameters
+    ----------
+    walker : BuiltWalker or PhasedWalker
+    actuation : str
+        One of :data:`ACTUATIONS`.
+    """
+    if actuation not in ACTUATIONS:
+        raise ValueError(f"unknown actuation {actuation!r}: choose from {', '.join(ACTUATIONS)}")
+    if actuation == "pushoff" or tuple(walker.actuated_joints) == (walker.hip_joint,):
+        return
+    actuated = ", ".join(walker.coordinate_names[j] for j in walker.actuated_joints)
+    raise ValueError(
+        f"the hip law {actuation} needs a walker whose one actuated joint is its hip (the "
+        f"law is its only torque); model {walker.description.name!r} actuates "
+        f"{actuated or 'no joint'}"
+    )
+
+
+def _find_model_hip_law_gait(
+    walker: Any, actuation: str, actuation_options: dict[str, float], *,
+    speed: float | None, step_length: float | None, backend: str, **options: Any,
+) -> PoweredGait:
+    """:func:`find_model_powered_gait` with a hip law (``walker`` a
+    :class:`~heelstrike.dynamics.phased.PhasedWalker`)."""
+    from heelstrike.dynamics.backends import simulator as backend_simulator
+
+    check_model_actuation(walker, actuation)
+    family = actuation_family(actuation, **actuation_options)
+    torque, push_off = family.build(walker, family.seed(walker)[0])
+    # the one entry point, checked for this walker and law (ValueError if unsupported)
+    simulator = backend_simulator(walker, backend, torque=torque, push_off=push_off)
+    options.setdefault("passive_gait", None)
+    return find_powered_gait(walker, actuation=family, speed=speed, step_length=step_length,
+                             simulator=simulator, **options)
 
 
 def energy_book_tables(walker: PlanarWalker, gait: PoweredGait) -> tuple[Any, Any]:

@@ -314,8 +314,12 @@ ACTUATIONS = ("pushoff", "hip-energy", "hip-pd")
 
 
 def add_actuation_options(p: argparse.ArgumentParser) -> None:
-    # defaults (None) come from heelstrike.dynamics.actuation.DEFAULT_*, which explain them
-    g = p.add_argument_group("actuation (defaults: heelstrike.dynamics.actuation)")
+    # defaults (None) come from heelstrike.dynamics.actuation.default_gains, which scales the
+    # DEFAULT_* constants (they explain them) to the walker
+    g = p.add_argument_group(
+        "actuation (defaults for the paper's walker, m g l = 196.2 N m, sqrt(l/g) = 0.319 s; "
+        "another walker's are the same dimensionless gains: torques scaled by its m g l, "
+        "times by its sqrt(l/g); heelstrike.dynamics.actuation.default_gains)")
     g.add_argument("--gain", type=float, default=None,
                    help="energy-tracking gain k of hip-energy (s/rad, default 3)")
     g.add_argument("--kp", type=float, default=None,

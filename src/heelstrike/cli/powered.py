@@ -37,12 +37,17 @@ from heelstrike.cli._render import (
 __all__ = ['add_powered', 'add_study']
 
 
-def refuse_model_actuation(actuations: Sequence[str]) -> None:
-    """With ``--model`` only push-off (with the walker file's posture law) is available."""
-    other = [a for a in actuations if a != "pushoff"]
-    if other:
-        raise CliError(f"--actuation {other[0]} is not supported with --model (only pushoff, "
-                       "with the posture law the walker file declares)")
+def refuse_model_actuation(walker: Any, actuations: Sequence[str]) -> None:
+    """A one-line error unless the described walker takes every actuation
+    (:func:`~heelstrike.analysis.powered.check_model_actuation`: the hip laws need a walker
+    whose one actuated joint is its hip)."""
+    from heelstrike.analysis.powered import check_model_actuation
+
+    for actuation in actuations:
+        try:
+            check_model_actuation(walker, actuation)
+        except ValueError as exc:
+            raise CliError(str(exc)) from None
 
 
 def declared_speed(walker: Any, model: str | None) -> float:
@@ -56,7 +61,7 @@ def declared_speed(walker: Any, model: str | None) -> float:
 
 
 #: ``--backend`` of ``powered`` and ``study cost``.
-BACKEND_HELP = ("step simulator: compiled (the default; it evaluates the push-off, the compass "
+BACKEND_HELP = ("step simulator: compiled (the default; it evaluates the push-off, the "
                 "hip laws hip-energy and hip-pd, and with --model the walker file's posture "
                 "law; for the compass gait the kernel generated from compass.toml) or the scipy "
                 "reference (the default for McGeer's wheel, --radius equal to --leg-length, "
@@ -76,13 +81,14 @@ def compass_simulator(walker: Any, family: Any, backend: str | None) -> Any:
         raise CliError(f"--backend compiled: {reason}") from None
 
 
-def refuse_hip_law_options(args: argparse.Namespace) -> None:
-    """The compass hip laws' gains mean nothing for a described walker: refuse them."""
+def refuse_hip_law_options(args: argparse.Namespace, actuations: Sequence[str]) -> None:
+    """The hip laws' gains mean nothing for a described walker's push-off: refuse them."""
     given = [f"--{k.replace('_', '-')}" for k in ("gain", "kp", "kd", "max_torque")
              if getattr(args, k) is not None]
-    if given:
-        raise CliError(f"{', '.join(given)} set(s) the compass hip laws, not used with "
-                       "--model (the posture law's gains are declared in the walker file)")
+    if given and set(actuations) == {"pushoff"}:
+        raise CliError(f"{', '.join(given)} set(s) the hip laws (--actuation hip-energy, "
+                       "hip-pd), not the push-off (with --model the posture law's gains are "
+                       "declared in the walker file)")
 
 
 def add_powered(sub: Any) -> None:
@@ -94,7 +100,9 @@ def add_powered(sub: Any) -> None:
         "(hip-energy) or swing-leg PD (hip-pd). Prints the energy books per step: on a "
         "periodic gait the actuator work equals the collision loss T_c (paper eqs. 14-15). "
         "With --model: push-off (the impulse is found) plus the posture law the walker file "
-        "declares ([control.torso], e.g. --model torso).",
+        "declares ([control.torso], e.g. --model torso), or a hip law on a walker whose one "
+        "actuated joint is its hip (compass, kneed); the hip laws' default gains are scaled "
+        "to the walker's m g l and sqrt(l/g).",
     )
     add_walker_options(p)
     add_model_options(p)
@@ -125,9 +133,10 @@ def _run_powered(args: argparse.Namespace) -> int:
     )
 
     if args.model is not None:
-        refuse_model_actuation([args.actuation])
-        refuse_hip_law_options(args)
+        refuse_hip_law_options(args, [args.actuation])
     walker = walker_from_args(args) if args.model is None else model_from_args(args)
+    if args.model is not None:
+        refuse_model_actuation(walker, [args.actuation])
     if args.speed is None and args.step_length is None:
         target, value, source = "speed", declared_speed(walker, args.model), "walker"
         declared_note = " (the walker's declared target)"
@@ -153,7 +162,8 @@ def _run_powered(args: argparse.Namespace) -> int:
                                      passive_gait=passive_gait_finder(walker, family,
                                                                       step_simulator))
         else:
-            gait = find_model_powered_gait(walker, backend=backend,
+            gait = find_model_powered_gait(walker, actuation=args.actuation, backend=backend,
+                                           actuation_options=actuation_options(args) or None,
                                            progress=True, time_limit=DEFAULT_TIME_LIMIT,
                                            speed=speed, step_length=step_length)
     except PoweredGaitNotFoundError as exc:
@@ -211,7 +221,8 @@ def add_study(sub: Any) -> None:
         "for each actuation model; writes cost_study.nc and figures, including the paper's "
         "impact-only eta against the actuator work per metre of the real gaits. With --model "
         "(a walker file with a foot radius parameter R, e.g. compass, kneed, torso): push-off "
-        "plus the posture law the file declares.",
+        "plus the posture law the file declares, or a hip law on a walker whose one actuated "
+        "joint is its hip.",
         conflict_handler="resolve",
     )
     add_walker_options(c)  # its --radius is replaced by the range below
@@ -251,11 +262,11 @@ def _run_study(args: argparse.Namespace) -> int:
         walker = walker_from_args(args)  # validates the other walker parameters
         leg_length = float(args.leg_length)
     else:
-        refuse_model_actuation(args.actuation or ())
-        refuse_hip_law_options(args)
+        refuse_hip_law_options(args, args.actuation or ["pushoff"])
         if any(item.partition("=")[0].strip() == "R" for item in args.param):
             raise CliError("--param R=... is swept by --radius START:STOP:COUNT: give it there")
         model = model_from_args(args)
+        refuse_model_actuation(model, args.actuation or ["pushoff"])
         if "R" not in model.params:
             raise CliError(f"model {model.description.name!r} has no foot radius parameter 'R' "
                            f"(its parameters: {', '.join(sorted(model.params))})")

@@ -7,8 +7,10 @@ Small frozen dataclasses that :func:`heelstrike.dynamics.hybrid.simulate` accept
   (pre-emptive push-off, Kuo 2002);
 - :class:`EnergyTracking`, :class:`SwingLegPD` and :class:`CustomTorque` have the
   :class:`~heelstrike.dynamics.single_support.TorqueLaw` signature ``(t, q, q_dot) -> u`` with
-  ``u`` of shape ``(..., n_u)`` (N m) and act at the hip (``B = e4`` of the compass gait, i.e.
-  a torque on the swing leg with its reaction on the stance leg). Torque laws add with ``+``.
+  ``u`` of shape ``(..., n_u)`` (N m). :class:`EnergyTracking` and :class:`SwingLegPD` act at
+  the hip (:attr:`~heelstrike.models.base.PlanarWalker.hip_joint`: ``B = e4`` of the compass
+  gait, i.e. a torque on the swing leg with its reaction on the stance leg) of a walker whose
+  one actuator is its hip. Torque laws add with ``+``.
 
 The actuator work of a torque law is integrated along the motion by the simulation as an extra
 state (``dW/dt = (B u) . q_dot``); the push-off work is the kinetic-energy change it causes.
@@ -23,15 +25,18 @@ The defaults (:data:`DEFAULT_ENERGY_GAIN`, :data:`DEFAULT_PD_KP`, :data:`DEFAULT
 :data:`DEFAULT_MAX_TORQUE`) are chosen so that ``heelstrike powered`` finds the default target,
 0.5 m/s on level ground, for the paper's walker (``m_H = 10``, ``m = 5`` kg, ``l = 1``,
 ``b = 0.5`` m) with point feet and with ``R = 0.3`` m. Their physical reasons are given with each
-constant. On level ground a hip torque alone powers the gait only through the swing leg (its
-reaction on the stance leg pushes the stance leg forward) and, with no stiffness of its own, the
-step period stays near the swing leg's pendulum half-period ``pi sqrt(b / g) = 0.71 s``; the
-speed ``L_S / T`` then grows only through longer steps.
+constant. Another walker gets the same dimensionless gains (:func:`default_gains`: torques scaled
+by its ``m g l``, times by its ``sqrt(l / g)``). On level ground a hip torque alone powers the
+gait only through the swing leg (its reaction on the stance leg pushes the stance leg forward)
+and, with no stiffness of its own, the step period stays near the swing leg's pendulum
+half-period ``pi sqrt(b / g) = 0.71 s``; the speed ``L_S / T`` then grows only through longer
+steps.
 """
 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -40,7 +45,7 @@ from numpy.typing import ArrayLike
 
 from heelstrike._typing import FloatArray
 from heelstrike.core.impact import kinetic_energy
-from heelstrike.models.base import PlanarWalker
+from heelstrike.models.base import PlanarWalker, WalkerScale
 
 __all__ = [
     "DEFAULT_ENERGY_GAIN",
@@ -53,6 +58,7 @@ __all__ = [
     "PushOff",
     "SwingLegPD",
     "TorqueSum",
+    "default_gains",
     "mechanical_energy",
     "push_off_velocity_change",
 ]
@@ -88,6 +94,41 @@ DEFAULT_PD_KD = 5.0
 #: (the PD's peak is ``k_p`` times a tracking error of up to ~0.5 rad) while the transients of
 #: the seed iterations stay bounded.
 DEFAULT_MAX_TORQUE = 50.0
+
+#: ``m g l`` (N m) and ``sqrt(l / g)`` (s) of the paper's walker (``m_total = 20 kg``,
+#: ``l = 1 m``, ``g = 9.81 m/s^2``), for which the defaults above were chosen.
+_REFERENCE_TORQUE, _REFERENCE_TIME = 20.0 * 9.81 * 1.0, math.sqrt(1.0 / 9.81)
+
+
+def default_gains(scale: WalkerScale) -> dict[str, float]:
+    """The hip laws' default gains for a walker of this scale.
+
+    The ``DEFAULT_*`` constants, chosen for the paper's walker, held at the same dimensionless
+    values: torques (``kp`` per radian, ``max_torque``) scale with the walker's ``m g l``,
+    times with its ``sqrt(l / g)`` (``kd = torque x time``, ``gain = time``: ``u = -k (E -
+    E_ref) q_dot`` with ``E`` in units of ``m g l``). A 1.6 kg walker (``kneed.toml``) so gets
+    ``kp = 4 N m/rad``, not the 50 N m/rad that would lock its 0.5 kg legs to the set point.
+    For the paper's walker the factors are exactly 1.
+
+    Parameters
+    ----------
+    scale : WalkerScale
+        The walker's :attr:`~heelstrike.models.base.PlanarWalker.scale` (scalars).
+
+    Returns
+    -------
+    dict
+        ``gain`` (s/rad), ``kp`` (N m/rad), ``kd`` (N m s/rad), ``max_torque`` (N m).
+    """
+    torque = float(scale.total_mass) * float(scale.gravity) * float(scale.leg_length)
+    time = math.sqrt(float(scale.leg_length) / float(scale.gravity))
+    f_torque, f_time = torque / _REFERENCE_TORQUE, time / _REFERENCE_TIME
+    return {
+        "gain": DEFAULT_ENERGY_GAIN * f_time,
+        "kp": DEFAULT_PD_KP * f_torque,
+        "kd": DEFAULT_PD_KD * f_torque * f_time,
+        "max_torque": DEFAULT_MAX_TORQUE * f_torque,
+    }
 
 
 def mechanical_energy(
@@ -212,6 +253,17 @@ def _check_limit(value: float) -> float:
     return v
 
 
+def _check_joint(joint: object, n_coordinates: int | None = None) -> int:
+    """A hip law's joint: a coordinate index past the base's ``(x, y)`` (and below
+    ``n_coordinates`` when known)."""
+    if isinstance(joint, bool) or not isinstance(joint, (int, np.integer)) or joint < 2 or (
+        n_coordinates is not None and joint >= n_coordinates
+    ):
+        within = "" if n_coordinates is None else f" and < {n_coordinates}"
+        raise ValueError(f"joint must be a coordinate index >= 2{within}, got {joint!r}")
+    return int(joint)
+
+
 @dataclass(frozen=True, kw_only=True)
 class TorqueSum(HipTorque):
     """Sum of hip torque laws, saturated again at ``max_torque`` (N m)."""
@@ -231,13 +283,14 @@ class TorqueSum(HipTorque):
 class EnergyTracking(HipTorque):
     """Hip torque restoring a target mechanical energy (Goswami, Espiau & Keramane 1997).
 
-    .. math:: u = \\operatorname{sat}_{u_{max}}\\big(-k\\,(E - E_{ref})\\,\\dot q_4\\big),
+    .. math:: u = \\operatorname{sat}_{u_{max}}\\big(-k\\,(E - E_{ref})\\,\\dot q_j\\big),
               \\qquad E = T + V,
 
-    with ``T`` the kinetic energy (eq. 1) and ``V`` the potential energy on level ground
-    (ground-frame origin at zero height). The hip power is ``u q4_dot`` (``B = e4``), so in
-    single support ``dE/dt = -k (E - E_ref) q4_dot^2`` (before saturation): the energy moves
-    monotonically towards ``E_ref``. Saturation keeps the sign of ``u``, hence the monotonicity.
+    with ``T`` the kinetic energy (eq. 1), ``V`` the potential energy on level ground
+    (ground-frame origin at zero height) and ``q_j`` the hip angle (``j = 3``, ``q4``, for the
+    compass gait). The hip power is ``u q_j_dot`` (``B = e_j``), so in single support
+    ``dE/dt = -k (E - E_ref) q_j_dot^2`` (before saturation): the energy moves monotonically
+    towards ``E_ref``. Saturation keeps the sign of ``u``, hence the monotonicity.
 
     Parameters
     ----------
@@ -251,6 +304,9 @@ class EnergyTracking(HipTorque):
         Slope (rad) in ``V`` (0: level ground, the case this law is meant for).
     walker : PlanarWalker
         Supplies ``M`` and ``V``.
+    joint : int, optional
+        Coordinate index ``j`` of the hip angle; default (None) the walker's
+        :attr:`~heelstrike.models.base.PlanarWalker.hip_joint`.
     """
 
     walker: PlanarWalker
@@ -258,29 +314,34 @@ class EnergyTracking(HipTorque):
     gain: float = DEFAULT_ENERGY_GAIN
     max_torque: float = DEFAULT_MAX_TORQUE
     slope: float = 0.0
+    joint: int | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "max_torque", _check_limit(self.max_torque))
         if not float(self.gain) > 0:
             raise ValueError(f"gain must be > 0, got {self.gain}")
+        joint = self.walker.hip_joint if self.joint is None else self.joint
+        object.__setattr__(self, "joint", _check_joint(joint, self.walker.n_coordinates))
 
     def __call__(self, t: float, q: FloatArray, q_dot: FloatArray) -> FloatArray:
         qd = np.asarray(q_dot, dtype=float)
         E = mechanical_energy(self.walker, q, qd, self.slope)
-        u = -self.gain * (E - self.energy) * qd[..., 3]
+        u = -self.gain * (E - self.energy) * qd[..., self.joint]
         return self._saturate(np.asarray(u)[..., None])
 
 
 @dataclass(frozen=True, kw_only=True)
 class SwingLegPD(HipTorque):
-    """PD control of the inter-leg angle ``q4`` towards a swing target.
+    """PD control of the hip angle ``q_j`` (the compass gait's inter-leg angle ``q4``, ``j = 3``)
+    towards a swing target.
 
-    .. math:: u = \\operatorname{sat}_{u_{max}}\\big(k_p\\,(q_4^{ref}(t) - q_4)
-              - k_d\\,\\dot q_4\\big), \\qquad q_4^{ref}(t) = -2 A\\, s(t),
+    .. math:: u = \\operatorname{sat}_{u_{max}}\\big(k_p\\,(q_j^{ref}(t) - q_j)
+              - k_d\\,\\dot q_j\\big), \\qquad q_j^{ref}(t) = -2 A\\, s(t),
 
     ``A`` (rad) is the amplitude: the swing leg is driven towards a symmetric stance with
-    half-angle ``A`` ahead of the stance leg (at heel strike ``q4 = -2 q3``). ``s(t)`` is a
-    dimensionless profile of the time since the step's start (default 1: a set point).
+    half-angle ``A`` ahead of the stance leg (at heel strike ``q4 = -2 q3``; for a walker with
+    knees, straight legs). ``s(t)`` is a dimensionless profile of the time since the step's
+    start (default 1: a set point).
 
     Parameters
     ----------
@@ -294,6 +355,9 @@ class SwingLegPD(HipTorque):
         Torque limit (N m), > 0; default :data:`DEFAULT_MAX_TORQUE`.
     profile : callable ``t -> float`` or None
         ``s(t)``; None for a constant 1.
+    joint : int
+        Coordinate index ``j`` of the hip angle (default 3, the compass gait's; a described
+        walker's is its :attr:`~heelstrike.models.base.PlanarWalker.hip_joint`).
     """
 
     amplitude: float
@@ -301,11 +365,13 @@ class SwingLegPD(HipTorque):
     kd: float = DEFAULT_PD_KD
     max_torque: float = DEFAULT_MAX_TORQUE
     profile: Callable[[float], float] | None = None
+    joint: int = 3
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "max_torque", _check_limit(self.max_torque))
         if self.kp < 0 or self.kd < 0:
             raise ValueError("kp and kd must be >= 0")
+        object.__setattr__(self, "joint", _check_joint(self.joint))
 
     def reference(self, t: float) -> float:
         """``q4_ref(t)`` (rad)."""
@@ -315,7 +381,8 @@ class SwingLegPD(HipTorque):
     def __call__(self, t: float, q: FloatArray, q_dot: FloatArray) -> FloatArray:
         q_ = np.asarray(q, dtype=float)
         qd = np.asarray(q_dot, dtype=float)
-        u = self.kp * (self.reference(t) - q_[..., 3]) - self.kd * qd[..., 3]
+        j = self.joint
+        u = self.kp * (self.reference(t) - q_[..., j]) - self.kd * qd[..., j]
         return self._saturate(np.asarray(u)[..., None])
 
 

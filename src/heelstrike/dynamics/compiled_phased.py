@@ -105,8 +105,6 @@ _C_SLOPE, _C_RST, _C_RSW, _C_THR, _C_MU, _C_TJ, _C_TANG, _C_KP, _C_KD, _C_PUSH, 
 _C_LAW, _C_UMAX, _C_GAIN, _C_EREF = range(11, 15)
 # joint laws: TorsoPD (absolute angle q_2 + q_j), SwingLegPD (relative q_j), EnergyTracking
 _LAW_POSTURE, _LAW_JOINT_PD, _LAW_ENERGY = 0, 1, 2
-#: The coordinate of the compass gait's hip (``q4``), which the hip laws read.
-_HIP = 3
 #: The torque laws the kernel evaluates (:func:`check_compiled_actuation`).
 JointLaw = TorsoPD | SwingLegPD | EnergyTracking
 
@@ -242,11 +240,12 @@ def check_compiled_actuation(walker: BuiltWalker, torque: Any, push_off: Any) ->
 
     - passive (``torque=None``);
     - a :class:`~heelstrike.dynamics.phased.TorsoPD` torque on a walker with a ``torso`` joint;
-    - on a walker whose one actuated joint is coordinate 3 (the hip of the compass gait and of
-      its description ``compass.toml``): a :class:`~heelstrike.dynamics.actuation.SwingLegPD`
-      set point (no time profile), or :class:`~heelstrike.dynamics.actuation.EnergyTracking`
-      whose walker has this walker's equations (the walker itself, or the compass gait it
-      describes with the same parameter values; its slope must be the walk's).
+    - on a walker whose one actuated joint is the law's ``joint`` (its hip: coordinate 3 of
+      the compass gait and of its description ``compass.toml``, 4 of ``kneed.toml``): a
+      :class:`~heelstrike.dynamics.actuation.SwingLegPD` set point (no time profile), or
+      :class:`~heelstrike.dynamics.actuation.EnergyTracking` whose walker has this walker's
+      equations (the walker itself, or the compass gait it describes with the same parameter
+      values; its slope must be the walk's).
     """
     if push_off is not None and type(push_off) is not PushOff:
         raise ValueError(
@@ -262,11 +261,11 @@ def check_compiled_actuation(walker: BuiltWalker, torque: Any, push_off: Any) ->
             f"the compiled backend evaluates passive walking and the {hip_laws} torque laws "
             "only; use backend='scipy' for other torque laws"
         )
-    if tuple(walker.actuated_joints) != (_HIP,):
+    if tuple(walker.actuated_joints) != (torque.joint,):
         raise ValueError(
-            f"the compiled backend evaluates {type(torque).__name__} on a walker whose one "
-            f"actuated joint is coordinate {_HIP} (the compass gait's hip); this walker's are "
-            f"{tuple(walker.actuated_joints)}: use backend='scipy'"
+            f"{type(torque).__name__} acts across coordinate {torque.joint}, and the walker's "
+            f"one actuated joint must be that one; this walker's actuated joints are "
+            f"{tuple(walker.actuated_joints)}"
         )
     if type(torque) is SwingLegPD and torque.profile is not None:
         raise ValueError(
@@ -287,7 +286,7 @@ def _joint_law(walker: BuiltWalker, torque: JointLaw | None, slope: float) -> tu
     if torque is None:
         return (_LAW_POSTURE, -1.0, 0.0, 0.0, 0.0, math.inf, 0.0, 0.0)
     if isinstance(torque, SwingLegPD):
-        return (_LAW_JOINT_PD, float(_HIP), torque.reference(0.0), float(torque.kp),
+        return (_LAW_JOINT_PD, float(torque.joint), torque.reference(0.0), float(torque.kp),
                 float(torque.kd), float(torque.max_torque), 0.0, 0.0)
     if isinstance(torque, EnergyTracking):
         if float(torque.slope) != float(slope):
@@ -296,7 +295,8 @@ def _joint_law(walker: BuiltWalker, torque: JointLaw | None, slope: float) -> tu
                 f"walk's slope ({slope} rad); the law's is {torque.slope} rad: use "
                 "backend='scipy'"
             )
-        return (_LAW_ENERGY, float(_HIP), 0.0, 0.0, 0.0, float(torque.max_torque),
+        hip = walker.hip_joint if torque.joint is None else torque.joint  # set by the law
+        return (_LAW_ENERGY, float(hip), 0.0, 0.0, 0.0, float(torque.max_torque),
                 float(torque.gain), float(torque.energy))
     joint = float(walker.joint_index("torso"))
     return (_LAW_POSTURE, joint, float(torque.angle), float(torque.kp), float(torque.kd),

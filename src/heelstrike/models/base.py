@@ -297,20 +297,31 @@ class PlanarWalker(ABC):
         return sum(f"{name}_dot" in names for name in names)
 
     @property
+    def hip_joint(self) -> int:
+        """Coordinate index of the hip: the joint named ``"hip"``, else coordinate 3 (the
+        compass gait's inter-leg angle ``q4``, relative to the stance leg).
+
+        The one definition of where the hip is: the hip torque laws
+        (:mod:`heelstrike.dynamics.actuation`) act across it and :attr:`scale` measures the
+        leg length from it.
+        """
+        names = self.coordinate_names
+        return names.index("hip") if "hip" in names else 3
+
+    @property
     def scale(self) -> WalkerScale:
         """``(total mass, gravity, leg length)`` of the walker (kg, m/s^2, m).
 
         The default derives them from the model itself, so that it holds for every walker:
         ``g`` is the weight per unit mass, ``(V(y = 1 m) - V(y = 0)) / m`` on level ground (the
         potential energy is linear in the height ``q[1]``), and ``l`` the distance from the hip
-        (joint ``"hip"``, else coordinate 3) to the swing foot's lowest point with every joint
+        (:attr:`hip_joint`) to the swing foot's lowest point with every joint
         straight: half the rise of the swing foot's arc centre when the hip turns by pi, plus
         the foot radius. Walkers with these as parameters override it.
         """
         m = np.asarray(self.total_mass, dtype=float)
         n = self.n_coordinates
-        names = self.coordinate_names
-        hip = names.index("hip") if "hip" in names else 3
+        hip = self.hip_joint
         r_stance, r_swing = (np.asarray(r, dtype=float) for r in self.foot_radii)
         q0 = np.zeros((*np.broadcast_shapes(m.shape, r_stance.shape), n))
         q0[..., 1] = r_stance

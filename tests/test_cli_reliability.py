@@ -463,5 +463,33 @@ def test_impact_map_refuses_a_backward_stance_rate(capsys: Capsys, tmp_path: Pat
     line = _one_line_error(*_run(capsys, "impact-map", "--model", "compass", "--x",
                                  "R:0:0.3:2", "--y", "angle:10deg:20deg:2", "--q3dot", "-1",
                                  "--out", str(tmp_path / "m")))
-    assert "--q3dot must be >= 0" in line and "no heel strike" in line
+    assert "--q3dot must be > 0" in line and "no heel strike" in line
     assert not (tmp_path / "m" / "impact_map.csv").exists()
+    # at rest (q3dot = 0) nothing strikes either: it wrote rows of zeros
+    line = _one_line_error(*_run(capsys, "impact-map", "--model", "compass", "--x",
+                                 "R:0:0.3:2", "--y", "angle:10deg:20deg:2", "--q3dot", "0",
+                                 "--out", str(tmp_path / "m")))
+    assert "--q3dot must be > 0, got 0" in line
+    assert not (tmp_path / "m" / "impact_map.csv").exists()
+
+
+@pytest.mark.parametrize(("argv", "needle"), [
+    # an option the command would ignore is refused, not dropped (QA sweep 3)
+    (["impact-map", "--model", "compass", "--x", "R:0:0.5:2", "--y", "angle:10deg:20deg:2",
+      "--param", "R=0.3"], "--param R=... is swept by --x/--y"),
+    (["impact-map", "--model", "compass", "--x", "R:0:0.5:2", "--y", "angle:10deg:20deg:2",
+      "--angle", "15deg"], "--angle sets the impact angle when it is not swept"),
+    (["impact-map", "--model", "compass", "--x", "R:0:1:1", "--y", "angle:10deg:20deg:2"],
+     "COUNT 1 is one point, START, so STOP must equal START"),
+    (["powered", "--gain", "5"], "--gain not used by --actuation pushoff"),
+    (["powered", "--actuation", "hip-energy", "--kp", "10"],
+     "--kp not used by --actuation hip-energy"),
+    (["study", "cost", "--kd", "1"], "--kd not used by --actuation pushoff"),
+    (["powered", "--actuation", "hip-pd", "--kd", "nan"], "--kd must be finite and >= 0"),
+])
+def test_ignored_or_meaningless_options_are_refused(argv: list[str], needle: str,
+                                                    capsys: Capsys, tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    line = _one_line_error(*_run(capsys, *argv, "--out", str(out)))
+    assert needle in line
+    assert not out.exists() or not any(out.iterdir())

@@ -203,7 +203,7 @@ def test_cli_powered_model_torso_json(capsys: pytest.CaptureFixture[str],
     [
         (["powered", "--model", "torso", "--actuation", "hip-energy"],
          "the hip law hip-energy needs a walker whose one actuated joint is its hip"),
-        (["powered", "--model", "torso", "--kp", "5"], "--kp set(s) the hip laws"),
+        (["powered", "--model", "torso", "--kp", "5"], "--kp not used by --actuation pushoff"),
         (["powered", "--actuation", "hip-energy", "--radius", "1", "--backend", "compiled"],
          "--backend compiled: the compiled backend runs a hip law"),
         (["powered", "--model", "torso", "--radius", "0.1", "--param", "R=0.1"],

@@ -244,6 +244,8 @@ def _check_units(d: dict[str, Any]) -> dict[str, Any]:
             assert isinstance(unit, dict), where
             for item in value:
                 check(item, {k: unit[k] for k in item}, f"{where}[]")
+        elif isinstance(value, list) and not value and isinstance(unit, dict):
+            assert unit == {}, where  # an empty list of objects (e.g. other_gaits)
         elif isinstance(unit, list):
             assert isinstance(value, list) and len(unit) == len(value), where
             for u in unit:
@@ -307,6 +309,12 @@ def test_powered_json_units(capsys: pytest.CaptureFixture[str]) -> None:
     u = _check_units(d)
     assert u["parameter"] == d["parameter_unit"] == "N s"
     assert u["cost_of_transport"] == "1" and u["actuator_work"] == "J"
+    # two gaits meet 0.3 m/s with point feet: the other one's units too
+    two = _json(["powered", "--radius", "0", "--speed", "0.3", "--json"], capsys)
+    assert two["gaits_found"] == 2
+    assert _check_units(two)["other_gaits"]["actuator_work"] == "J"
+    pd = _json(["powered", "--radius", "0.3", "--actuation", "hip-pd", "--json"], capsys)
+    assert _check_units(pd)["gains"]["kp"] == "N m/rad"
 
 
 # -- Python scalars from scalar inputs ------------------------------------------------------

@@ -9,7 +9,8 @@ norm over mixed units). A key whose value is
   (``q``, ``q_dot``, ``qdot_minus``, ``qdot_plus``: ``(x, y, angles...)``) and ``impulse`` have a
   list with one unit per entry;
 - an object (``fixed_point``, ``fractions``) has an object of units for its keys;
-- a list of objects (``impacts``, ``gaits``) has the object of units of its entries' keys.
+- a list of objects (``impacts``, ``gaits``, ``other_gaits``) has the object of units of its
+  entries' keys (``{}`` when it is empty).
 """
 
 from __future__ import annotations
@@ -38,7 +39,10 @@ UNITS: dict[str, str | None] = {
     "restitution": "1", "multipliers": "1", "multipliers_complex": "1",
     "cost_of_transport": "1", "spectral_radius": "1", "converging_fraction": "1",
     "stable_fraction": "1", "gait_found_fraction": "1", "grid": "1", "steps": "1",
+    "gaits_found": "1",
     "iterations": "1",
+    # torque-law gains (heelstrike.analysis.powered.GAIN_UNITS)
+    "gain": "s/rad", "kp": "N m/rad", "kd": "N m s/rad", "max_torque": "N m", "angle": "rad",
     # not quantities
     "trailing_foot_lifts": None, "degenerate_wheel": None, "stable": None,
     "trailing_foot_grazes": None, "model": None, "torque_joint": None, "coordinates": None,
@@ -52,6 +56,10 @@ UNITS: dict[str, str | None] = {
     # a joint outside its limits: rad (m for a prismatic joint, its "unit" says which)
     "position": "rad", "lower": "rad", "upper": "rad",
 }
+
+#: Keys whose value is a list of objects: the object of units of their entries' keys, ``{}``
+#: when the list is empty.
+_OBJECT_LISTS = {"impacts", "gaits", "other_gaits"}
 
 _POSITION = {"q"}
 _VELOCITY = {"q_dot", "qdot_minus", "qdot_plus"}
@@ -107,6 +115,8 @@ def json_units(obj: Mapping[str, Any]) -> dict[str, Any]:
             units[key] = dict.fromkeys(value, "1")
         elif key == "parameter" and isinstance(obj.get("parameter_unit"), str):
             units[key] = obj["parameter_unit"]
+        elif key in _OBJECT_LISTS and isinstance(value, list) and not value:
+            units[key] = {}
         elif isinstance(value, list) and value and all(isinstance(v, Mapping) for v in value):
             merged: dict[str, Any] = {}
             for item in value:

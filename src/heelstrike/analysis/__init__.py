@@ -46,7 +46,7 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "basin_of_attraction", "model_basin_of_attraction", "model_slice_axes",
     ),
     "cost_study": (
-        "BRANCH_NOTE", "GAIT_VARIABLES", "impact_angle_for_step_length", "paper_eta", "save_study",
+        "BRANCH_NOTE", "GAIT_VARIABLES", "paper_eta", "save_study",
     ),
     "gait_map": (
         "GaitMap", "NewtonGait", "compass_bifurcation", "model_bifurcation", "model_gait_map",
@@ -76,8 +76,9 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "ACTUATIONS", "ActuationFamily", "PoweredGait", "PoweredGaitNotFoundError",
         "SearchLimitError", "actuation_family", "check_model_actuation", "declared_posture_law",
         "energy_book_tables", "family_simulator",
-        "find_model_powered_gait", "find_powered_gait", "max_walking_speed",
-        "passive_gait_finder", "powered_step",
+        "find_model_powered_gait", "find_powered_gait", "impact_angle_for_step_length",
+        "law_gains", "max_walking_speed", "powered_gaits",
+        "passive_gait_finder", "powered_step", "preferred_gait",
     ),
     "sweep": (
         "KNOWN_UNITS", "SweepError", "SweepFunction", "SweepStoreLockedError",

@@ -37,7 +37,6 @@ from typing import Any
 import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import brentq
 
 from heelstrike._typing import FloatArray
 from heelstrike.analysis.heel_strike import heel_strike_study
@@ -45,12 +44,14 @@ from heelstrike.analysis.powered import (
     ACTUATIONS,
     PoweredGait,
     PoweredGaitNotFoundError,
+    _count_distinct,
+    _fresh_gaits,
+    _seed_walker,
+    _solver,
     actuation_family,
     check_model_actuation,
     family_simulator,
-    find_model_powered_gait,
-    find_powered_gait,
-    passive_gait_finder,
+    impact_angle_for_step_length,
 )
 from heelstrike.io import write_netcdf
 from heelstrike.models.compass import CompassGait
@@ -59,7 +60,6 @@ __all__ = [
     "BRANCH_NOTE",
     "GAIT_VARIABLES",
     "cost_study",
-    "impact_angle_for_step_length",
     "paper_eta",
     "save_study",
 ]
@@ -77,23 +77,17 @@ GAIT_VARIABLES: dict[str, tuple[str, str]] = {
     "step_length": ("m", "step length L_S"),
     "speed": ("m/s", "mean speed"),
     "impact_angle": ("rad", "stance angle q3 at heel strike"),
-    "parameter": ("", "actuation parameter found by Newton"),
+    "parameter": ("", "actuation parameter found by Newton (its unit: parameter_unit)"),
     "spectral_radius": ("1", "largest Floquet multiplier modulus"),
     "stable": ("1", "1 if stable, 0 if unstable, NaN where no gait"),
     "energy_balance_error": ("J", "W_act - T_c - change of mechanical energy"),
+    # the torque law's gains as used (NaN where the law has none: the push-off alone)
+    "gain": ("s/rad", "energy-tracking gain k of the hip law (hip-energy)"),
+    "kp": ("N m/rad", "stiffness of the torque law (hip-pd, a posture law)"),
+    "kd": ("N m s/rad", "damping of the torque law (hip-pd, a posture law)"),
+    "max_torque": ("N m", "torque limit of the hip law"),
 }
 
-
-def impact_angle_for_step_length(walker: CompassGait, step_length: float) -> float:
-    """``q3`` (rad) with ``2 (l - R) sin q3 + 2 R q3 = L`` (increasing on [0, pi/2])."""
-    l, R = float(walker.leg_length), float(walker.foot_radius)
-
-    def f(q3: float) -> float:
-        return 2 * (l - R) * np.sin(q3) + 2 * R * q3 - step_length
-
-    if f(np.pi / 2) < 0:
-        return float("nan")
-    return float(brentq(f, 0.0, np.pi / 2, xtol=1e-14))
 
 
 def paper_eta(walker: CompassGait, step_length: float) -> tuple[float, float]:
@@ -125,6 +119,7 @@ def _row(g: PoweredGait) -> dict[str, float]:
         "spectral_radius": float(np.max(np.abs(g.multipliers))),
         "stable": float(g.stable),
         "energy_balance_error": g.energy_balance_error,
+        **{k: g.gains.get(k, np.nan) for k in ("gain", "kp", "kd", "max_torque")},
     }
 
 
@@ -277,6 +272,10 @@ def cost_study(
         "units": "1", "long_name": "distinct periodic gaits found meeting the target"})
     ds["backend"] = (("actuation", "radius"), np.asarray(backends, dtype=str), {
         "long_name": "step simulator of the gaits (compiled or scipy)"})
+    ds["parameter_unit"] = (("actuation",), np.asarray(
+        [actuation_family(a).parameter_unit for a in actuations], dtype=str), {
+        "long_name": "unit of the actuation parameter (N s: impulse, J: target energy, "
+                     "rad: amplitude)"})
     if target == "step_length" and model is None:
         eta_p = np.full((R.size, T.size), np.nan)
         tc_p = np.full((R.size, T.size), np.nan)
@@ -404,17 +403,7 @@ def _study_row(
     base = walker
     kwargs = dict(options)
     family = actuation_family(actuation, **dict(actuation_options))
-
-    def solve(radius: float, **opts: Any) -> PoweredGait:
-        if model is None:
-            w = base.replace(foot_radius=radius)
-            sim = family_simulator(w, family, backend)
-            opts.setdefault("passive_gait", passive_gait_finder(w, family, sim))
-            return find_powered_gait(w, actuation=family, simulator=sim, **opts)
-        return find_model_powered_gait(
-            model.replace(R=radius), actuation=actuation, backend=backend,
-            actuation_options=None if actuation == "pushoff" else dict(actuation_options),
-            **opts)
+    solve = _solver(base, model, actuation, dict(actuation_options), backend)
 
     found: dict[tuple[int, int], FloatArray] = {
         (i - 1, j): np.asarray(x, dtype=float) for j, x in enumerate(previous) if len(x)
@@ -476,72 +465,6 @@ def _study_row(
     return rows | {"failure": failure, "seed": seed, "seed_size": seed_size,
                    "branch": branch, "gaits_found": n_found}
 
-
-#: Extra Newton starts ``(q3_dot, q4_dot)`` (rad/s) of the fresh search, with ``q3`` from the
-#: target step length and the family's smallest seed parameter. They reach the cheap push-off
-#: branch near McGeer's wheel that the attractor seeds of ``find_powered_gait`` miss.
-_FRESH_STARTS = ((0.6, -0.3), (0.9, -0.3))
-
-
-def _seed_walker(base: CompassGait, model: Any | None, r: float) -> Any:
-    """The walker at radius ``r`` whose section the fresh starts are laid out on."""
-    if model is None:
-        return base.replace(foot_radius=r)
-    from heelstrike.dynamics.phased import PhasedWalker
-
-    return PhasedWalker.from_built(model.replace(R=r))
-
-
-def _fresh_start(w: Any, q3: float, w3: float, w4: float, p0: float) -> FloatArray:
-    """Newton start on ``w``'s section: stance angle ``-q3``, rates ``(w3, w4)``
-    (:meth:`~heelstrike.models.base.PlanarWalker.section_point`: further links upright), then
-    the parameter ``p0``."""
-    return np.append(w.section_point(-q3, w3, w4), p0)
-
-
-def _fresh_gaits(
-    solve: Any, r: float, w: Any, family: Any, speed: float | None, length: float | None,
-    kwargs: dict[str, Any],
-) -> tuple[list[PoweredGait], Exception | None]:
-    """Gaits found without continuation at radius ``r``: the seed search of ``solve`` (the
-    compass or described walker's ``find_*powered_gait``) and Newton from
-    :data:`_FRESH_STARTS`. Returns the gaits and the seed search's failure (or None)."""
-    gaits: list[PoweredGait] = []
-    err: Exception | None = None
-    try:
-        gaits.append(solve(r, speed=speed, step_length=length, **kwargs))
-    except (PoweredGaitNotFoundError, ValueError) as exc:
-        err = exc
-    if length is not None:
-        try:
-            q3 = impact_angle_for_step_length(
-                CompassGait(leg_length=float(w.scale.leg_length), foot_radius=r), length)
-        except ValueError:  # a described walker's R beyond its leg length
-            q3 = float("nan")
-    else:
-        q3 = 0.2
-    if not np.isfinite(q3):
-        return gaits, err
-    p0 = float(min(family.seed(w)))
-    # near the wheel the map is flat and Newton stalls at ~1e-8 (integrator noise floor)
-    opts = {"max_iter": 12, "max_evaluations": 200, "tol": 1e-7} | kwargs
-    for w3, w4 in _FRESH_STARTS:
-        try:
-            gaits.append(solve(r, speed=speed, step_length=length,
-                               guess=_fresh_start(w, q3, w3, w4, p0), fallback=False, **opts))
-        except (PoweredGaitNotFoundError, ValueError):
-            pass
-    return gaits, err
-
-
-def _count_distinct(gaits: Sequence[PoweredGait], tol: float = 1e-6) -> int:
-    """Number of distinct gaits (fixed point and parameter differ by more than ``tol``)."""
-    keys: list[FloatArray] = []
-    for g in gaits:
-        x = np.append(g.fixed_point, g.parameter)
-        if all(float(np.linalg.norm(x - k)) > tol for k in keys):
-            keys.append(x)
-    return len(keys)
 
 
 def save_study(ds: xr.Dataset, path: str | Path) -> Path:

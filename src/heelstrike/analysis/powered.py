@@ -56,7 +56,7 @@ from __future__ import annotations
 import dataclasses
 import sys
 import time
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal, TypeVar
 
@@ -65,6 +65,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
+from heelstrike._units import UNITS
 from heelstrike.core.impact import kinetic_energy
 from heelstrike.dynamics._aot import compile_seconds
 from heelstrike.dynamics.actuation import (
@@ -77,6 +78,7 @@ from heelstrike.dynamics.actuation import (
 from heelstrike.dynamics.hybrid import ImpactRecord, WalkResult, WalkStatus, simulate
 from heelstrike.dynamics.single_support import TorqueLaw
 from heelstrike.models.base import PlanarWalker
+from heelstrike.models.compass import CompassGait
 
 Target = Literal["speed", "step_length"]
 _T = TypeVar("_T")
@@ -94,9 +96,13 @@ __all__ = [
     "family_simulator",
     "find_model_powered_gait",
     "find_powered_gait",
+    "impact_angle_for_step_length",
+    "law_gains",
     "max_walking_speed",
     "passive_gait_finder",
+    "powered_gaits",
     "powered_step",
+    "preferred_gait",
 ]
 
 #: Names of the built-in actuation models.
@@ -480,6 +486,13 @@ class PoweredGait(ResultDictMixin):
         Wheel case ``R = l`` (module docstring).
     walk : WalkResult
         One simulated period.
+    torque_joint : str
+        The joint the torque law acts across (``"hip"``, or a posture law's joint).
+    model : str or None
+        The described walker's name (None: the compass gait).
+    gains : dict
+        The torque law's gains as used (:func:`law_gains`; empty for the push-off alone): what
+        reproduces the gait, the hip laws' defaults being scaled to the walker.
     """
 
     actuation: str
@@ -508,6 +521,7 @@ class PoweredGait(ResultDictMixin):
     walk: WalkResult = field(repr=False)
     torque_joint: str = "hip"
     model: str | None = None
+    gains: dict[str, float] = field(default_factory=dict)
 
     @property
     def torque_work(self) -> float:
@@ -536,6 +550,7 @@ class PoweredGait(ResultDictMixin):
             "torque_joint": self.torque_joint,
             "torque_work": self.torque_work,
             "model": self.model,
+            "gains": dict(self.gains),
             "collision_loss": self.collision_loss,
             "energy_change": self.energy_change,
             "energy_balance_error": self.energy_balance_error,
@@ -1473,6 +1488,7 @@ def _characterise(
     loss = (float(sum(e.kinetic_energy_constrained for e in events)) if events
             else rec.energy_lost)
     desc = walker.description
+    law, _ = prob.family.build(walker, float(x[-1]))
     return PoweredGait(
         actuation=prob.family.name,
         parameter_name=prob.family.parameter_name,
@@ -1500,7 +1516,40 @@ def _characterise(
         walk=st.walk,
         torque_joint=prob.family.torque_joint,
         model=None if desc is None else str(desc.name),
+        gains=law_gains(law),
     )
+
+
+#: Units of the gains :func:`law_gains` reports (those of the ``--json`` units map).
+GAIN_UNITS: dict[str, str | None] = {
+    k: UNITS[k] for k in ("gain", "kp", "kd", "angle", "max_torque")}
+
+
+def law_gains(torque: Any) -> dict[str, float]:
+    """The gains of a torque law, by the names of :func:`actuation_family` and the walker
+    file's ``[control]`` tables (:data:`GAIN_UNITS`): those the law has and that are finite
+    (no ``max_torque`` for an unsaturated law); empty for None.
+
+    Parameters
+    ----------
+    torque : torque law or None
+        E.g. :class:`~heelstrike.dynamics.actuation.SwingLegPD` (``kp``, ``kd``,
+        ``max_torque``), :class:`~heelstrike.dynamics.actuation.EnergyTracking` (``gain``,
+        ``max_torque``), :class:`~heelstrike.dynamics.phased.TorsoPD` (``kp``, ``kd``, ``angle``).
+
+    Returns
+    -------
+    dict
+        Name -> value (SI units, :data:`GAIN_UNITS`).
+    """
+    if torque is None:
+        return {}
+    out = {}
+    for name in GAIN_UNITS:
+        value = getattr(torque, name, None)
+        if isinstance(value, (int, float, np.floating)) and np.isfinite(value):
+            out[name] = float(value)
+    return out
 
 
 # -- described walkers (TOML models) ------------------------------------------------------------
@@ -1790,3 +1839,264 @@ def energy_book_tables(walker: PlanarWalker, gait: PoweredGait) -> tuple[Any, An
         "T_c_J": gait.collision_loss,
     }])
     return energy, impacts
+
+
+# -- every gait at one design point (what `powered` reports and `study cost` keeps) -----------
+def impact_angle_for_step_length(walker: CompassGait, step_length: float) -> float:
+    """``q3`` (rad) with ``2 (l - R) sin q3 + 2 R q3 = L`` (increasing on [0, pi/2])."""
+    l, R = float(walker.leg_length), float(walker.foot_radius)
+
+    def f(q3: float) -> float:
+        return 2 * (l - R) * np.sin(q3) + 2 * R * q3 - step_length
+
+    if f(np.pi / 2) < 0:
+        return float("nan")
+    from scipy.optimize import brentq  # only for step-length targets: keep `powered` light
+
+    return float(brentq(f, 0.0, np.pi / 2, xtol=1e-14))
+
+
+#: Extra Newton starts ``(q3_dot, q4_dot)`` (rad/s) of the fresh search, with ``q3`` from the
+#: target step length and the family's smallest seed parameter. They reach the cheap push-off
+#: branch near McGeer's wheel that the attractor seeds of ``find_powered_gait`` miss.
+_FRESH_STARTS = ((0.6, -0.3), (0.9, -0.3))
+
+
+def _solver(
+    base: CompassGait, model: Any | None, actuation: str, actuation_options: dict[str, float],
+    backend: str | None,
+) -> Callable[..., PoweredGait]:
+    """``solve(radius, **options)``: the powered gait of the compass gait ``base`` (or of the
+    described ``model``) with foot radius ``radius`` (m), by
+    :func:`~heelstrike.analysis.powered.find_powered_gait` (or
+    :func:`~heelstrike.analysis.powered.find_model_powered_gait`) on ``backend``."""
+    family = actuation_family(actuation, **actuation_options)
+
+    def solve(radius: float, **opts: Any) -> PoweredGait:
+        if model is None:
+            w = base.replace(foot_radius=radius)
+            sim = family_simulator(w, family, backend)
+            opts.setdefault("passive_gait", passive_gait_finder(w, family, sim))
+            return find_powered_gait(w, actuation=family, simulator=sim, **opts)
+        return find_model_powered_gait(
+            _at_radius(model, radius), actuation=actuation, backend=backend or "compiled",
+            actuation_options=None if actuation == "pushoff" else dict(actuation_options),
+            **opts)
+
+    return solve
+
+
+def powered_gaits(
+    radius: float,
+    *,
+    speed: float | None = None,
+    step_length: float | None = None,
+    actuation: str = "pushoff",
+    walker: CompassGait | None = None,
+    model: Any | None = None,
+    backend: str | None = None,
+    actuation_options: dict[str, float] | None = None,
+    **kwargs: Any,
+) -> list[PoweredGait]:
+    """Every distinct powered gait the cost study meets at one design point, cheapest first.
+
+    The study's fresh search at a grid point without neighbours: the seed search of
+    :func:`~heelstrike.analysis.powered.find_powered_gait` (or
+    :func:`~heelstrike.analysis.powered.find_model_powered_gait` for ``model``) and Newton
+    from the fresh starts (``_FRESH_STARTS``), which reach branches the seed search misses
+    (near McGeer's wheel a push-off gait needing 1/4000 of the work of the one the seeds find).
+    Near the wheel (``R`` above :data:`NEAR_WHEEL` ``l``) the compass gait's push-off gaits
+    are also continued in the radius from ``NEAR_WHEEL l``, as a study's grid would reach them
+    (:func:`_gaits_from_farther_radius`): the fresh starts alone miss the cheap branch at
+    ``R = 0.99 l``. Several gaits can meet one target; the first is the one the study keeps
+    there, the one needing the least actuator work (issue 11, item 8), stable or not. Each gait
+    is polished to ``tol`` (default 1e-9).
+
+    Parameters
+    ----------
+    radius : float
+        Foot radius ``R`` (m); for a ``model`` without a parameter ``R``, its foot radius
+        (the walker is studied as given).
+    speed, step_length : float, optional
+        Target (m/s or m); exactly one.
+    actuation : str
+        One of :data:`~heelstrike.analysis.powered.ACTUATIONS`.
+    walker : CompassGait, optional
+        The compass gait's other parameters (paper defaults); or ``model``, a described walker
+        with a foot radius parameter ``R``.
+    backend : {"compiled", "scipy"} or None
+        As in :func:`~heelstrike.analysis.cost_study.cost_study`.
+    actuation_options : dict, optional
+        The hip laws' gains.
+    **kwargs
+        Passed to the searches (``tol``, ``progress``, ``time_limit``...).
+
+    Returns
+    -------
+    list of PoweredGait
+        Distinct gaits (fixed point and parameter differing by more than 1e-6), by actuator
+        work.
+
+    Raises
+    ------
+    PoweredGaitNotFoundError
+        The seed search's failure, when no search met the target.
+    """
+    if (speed is None) == (step_length is None):
+        raise ValueError("give exactly one of speed and step_length")
+    base = CompassGait() if walker is None else walker
+    opts = dict(actuation_options or {})
+    solve = _solver(base, model, actuation, opts, backend)
+    family = actuation_family(actuation, **opts)
+    gaits, err = _fresh_gaits(solve, float(radius), _seed_walker(base, model, float(radius)),
+                              family, speed, step_length, kwargs)
+    if model is None and family.name == "pushoff":
+        gaits += _gaits_from_farther_radius(solve, base, family, float(radius), speed,
+                                            step_length, kwargs)
+    if not gaits:
+        assert err is not None
+        raise err
+    tol = float(kwargs.get("tol", 1e-9))
+    polished: list[PoweredGait] = []
+    for g in gaits:
+        if g.residual > tol:  # a fresh start's looser tolerance
+            try:
+                g = solve(float(radius), guess=np.append(g.fixed_point, g.parameter),
+                          speed=speed, step_length=step_length, fallback=False, **kwargs)
+            except (PoweredGaitNotFoundError, ValueError):
+                continue
+        if all(not _same_gait(g, h) for h in polished):
+            polished.append(g)
+    if not polished:
+        assert err is not None
+        raise err
+    return sorted(polished, key=lambda g: g.actuator_work)
+
+
+#: Foot radius (fraction of the leg length) above which :func:`powered_gaits` also continues the
+#: compass gait's push-off gaits from this radius: near McGeer's wheel (``R = l``) a cheap
+#: branch coexists with a costly one that the seeds find (at ``R = 0.97 l``, 0.5 m/s: 0.00025 J
+#: against 1.01 J per step).
+NEAR_WHEEL = 0.9
+
+#: Largest radius step (fraction of the leg length) of that continuation, the cost study's
+#: default ``radius_step`` for ``l = 1 m``.
+NEAR_WHEEL_STEP = 0.05
+
+
+def _gaits_from_farther_radius(
+    solve: Callable[..., PoweredGait], base: CompassGait, family: ActuationFamily, r: float,
+    speed: float | None, length: float | None, kwargs: dict[str, Any],
+) -> list[PoweredGait]:
+    """Gaits at radius ``r`` (m) continued in the radius from ``NEAR_WHEEL l``, when ``r`` is
+    above it (else none): the fresh search there, then Newton along radii at most
+    ``NEAR_WHEEL_STEP l`` apart."""
+    leg = float(base.leg_length)
+    r0 = NEAR_WHEEL * leg
+    if r <= r0:
+        return []
+    start, _ = _fresh_gaits(solve, r0, _seed_walker(base, None, r0), family, speed, length,
+                            kwargs)
+    n_sub = max(1, int(np.ceil((r - r0) / (NEAR_WHEEL_STEP * leg) - 1e-9)))
+    found: list[PoweredGait] = []
+    for g in start:
+        x = np.append(g.fixed_point, g.parameter)
+        try:
+            for r_sub in np.linspace(r0, r, n_sub + 1)[1:]:
+                g = solve(float(r_sub), guess=x, speed=speed, step_length=length,
+                          fallback=False, **kwargs)
+                x = np.append(g.fixed_point, g.parameter)
+        except (PoweredGaitNotFoundError, ValueError):
+            continue
+        found.append(g)
+    return found
+
+
+def preferred_gait(gaits: Sequence[PoweredGait]) -> PoweredGait:
+    """The gait ``heelstrike powered`` reports among several meeting one target: the stable one
+    needing the least actuator work, else (none stable) the one needing the least work.
+
+    A stable gait is one the walker walks with this actuation alone (as ``gait`` prefers the
+    most attracting stable passive gait); ``study cost`` maps the cheapest, stable or not, and
+    marks the unstable ones (issue 11, item 8).
+
+    Parameters
+    ----------
+    gaits : sequence of PoweredGait
+        Non-empty, e.g. :func:`powered_gaits`.
+    """
+    if not gaits:
+        raise ValueError("no gaits to choose from")
+    return min(gaits, key=lambda g: (not g.stable, g.actuator_work))
+
+
+def _same_gait(a: PoweredGait, b: PoweredGait, tol: float = 1e-6) -> bool:
+    """Whether two gaits are one (fixed point and parameter within ``tol``)."""
+    xa, xb = np.append(a.fixed_point, a.parameter), np.append(b.fixed_point, b.parameter)
+    return float(np.linalg.norm(xa - xb)) <= tol
+
+
+def _seed_walker(base: CompassGait, model: Any | None, r: float) -> Any:
+    """The walker at radius ``r`` whose section the fresh starts are laid out on."""
+    if model is None:
+        return base.replace(foot_radius=r)
+    from heelstrike.dynamics.phased import PhasedWalker
+
+    return PhasedWalker.from_built(_at_radius(model, r))
+
+
+def _at_radius(model: Any, r: float) -> Any:
+    """The described walker with foot radius parameter ``R = r`` (m); a walker file without
+    ``R`` (:func:`powered_gaits` of a walker as given) is returned unchanged."""
+    return model.replace(R=r) if "R" in model.params else model
+
+
+def _fresh_start(w: Any, q3: float, w3: float, w4: float, p0: float) -> FloatArray:
+    """Newton start on ``w``'s section: stance angle ``-q3``, rates ``(w3, w4)``
+    (:meth:`~heelstrike.models.base.PlanarWalker.section_point`: further links upright), then
+    the parameter ``p0``."""
+    return np.append(w.section_point(-q3, w3, w4), p0)
+
+
+def _fresh_gaits(
+    solve: Any, r: float, w: Any, family: Any, speed: float | None, length: float | None,
+    kwargs: dict[str, Any],
+) -> tuple[list[PoweredGait], Exception | None]:
+    """Gaits found without continuation at radius ``r``: the seed search of ``solve`` (the
+    compass or described walker's ``find_*powered_gait``) and Newton from
+    :data:`_FRESH_STARTS`. Returns the gaits and the seed search's failure (or None)."""
+    gaits: list[PoweredGait] = []
+    err: Exception | None = None
+    try:
+        gaits.append(solve(r, speed=speed, step_length=length, **kwargs))
+    except (PoweredGaitNotFoundError, ValueError) as exc:
+        err = exc
+    if length is not None:
+        try:
+            q3 = impact_angle_for_step_length(
+                CompassGait(leg_length=float(w.scale.leg_length), foot_radius=r), length)
+        except ValueError:  # a described walker's R beyond its leg length
+            q3 = float("nan")
+    else:
+        q3 = 0.2
+    if not np.isfinite(q3):
+        return gaits, err
+    p0 = float(min(family.seed(w)))
+    # near the wheel the map is flat and Newton stalls at ~1e-8 (integrator noise floor)
+    opts = {"max_iter": 12, "max_evaluations": 200, "tol": 1e-7} | kwargs
+    for w3, w4 in _FRESH_STARTS:
+        try:
+            gaits.append(solve(r, speed=speed, step_length=length,
+                               guess=_fresh_start(w, q3, w3, w4, p0), fallback=False, **opts))
+        except (PoweredGaitNotFoundError, ValueError):
+            pass
+    return gaits, err
+
+
+def _count_distinct(gaits: Sequence[PoweredGait]) -> int:
+    """Number of distinct gaits (:func:`_same_gait`)."""
+    kept: list[PoweredGait] = []
+    for g in gaits:
+        if all(not _same_gait(g, k) for k in kept):
+            kept.append(g)
+    return len(kept)

@@ -8,7 +8,7 @@ import math
 import os
 import re
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any, NoReturn
 
 
@@ -64,6 +64,9 @@ def parse_range(
         raise argparse.ArgumentTypeError(f"invalid range {text!r}: {exc}") from None
     if count is not None and count < 1:
         raise argparse.ArgumentTypeError(f"invalid range {text!r}: COUNT must be >= 1")
+    if count == 1 and start != stop:  # one point: STOP would be ignored
+        raise argparse.ArgumentTypeError(
+            f"invalid range {text!r}: COUNT 1 is one point, START, so STOP must equal START")
     return start, stop, count
 
 
@@ -339,9 +342,27 @@ def actuation_options(args: argparse.Namespace) -> dict[str, float]:
     if "gain" in opts and not opts["gain"] > 0:
         raise CliError("--gain must be > 0 (s/rad)")
     for k in ("kp", "kd"):
-        if k in opts and not opts[k] >= 0:
-            raise CliError(f"--{k} must be >= 0")
+        if k in opts and not (math.isfinite(opts[k]) and opts[k] >= 0):
+            raise CliError(f"--{k} must be finite and >= 0, got {opts[k]:g}")
     return opts
+
+
+#: The hip laws' options each actuation uses (the others would be silently ignored).
+_GAINS_USED = {"pushoff": (), "hip-energy": ("gain", "max_torque"),
+               "hip-pd": ("kp", "kd", "max_torque")}
+
+
+def refuse_unused_gains(args: argparse.Namespace, actuations: Sequence[str]) -> None:
+    """A one-line error for a gain option none of the actuations uses (e.g. ``--kp`` with
+    ``--actuation hip-energy``, or any gain with the push-off alone)."""
+    used = {k for a in actuations for k in _GAINS_USED.get(a, ())}
+    unused = [f"--{k.replace('_', '-')}" for k in ("gain", "kp", "kd", "max_torque")
+              if getattr(args, k, None) is not None and k not in used]
+    if unused:
+        raise CliError(
+            f"{', '.join(unused)} not used by --actuation {', '.join(actuations)} (--gain "
+            "sets hip-energy, --kp and --kd set hip-pd, --max-torque both; the push-off has "
+            "no gains, and a walker file's posture law declares its own)")
 
 
 def family_from_args(args: argparse.Namespace) -> Any:

@@ -257,11 +257,16 @@ def add_impact_map(sub: Any) -> None:
         "joints at rest). Writes impact_map.png and impact_map.csv and prints their paths.",
     )
     add_model_options(p)
-    p.add_argument("--x", type=parse_sweep, required=True, metavar="NAME:START:STOP:COUNT")
-    p.add_argument("--y", type=parse_sweep, required=True, metavar="NAME:START:STOP:COUNT")
-    p.add_argument("--angle", type=parse_angle, default=parse_angle("20deg"),
+    p.add_argument("--x", type=parse_sweep, required=True, metavar="NAME:START:STOP:COUNT",
+                   help="first swept quantity: a parameter of the walker file (SI units) or "
+                   "'angle' (the impact angle, e.g. angle:5deg:30deg:11), COUNT values from "
+                   "START to STOP")
+    p.add_argument("--y", type=parse_sweep, required=True, metavar="NAME:START:STOP:COUNT",
+                   help="second swept quantity, as --x")
+    p.add_argument("--angle", type=parse_angle, default=None,
                    help="impact angle when not swept (default 20deg)")
-    p.add_argument("--q3dot", type=float, default=1.0, help="stance rate (rad/s, default 1)")
+    p.add_argument("--q3dot", type=float, default=1.0,
+                   help="stance rate (rad/s, > 0, default 1)")
     p.add_argument("--out", default="impact_map", help="output directory")
     add_backend_option(p, "heel-strike computation: scipy (default and only: the reference "
                        "complementarity heel strike of the walker's generated numpy "
@@ -286,15 +291,23 @@ def _run_impact_map(args: argparse.Namespace) -> int:
                        "drop --backend compiled")
     if not math.isfinite(args.q3dot):
         raise CliError(f"--q3dot must be finite, got {args.q3dot:g}")
-    if args.q3dot < 0:  # joints at rest: the leading foot's normal velocity is -q3dot * L_S
-        raise CliError(f"--q3dot must be >= 0, got {args.q3dot:g}: with the stance leg rotating "
-                       "backwards the striking foot moves away from the ground and no heel "
-                       "strike happens")
+    if args.q3dot <= 0:  # joints at rest: the leading foot's normal velocity is -q3dot * L_S
+        raise CliError(f"--q3dot must be > 0, got {args.q3dot:g}: with the stance leg at rest "
+                       "or rotating backwards the striking foot does not move towards the "
+                       "ground and no heel strike happens")
     walker = model_from_args(args)
     axes = [(n, np.linspace(a, b, c)) for n, a, b, c in (args.x, args.y)]
     if axes[0][0] == axes[1][0]:
         raise CliError(f"--x and --y must sweep different quantities, both are {axes[0][0]!r}")
     swept_angle = any(name == ANGLE for name, _ in axes)
+    if swept_angle and args.angle is not None:
+        raise CliError("--angle sets the impact angle when it is not swept; it is swept by "
+                       "--x or --y here: drop --angle")
+    args.angle = parse_angle("20deg") if args.angle is None else args.angle
+    given = {item.partition("=")[0].strip() for item in args.param}
+    for name, _ in axes:
+        if name in given:
+            raise CliError(f"--param {name}=... is swept by --x/--y: give it there only")
     for option, (name, values) in zip(("--x", "--y"), axes, strict=True):
         if name == ANGLE:
             if not np.all((values > 0) & (values < math.pi / 2)):

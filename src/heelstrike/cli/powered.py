@@ -22,6 +22,7 @@ from heelstrike.cli._common import (
     linspace_grid,
     model_from_args,
     parse_range,
+    refuse_unused_gains,
     run_with_store,
     walker_from_args,
     writable_dir,
@@ -81,16 +82,6 @@ def compass_simulator(walker: Any, family: Any, backend: str | None) -> Any:
         raise CliError(f"--backend compiled: {reason}") from None
 
 
-def refuse_hip_law_options(args: argparse.Namespace, actuations: Sequence[str]) -> None:
-    """The hip laws' gains mean nothing for a described walker's push-off: refuse them."""
-    given = [f"--{k.replace('_', '-')}" for k in ("gain", "kp", "kd", "max_torque")
-             if getattr(args, k) is not None]
-    if given and set(actuations) == {"pushoff"}:
-        raise CliError(f"{', '.join(given)} set(s) the hip laws (--actuation hip-energy, "
-                       "hip-pd), not the push-off (with --model the posture law's gains are "
-                       "declared in the walker file)")
-
-
 def add_powered(sub: Any) -> None:
     p = sub.add_parser(
         "powered",
@@ -127,13 +118,11 @@ def _run_powered(args: argparse.Namespace) -> int:
     from heelstrike.analysis.powered import (
         DEFAULT_TIME_LIMIT,
         PoweredGaitNotFoundError,
-        find_model_powered_gait,
-        find_powered_gait,
-        passive_gait_finder,
+        powered_gaits,
+        preferred_gait,
     )
 
-    if args.model is not None:
-        refuse_hip_law_options(args, [args.actuation])
+    refuse_unused_gains(args, [args.actuation])
     walker = walker_from_args(args) if args.model is None else model_from_args(args)
     if args.model is not None:
         refuse_model_actuation(walker, [args.actuation])
@@ -155,24 +144,24 @@ def _run_powered(args: argparse.Namespace) -> int:
         step_simulator = compass_simulator(walker, family, args.backend)
         backend = "scipy" if step_simulator is None else "compiled"
     try:
-        if args.model is None:
-            gait = find_powered_gait(walker, actuation=family, progress=True,
-                                     time_limit=DEFAULT_TIME_LIMIT, speed=speed,
-                                     step_length=step_length, simulator=step_simulator,
-                                     passive_gait=passive_gait_finder(walker, family,
-                                                                      step_simulator))
-        else:
-            gait = find_model_powered_gait(walker, actuation=args.actuation, backend=backend,
-                                           actuation_options=actuation_options(args) or None,
-                                           progress=True, time_limit=DEFAULT_TIME_LIMIT,
-                                           speed=speed, step_length=step_length)
+        # the gaits study cost meets at this design point (it keeps the cheapest, issue 11.8)
+        gaits = powered_gaits(
+            radius, speed=speed, step_length=step_length, actuation=args.actuation,
+            walker=walker if args.model is None else None,
+            model=walker if args.model is not None else None,
+            backend=args.backend if args.model is None else backend,
+            actuation_options=actuation_options(args) or None,
+            progress=True, time_limit=DEFAULT_TIME_LIMIT)
     except PoweredGaitNotFoundError as exc:
         raise CliError(
             f"no {args.actuation} gait found with {target.replace('_', ' ')} {value:g}"
             f"{declared_note} at R = {radius:g} m: {exc}"
         ) from exc
+    gait = preferred_gait(gaits)
+    others = [g for g in gaits if g is not gait]
     d = {**gait.to_dict(), "target_speed": speed, "target_step_length": step_length,
-         "target_source": source, "backend": backend}
+         "target_source": source, "backend": backend, "gaits_found": len(gaits),
+         "other_gaits": [_gait_summary(g) for g in others]}
     if out is not None:
         from heelstrike.analysis.powered import energy_book_tables
         from heelstrike.outputs import write_powered_energy
@@ -190,6 +179,11 @@ def _run_powered(args: argparse.Namespace) -> int:
     given = "the walker's declared target" if source == "walker" else source
     print(f"  target          {target.replace('_', ' ')} {value:g} {unit} ({given})")
     print(f"  {gait.parameter_name:15s} {gait.parameter:10.5f} {gait.parameter_unit}")
+    if gait.gains:
+        from heelstrike.analysis.powered import GAIN_UNITS
+
+        print("  gains           " + ", ".join(
+            f"{k} {v:g} {GAIN_UNITS[k]}" for k, v in gait.gains.items()))
     print(f"  fixed point (just after impact): {fixed_point_text(d['fixed_point'])}")
     print_step_lines(gait)
     print_stability_lines(gait)
@@ -201,10 +195,34 @@ def _run_powered(args: argparse.Namespace) -> int:
     print(f"    imbalance       {gait.energy_balance_error:12.3e} J")
     print(f"  cost of transport {gait.cost_of_transport:10.6f}")
     print(f"  eta             {gait.eta:10.6f} J/m")
+    if others:
+        which = ("the stable one needing the least actuator work" if gait.stable else
+                 "none is stable: this is the one needing the least actuator work")
+        print(f"  note: {len(gaits)} distinct gaits meet this target; {which} (study cost "
+              "keeps the cheapest, stable or not); the others:")
+        for g in others:
+            o = _gait_summary(g)
+            print(f"    {g.parameter_name} {g.parameter:.5f} {g.parameter_unit}: actuator work "
+                  f"{g.actuator_work:.6f} J, speed {g.speed:.5f} m/s, step length "
+                  f"{g.step_length:.5f} m, stable {'yes' if g.stable else 'no'} (|m| "
+                  f"{o['spectral_radius']:.4f})")
     if gait.trailing_foot_grazes:
         print("  note: R = l (McGeer's wheel): the trailing foot's lift velocity is exactly 0; "
               "both contacts are the same point, so the step was accepted")
     return 0
+
+
+def _gait_summary(gait: Any) -> dict[str, Any]:
+    """What tells another gait at the same target apart (``other_gaits`` of the JSON)."""
+    import numpy as np
+
+    return {"parameter": gait.parameter, "parameter_unit": gait.parameter_unit,
+            "actuator_work": gait.actuator_work, "collision_loss": gait.collision_loss,
+            "period": gait.period, "step_length": gait.step_length, "speed": gait.speed,
+            "stable": bool(gait.stable),
+            "spectral_radius": float(np.max(np.abs(gait.multipliers))),
+            "fixed_point": dict(zip(gait.section_names, map(float, gait.fixed_point),
+                                    strict=True))}
 
 
 def add_study(sub: Any) -> None:
@@ -262,7 +280,6 @@ def _run_study(args: argparse.Namespace) -> int:
         walker = walker_from_args(args)  # validates the other walker parameters
         leg_length = float(args.leg_length)
     else:
-        refuse_hip_law_options(args, args.actuation or ["pushoff"])
         if any(item.partition("=")[0].strip() == "R" for item in args.param):
             raise CliError("--param R=... is swept by --radius START:STOP:COUNT: give it there")
         model = model_from_args(args)
@@ -288,6 +305,7 @@ def _run_study(args: argparse.Namespace) -> int:
     if min(values) <= 0:
         raise CliError(f"--{target.replace('_', '-')} values must be > 0")
     acts = args.actuation or ["pushoff"]
+    refuse_unused_gains(args, acts)
     options = actuation_options(args)
     if walker is not None:  # --backend compiled for McGeer's wheel: one line
         for act in acts:

@@ -251,7 +251,9 @@ def test_basin_memory_estimate_refuses_before_computing(
     capsys: Capsys, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     _forbid(monkeypatch, basin_module, "find_limit_cycle")
-    monkeypatch.setattr(basin_module, "available_memory", lambda: 2 * 1024**3)
+    from heelstrike.analysis import _memory
+
+    monkeypatch.setattr(_memory, "available_memory", lambda: 2 * 1024**3)
     line = _one_line_error(*_run(capsys, "basin", "--grid", "30000x30000",
                                  "--out", str(tmp_path / "b")))
     assert "GiB" in line and "30000x30000" in line
@@ -259,6 +261,44 @@ def test_basin_memory_estimate_refuses_before_computing(
     assert need >= 30000 * 30000 * 100  # at least the ~120 B per point of the state arrays
     with pytest.raises(MemoryError, match="GiB"):
         basin_module.basin_of_attraction(CompassGait(), 0.05, grid=(30000, 30000))
+
+
+@pytest.mark.parametrize(("argv", "needle"), [
+    # QA sweep 3: accepted, then silent (4e10 and 1e10 points)
+    (["impact-map", "--model", "compass", "--x", "R:0:0.5:200000", "--y",
+      "angle:10deg:20deg:200000"], "a 200000x200000 impact map needs about"),
+    (["study", "cost", "--radius", "0:0.9:100000", "--step-length", "0.3:0.6:100000"],
+     "a 1x100000x100000 cost study needs about"),
+])
+def test_huge_grids_are_refused_before_computing(argv: list[str], needle: str, capsys: Capsys,
+                                                 tmp_path: Path,
+                                                 monkeypatch: pytest.MonkeyPatch) -> None:
+    from heelstrike.analysis import cost_study as study_module
+    from heelstrike.analysis import model_gaits
+
+    # nothing is built or searched: the refusal comes first
+    _forbid(monkeypatch, model_gaits, "impact_map")
+    _forbid(monkeypatch, study_module, "cost_study")
+    line = _one_line_error(*_run(capsys, *argv, "--out", str(tmp_path / "o")))
+    assert "out of memory" in line and needle in line and "GiB" in line
+    assert not (tmp_path / "o").exists()
+
+
+def test_long_impact_map_says_what_it_costs(capsys: Capsys, tmp_path: Path,
+                                            monkeypatch: pytest.MonkeyPatch) -> None:
+    from heelstrike.analysis import model_gaits
+
+    monkeypatch.setattr(model_gaits, "IMPACT_MAP_SECONDS_PER_POINT", 100.0)  # 4 points: 400 s
+    rc, out, err = _run(capsys, "impact-map", "--model", "compass", "--x", "R:0:0.3:2",
+                        "--y", "angle:10deg:20deg:2", "--out", str(tmp_path / "m"))
+    assert rc == 0
+    assert "impact-map: 4 points, about 6.67 min (about 100000 ms a point)" in err
+    assert "impact-map:" not in out
+    capsys.readouterr()
+    monkeypatch.setattr(model_gaits, "IMPACT_MAP_SECONDS_PER_POINT", 2e-3)
+    rc, _, err = _run(capsys, "impact-map", "--model", "compass", "--x", "R:0:0.3:2",
+                      "--y", "angle:10deg:20deg:2", "--out", str(tmp_path / "m"))
+    assert rc == 0 and "impact-map:" not in err  # a short map says nothing
 
 
 @pytest.mark.parametrize(

@@ -245,3 +245,6 @@ def test_cli_powered_out_writes_the_energy_books(tmp_path: Path,
     assert abs(total[-2] - total[-3] - g.push_off_work) < 1e-8
     assert abs(total[-2] - total[-1] - g.collision_loss) < 1e-8
     assert abs(total[-1] - total[0]) < 1e-8
+    # the three rows at the heel-strike time say which is which
+    assert e["event"].fillna("").tolist()[-3:] == ["", "push_off", "heel_strike"]
+    assert set(e["event"].fillna("").iloc[:-2]) == {""}

@@ -46,7 +46,8 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "basin_of_attraction", "model_basin_of_attraction", "model_slice_axes",
     ),
     "cost_study": (
-        "BRANCH_NOTE", "GAIT_VARIABLES", "paper_eta", "save_study",
+        "BRANCH_NOTE", "GAIT_VARIABLES", "STUDY_BYTES_PER_POINT", "check_study_memory", "paper_eta",
+        "save_study",
     ),
     "gait_map": (
         "GaitMap", "NewtonGait", "compass_bifurcation", "model_bifurcation", "model_gait_map",
@@ -63,7 +64,9 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "refine_period_doubling",
     ),
     "model_gaits": (
-        "ANGLE", "ImpactMap", "ModelGait", "ModelHeelStrike", "REFERENCE_SLOPE", "find_model_gait",
+        "ANGLE", "IMPACT_MAP_BYTES_PER_POINT", "IMPACT_MAP_SECONDS_PER_POINT", "ImpactMap",
+        "check_impact_map_memory",
+        "ModelGait", "ModelHeelStrike", "REFERENCE_SLOPE", "find_model_gait",
         "find_model_gaits", "impact_map", "model_heel_strike", "symmetric_heel_strike_state",
     ),
     "newton": ("NewtonSolution", "NewtonStatus", "newton_solve"),

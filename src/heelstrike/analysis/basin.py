@@ -38,6 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
+from heelstrike.analysis._memory import available_memory, require_memory
 from heelstrike.analysis.limit_cycle import LimitCycle, find_limit_cycle
 from heelstrike.dynamics.compiled import ensemble_walk
 from heelstrike.dynamics.hybrid import WalkStatus
@@ -94,32 +95,8 @@ def basin_memory_estimate(grid: tuple[int, int]) -> int:
     return n3 * nd * BYTES_PER_POINT
 
 
-def available_memory() -> int | None:
-    """Memory (bytes) available to a new computation without swapping, or None if unknown.
-
-    ``MemAvailable`` of ``/proc/meminfo`` on Linux, else the free physical pages.
-    """
-    try:
-        with open("/proc/meminfo", encoding="ascii") as fh:
-            for line in fh:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
-    try:
-        return int(os.sysconf("SC_AVPHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
-    except (ValueError, OSError, AttributeError):
-        return None
-
-
 def _check_memory(grid: tuple[int, int]) -> None:
-    need, free = basin_memory_estimate(grid), available_memory()
-    if free is not None and need > free:
-        gib = 1024.0**3
-        raise MemoryError(
-            f"a {grid[0]}x{grid[1]} basin needs about {need / gib:.3g} GiB of memory and "
-            f"{free / gib:.3g} GiB are available: use a smaller grid"
-        )
+    require_memory(basin_memory_estimate(grid), f"a {grid[0]}x{grid[1]} basin")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -325,7 +302,7 @@ def basin_of_attraction(
     ------
     MemoryError
         Before any computing, if :func:`basin_memory_estimate` exceeds
-        :func:`available_memory`; the message gives both.
+        :func:`~heelstrike.analysis._memory.available_memory`; the message gives both.
     ValueError
         Unknown backend, or decreasing ranges.
     """

@@ -39,6 +39,7 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._typing import FloatArray
+from heelstrike.analysis._memory import require_memory
 from heelstrike.analysis.heel_strike import heel_strike_study
 from heelstrike.analysis.powered import (
     ACTUATIONS,
@@ -59,10 +60,17 @@ from heelstrike.models.compass import CompassGait
 __all__ = [
     "BRANCH_NOTE",
     "GAIT_VARIABLES",
+    "STUDY_BYTES_PER_POINT",
+    "check_study_memory",
     "cost_study",
     "paper_eta",
     "save_study",
 ]
+
+#: Memory (bytes) a study needs per (actuation, radius, target) point, an upper estimate: the
+#: gait variables (about 200 B), the failure message (512 B of UTF-8 in a row, up to 2 KiB as
+#: a str in the dataset), the continuation seed and the figures' arrays.
+STUDY_BYTES_PER_POINT = 4096
 
 #: Gait quantities stored per (actuation, radius, target) and their units.
 GAIT_VARIABLES: dict[str, tuple[str, str]] = {
@@ -191,6 +199,9 @@ def cost_study(
 
     Raises
     ------
+    MemoryError
+        The grid would not fit in the available memory (:data:`STUDY_BYTES_PER_POINT` a
+        point), before any computing.
     ValueError
         Bad target or actuation, ``backend="compiled"`` with McGeer's wheel; with ``model``:
         no parameter ``R``, a radius the walker file rejects, a hip law on a walker with other
@@ -204,6 +215,7 @@ def cost_study(
     base = walker if walker is not None else CompassGait()
     R = np.asarray(radii, dtype=float).ravel()
     T = np.asarray(targets, dtype=float).ravel()
+    check_study_memory(len(actuations), R.size, T.size)
     if model is not None:
         backend = backend or "compiled"
         _check_model(model, R, actuations, actuation_options, walker, backend)
@@ -307,6 +319,13 @@ def cost_study(
             **{f"param_{k}": float(v) for k, v in sorted(model.params.items()) if k != "R"},
         )
     return ds
+
+
+def check_study_memory(n_actuations: int, n_radii: int, n_targets: int) -> None:
+    """Raise ``MemoryError`` if a study of this size would not fit in the available memory
+    (:data:`STUDY_BYTES_PER_POINT` a point); :func:`cost_study` checks it before computing."""
+    require_memory(n_actuations * n_radii * n_targets * STUDY_BYTES_PER_POINT,
+                   f"a {n_actuations}x{n_radii}x{n_targets} cost study")
 
 
 def _check_model(

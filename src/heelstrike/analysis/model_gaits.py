@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
 from heelstrike.analysis._continuation import PARAMETER_STEP, SLOPE_STEP, Point, follow
+from heelstrike.analysis._memory import require_memory
 from heelstrike.analysis.heel_strike import trailing_foot_lifts
 from heelstrike.analysis.limit_cycle import (
     GaitNotFoundError,
@@ -50,10 +51,13 @@ from heelstrike.models.builder import BuiltWalker
 
 __all__ = [
     "ANGLE",
+    "IMPACT_MAP_BYTES_PER_POINT",
+    "IMPACT_MAP_SECONDS_PER_POINT",
     "REFERENCE_SLOPE",
     "ImpactMap",
     "ModelGait",
     "ModelHeelStrike",
+    "check_impact_map_memory",
     "find_model_gait",
     "find_model_gaits",
     "impact_map",
@@ -561,6 +565,20 @@ class ImpactMap(ResultDictMixin):
     walker_name: str
 
 
+#: Time (s) an impact-map point takes, about: building and checking its walker dominates.
+IMPACT_MAP_SECONDS_PER_POINT = 2e-3
+
+#: Memory (bytes) an impact-map point needs, an upper estimate: seven result arrays (56 B), its
+#: CSV row (about 200 B of text) and the figure's image of it.
+IMPACT_MAP_BYTES_PER_POINT = 512
+
+
+def check_impact_map_memory(nx: int, ny: int) -> None:
+    """Raise ``MemoryError`` if an ``nx`` x ``ny`` impact map would not fit in the available
+    memory (:data:`IMPACT_MAP_BYTES_PER_POINT` a point); :func:`impact_map` checks it first."""
+    require_memory(nx * ny * IMPACT_MAP_BYTES_PER_POINT, f"a {nx}x{ny} impact map")
+
+
 def impact_map(
     walker: BuiltWalker,
     x: tuple[str, Sequence[float] | FloatArray],
@@ -572,8 +590,10 @@ def impact_map(
 ) -> ImpactMap:
     """Map ``T_c``, ``T_a``, ``eta`` at heel strike over two swept quantities.
 
-    Each grid point is one walker (about 2 ms to build and check) and one complementarity heel
-    strike: a 100 x 100 map takes about 20 s.
+    Each grid point is one walker (about 2 ms to build and check,
+    :data:`IMPACT_MAP_SECONDS_PER_POINT`) and one complementarity heel strike: a 100 x 100
+    map takes about 20 s. A grid whose arrays, file and figure would not fit in the available
+    memory (:data:`IMPACT_MAP_BYTES_PER_POINT` a point) is refused before any computing.
 
     Parameters
     ----------
@@ -596,6 +616,8 @@ def impact_map(
     ------
     ValueError
         Unknown parameter name, or the same quantity on both axes.
+    MemoryError
+        The grid would not fit in the available memory.
     """
     (xn, xv), (yn, yv) = x, y
     if xn == yn:
@@ -607,6 +629,7 @@ def impact_map(
             )
     xa, ya = np.asarray(xv, dtype=float), np.asarray(yv, dtype=float)
     shape = (ya.size, xa.size)
+    check_impact_map_memory(xa.size, ya.size)
     # the section walker: replace() keeps it, so each point builds one walker, not two
     walker = PhasedWalker.from_built(walker)
     out = {k: np.full(shape, np.nan) for k in ("T", "T_c", "T_a", "eta", "L", "v")}

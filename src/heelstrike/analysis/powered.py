@@ -1808,9 +1808,11 @@ def energy_book_tables(walker: PlanarWalker, gait: PoweredGait) -> tuple[Any, An
     Returns
     -------
     energy : pandas.DataFrame
-        ``t_s`` (s), ``step``, ``kinetic_J``, ``potential_J``, ``total_J`` (J) at every sample
-        of the period, then two rows at the heel-strike time: just after the push-off (the
-        total jumps by its work) and just after the heel strike (the total drops by ``T_c``,
+        ``t_s`` (s), ``step`` (0: the period is one step), ``event``, ``kinetic_J``,
+        ``potential_J``, ``total_J`` (J) at every sample of the period (``event`` empty; the
+        last is just before the push-off), then two rows at the heel-strike time: just after
+        the push-off (``event`` ``"push_off"``: the total jumps by its work, none for a hip
+        law) and just after the heel strike (``"heel_strike"``: the total drops by ``T_c``,
         back to its start value on the periodic gait). Between them the torque law's work
         changes the total.
     impacts : pandas.DataFrame
@@ -1829,8 +1831,9 @@ def energy_book_tables(walker: PlanarWalker, gait: PoweredGait) -> tuple[Any, An
                     for q, qd in zip(q_all, qd_all, strict=True)])
     U = np.asarray([float(np.asarray(walker.potential_energy(q, 0.0))) for q in q_all])
     t = np.concatenate((walk.t, [rec.time, rec.time]))
-    energy = pd.DataFrame({"t_s": t, "step": np.zeros(t.size, dtype=int), "kinetic_J": T,
-                           "potential_J": U, "total_J": T + U})
+    event = [""] * walk.t.size + ["push_off", "heel_strike"]
+    energy = pd.DataFrame({"t_s": t, "step": np.zeros(t.size, dtype=int), "event": event,
+                           "kinetic_J": T, "potential_J": U, "total_J": T + U})
     before, after = float(T[-2] + U[-2]), float(T[-1] + U[-1])
     impacts = pd.DataFrame([{
         "step": 0, "kind": "heel_strike", "time_s": rec.time,

@@ -279,7 +279,12 @@ def add_impact_map(sub: Any) -> None:
 def _run_impact_map(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from heelstrike.analysis.model_gaits import ANGLE, impact_map
+    from heelstrike.analysis.model_gaits import (
+        ANGLE,
+        IMPACT_MAP_SECONDS_PER_POINT,
+        check_impact_map_memory,
+        impact_map,
+    )
     from heelstrike.models.description import parameter_units
     from heelstrike.outputs import write_impact_map
 
@@ -295,6 +300,7 @@ def _run_impact_map(args: argparse.Namespace) -> int:
         raise CliError(f"--q3dot must be > 0, got {args.q3dot:g}: with the stance leg at rest "
                        "or rotating backwards the striking foot does not move towards the "
                        "ground and no heel strike happens")
+    check_impact_map_memory(args.x[3], args.y[3])  # before building any walker
     walker = model_from_args(args)
     axes = [(n, np.linspace(a, b, c)) for n, a, b, c in (args.x, args.y)]
     if axes[0][0] == axes[1][0]:
@@ -327,6 +333,11 @@ def _run_impact_map(args: argparse.Namespace) -> int:
         raise CliError(f"--angle must satisfy 0 < angle < 90deg, got "
                        f"{math.degrees(args.angle):g} deg")
     out = writable_dir(args.out)
+    n_points = args.x[3] * args.y[3]
+    seconds = n_points * IMPACT_MAP_SECONDS_PER_POINT
+    if seconds > 60:  # say what a long map costs before it starts
+        print(f"impact-map: {n_points} points, about {seconds / 60:.3g} min (about "
+              f"{IMPACT_MAP_SECONDS_PER_POINT * 1e3:g} ms a point)", file=sys.stderr)
     m = impact_map(walker, axes[0], axes[1], angle=args.angle, stance_rate=args.q3dot,
                    progress=sys.stderr.isatty())
     bad = ~np.isfinite(m.T_c) | ~np.isfinite(m.T_a) | ~np.isfinite(m.eta)

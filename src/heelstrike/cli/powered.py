@@ -269,7 +269,7 @@ def add_study(sub: Any) -> None:
 def _run_study(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from heelstrike.analysis.cost_study import cost_study, save_study
+    from heelstrike.analysis.cost_study import check_study_memory, cost_study, save_study
     from heelstrike.analysis.powered import actuation_family
     from heelstrike.outputs import write_cost_figures
 
@@ -292,6 +292,8 @@ def _run_study(args: argparse.Namespace) -> int:
     if args.radii is None:  # the walker's own range (R = l is McGeer's wheel: stop short)
         largest = leg_length if model is None else model.largest_admissible("R", leg_length)
         args.radii = (0.0, 0.9 * largest, 4)
+    check_study_memory(len(args.actuation or ["pushoff"]), args.radii[2] or 4,
+                       (args.speeds or args.lengths or (0, 0, 4))[2] or 4)
     radii = linspace_grid(args.radii, 4)
     if min(radii) < 0 or max(radii) > leg_length:
         raise CliError(f"--radius must lie in [0, {leg_length:g}] m")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from heelstrike.plots.powered import cost_figure
+from heelstrike.plots.powered import cost_figure, paper_comparison_figure
 
 
 def _study(stable: np.ndarray) -> xr.Dataset:
@@ -34,3 +34,22 @@ def test_unstable_gaits_are_marked_and_only_they() -> None:
         [(0.4, float(np.linspace(0.01, 0.05, 6)[1])), (0.3, float(np.linspace(0.01, 0.05, 6)[3]))])
     assert "unstable gait" in [t.get_text() for t in ax.get_legend().get_texts()]
     assert "red x: unstable" in fig.texts[0].get_text()
+
+
+def test_grid_points_without_a_gait_are_marked_and_only_they() -> None:
+    # a QA finding: a point without a gait was a silent gap in its line
+    stable = np.array([[[1.0, 0.0, 0.0], [0.0, 1.0, 1.0]]])
+    ds = _study(stable)
+    fig = cost_figure(ds)
+    ax = fig.axes[0]
+    missing = [ln for ln in ax.get_lines() if ln.get_marker() == "v"]
+    assert len(missing) == 1 and missing[0].get_xdata().tolist() == [0.5]  # R = 0, L = 0.5
+    assert "R = 0 m: no gait found" in [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "no gait found" in fig.texts[0].get_text()
+    # the paper comparison marks the same point (against R, in the L = 0.5 m panel)
+    ds["work_per_metre"] = ds["cost_of_transport"] * 100.0
+    ds["eta_paper"] = (("radius", "step_length"), np.ones((2, 3)))
+    fig = paper_comparison_figure(ds)
+    marks = [[ln.get_xdata().tolist() for ln in a.get_lines() if ln.get_marker() == "v"]
+             for a in fig.axes]
+    assert marks == [[], [], [[0.0]]]

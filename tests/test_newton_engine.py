@@ -42,6 +42,9 @@ def test_batched_starts_end_each_in_its_own_way() -> None:
     # batched: the first call holds every start and its 4 neighbours
     assert calls[0] == 4 * (1 + 4)
     assert sol.message(2).startswith("the walker fails to take a step from the Newton iterate")
+    # with labels the iterate is told by name and unit (a QA finding: a bare array)
+    assert sol.message(2, (("q3", "rad"), ("energy", "J"))).endswith(
+        "Newton iterate (q3 = -6 rad, energy = 0 J)")
     json.dumps(sol.to_dict())
 
 

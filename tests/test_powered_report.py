@@ -14,6 +14,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -116,3 +117,34 @@ def test_study_records_the_gains_and_parameter_units(tmp_path: Path, capsys: Cap
         assert np.all(ds["kd"].sel(actuation="hip-pd").values[found] == 5.0)
         assert np.all(np.isnan(ds["kp"].sel(actuation="pushoff").values))
         assert ds["kp"].attrs["units"] == "N m/rad"
+
+
+def test_report_says_what_the_parameter_and_a_failed_iterate_are(capsys: Capture,
+                                                                tmp_path: Path) -> None:
+    # QA findings: "energy 158.33 J" did not say it is the law's target E = T + V, and a
+    # failed search printed an unlabelled Newton iterate "[-0.284291 0.96226 ...]"
+    assert main(["powered", "--actuation", "hip-energy", "--out", str(tmp_path)]) == 0
+    line = next(ln for ln in capsys.readouterr().out.splitlines()
+                if ln.strip().startswith("energy"))
+    assert "J (the hip law's target energy E_ref = T + V" in line
+    assert main(["powered", "--actuation", "hip-energy", "--speed", "0.8",
+                 "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no gait with speed 0.8 m/s" in err[0]
+    # Newton fails past the family's end: the iterate, each unknown by name and unit
+    tail = err[0].split("fails to take a step from the Newton iterate", 1)[1]
+    assert re.match(r" \(q3 = \S+ rad, q3_dot = \S+ rad/s, q4_dot = \S+ rad/s, "
+                    r"energy = \S+ J\)", tail), err[0]
+
+
+@pytest.mark.slow
+def test_kneed_report_splits_the_collision_loss(capsys: Capture, tmp_path: Path) -> None:
+    # QA finding: the kneed walker's T_c is its knee strike's and heel strike's together; the
+    # report now gives each, and they add up to the step's loss
+    assert main(["powered", "--model", "kneed", "--out", str(tmp_path)]) == 0
+    line = next(ln for ln in capsys.readouterr().out.splitlines() if "collision loss" in ln)
+    m = re.search(r"collision loss\s+([0-9.]+) J \(T_c = knee_strike ([0-9.]+) J \+ "
+                  r"heel_strike ([0-9.]+) J\)", line)
+    assert m is not None, line
+    total, knee, heel = map(float, m.groups())
+    assert knee > 0 and heel > knee and total == pytest.approx(knee + heel, abs=2e-6)

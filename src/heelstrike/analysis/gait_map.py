@@ -211,7 +211,8 @@ def newton_gaits(
     Z = np.atleast_2d(np.asarray(guesses, dtype=float)).reshape(-1, 3)
     sol = newton_solve(lambda X: _map_many(walker, X, slope, rtol, atol, backend)[0] - X, Z,
                        tol=tol, max_iter=max_iter, fd_step=fd_step, deadline=deadline)
-    out: list[NewtonGait | str] = [sol.message(k) for k in range(Z.shape[0])]
+    out: list[NewtonGait | str] = [sol.message(k, walker.section_labels)
+                                   for k in range(Z.shape[0])]
     done = np.flatnonzero(sol.converged)
     if done.size == 0:
         return out

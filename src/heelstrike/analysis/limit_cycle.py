@@ -529,7 +529,7 @@ def _newton(
     sol = newton_solve(lambda Z: pmap.many(Z) - Z, z, tol=tol,
                        max_iter=max_iter, fd_step=fd_step, jacobian_at_root=False)
     if not sol.converged[0]:
-        raise GaitNotFoundError(sol.message(0))
+        raise GaitNotFoundError(sol.message(0, pmap.walker.section_labels))
     return sol.x[0], float(sol.residual_norm[0]), int(sol.iterations[0])
 
 

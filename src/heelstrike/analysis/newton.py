@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import enum
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Literal
 
@@ -96,11 +96,20 @@ class NewtonSolution(ResultDictMixin):
     status: tuple[NewtonStatus, ...]
     max_iter: int
 
-    def message(self, k: int) -> str:
-        """One line on how start ``k`` ended, with its iterate or residual where they help."""
+    def message(self, k: int, labels: Sequence[tuple[str, str]] | None = None) -> str:
+        """One line on how start ``k`` ended, with its iterate or residual where they help.
+
+        ``labels``: ``(name, unit)`` per unknown, to print the iterate as ``name = value unit``
+        instead of a bare array.
+        """
         s, r = self.status[k], float(self.residual_norm[k])
         if s is NewtonStatus.STEP_FAILED:
-            return f"{s.message} {np.round(self.x[k], 6)}"
+            x = self.x[k]
+            if labels is not None and len(labels) == x.size:
+                pairs = ", ".join(f"{n} = {v:.6g} {u}"
+                                  for (n, u), v in zip(labels, x, strict=True))
+                return f"{s.message} ({pairs})"
+            return f"{s.message} {np.round(x, 6)}"
         if s is NewtonStatus.MAX_ITERATIONS:
             return f"Newton did not converge in {self.max_iter} iterations (residual {r:.2e})"
         if s in (NewtonStatus.STALLED, NewtonStatus.SLOW):

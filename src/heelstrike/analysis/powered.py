@@ -152,6 +152,8 @@ class ActuationFamily:
         ``"pushoff"``, ``"hip-energy"``, ``"hip-pd"`` or a user name.
     parameter_name, parameter_unit : str
         What the free parameter ``a`` is (e.g. ``"impulse"``, ``"N s"``).
+    parameter_meaning : str
+        One phrase saying what the parameter means physically (for reports).
     build : callable ``(walker, a) -> (torque, push_off)``
         The actuation for a parameter value; either may be None.
     seed : callable ``(walker) -> tuple of float``
@@ -170,6 +172,7 @@ class ActuationFamily:
     seed: Callable[[PlanarWalker], tuple[float, ...]]
     lower: float = -np.inf
     torque_joint: str = "hip"
+    parameter_meaning: str = ""
 
 
 def family_simulator(
@@ -304,6 +307,7 @@ def actuation_family(
             name=name,
             parameter_name="impulse",
             parameter_unit="N s",
+            parameter_meaning="push-off impulse of the trailing foot just before heel strike",
             build=lambda w, a: (None, PushOff(impulse=max(float(a), 0.0))),
             seed=lambda w: tuple(
                 c * _scale(w)[0] * float(np.sqrt(_scale(w)[1] * _scale(w)[2]))
@@ -328,6 +332,7 @@ def actuation_family(
             name=name,
             parameter_name="energy",
             parameter_unit="J",
+            parameter_meaning="the hip law's target energy E_ref = T + V, V = 0 at the ground",
             build=lambda w, a: (energy_law(w, float(a)), None),
             seed=seed_energy,
         )
@@ -342,6 +347,7 @@ def actuation_family(
             name=name,
             parameter_name="amplitude",
             parameter_unit="rad",
+            parameter_meaning="the hip set point's half-angle A, target hip angle -2 A",
             build=lambda w, a: (pd_law(w, float(a)), None),
             seed=lambda w: (0.15, 0.2, 0.1, 0.25),  # rad
         )
@@ -755,7 +761,9 @@ def _newton(
         project=project,
     )
     if not sol.converged[0]:
-        raise PoweredGaitNotFoundError(sol.message(0))
+        fam = prob.family
+        labels = (*prob.walker.section_labels, (fam.parameter_name, fam.parameter_unit))
+        raise PoweredGaitNotFoundError(sol.message(0, labels))
     return sol.x[0], float(sol.residual_norm[0]), int(sol.iterations[0]), sol.jacobian[0]
 
 
@@ -1412,7 +1420,8 @@ def _find(
                          f"move it towards {value:g} {unit}: {exc})"
                          if hi - lo < 1e-4 * max(abs(hi), 1e-3) else
                          f"span {lo:.4g} to {hi:.4g} {unit} and end near {reached:.4g} {unit} "
-                         f"(continuation from {current:.4g} stopped there: {exc})")
+                         f"(continuation from {current:.4g} stopped there: {exc}; the end "
+                         f"of the path searched, not a verified end of the family)")
                 raise PoweredGaitNotFoundError(
                     f"no gait with {target} {value:g} {unit}: the {prob.family.name} gaits "
                     f"found {found}{seed_note[0]}"
@@ -1732,6 +1741,7 @@ def find_model_powered_gait(
         name="pushoff",
         parameter_name=base.parameter_name,
         parameter_unit=base.parameter_unit,
+        parameter_meaning=base.parameter_meaning,
         build=lambda _w, a: (law, PushOff(impulse=max(float(a), 0.0))),
         seed=base.seed,
         lower=base.lower,

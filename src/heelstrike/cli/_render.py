@@ -56,8 +56,9 @@ def print_paths(paths: Iterable[Any]) -> None:
 def fixed_point_text(fixed_point: dict[str, float]) -> str:
     """``'q3 = -0.200000 rad, q3_dot = ... rad/s'``: a fixed point's section coordinates
     (angles, then rates)."""
-    return ", ".join(f"{k} = {v:.6f} {'rad/s' if k.endswith('_dot') else 'rad'}"
-                     for k, v in fixed_point.items())
+    from heelstrike.models.base import section_unit
+
+    return ", ".join(f"{k} = {v:.6f} {section_unit(k)}" for k, v in fixed_point.items())
 
 
 def multipliers_text(multipliers: Iterable[complex]) -> str:

@@ -178,7 +178,10 @@ def _run_powered(args: argparse.Namespace) -> int:
     unit = "m/s" if target == "speed" else "m"
     given = "the walker's declared target" if source == "walker" else source
     print(f"  target          {target.replace('_', ' ')} {value:g} {unit} ({given})")
-    print(f"  {gait.parameter_name:15s} {gait.parameter:10.5f} {gait.parameter_unit}")
+    from heelstrike.analysis.powered import actuation_family
+
+    print(f"  {gait.parameter_name:15s} {gait.parameter:10.5f} {gait.parameter_unit} "
+          f"({actuation_family(gait.actuation).parameter_meaning})")
     if gait.gains:
         from heelstrike.analysis.powered import GAIN_UNITS
 
@@ -190,7 +193,10 @@ def _run_powered(args: argparse.Namespace) -> int:
     print("  energy books per step")
     print(f"    actuator work   {gait.actuator_work:12.6f} J (push-off "
           f"{gait.push_off_work:.6f} J, {gait.torque_joint} {gait.torque_work:.6f} J)")
-    print(f"    collision loss  {gait.collision_loss:12.6f} J (T_c)")
+    losses = gait.walk.impact_losses()
+    split = (" = " + " + ".join(f"{kind} {loss:.6f} J" for kind, loss in losses)
+             if len(losses) > 1 else "")
+    print(f"    collision loss  {gait.collision_loss:12.6f} J (T_c{split})")
     print(f"    change of T + V {gait.energy_change:12.3e} J")
     print(f"    imbalance       {gait.energy_balance_error:12.3e} J")
     print(f"  cost of transport {gait.cost_of_transport:10.6f}")

@@ -261,6 +261,11 @@ class WalkResult(ResultDictMixin):
         """Stack one :class:`ImpactRecord` field over all impacts."""
         return np.asarray([getattr(r, name) for r in self.impacts], dtype=float)
 
+    def impact_losses(self) -> tuple[tuple[str, float], ...]:
+        """Every impact in order with its loss ``T_c`` (J): ``("heel_strike", T_c)`` per step
+        (a walker with knees also lists its knee strikes, :class:`PhasedWalkResult`)."""
+        return tuple(("heel_strike", r.kinetic_energy_constrained) for r in self.impacts)
+
 
 @dataclass(frozen=True, kw_only=True)
 class GroundReaction(ResultDictMixin):
@@ -483,6 +488,10 @@ class PhasedWalkResult(WalkResult):
     events: tuple[PhasedImpact, ...] = ()
     phase: NDArray[np.str_] = field(default_factory=lambda: np.array([], dtype=str))
     mechanical_energy: FloatArray = field(default_factory=lambda: np.array([]))
+
+    def impact_losses(self) -> tuple[tuple[str, float], ...]:
+        """Every impact in order (knee strikes and heel strikes) with its loss ``T_c`` (J)."""
+        return tuple((e.kind, e.kinetic_energy_constrained) for e in self.events)
 
 
 # -- the one loop ------------------------------------------------------------------------------

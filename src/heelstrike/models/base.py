@@ -71,7 +71,15 @@ __all__ = [
     "PlanarWalker",
     "WalkerScale",
     "gravity_vector",
+    "section_unit",
 ]
+
+
+def section_unit(name: str) -> str:
+    """The unit of a Poincare-section coordinate, by the naming rule of
+    :attr:`PlanarWalker.section_names`: ``"rad/s"`` for a rate (``"<coordinate>_dot"``),
+    else ``"rad"``."""
+    return "rad/s" if name.endswith("_dot") else "rad"
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -423,6 +431,12 @@ class PlanarWalker(ABC):
         """Names of the Poincare-section coordinates: angles (rad), then rates named
         ``"<coordinate>_dot"`` (rad/s)."""
         raise NotImplementedError(f"{type(self).__name__} defines no Poincare section")
+
+    @property
+    def section_labels(self) -> tuple[tuple[str, str], ...]:
+        """:attr:`section_names` with their units (:func:`section_unit`),
+        ``(("q3", "rad"), ("q3_dot", "rad/s"), ...)``: for reports and messages."""
+        return tuple((n, section_unit(n)) for n in self.section_names)
 
     def kinetic_energy(self, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
         """Kinetic energy ``1/2 q_dot^T M q_dot`` (J), shape (...)."""

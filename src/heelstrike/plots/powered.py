@@ -6,8 +6,10 @@ Drawing only, from the study's :class:`xarray.Dataset`; matplotlib object API, A
 
 from __future__ import annotations
 
+import numpy as np
 import xarray as xr
 from matplotlib import colormaps
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from heelstrike.plots import _new_figure
@@ -18,6 +20,17 @@ __all__ = ["BRANCH_CAPTION", "cost_figure", "paper_comparison_figure"]
 
 def _target(ds: xr.Dataset) -> str:
     return str(ds.attrs.get("target", "step_length"))
+
+
+def _mark_missing(ax: Axes, x: np.ndarray, y: np.ndarray, colour: object,
+                  label: str | None) -> None:
+    """Grid points where no gait was found (``y`` NaN): a marker on the bottom edge of the
+    axes, so that a gap in a line is not read as missing data."""
+    missing = ~np.isfinite(np.asarray(y, dtype=float))
+    if np.any(missing):
+        ax.plot(np.asarray(x)[missing], np.full(int(missing.sum()), 0.03), "v", ms=6,
+                mfc="none", color=colour, transform=ax.get_xaxis_transform(), clip_on=False,
+                label=label)
 
 
 def cost_figure(ds: xr.Dataset, variable: str = "cost_of_transport") -> Figure:
@@ -42,6 +55,8 @@ def cost_figure(ds: xr.Dataset, variable: str = "cost_of_transport") -> Figure:
                 unstable = ds["stable"].sel(actuation=act).isel(radius=k).values == 0
                 ax.plot(ds[tgt].values[unstable], y[unstable], "x", ms=7, mew=1.5,
                         color="tab:red", label="unstable gait" if k == 0 else None)
+            _mark_missing(ax, ds[tgt].values, y, colour,
+                          f"R = {r:g} m: no gait found" if np.any(~np.isfinite(y)) else None)
         ax.set_title(act)
         ax.set_xlabel(f"{tgt.replace('_', ' ')} ({ds[tgt].attrs.get('units', '')})")
         ax.set_ylabel(f"{variable.replace('_', ' ')} ({unit})")
@@ -55,7 +70,7 @@ def cost_figure(ds: xr.Dataset, variable: str = "cost_of_transport") -> Figure:
 BRANCH_CAPTION = (
     "each point: the cheapest periodic gait found\n(continuation from neighbours and fresh "
     "searches;\nopen squares: found by a fresh search, not by continuation;\nred x: unstable "
-    "gait, a Floquet multiplier |m| > 1)"
+    "gait, a Floquet multiplier |m| > 1;\nopen triangles on the bottom edge: no gait found there)"
 )
 
 
@@ -75,10 +90,12 @@ def paper_comparison_figure(ds: xr.Dataset) -> Figure:
         for act in ds["actuation"].values:
             sel = ds.sel(actuation=act).isel({tgt: j})
             y = sel["work_per_metre"].values
-            ax.plot(R, y, "o-", ms=3, label=f"{act}: W_act / L")
+            (line,) = ax.plot(R, y, "o-", ms=3, label=f"{act}: W_act / L")
             if "stable" in sel:
                 unstable = sel["stable"].values == 0
                 ax.plot(R[unstable], y[unstable], "x", ms=7, mew=1.5, color="tab:red")
+            _mark_missing(ax, R, y, line.get_color(),
+                          f"{act}: no gait found" if np.any(~np.isfinite(y)) else None)
         ax.set_title(f"L = {length:g} m")
         ax.set_xlabel("foot radius R (m)")
         ax.set_yscale("log")

@@ -42,28 +42,33 @@ _LIST_UNITS: dict[str, Any] = {
 
 
 def _joint_units(model: Any) -> tuple[list[str], list[str]]:
-    """Units of the entries of ``q`` and ``v`` in Pinocchio's conventions, joint by joint."""
+    """Units of the entries of ``q`` and ``v`` in Pinocchio's conventions, joint by joint (a
+    composite joint, e.g. an MJCF body with a hinge and a slide, by its parts)."""
     q_units: list[str] = []
     v_units: list[str] = []
     for jid in range(1, model.njoints):
         joint = model.joints[jid]
-        kind = joint.shortname()
-        nq, nv = int(joint.nq), int(joint.nv)
-        if kind == "JointModelFreeFlyer":
-            q_units += ["m"] * 3 + ["1"] * 4  # position, unit quaternion
-            v_units += ["m/s"] * 3 + ["rad/s"] * 3
-        elif kind == "JointModelTranslation" or (
-            kind.startswith("JointModelP") and kind != "JointModelPlanar"
-        ):
-            q_units += ["m"] * nq
-            v_units += ["m/s"] * nv
-        elif kind == "JointModelPlanar":
-            q_units += ["m", "m", "1", "1"]
-            v_units += ["m/s", "m/s", "rad/s"]
-        else:  # revolute (cos/sin pairs for unbounded ones), spherical (quaternion)
-            q_units += (["rad"] if nq == nv == 1 else ["1"]) * nq
-            v_units += ["rad/s"] * nv
+        parts = (joint.extract().joints if joint.shortname() == "JointModelComposite"
+                 else [joint])
+        for part in parts:
+            qu, vu = _one_joint_units(part.shortname(), int(part.nq), int(part.nv))
+            q_units += qu
+            v_units += vu
     return q_units, v_units
+
+
+def _one_joint_units(kind: str, nq: int, nv: int) -> tuple[list[str], list[str]]:
+    """The units of one (non-composite) joint's ``q`` and ``v`` entries."""
+    if kind == "JointModelFreeFlyer":
+        return ["m"] * 3 + ["1"] * 4, ["m/s"] * 3 + ["rad/s"] * 3  # position, unit quaternion
+    if kind == "JointModelTranslation" or (
+        kind.startswith("JointModelP") and kind != "JointModelPlanar"
+    ):
+        return ["m"] * nq, ["m/s"] * nv
+    if kind == "JointModelPlanar":
+        return ["m", "m", "1", "1"], ["m/s", "m/s", "rad/s"]
+    # revolute (cos/sin pairs for unbounded ones), spherical (quaternion)
+    return (["rad"] if nq == nv == 1 else ["1"]) * nq, ["rad/s"] * nv
 
 
 def add_robot_command(sub: Any) -> None:
@@ -270,7 +275,9 @@ def add_robot_impact_options(p: argparse.ArgumentParser) -> None:
                    help="persistent contact (repeatable): bilateral and inert, stays fixed; "
                    "with --keep contacts only, the paper's inert impact")
     g.add_argument("--friction", type=float, default=math.inf, metavar="MU",
-                   help="Coulomb coefficient of the striking contacts (default inf: no slip)")
+                   help="Coulomb coefficient of the striking contacts (default inf: an "
+                   "unbounded cone; a contact then slips only where sticking would need the "
+                   "ground to pull, and says so)")
 
 
 def robot_requested(args: argparse.Namespace) -> bool:
@@ -304,14 +311,14 @@ def _read_state(path: str, nq: int, nv: int) -> tuple[list[float], list[float]]:
     return out[0], out[1]
 
 
-def _note_normalised_quaternion(q: list[float], where: str) -> None:
-    """Say on stderr when the base quaternion ``q[3:7]`` is not a unit quaternion to
-    round-off: the robot functions normalise it (:meth:`Robot.check_state`), so the pose
-    computed is ``q[3:7] / |q[3:7]|`` (pinocchio's order x, y, z, w)."""
-    norm = math.sqrt(sum(x * x for x in q[3:7]))
-    if abs(norm - 1.0) > 1e-9 and 0.5 < norm < 1.5:  # outside: refused by check_state
-        print(f"heelstrike: note: {where}: the base quaternion q[3:7] has norm {norm:.9g}; it "
-              "is normalised (order x, y, z, w, pinocchio's)", file=sys.stderr)
+def _note_normalised_blocks(robot: Any, q: list[float], where: str) -> None:
+    """Say on stderr which unit blocks of ``q`` (the base quaternion, a continuous joint's
+    ``(cos, sin)`` pair, ...: :attr:`Robot.unit_blocks`) are not unit vectors to round-off:
+    the robot functions normalise them (:meth:`Robot.check_state`), so the pose computed is
+    each block divided by its norm."""
+    for block, norm in robot.normalised_blocks(q):
+        print(f"heelstrike: note: {where}: {block.describe()} has norm {norm:.9g}; it is "
+              "normalised", file=sys.stderr)
 
 
 def _note_separating_strikes(contacts: list[dict[str, Any]]) -> None:
@@ -366,7 +373,12 @@ def run_robot_impact(args: argparse.Namespace) -> int:
     d = {"robot": robot.name, "nq": robot.nq, "nv": robot.nv, **d}
     require_finite(d)
     _note_limit_violations(violations, f"state {args.state}")
-    _note_normalised_quaternion(q, f"state {args.state}")
+    _note_normalised_blocks(robot, q, f"state {args.state}")
+    if robot.ignored_couplings:
+        tags = ", ".join(f"<{t}>" for t in robot.ignored_couplings)
+        print(f"heelstrike: note: {robot.source} has {tags} elements, which the model does not "
+              "hold (Pinocchio's parser drops them): the joints they couple move independently "
+              "in this impact", file=sys.stderr)
     keep_text = dict(zip([c.frame for c in keep], args.keep or [], strict=True))
     for frame, lam_n in res.pulling_contacts():
         print(f"heelstrike: note: the kept contact {frame} pulls on the ground (normal impulse "
@@ -374,6 +386,17 @@ def run_robot_impact(args: argparse.Namespace) -> int:
               f"lift; pass it as --strike {keep_text.get(frame, frame)} (complementarity then "
               "decides whether it lifts) or drop it", file=sys.stderr)
     _note_separating_strikes(d["contacts"])
+    if d["T_plus"] > d["T"] + 1e-9 * max(d["T"], 1e-300):
+        print(f"heelstrike: note: the impact adds {d['T_plus'] - d['T']:.6g} J of kinetic "
+              f"energy (T_plus {d['T_plus']:.6g} J > T {d['T']:.6g} J): Newton's restitution "
+              "with sticking friction can do so (Kane's paradox); the numbers follow that law, "
+              "not an energetic bound", file=sys.stderr)
+    if math.isinf(args.friction):
+        for c in d["contacts"]:
+            if c["role"] == "strike" and c["mode"] == "slip":
+                print(f"heelstrike: note: {c['frame']} slips although friction is unbounded: "
+                      "sticking would need the ground to pull (a Painleve-type case), so the "
+                      "contact slides with a vanishing normal impulse", file=sys.stderr)
     if args.json:
         _, v_units = _joint_units(robot.model)
         impulse_units = [u for c in res.contacts

@@ -48,7 +48,7 @@ from heelstrike.core.contact_laws import (
     inert_contact_impact_batch,
     resolve_contact_impact,
 )
-from heelstrike.core.impact import ImpactResult, impact
+from heelstrike.core.impact import ImpactInputError, ImpactResult, impact
 from heelstrike.robots.loading import Robot, RobotError, _pin
 
 __all__ = [
@@ -384,7 +384,8 @@ def robot_impact(
     keep : sequence of ContactSpec
         Persistent bilateral inert contacts.
     friction : float
-        Coulomb coefficient of the striking contacts (``inf``: no slip).
+        Coulomb coefficient of the striking contacts (``inf``: an unbounded cone; a contact
+        then slips only where sticking would need the ground to pull, a Painlevé-type case).
     restitution : float
         Newton coefficient of the striking contacts' normal rows, in [0, 1].
 
@@ -401,17 +402,54 @@ def robot_impact(
     plan = _row_plan(robot, specs)
     M, A = _matrices(robot, plan, q_)
     jacs = tuple(A[sl] for sl in plan.layout.slices)
-    if not strike:
-        # Only persistent contacts: the paper's inert law, solved directly.
-        res = inert_contact_impact(M, v_, A, plan.layout)
-        return RobotImpact(contacts=specs, bilateral=bil, result=res, M=M, jacobians=jacs)
-    rows = [
-        ContactRows(jacobian=J, normal=s.normal, tangential=s.tangential,
-                    tangential_weights=s.tangential_weights, bilateral=b, law=law, name=s.frame)
-        for J, s, b in zip(jacs, specs, bil, strict=True)
-    ]
-    res = resolve_contact_impact(M, v_, rows)
+    try:
+        if not strike:
+            # Only persistent contacts: the paper's inert law, solved directly.
+            res = inert_contact_impact(M, v_, A, plan.layout)
+            return RobotImpact(contacts=specs, bilateral=bil, result=res, M=M, jacobians=jacs)
+        rows = [
+            ContactRows(jacobian=J, normal=s.normal, tangential=s.tangential,
+                        tangential_weights=s.tangential_weights, bilateral=b, law=law,
+                        name=s.frame)
+            for J, s, b in zip(jacs, specs, bil, strict=True)
+        ]
+        res = resolve_contact_impact(M, v_, rows)
+    except ImpactInputError as exc:
+        raise ImpactInputError(f"{exc}{_why(robot, M, jacs, specs, str(exc))}") from None
     return RobotImpact(contacts=specs, bilateral=bil, result=res, M=M, jacobians=jacs)
+
+
+def _why(robot: Robot, M: FloatArray, jacs: Sequence[FloatArray],
+         specs: Sequence[ContactSpec], message: str) -> str:
+    """What makes the impact algebra refuse a robot's matrices, in the robot's names: the
+    joints that move no mass (``M`` singular) or the contacts whose rows repeat others'."""
+    if "not positive definite" in message:
+        d = np.diag(M)
+        tiny = np.flatnonzero(d <= 1e-12 * max(float(np.max(np.abs(d))), 1e-300))
+        names = []
+        for jid in range(1, robot.model.njoints):
+            j = robot.model.joints[jid]
+            if any(int(j.idx_v) <= i < int(j.idx_v) + int(j.nv) for i in tiny):
+                names.append(str(robot.model.names[jid]))
+        if names:
+            return (f": joint(s) {', '.join(names)} move no mass (a massless link at the end "
+                    "of a chain, or a second floating base)")
+        return ""
+    if "rank deficient" in message:
+        rank, seen, bad = 0, np.zeros((0, M.shape[0])), []
+        for J, s in zip(jacs, specs, strict=True):
+            trial = np.vstack((seen, J))
+            r = int(np.linalg.matrix_rank(trial, tol=1e-9 * max(float(np.abs(trial).max()),
+                                                                 1e-300)))
+            if r < rank + J.shape[0]:
+                bad.append(s.frame)
+            seen, rank = trial, r
+        if not bad:
+            return ""
+        return (f": the rows of {', '.join(bad)} repeat those of the contacts before (points "
+                "of one rigid body, or a frame that does not move): give a sole as one "
+                "FRAME:flat contact, not as several points, and drop a contact on a fixed frame")
+    return ""
 
 
 def _matrices(robot: Robot, plan: _RowPlan, q: FloatArray) -> tuple[FloatArray, FloatArray]:

@@ -6,8 +6,10 @@ no Python loader, so the files are located through the package's installed metad
 the optional extra ``heelstrike[robots]``. Nothing is fetched from the network.
 
 Every model gets a floating base ``JointModelFreeFlyer`` as its root joint (a root ``floating``
-joint in a URDF is ignored by Pinocchio's parser; an MJCF ``freejoint`` at the root is kept and
-no second one is added). Pinocchio's conventions hold: ``q`` has ``nq`` entries (the base as
+joint in a URDF or a ``freejoint`` at an MJCF root is kept, and no second one is added).
+Couplings the model cannot hold (URDF ``<mimic>``, MJCF ``<equality>`` and ``<tendon>``) are
+dropped by Pinocchio's parsers: they are listed in :attr:`Robot.ignored_couplings` and the
+CLI says so. Pinocchio's conventions hold: ``q`` has ``nq`` entries (the base as
 position and unit quaternion ``x, y, z, w``), ``v`` has ``nv`` entries (the base's linear and
 angular velocity in its own frame), world ``z`` is up.
 """
@@ -36,11 +38,13 @@ __all__ = [
     "Robot",
     "RobotError",
     "RobotSpec",
+    "UnitBlock",
     "list_robots",
     "load_mjcf",
     "load_robot",
     "load_urdf",
     "robot_data_dir",
+    "unit_blocks",
 ]
 
 
@@ -141,6 +145,72 @@ def robot_data_dir() -> Path:
     return path
 
 
+@dataclass(frozen=True, kw_only=True)
+class UnitBlock:
+    """A block ``q[start:stop]`` of a configuration that must have unit norm.
+
+    Attributes
+    ----------
+    joint : str
+        The joint's name.
+    start, stop : int
+        Its slice of ``q``.
+    kind : {"quaternion", "cos_sin"}
+        A quaternion ``(x, y, z, w)`` (free flyer, spherical joint) or the ``(cos, sin)`` pair
+        of an unbounded revolute (URDF ``continuous``) or planar joint's angle.
+    base : bool
+        The root free flyer's quaternion.
+    """
+
+    joint: str
+    start: int
+    stop: int
+    kind: str
+    base: bool = False
+
+    @property
+    def unit(self) -> str:
+        """``"unit quaternion"`` or ``"unit vector"``: what the block must be."""
+        return "unit quaternion" if self.kind == "quaternion" else "unit vector"
+
+    def describe(self) -> str:
+        """``"q[3:7], the base's quaternion (x, y, z, w)"`` or the joint's block, named."""
+        where = f"q[{self.start}:{self.stop}]"
+        if self.base:
+            return f"{where}, the base's quaternion (x, y, z, w),"
+        what = "quaternion (x, y, z, w)" if self.kind == "quaternion" else "(cos, sin) pair"
+        return f"{where}, the {what} of joint {self.joint!r},"
+
+
+def unit_blocks(model: Any) -> tuple[UnitBlock, ...]:
+    """Every block of ``q`` with unit norm in Pinocchio's conventions, joint by joint.
+
+    Raises
+    ------
+    RobotError
+        A joint with ``nq != nv`` of a kind not known here (e.g. a composite joint).
+    """
+    blocks = []
+    for jid in range(1, model.njoints):
+        joint = model.joints[jid]
+        kind, iq = joint.shortname(), int(joint.idx_q)
+        nq, nv, name = int(joint.nq), int(joint.nv), str(model.names[jid])
+        if nq == nv:
+            continue
+        if kind == "JointModelFreeFlyer":
+            blocks.append(UnitBlock(joint=name, start=iq + 3, stop=iq + 7, kind="quaternion",
+                                    base=jid == 1))
+        elif kind == "JointModelSpherical":
+            blocks.append(UnitBlock(joint=name, start=iq, stop=iq + 4, kind="quaternion"))
+        elif kind == "JointModelPlanar":
+            blocks.append(UnitBlock(joint=name, start=iq + 2, stop=iq + 4, kind="cos_sin"))
+        elif nq == 2 and nv == 1:  # unbounded revolute (RUBX, RUBY, RUBZ, unaligned)
+            blocks.append(UnitBlock(joint=name, start=iq, stop=iq + 2, kind="cos_sin"))
+        else:
+            raise RobotError(f"joint {name!r} ({kind}, nq={nq}, nv={nv}) is not supported")
+    return tuple(blocks)
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Robot:
     """A floating-base robot loaded into Pinocchio.
@@ -163,6 +233,10 @@ class Robot:
         Work space reused by this robot's computations (not thread-safe; one per thread).
     cache : dict
         Derived data reused between calls (row layouts of contact sets).
+    ignored_couplings : tuple of str
+        Elements of the robot file that couple joints and that the model does not hold (URDF
+        ``mimic``, MJCF ``equality``, ``tendon``): the joints they couple move independently
+        here.
     """
 
     name: str
@@ -173,6 +247,7 @@ class Robot:
     foot_contact: str = "flat"
     data: Any = field(default=None, repr=False, compare=False)
     cache: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
+    ignored_couplings: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if self.data is None:
@@ -199,15 +274,31 @@ class Robot:
             raise RobotError(f"unknown frame {frame!r} in robot {self.name!r}")
         return int(self.model.getFrameId(frame))
 
+    @property
+    def unit_blocks(self) -> tuple[UnitBlock, ...]:
+        """The blocks of ``q`` that must have unit norm (:func:`unit_blocks`), cached."""
+        blocks = self.cache.get("unit_blocks")
+        if blocks is None:
+            blocks = self.cache["unit_blocks"] = unit_blocks(self.model)
+        return blocks
+
     def check_state(
         self, q: ArrayLike, v: ArrayLike | None = None
     ) -> tuple[FloatArray, FloatArray]:
-        """Validate sizes and finiteness; normalise the base quaternion.
+        """Validate sizes and finiteness; normalise every unit block of ``q`` (the base
+        quaternion, a continuous joint's ``(cos, sin)`` pair, a spherical joint's quaternion:
+        :attr:`unit_blocks`).
 
         Returns
         -------
         q : ndarray, shape (nq,)
         v : ndarray, shape (nv,) (zeros if ``v`` is None)
+
+        Raises
+        ------
+        RobotError
+            Wrong sizes, non-finite entries, or a unit block of norm outside (0.5, 1.5) (not a
+            slightly perturbed unit vector: the joint's angle is then undefined), named.
         """
         nq, nv = self.nq, self.nv
         q_ = np.array(q, dtype=float).reshape(-1)  # a copy: normalised below
@@ -218,15 +309,17 @@ class Robot:
             raise RobotError(f"v has {v_.size} entries, robot {self.name!r} needs nv={nv}")
         if not (np.isfinite(q_).all() and np.isfinite(v_).all()):
             raise RobotError("q and v must be finite")
-        quat = q_[3:7]
-        nrm = math.sqrt(float(quat.dot(quat)))  # np.linalg.norm of a vector, without overhead
-        if not 0.5 < nrm < 1.5:
-            raise RobotError(f"q[3:7] must be the base's unit quaternion, |q[3:7]| = {nrm:g}")
-        quat /= nrm
+        for b in self.unit_blocks:
+            block = q_[b.start:b.stop]
+            nrm = math.sqrt(float(block.dot(block)))  # np.linalg.norm, without overhead
+            if not 0.5 < nrm < 1.5:
+                raise RobotError(f"{b.describe()} must be a {b.unit}, "
+                                 f"|q[{b.start}:{b.stop}]| = {nrm:g}")
+            block /= nrm
         return q_, v_
 
     def check_states(self, qs: ArrayLike) -> FloatArray:
-        """:meth:`check_state` for many configurations at once: (B, nq) with unit quaternions.
+        """:meth:`check_state` for many configurations at once: (B, nq) with unit blocks.
 
         Raises
         ------
@@ -241,16 +334,28 @@ class Robot:
             )
         if not np.all(np.isfinite(q_all)):
             raise RobotError("q and v must be finite")
-        nrm = np.linalg.norm(q_all[:, 3:7], axis=1)
-        bad = ~((nrm > 0.5) & (nrm < 1.5))
-        if np.any(bad):
-            i = int(np.argmax(bad))
-            raise RobotError(
-                f"q[3:7] must be the base's unit quaternion, |q[3:7]| = {nrm[i]:g} "
-                f"(configuration {i})"
-            )
         out = q_all.copy()
-        out[:, 3:7] /= nrm[:, None]
+        for b in self.unit_blocks:
+            nrm = np.linalg.norm(q_all[:, b.start:b.stop], axis=1)
+            bad = ~((nrm > 0.5) & (nrm < 1.5))
+            if np.any(bad):
+                i = int(np.argmax(bad))
+                raise RobotError(
+                    f"{b.describe()} must be a {b.unit}, |q[{b.start}:{b.stop}]| = "
+                    f"{nrm[i]:g} (configuration {i})"
+                )
+            out[:, b.start:b.stop] /= nrm[:, None]
+        return out
+
+    def normalised_blocks(self, q: ArrayLike) -> list[tuple[UnitBlock, float]]:
+        """The unit blocks of ``q`` that :meth:`check_state` rescales (norm not 1 to
+        round-off, 1e-9), with their norms: what a report should mention."""
+        q_ = np.asarray(q, dtype=float).reshape(-1)
+        out = []
+        for b in self.unit_blocks:
+            nrm = float(np.linalg.norm(q_[b.start:b.stop]))
+            if abs(nrm - 1.0) > 1e-9 and 0.5 < nrm < 1.5:
+                out.append((b, nrm))
         return out
 
     def mass_matrix(self, q: ArrayLike, data: Any = None) -> FloatArray:
@@ -296,16 +401,35 @@ def _has_free_root(model: Any) -> bool:
     return model.njoints > 1 and model.joints[1].shortname() == "JointModelFreeFlyer"
 
 
+def _couplings(path: Path, tags: tuple[str, ...]) -> tuple[str, ...]:
+    """Which of the coupling elements ``tags`` a robot file has (the parsers drop them). A URDF
+    ``mimic`` counts only inside a joint that moves (not ``type="fixed"``)."""
+    import re
+
+    try:
+        text = path.read_text(errors="replace")
+    except OSError:  # pragma: no cover - the parser read it just before
+        return ()
+    if "mimic" in tags:  # joint blocks: <joint ... type="..."> ... </joint>
+        moving = [body for kind, body in re.findall(
+            r"<\s*joint\b[^>]*?\btype\s*=\s*[\"'](\w+)[\"'][^>]*>(.*?)<\s*/\s*joint\s*>",
+            text, flags=re.DOTALL) if kind != "fixed"]
+        text = "\n".join(moving) + "\n" + re.sub(r"<\s*mimic\b", "", text)
+    return tuple(t for t in tags if re.search(rf"<\s*{t}\b", text))
+
+
 def _finish(model: Any, name: str, source: Path, q_ref: FloatArray | None,
-            feet: tuple[str, str] = ("", ""), foot_contact: str = "flat") -> Robot:
+            feet: tuple[str, str] = ("", ""), foot_contact: str = "flat",
+            ignored: tuple[str, ...] = ()) -> Robot:
     pin = _pin()
     if not _has_free_root(model):
         raise RobotError(f"{source}: model has no floating base")
     if model.nv <= 6 or pin.computeTotalMass(model) <= 0.0:
         raise RobotError(f"{source}: not a robot (no joints or no mass)")
     q = np.array(pin.neutral(model)) if q_ref is None else np.asarray(q_ref, dtype=float)
+    unit_blocks(model)  # a joint the state checks do not know is refused here
     return Robot(name=name, source=str(source), model=model, reference_q=q, feet=feet,
-                 foot_contact=foot_contact)
+                 foot_contact=foot_contact, ignored_couplings=ignored)
 
 
 def _checked_path(path: str | Path, kind: str) -> Path:
@@ -329,10 +453,12 @@ def load_urdf(path: str | Path, *, name: str | None = None) -> Robot:
     p = _checked_path(path, "URDF")
     try:
         with _quiet_native_stderr():
-            model = pin.buildModelFromUrdf(str(p), pin.JointModelFreeFlyer())
+            model = pin.buildModelFromUrdf(str(p))
+            if not _has_free_root(model):  # no root floating joint of its own: one is added
+                model = pin.buildModelFromUrdf(str(p), pin.JointModelFreeFlyer())
     except (RuntimeError, ValueError, OSError) as exc:
-        raise RobotError(f"{p}: not a URDF robot ({str(exc).splitlines()[0][:120]})") from None
-    return _finish(model, name or p.stem, p, None)
+        raise RobotError(f"{p}: not a URDF robot ({_parser_reason(exc)})") from None
+    return _finish(model, name or p.stem, p, None, ignored=_couplings(p, ("mimic",)))
 
 
 def load_mjcf(path: str | Path, *, name: str | None = None) -> Robot:
@@ -348,13 +474,21 @@ def load_mjcf(path: str | Path, *, name: str | None = None) -> Robot:
     try:
         with _quiet_native_stderr():
             model = pin.buildModelFromMJCF(str(p))
-            if not _has_free_root(model):
-                model = pin.buildModelFromMJCF(str(p), pin.JointModelFreeFlyer())
+            if not _has_free_root(model):  # a fixed root: a free flyer is added
+                model = pin.buildModelFromMJCFAndRootJoint(
+                    str(p), pin.JointModelFreeFlyer(), "root_joint")
     except (RuntimeError, ValueError, OSError) as exc:
-        raise RobotError(f"{p}: not an MJCF robot ({str(exc).splitlines()[0][:120]})") from None
-    if isinstance(model, tuple):  # pragma: no cover - overload returning constraints too
-        model = model[0]
-    return _finish(model, name or p.stem, p, None)
+        raise RobotError(f"{p}: not an MJCF robot ({_parser_reason(exc)})") from None
+    return _finish(model, name or p.stem, p, None,
+                   ignored=_couplings(p, ("equality", "tendon")))
+
+
+def _parser_reason(exc: BaseException) -> str:
+    """The informative line of a Pinocchio parser error: not its ``From file: ...cpp``
+    location line."""
+    lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
+    useful = [ln for ln in lines if not ln.startswith(("From file:", "in function:", "at line:"))]
+    return (useful or lines or [type(exc).__name__])[-1][:160]
 
 
 def _bent_neutral(model: Any, bend: float) -> FloatArray:
@@ -390,7 +524,8 @@ def load_robot(name: str) -> Robot:
         q_ref = np.array(model.referenceConfigurations[spec.pose])
     else:
         q_ref = _bent_neutral(model, spec.knee_bend)
-    robot = _finish(model, spec.name, path, q_ref, spec.feet, spec.foot_contact)
+    robot = _finish(model, spec.name, path, q_ref, spec.feet, spec.foot_contact,
+                    ignored=_couplings(path, ("mimic",)))
     for f in spec.feet:
         robot.frame_id(f)
     return robot

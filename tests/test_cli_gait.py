@@ -103,3 +103,23 @@ def test_gait_refuses_a_slope_of_90_deg_or_more(slope, capsys, monkeypatch):
     assert main(["gait", "--slope", slope]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("heelstrike: error: --slope must be below 90deg")
+
+
+@pytest.mark.parametrize("argv", [
+    ["gait", "--slope", "3"], ["walk", "--slope", "3"], ["basin", "--slope", "3"],
+    ["map", "--slope", "1:6:3"], ["bifurcation", "--slope-range", "0.5:6"],
+])
+def test_every_slope_option_says_a_bare_number_is_radians(argv, capsys, monkeypatch):
+    # QA sweep 4: only gait refused 3 (= 172 deg); basin and walk searched 864 seeds and said
+    # "no gait found", map computed for 9 s and exited 0 with a grey figure over 57-344 deg
+    import heelstrike.analysis.limit_cycle as lc
+
+    def forbidden(*args, **kwargs):
+        raise AssertionError("searched for a gait")
+
+    monkeypatch.setattr(lc, "find_limit_cycles", forbidden)
+    monkeypatch.setattr(lc, "find_limit_cycle", forbidden)
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "must be below 90deg" in err[0], err
+    assert "a bare number is radians; for degrees write" in err[0]

@@ -53,3 +53,18 @@ def test_grid_points_without_a_gait_are_marked_and_only_they() -> None:
     marks = [[ln.get_xdata().tolist() for ln in a.get_lines() if ln.get_marker() == "v"]
              for a in fig.axes]
     assert marks == [[], [], [[0.0]]]
+
+
+def test_paper_comparison_draws_the_wheels_zero_loss_as_a_marker() -> None:
+    # QA sweep 4: at R = l the paper's eta is round-off (1e-32 J/m); on the log axis it
+    # stretched the figure over 30 decades and squeezed every real value into the top band
+    stable = np.ones((1, 2, 3))
+    ds = _study(stable)
+    ds["work_per_metre"] = ds["cost_of_transport"] * 100.0
+    ds["eta_paper"] = (("radius", "step_length"), np.array([[2.0, 2.5, 3.0], [1e-32, 0, 2e-32]]))
+    fig = paper_comparison_figure(ds)
+    for ax in fig.axes:
+        lo, hi = ax.get_ylim()
+        assert lo > 1e-3 and hi < 1e2  # the axis spans the data, not the round-off
+        wheel = [ln for ln in ax.get_lines() if ln.get_marker() == "v" and ln.get_color() == "k"]
+        assert len(wheel) == 1 and wheel[0].get_xdata().tolist() == [0.3]

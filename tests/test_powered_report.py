@@ -148,3 +148,18 @@ def test_kneed_report_splits_the_collision_loss(capsys: Capture, tmp_path: Path)
     assert m is not None, line
     total, knee, heel = map(float, m.groups())
     assert knee > 0 and heel > knee and total == pytest.approx(knee + heel, abs=2e-6)
+
+
+@pytest.mark.slow
+def test_model_near_the_wheel_meets_the_compass_gaits(capsys: Capture) -> None:
+    # QA sweep 4, P1: compass.toml at R = 0.99 reported only the costly unstable gait (5.39 N s,
+    # 1.05 J per step) where the built-in compass gait finds a stable one needing 2.8e-5 J: the
+    # radius continuation from 0.9 l ran for the compass gait only
+    lib = _powered(["--radius", "0.99", "--speed", "0.5"], capsys)
+    model = _powered(["--model", "compass", "--param", "R=0.99", "--speed", "0.5"], capsys)
+    assert model["stable"] and model["gaits_found"] == lib["gaits_found"] == 2
+    assert model["parameter"] == pytest.approx(lib["parameter"], abs=1e-8)
+    assert list(model["fixed_point"].values()) == pytest.approx(
+        list(lib["fixed_point"].values()), abs=1e-8)
+    assert model["actuator_work"] == pytest.approx(model["collision_loss"], abs=1e-9)
+    assert model["actuator_work"] < 1e-4  # the cheap branch (the costly one needs ~1 J)

@@ -1918,8 +1918,9 @@ def powered_gaits(
     :func:`~heelstrike.analysis.powered.find_model_powered_gait` for ``model``) and Newton
     from the fresh starts (``_FRESH_STARTS``), which reach branches the seed search misses
     (near McGeer's wheel a push-off gait needing 1/4000 of the work of the one the seeds find).
-    Near the wheel (``R`` above :data:`NEAR_WHEEL` ``l``) the compass gait's push-off gaits
-    are also continued in the radius from ``NEAR_WHEEL l``, as a study's grid would reach them
+    Near the wheel (``R`` above :data:`NEAR_WHEEL` ``l``) the push-off gaits (of the compass
+    gait, or of a model with a foot radius parameter ``R``) are also continued in the radius
+    from ``NEAR_WHEEL l``, as a study's grid would reach them
     (:func:`_gaits_from_farther_radius`): the fresh starts alone miss the cheap branch at
     ``R = 0.99 l``. Several gaits can meet one target; the first is the one the study keeps
     there, the one needing the least actuator work (issue 11, item 8), stable or not. Each gait
@@ -1963,8 +1964,8 @@ def powered_gaits(
     family = actuation_family(actuation, **opts)
     gaits, err = _fresh_gaits(solve, float(radius), _seed_walker(base, model, float(radius)),
                               family, speed, step_length, kwargs)
-    if model is None and family.name == "pushoff":
-        gaits += _gaits_from_farther_radius(solve, base, family, float(radius), speed,
+    if family.name == "pushoff" and (model is None or "R" in model.params):
+        gaits += _gaits_from_farther_radius(solve, base, model, family, float(radius), speed,
                                             step_length, kwargs)
     if not gaits:
         assert err is not None
@@ -1998,17 +1999,18 @@ NEAR_WHEEL_STEP = 0.05
 
 
 def _gaits_from_farther_radius(
-    solve: Callable[..., PoweredGait], base: CompassGait, family: ActuationFamily, r: float,
-    speed: float | None, length: float | None, kwargs: dict[str, Any],
+    solve: Callable[..., PoweredGait], base: CompassGait, model: Any | None,
+    family: ActuationFamily, r: float, speed: float | None, length: float | None,
+    kwargs: dict[str, Any],
 ) -> list[PoweredGait]:
     """Gaits at radius ``r`` (m) continued in the radius from ``NEAR_WHEEL l``, when ``r`` is
     above it (else none): the fresh search there, then Newton along radii at most
     ``NEAR_WHEEL_STEP l`` apart."""
-    leg = float(base.leg_length)
+    leg = float((base if model is None else model).scale.leg_length)
     r0 = NEAR_WHEEL * leg
     if r <= r0:
         return []
-    start, _ = _fresh_gaits(solve, r0, _seed_walker(base, None, r0), family, speed, length,
+    start, _ = _fresh_gaits(solve, r0, _seed_walker(base, model, r0), family, speed, length,
                             kwargs)
     n_sub = max(1, int(np.ceil((r - r0) / (NEAR_WHEEL_STEP * leg) - 1e-9)))
     found: list[PoweredGait] = []

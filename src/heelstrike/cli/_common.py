@@ -26,7 +26,9 @@ class Parser(argparse.ArgumentParser):
         self._negative_number_matcher = re.compile(r"^-\.?\d")
 
     def error(self, message: str) -> NoReturn:
-        raise CliError(message)
+        # "argument --slope: must be ..." reads "--slope must be ..."
+        m = re.fullmatch(r"argument (--[\w-]+): (must .*)", message, flags=re.DOTALL)
+        raise CliError(f"{m[1]} {m[2]}" if m else message)
 
 
 def parse_angle(text: str) -> float:
@@ -45,6 +47,21 @@ def parse_angle(text: str) -> float:
         ) from None
     if not math.isfinite(value):
         raise argparse.ArgumentTypeError(f"invalid angle {text!r}: must be finite")
+    return value
+
+
+def parse_slope(text: str) -> float:
+    """Parse a ground slope like :func:`parse_angle`, refusing one of 90 deg or more (no
+    walkable incline): the usual cause is a bare number read as radians (``3`` is 172 deg),
+    and the message says so."""
+    value = parse_angle(text)
+    if abs(value) >= math.pi / 2:
+        bare = not str(text).strip().lower().endswith(("deg", "rad"))
+        hint = (f": a bare number is radians; for degrees write {str(text).strip()}deg"
+                if bare else "")
+        raise argparse.ArgumentTypeError(
+            f"must be below 90deg in magnitude (a walkable incline), got {str(text).strip()!r} = "
+            f"{math.degrees(value):.6g} deg{hint}")
     return value
 
 

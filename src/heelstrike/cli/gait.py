@@ -20,6 +20,7 @@ from heelstrike.cli._common import (
     parse_grid,
     parse_guess,
     parse_range,
+    parse_slope,
     parse_sweep,
     positive_int,
     run_with_store,
@@ -52,7 +53,7 @@ def add_gait(sub: Any) -> None:
     )
     add_walker_options(p)
     add_model_options(p)
-    p.add_argument("--slope", type=parse_angle, default=parse_angle("3deg"),
+    p.add_argument("--slope", type=parse_slope, default=parse_angle("3deg"),
                    help="slope angle, e.g. 3deg (default 3deg)")
     p.add_argument("--guess", default=None,
                    help="post-impact Q3,Q3DOT,Q4DOT to start Newton from (rad, rad/s); "
@@ -82,10 +83,10 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     # each gait's collision loss is its step's total (knee strikes included), as in d
     d["gaits"] = [_gait_summary(g.cycle) | {"collision_loss": g.collision_loss} for g in gaits]
     if guess is None and not gait.cycle.stable:
-        print(f"heelstrike: note: no stable period-one gait found (the automatic search, and "
-              f"the walker file's own stable gait at {math.degrees(REFERENCE_SLOPE):g} deg "
-              "continued to these parameters and slope, found none); the least unstable gait "
-              "found is shown", file=sys.stderr)
+        print(f"heelstrike: note: no stable period-one gait found (not by the automatic "
+              f"search, nor by following the walker file's own gait at "
+              f"{math.degrees(REFERENCE_SLOPE):g} deg, where it has a stable one, to these "
+              "parameters and slope); the least unstable gait found is shown", file=sys.stderr)
     if args.json:
         print_json(d)
         return 0
@@ -198,7 +199,7 @@ def add_walk(sub: Any) -> None:
     add_backend_option(p, "step simulator: compiled (default; the walker file's generated "
                        "kernel, for the compass gait that of compass.toml) or the scipy reference "
                        "(the default for McGeer's wheel, --radius equal to --leg-length)")
-    p.add_argument("--slope", type=parse_angle, default=parse_angle("3deg"),
+    p.add_argument("--slope", type=parse_slope, default=parse_angle("3deg"),
                    help="slope angle (default 3deg)")
     p.add_argument("--steps", type=positive_int, default=6, help="number of steps (default 6)")
     p.add_argument("--guess", default=None,
@@ -321,7 +322,7 @@ def add_bifurcation(sub: Any) -> None:
                        "(default) or the scipy reference (slower: minutes for the compass "
                        "gait's 45 slopes)", "compiled")
     p.add_argument("--slope-range", default="0.5deg:6deg",
-                   type=lambda t: parse_range(t, parse_angle),
+                   type=lambda t: parse_range(t, parse_slope),
                    help="START:STOP[:COUNT] slopes, e.g. 0.5deg:6deg:56 (default count 45)")
     p.add_argument("--transient", type=positive_int, default=50, help="steps discarded")
     p.add_argument("--record", type=positive_int, default=16, help="steps recorded")
@@ -391,7 +392,7 @@ def add_basin(sub: Any) -> None:
     add_backend_option(p, "step simulator: the compiled ensemble (default) or the scipy "
                        "reference, walker by walker (slow: about 10,000 walker-steps a minute, "
                        "hours for the compass gait's default 400x400 grid)", "compiled")
-    p.add_argument("--slope", type=parse_angle, default=parse_angle("3deg"),
+    p.add_argument("--slope", type=parse_slope, default=parse_angle("3deg"),
                    help="slope angle (default 3deg)")
     p.add_argument("--grid", type=parse_grid, default=None,
                    help="N_Q3xN_Q3DOT grid points (default 400x400; 100x100 with --model)")
@@ -540,7 +541,7 @@ def add_map(sub: Any) -> None:
     p.add_argument("--x", type=parse_sweep, default=None, metavar="NAME:START:STOP:COUNT",
                    help="with --model: the swept walker parameter instead of --radius, e.g. "
                    "R:0:0.2:5 (SI units)")
-    p.add_argument("--slope", type=lambda t: parse_range(t, parse_angle),
+    p.add_argument("--slope", type=lambda t: parse_range(t, parse_slope),
                    default=(math.radians(1.0), math.radians(6.0), 21),
                    help="START:STOP[:COUNT] slopes, e.g. 1deg:6deg:21 (default)")
     p.add_argument("--out", default="gait_map", help="output directory (default ./gait_map)")

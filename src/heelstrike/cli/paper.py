@@ -59,7 +59,8 @@ def add_impact(sub: Any) -> None:
         description="Decompose the pre-impact kinetic energy of a heel strike of the "
         "circular-feet compass gait into the constrained part T_c (lost) and the admissible "
         "part T_a (kept), with the post-impact velocities, the ground impulse and the loss per "
-        "metre eta = T_c / L_S (Font & Kövecses 2008, eqs. 5-16).",
+        "metre eta = (energy lost) / L_S, which is T_c / L_S for the inert impact (e = 0; "
+        "with --restitution e it is (1 - e^2) T_c / L_S) (Font & Kövecses 2008, eqs. 5-16).",
     )
     add_walker_options(p)
     add_model_options(p)

@@ -326,6 +326,10 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
             self._eval(links[j - 2].joint.lock_angle)  # type: ignore[union-attr]
             for j in self.lockable_joints
         )
+        if self.hip_joint in self.lockable_joints:  # the section needs the swing leg free
+            raise ModelDescriptionError(
+                f"link[{self.hip_joint - 2}].joint.lockable: the hip ({self.coordinate_names[self.hip_joint]!r}) "
+                "cannot be lockable: the swing leg swings about it (lock knees, not the hip)")
         self.point_names: tuple[str, ...] = description.point_names
         # a batch of walkers does not walk (its parameters broadcast against states instead)
         self._feet_one_circle = not self.is_batched and self._feet_are_one_circle()

@@ -344,7 +344,11 @@ def evaluate_expression(
         assert isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
         return fns[node.func.id](ev(node.args[0]))
 
-    return ev(tree)
+    try:
+        with np.errstate(invalid="ignore", divide="ignore"):  # NaN/inf: checked by the caller
+            return ev(tree)
+    except ArithmeticError as exc:  # 1 / 0, 0 ** -1, overflow
+        raise ModelDescriptionError(f"{path}: {value!r} cannot be evaluated: {exc}") from None
 
 
 # -- dataclasses --------------------------------------------------------------------------------
@@ -1078,6 +1082,10 @@ def _parse_control(
             )
         if joint in used:
             raise ModelDescriptionError(f"{p}.joint: {joint!r} already has a posture law")
+        if joint != "torso" or used:  # what TorsoPD and the compiled kernel drive
+            raise ModelDescriptionError(
+                f"{p}.joint: one posture law, on a joint named 'torso', is supported "
+                f"(got {joint!r}{' as a second law' if used else ''})")
         used.add(joint)
         out.append(
             PostureLawSpec(

@@ -85,8 +85,16 @@ def paper_comparison_figure(ds: xr.Dataset) -> Figure:
     axes = fig.subplots(1, len(L), squeeze=False, sharey=True)[0]
     R = ds["radius"].values
     for j, (ax, length) in enumerate(zip(axes, L, strict=True)):
-        ax.plot(R, ds["eta_paper"].isel({tgt: j}).values, "k--",
+        eta = np.asarray(ds["eta_paper"].isel({tgt: j}).values, dtype=float)
+        # at McGeer's wheel (R = l) the paper's loss is zero: its round-off (1e-32 J/m) would
+        # stretch the log axis over 30 decades; it is drawn as a marker on the bottom edge
+        zero = eta <= 1e-12 * np.nanmax(np.abs(eta), initial=0.0)
+        ax.plot(R, np.where(zero, np.nan, eta), "k--",
                 label="paper: impact only, q3_dot = 1 rad/s")
+        if np.any(zero):
+            ax.plot(R[zero], np.full(int(zero.sum()), 0.03), "kv", ms=6,
+                    transform=ax.get_xaxis_transform(), clip_on=False,
+                    label="paper: no loss (McGeer's wheel)" if j == 0 else None)
         for act in ds["actuation"].values:
             sel = ds.sel(actuation=act).isel({tgt: j})
             y = sel["work_per_metre"].values

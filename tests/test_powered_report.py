@@ -163,3 +163,15 @@ def test_model_near_the_wheel_meets_the_compass_gaits(capsys: Capture) -> None:
         list(lib["fixed_point"].values()), abs=1e-8)
     assert model["actuator_work"] == pytest.approx(model["collision_loss"], abs=1e-9)
     assert model["actuator_work"] < 1e-4  # the cheap branch (the costly one needs ~1 J)
+
+
+def test_time_limit_is_an_option_and_its_end_says_so(capsys: Capture, tmp_path: Path) -> None:
+    # QA sweep 4: the scipy search stopped at a 45 s limit that the CLI could not raise
+    assert main(["powered", "--model", "kneed", "--backend", "scipy", "--time-limit", "0.5",
+                 "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "gave up after 0.5 s (time limit" in err
+    assert err.endswith("give it more with --time-limit SECONDS or use --backend compiled, "
+                        "much faster")
+    assert main(["powered", "--time-limit", "nan"]) == 2
+    assert "--time-limit must be finite and > 0" in capsys.readouterr().err

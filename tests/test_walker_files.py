@@ -105,3 +105,80 @@ def test_own_walker_file_finds_the_stable_gait_of_the_same_physics(tmp_path: Pat
     g = gaits[0]
     assert g.collision_loss == pytest.approx(
         26.0 * 9.81 * g.cycle.step_length * np.sin(slope), rel=1e-7)
+
+
+def test_bent_knee_is_free_in_an_impact_and_said(capsys: pytest.CaptureFixture[str]) -> None:
+    # QA sweep 4: impact --state with the swing knee bent 0.3 rad locked it at the bent angle
+    # (its post-impact rate was 6e-16): a joint away from its lock angle is not locked
+    import numpy as np
+
+    from heelstrike.analysis.model_gaits import model_heel_strike, symmetric_heel_strike_state
+    from heelstrike.core.impact import impact
+
+    kneed = load_walker("kneed")
+    q, qd = symmetric_heel_strike_state(kneed, 0.26)
+    knee = kneed.joint_index("swing_knee")
+    stance_knee = kneed.joint_index("stance_knee")
+    assert kneed.joints_at_lock(q) == kneed.lockable_joints  # the symmetric state: all locked
+    q = q.copy()
+    q[knee] = 0.3  # bent swing knee; the swing foot then sits elsewhere: put it on the ground
+    q = PhasedWalker.from_built(kneed).touchdown_configuration(q)
+    assert kneed.joints_at_lock(q) == (stance_knee,)
+    hs = model_heel_strike(kneed, q, qd)
+    assert abs(hs.q_dot_plus[knee]) > 1e-3 and abs(hs.q_dot_plus[stance_knee]) < 1e-12
+    assert hs.T == pytest.approx(hs.T_c + hs.T_a, rel=1e-12)
+    # the same impact from the algebra alone: striking foot and stance knee, trailing foot lifts
+    assert hs.trailing_foot_lifts
+    A = np.vstack((kneed.contact_jacobian(q, "left"), kneed.lock_jacobian((stance_knee,))))
+    ref = impact(kneed.mass_matrix(q), A, qd)
+    np.testing.assert_allclose(hs.q_dot_plus, ref.velocity_post, atol=1e-12)
+    state = ",".join(f"{v:.17g}" for v in q)
+    assert main(["impact", "--model", "kneed", f"--state={state}", "--json"]) == 0
+    out = capsys.readouterr()
+    assert "joint 'swing_knee' is at 0.3 rad, not at its lock angle 0 rad: it is free" in out.err
+
+
+def test_stance_foot_must_roll_before_the_impact(capsys: pytest.CaptureFixture[str]) -> None:
+    # QA sweep 4: a stance foot moving into the ground at 3 m/s was accepted (T_c = T)
+    import numpy as np
+
+    from heelstrike.analysis.heel_strike import NotAHeelStrikeError, check_stance_foot_rolls
+    from heelstrike.analysis.model_gaits import symmetric_heel_strike_state
+
+    kneed = load_walker("kneed")
+    q, qd = symmetric_heel_strike_state(kneed, 0.26)
+    check_stance_foot_rolls(kneed, q, qd)  # the rolling state passes
+    for bad in ((0, 0.0), (1, -3.0)):  # x_dot = 0 (slides, R > 0), y_dot = -3 m/s
+        v = qd.copy()
+        v[bad[0]] = bad[1]
+        with pytest.raises(NotAHeelStrikeError, match="stance foot's contact point moves"):
+            check_stance_foot_rolls(kneed, q, v)
+    state = ",".join(f"{x:.17g}" for x in q)
+    vel = ",".join(f"{x:.17g}" for x in np.where(np.arange(qd.size) == 1, -3.0, qd))
+    assert main(["impact", "--model", "kneed", f"--state={state}", f"--velocity={vel}"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "stance foot's contact point moves" in err[0]
+
+
+@pytest.mark.parametrize("argv", [["impact", "--angle", "20deg", "--q3dot", "0"],
+                                  ["impact", "--model", "kneed", "--angle", "20deg",
+                                   "--q3dot", "0"]])
+def test_impact_at_rest_is_refused(argv: list[str],
+                                   capsys: pytest.CaptureFixture[str]) -> None:
+    # QA sweep 4: --q3dot 0 printed an all-zero "heel strike" (exit 0) while --q3dot -1 was
+    # refused: a striking foot at rest strikes nothing
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "does not move towards the ground" in err[0]
+
+
+@pytest.mark.parametrize(("argv", "choices"), [([], "reproduce, impact, gait"),
+                                               (["robot"], "list, info, state"),
+                                               (["study"], "cost")])
+def test_missing_subcommand_names_the_choices(argv: list[str], choices: str,
+                                              capsys: pytest.CaptureFixture[str]) -> None:
+    # QA sweep 4: "the following arguments are required: robot_command"
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "needs a command: " + choices in err[0]
+    assert "robot_command" not in err[0]

@@ -36,6 +36,7 @@ __all__ = [
     "HeelStrikeStudy",
     "NotAHeelStrikeError",
     "check_heel_strike_state",
+    "check_stance_foot_rolls",
     "check_striking_foot_approaches",
     "heel_strike_study",
     "step_length",
@@ -72,7 +73,9 @@ def check_striking_foot_approaches(
     Raises
     ------
     NotAHeelStrikeError
-        If the foot's pre-impact normal velocity is positive (away from the ground).
+        If the foot's pre-impact normal velocity is positive (away from the ground), or the
+        walker is at rest (nothing strikes). (At McGeer's wheel, ``R = l``, the striking
+        point's normal velocity is zero while the walker rolls: a valid, lossless impact.)
     """
     vn = float((walker.contact_jacobian(np.asarray(q, dtype=float), foot)
                 @ np.asarray(q_dot, dtype=float))[1])
@@ -81,6 +84,42 @@ def check_striking_foot_approaches(
             f"the striking foot moves away from the ground before the impact (normal velocity "
             f"+{vn:.6g} m/s): no heel strike happens with these pre-impact rates (the paper's "
             "rates q3_dot = 1 rad/s, q4_dot = 0 bring it down)")
+    if not np.any(np.asarray(q_dot, dtype=float)):  # at rest: nothing strikes
+        raise NotAHeelStrikeError(
+            "the striking foot does not move towards the ground before the impact (every "
+            "pre-impact rate is 0): no heel strike happens (the paper's rates q3_dot = 1 rad/s, "
+            "q4_dot = 0 bring it down)")
+
+
+def check_stance_foot_rolls(walker: PlanarWalker, q: ArrayLike, q_dot: ArrayLike) -> None:
+    """Check that the stance foot's contact point is at rest before the impact.
+
+    In single support the stance foot rolls without slipping (for a foot of radius ``R``,
+    ``x_dot = -R`` times the stance leg's rate): pre-impact velocities where it slides or
+    moves into the ground describe no walker's heel strike, and the decomposition would
+    count their energy as lost.
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+        Scalar-parameter walker.
+    q, q_dot : array_like, shape (n,)
+        Pre-impact configuration (m, rad) and velocities (m/s, rad/s).
+
+    Raises
+    ------
+    NotAHeelStrikeError
+        If the contact point's velocity exceeds round-off relative to ``l sum |q_dot|``.
+    """
+    qd = np.asarray(q_dot, dtype=float)
+    v = walker.contact_jacobian(np.asarray(q, dtype=float), "right") @ qd
+    scale = float(walker.scale.leg_length) * float(np.sum(np.abs(qd)))
+    if float(np.max(np.abs(v))) > 1e-9 * max(scale, 1e-300):
+        raise NotAHeelStrikeError(
+            f"the stance foot's contact point moves before the impact (along the ground "
+            f"{float(v[0]):+.6g} m/s, normal {float(v[1]):+.6g} m/s): in single support it "
+            "rolls without slipping, x_dot = -R times the stance leg's rate (R its foot "
+            "radius) and y_dot = 0")
 
 
 def check_heel_strike_state(

@@ -175,6 +175,49 @@ def _energy_book(cycle: LimitCycle) -> ModelGait:
     )
 
 
+def _nearly_periodic(w: PhasedWalker, Z: FloatArray, backend: str,
+                     kw: dict[str, Any]) -> list[FloatArray]:
+    """The seeds ``Z`` (S, d) that take a step, most nearly periodic first (``|P(z) - z|`` at
+    a coarse tolerance: one batched compiled call, or step by step on the scipy reference).
+
+    Raises
+    ------
+    GaitNotFoundError
+        No seed takes a step.
+    """
+    if backend == "compiled":
+        from heelstrike.dynamics.compiled_phased import ensemble_walk_phased
+
+        # the actuation was checked for the compiled backend (backend_simulator)
+        ens = ensemble_walk_phased(w, Z, slope=kw["slope"], torque=cast(Any, kw["torque"]),
+                                   push_off=cast(Any, kw["push_off"]), rtol=1e-7, atol=1e-8,
+                                   parallel=False)
+        Z1 = np.where(ens.ok[:, None], ens.z, np.nan)
+    else:
+        coarse = PoincareMap(walker=w, rtol=1e-7, atol=1e-8, **kw)
+        Z1 = np.array([coarse(z) for z in Z])
+    err = np.linalg.norm(Z1 - Z, axis=1)
+    mapped = np.flatnonzero(np.all(np.isfinite(Z1), axis=1))
+    if mapped.size == 0:
+        raise GaitNotFoundError("no step could be completed from any automatic guess")
+    return [Z[i] for i in mapped[np.argsort(err[mapped], kind="stable")]]
+
+
+def _attractors(w: PhasedWalker, Z: FloatArray, kw: dict[str, Any]) -> list[FloatArray]:
+    """Where the seeds ``Z`` settle in :data:`ATTRACTOR_STEPS` compiled steps (a stable
+    gait attracts the seeds near it), distinct to 1e-3."""
+    from heelstrike.dynamics.compiled_phased import ensemble_walk_phased
+
+    walked = ensemble_walk_phased(w, Z, steps=ATTRACTOR_STEPS, slope=kw["slope"],
+                                  torque=cast(Any, kw["torque"]),
+                                  push_off=cast(Any, kw["push_off"]), rtol=1e-7, atol=1e-8,
+                                  parallel=False)
+    out: list[FloatArray] = []
+    for z in walked.z[walked.ok]:
+        _add_distinct(out, np.asarray(z, dtype=float), 1e-3)
+    return out
+
+
 def find_model_gaits(
     walker: BuiltWalker,
     *,
@@ -193,14 +236,14 @@ def find_model_gaits(
 
     Without ``guess`` the search has two stages:
 
-    1. A grid of post-impact states (:func:`_grid_guesses`, rates scaled by the walker's
-       ``sqrt(g / l)``) is mapped once; Newton starts from the most nearly periodic ones,
-       until one converges to a stable gait. On the compiled backend the grid is the compass
-       search's finer one (864 seeds, step angles 3-34 deg), and its
-       :data:`ATTRACTOR_SEEDS` most nearly periodic seeds are also walked
-       :data:`ATTRACTOR_STEPS` steps first: where they settle (a stable gait's attraction)
-       Newton starts too. The scipy reference maps the coarse grid of 120 seeds only (its
-       steps cost about a thousand times more).
+    1. A coarse grid of post-impact states (:func:`_grid_guesses`, 120 seeds, rates scaled
+       by the walker's ``sqrt(g / l)``) is mapped once; Newton starts from the 5 most nearly
+       periodic ones, until one converges to a stable gait. If none does, on the compiled
+       backend, the compass search's finer grid (864 seeds, step angles 3-34 deg) is mapped
+       too, its :data:`ATTRACTOR_SEEDS` most nearly periodic seeds are walked
+       :data:`ATTRACTOR_STEPS` steps, and Newton starts from where they settle (a stable
+       gait attracts them), then from the finer grid's 5 best. (The scipy reference, whose
+       steps cost about a thousand times more, stops at the coarse grid.)
     2. If no stable gait was found and ``from_reference``: the stable gait of the walker file's
        own parameters at :data:`REFERENCE_SLOPE` (found by stage 1) is followed by
        natural-parameter continuation with step control (the one ``map`` uses) along the
@@ -253,51 +296,44 @@ def find_model_gaits(
     else:
         # the grid mapped once at a coarse tolerance: one batched compiled call, or step by
         # step on the scipy reference; Newton starts from the most nearly periodic points
-        compiled = backend == "compiled"
-        Z = np.array(_grid_guesses(w, fine=compiled))
-        attractors: list[FloatArray] = []
-        if compiled:
-            from heelstrike.dynamics.compiled_phased import ensemble_walk_phased
-
-            # the actuation was checked for the compiled backend above (backend_simulator)
-            act: dict[str, Any] = dict(slope=slope, torque=cast(Any, torque),
-                                       push_off=cast(Any, push_off), rtol=1e-7, atol=1e-8,
-                                       parallel=False)
-            ens = ensemble_walk_phased(w, Z, **act)
-            Z1 = np.where(ens.ok[:, None], ens.z, np.nan)
-        else:
-            coarse = PoincareMap(walker=w, rtol=1e-7, atol=1e-8, **kw)
-            Z1 = np.array([coarse(z) for z in Z])
-        err = np.linalg.norm(Z1 - Z, axis=1)
-        mapped = np.flatnonzero(np.all(np.isfinite(Z1), axis=1))
-        if mapped.size == 0:
-            raise GaitNotFoundError("no step could be completed from any automatic guess")
-        best = mapped[np.argsort(err[mapped], kind="stable")]
-        if compiled:  # a stable gait attracts the seeds near it: walk them (cheap, batched)
-            walked = ensemble_walk_phased(w, Z[best[:ATTRACTOR_SEEDS]], steps=ATTRACTOR_STEPS,
-                                          **act)
-            for z in walked.z[walked.ok]:
-                _add_distinct(attractors, np.asarray(z, dtype=float), 1e-3)
-        starts = attractors + [Z[i] for i in best[:5]]
-    # stage 1: Newton from each start until a stable gait is found
+        Z = np.array(_grid_guesses(w))
+        starts = _nearly_periodic(w, Z, backend, kw)[:5]
+    # stage 1: Newton from each start until a stable gait is found (on the compiled backend
+    # then from the finer grid's attractors and most nearly periodic seeds)
     last: Exception | None = None
     found: list[LimitCycle] = []
     points: list[FloatArray] = []
+    finer = ""
 
     def add(cycle: LimitCycle) -> None:
         if _add_distinct(points, np.asarray(cycle.fixed_point, dtype=float)):
             found.append(cycle)
 
-    for z0 in starts:
+    def newton_from(zs: list[FloatArray]) -> None:
+        nonlocal last
+        for z0 in zs:
+            try:
+                add(find_limit_cycle(
+                    w, guess=z0, tol=tol, max_iter=max_iter, rtol=rtol, atol=atol, **kw
+                ))
+            except GaitNotFoundError as exc:
+                last = exc
+                continue
+            if any(c.stable for c in found):
+                break
+
+    newton_from(starts)
+    if guess is None and backend == "compiled" and not any(c.stable for c in found):
+        fine = np.array(_grid_guesses(w, fine=True))
         try:
-            add(find_limit_cycle(
-                w, guess=z0, tol=tol, max_iter=max_iter, rtol=rtol, atol=atol, **kw
-            ))
-        except GaitNotFoundError as exc:
-            last = exc
-            continue
-        if any(c.stable for c in found):
-            break
+            best = _nearly_periodic(w, fine, backend, kw)
+        except GaitNotFoundError:
+            best = []
+        attractors = _attractors(w, np.array(best[:ATTRACTOR_SEEDS]), kw) if best else []
+        newton_from(attractors + best[:5])
+        finer = (f"; nor from the {len(attractors)} states that the {ATTRACTOR_SEEDS} most "
+                 f"nearly periodic of {len(fine)} finer seeds settle to in {ATTRACTOR_STEPS} "
+                 "steps, nor from the 5 best of those seeds")
     # stage 2: the reference gait followed to this walker and slope
     if guess is None and from_reference and not any(c.stable for c in found):
         z_end = _follow_reference(w, slope, torque=torque, push_off=push_off,
@@ -316,7 +352,7 @@ def find_model_gaits(
                  " deg continue to these parameters and slope" if from_reference else "")
         raise GaitNotFoundError(
             f"Newton converged from none of the {len(starts)} most nearly periodic of "
-            f"{len(Z)} automatic starts (the last: {last}){tried}")
+            f"{len(Z)} automatic starts (the last: {last}){finer}{tried}")
     return tuple(_energy_book(c) for c in sorted(found, key=_preference))
 
 
@@ -510,8 +546,10 @@ class ModelHeelStrike(ResultDictMixin):
 def model_heel_strike(walker: BuiltWalker, q: ArrayLike, q_dot: ArrayLike) -> ModelHeelStrike:
     """Heel strike of a described walker at ``(q, q_dot)`` (swing foot striking).
 
-    The striking foot's rows and all knee locks are bilateral, the trailing foot a unilateral
-    candidate decided by :func:`~heelstrike.core.complementarity.resolve_impact`.
+    The striking foot's rows and the locks of the lockable joints at their lock angle
+    (:meth:`~heelstrike.models.builder.BuiltWalker.joints_at_lock`: a bent knee is free) are
+    bilateral, the trailing foot a unilateral candidate decided by
+    :func:`~heelstrike.core.complementarity.resolve_impact`.
 
     Parameters
     ----------
@@ -526,7 +564,8 @@ def model_heel_strike(walker: BuiltWalker, q: ArrayLike, q_dot: ArrayLike) -> Mo
         raise ValueError(
             f"state and velocity need {n} values each ({', '.join(walker.coordinate_names)})"
         )
-    A_lock = walker.lock_jacobian() if walker.lockable_joints else np.zeros((0, n))
+    locked = walker.joints_at_lock(q_)  # a lockable joint away from its lock angle is free
+    A_lock = walker.lock_jacobian(locked) if locked else np.zeros((0, n))
     M = walker.mass_matrix(q_)
     bil = np.vstack((walker.contact_jacobian(q_, "left"), A_lock))
     mc = resolve_impact(

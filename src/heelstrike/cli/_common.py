@@ -28,7 +28,15 @@ class Parser(argparse.ArgumentParser):
     def error(self, message: str) -> NoReturn:
         # "argument --slope: must be ..." reads "--slope must be ..."
         m = re.fullmatch(r"argument (--[\w-]+): (must .*)", message, flags=re.DOTALL)
-        raise CliError(f"{m[1]} {m[2]}" if m else message)
+        if m:
+            raise CliError(f"{m[1]} {m[2]}")
+        # a missing subcommand: name the choices, not the parser's internal destination
+        for action in self._actions:
+            if (isinstance(action, argparse._SubParsersAction)
+                    and message == f"the following arguments are required: {action.dest}"):
+                raise CliError(f"{self.prog} needs a command: {', '.join(action.choices)} "
+                               f"(see '{self.prog} --help')")
+        raise CliError(message)
 
 
 def parse_angle(text: str) -> float:

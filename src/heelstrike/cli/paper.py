@@ -99,6 +99,7 @@ def _check_rates(args: argparse.Namespace) -> None:
 def _run_impact_model(args: argparse.Namespace) -> int:
     from heelstrike.analysis.heel_strike import (
         check_heel_strike_state,
+        check_stance_foot_rolls,
         check_striking_foot_approaches,
     )
     from heelstrike.analysis.model_gaits import model_heel_strike, symmetric_heel_strike_state
@@ -142,6 +143,14 @@ def _run_impact_model(args: argparse.Namespace) -> int:
     if args.velocity is None and "q4dot" in given:
         qd[walker.coordinate_names.index("hip")] = args.q4dot
     check_striking_foot_approaches(walker, q, qd)
+    check_stance_foot_rolls(walker, q, qd)
+    locked = walker.joints_at_lock(q)
+    for j, angle in zip(walker.lockable_joints, walker.lock_angles, strict=True):
+        if j not in locked:
+            print(f"heelstrike: note: joint {walker.coordinate_names[j]!r} is at "
+                  f"{q[j]:.6g} rad, not at its lock angle {float(angle):.6g} rad: it is free "
+                  "in this impact (only joints at their lock angle are held locked)",
+                  file=sys.stderr)
     s = model_heel_strike(walker, q, qd)
     d = s.to_dict()
     d["model"] = walker.description.name

@@ -110,6 +110,9 @@ def add_powered(sub: Any) -> None:
     p.add_argument("--out", default=None, metavar="DIR",
                    help="also write the period's energy books: DIR/powered_energy.png and "
                    "its data DIR/powered_energy.csv")
+    p.add_argument("--time-limit", type=float, default=None, metavar="SECONDS",
+                   help="stop the search after this many seconds of computing (default 45; "
+                   "first-run kernel builds not counted)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=_run_powered)
 
@@ -123,6 +126,9 @@ def _run_powered(args: argparse.Namespace) -> int:
     )
 
     refuse_unused_gains(args, [args.actuation])
+    limit = DEFAULT_TIME_LIMIT if args.time_limit is None else args.time_limit
+    if not (math.isfinite(limit) and limit > 0):
+        raise CliError(f"--time-limit must be finite and > 0 (s), got {limit:g}")
     walker = walker_from_args(args) if args.model is None else model_from_args(args)
     if args.model is not None:
         refuse_model_actuation(walker, [args.actuation])
@@ -151,11 +157,14 @@ def _run_powered(args: argparse.Namespace) -> int:
             model=walker if args.model is not None else None,
             backend=args.backend if args.model is None else backend,
             actuation_options=actuation_options(args) or None,
-            progress=True, time_limit=DEFAULT_TIME_LIMIT)
+            progress=True, time_limit=limit)
     except PoweredGaitNotFoundError as exc:
+        hint = ("; give it more with --time-limit SECONDS"
+                + ("" if backend == "compiled" else " or use --backend compiled, much faster")
+                if "(time limit" in str(exc) else "")
         raise CliError(
             f"no {args.actuation} gait found with {target.replace('_', ' ')} {value:g}"
-            f"{declared_note} at R = {radius:g} m: {exc}"
+            f"{declared_note} at R = {radius:g} m: {exc}{hint}"
         ) from exc
     gait = preferred_gait(gaits)
     others = [g for g in gaits if g is not gait]
@@ -202,7 +211,7 @@ def _run_powered(args: argparse.Namespace) -> int:
     print(f"  cost of transport {gait.cost_of_transport:10.6f}")
     print(f"  eta             {gait.eta:10.6f} J/m")
     if others:
-        which = ("the stable one needing the least actuator work" if gait.stable else
+        which = ("this is the stable one needing the least actuator work" if gait.stable else
                  "none is stable: this is the one needing the least actuator work")
         print(f"  note: {len(gaits)} distinct gaits meet this target; {which} (study cost "
               "keeps the cheapest, stable or not); the others:")

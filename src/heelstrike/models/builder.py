@@ -327,9 +327,10 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
             for j in self.lockable_joints
         )
         if self.hip_joint in self.lockable_joints:  # the section needs the swing leg free
+            hip = self.coordinate_names[self.hip_joint]
             raise ModelDescriptionError(
-                f"link[{self.hip_joint - 2}].joint.lockable: the hip ({self.coordinate_names[self.hip_joint]!r}) "
-                "cannot be lockable: the swing leg swings about it (lock knees, not the hip)")
+                f"link[{self.hip_joint - 2}].joint.lockable: the hip ({hip!r}) cannot be "
+                "lockable: the swing leg swings about it (lock knees, not the hip)")
         self.point_names: tuple[str, ...] = description.point_names
         # a batch of walkers does not walk (its parameters broadcast against states instead)
         self._feet_one_circle = not self.is_batched and self._feet_are_one_circle()
@@ -604,6 +605,20 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         for r, j in enumerate(js):
             A[r, j] = 1.0
         return A
+
+    def joints_at_lock(self, q: ArrayLike, tol: float = 1e-6) -> tuple[int, ...]:
+        """The lockable joints at their lock angle in the configuration ``q`` (within ``tol``
+        rad): the ones an impact at ``q`` holds locked; a bent knee is free.
+
+        Parameters
+        ----------
+        q : array_like, shape (n,)
+        tol : float
+            Accepted ``|q[j] - lock_angle|`` (rad).
+        """
+        q_ = np.asarray(q, dtype=float)
+        return tuple(j for j, a in zip(self.lockable_joints, self.lock_angles, strict=True)
+                     if abs(float(q_[j]) - float(a)) <= tol)
 
     def stance_and_swing_locks(self) -> tuple[tuple[int, ...], tuple[int, ...]]:
         """Split the lockable joints into stance-leg and swing-leg ones.

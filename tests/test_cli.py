@@ -242,3 +242,10 @@ def test_impact_backend_compiled_gives_the_reference_numbers(capsys):
             assert fast[key] == value, key
         else:
             np.testing.assert_allclose(fast[key], value, rtol=1e-12, atol=1e-12, err_msg=key)
+
+
+def test_wheel_impact_text_has_no_negative_zero(capsys):
+    # QA sweep 4: at R = l the round-off (1e-17) printed as "-0.000000" next to "exactly 0"
+    assert main(["impact", "--radius", "1", "--angle", "20deg"]) == 0
+    out = capsys.readouterr().out
+    assert "-0.000000" not in out and "0.000000, 0.000000 N s" in out

@@ -280,3 +280,38 @@ def test_kane_and_painleve_cases_are_said(tmp_path: Path, capsys: Capture) -> No
     out = capsys.readouterr()
     d = json.loads(out.out)
     assert d["T_plus"] == pytest.approx(d["T"], rel=1e-12) and "Kane" not in out.err
+
+
+def test_flat_sole_reports_its_centre_of_pressure(tmp_path: Path, capsys: Capture) -> None:
+    # QA sweep 4: a flat sole is unbounded, so a centre of pressure 0.7 m behind a real sole
+    # went unnoticed; it is now reported. A rigid brick (a wheel on an axle through its centre
+    # of mass, at rest) dropped flat at 1 m/s: the sole stops all of it, and its impulse acts
+    # below the centre of mass, (0.1, 0.05) m from the sole frame
+    path = tmp_path / "brick.urdf"
+    path.write_text(f"""<?xml version="1.0"?>
+<robot name="brick">
+  <link name="base"><inertial><origin xyz="0.1 0.05 0.2"/><mass value="2.0"/>
+    <inertia ixx="0.02" iyy="0.03" izz="0.04" {_INERTIA}/></inertial></link>
+  <link name="wheel"><inertial><origin xyz="0 0 0"/><mass value="0.5"/>
+    <inertia ixx="0.001" iyy="0.002" izz="0.001" {_INERTIA}/></inertial></link>
+  <joint name="axle" type="revolute"><parent link="base"/><child link="wheel"/>
+    <origin xyz="0.1 0.05 0.2"/><axis xyz="0 1 0"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+</robot>
+""")
+    robot = load_urdf(path)
+    q, v = [*DROP_Q[:2], 0.0, *DROP_Q[3:], 0.0], [*DROP_V, 0.0]
+    d = robot_impact(robot, q, v, strike=[parse_contact("base:flat")]).to_dict()
+    c = d["contacts"][0]
+    assert c["mode"] == "stick"
+    np.testing.assert_allclose(c["force_impulse"], [0.0, 0.0, 2.5], atol=1e-12)  # m v
+    np.testing.assert_allclose(c["centre_of_pressure"], [0.1, 0.05], atol=1e-12)
+    assert d["T_c"] == pytest.approx(1.25, rel=1e-12) and np.max(np.abs(d["qdot_plus"])) < 1e-12
+    state = _state(tmp_path / "s.json", q, v)
+    assert main(["impact", "--urdf", str(path), "--state", state, "--strike", "base:flat",
+                 "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["units"]["contacts"]["centre_of_pressure"] == "m"
+    assert out["contacts"][0]["centre_of_pressure"] == pytest.approx([0.1, 0.05], abs=1e-12)
+    assert main(["impact", "--urdf", str(path), "--state", state, "--strike", "base:flat"]) == 0
+    assert "centre of pressure (+0.1000, +0.0500) m" in capsys.readouterr().out

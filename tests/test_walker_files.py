@@ -182,3 +182,29 @@ def test_missing_subcommand_names_the_choices(argv: list[str], choices: str,
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "needs a command: " + choices in err[0]
     assert "robot_command" not in err[0]
+
+
+def test_a_parameter_given_twice_is_refused(capsys: pytest.CaptureFixture[str]) -> None:
+    # QA sweep 4: --param R=0.3 --param R=0.2 silently took the last value
+    assert main(["impact", "--model", "compass", "--param", "R=0.3", "--param", "R=0.2",
+                 "--angle", "20deg"]) == 2
+    assert "--param R is given twice" in capsys.readouterr().err
+
+
+def test_default_gains_of_the_paper_scale_are_the_documented_ones() -> None:
+    # QA sweep 4: compass.toml's scale (g from its potential) gave gain 2.999999999999999
+    from heelstrike.dynamics.actuation import (
+        DEFAULT_ENERGY_GAIN,
+        DEFAULT_MAX_TORQUE,
+        DEFAULT_PD_KD,
+        DEFAULT_PD_KP,
+        default_gains,
+    )
+    from heelstrike.models.compass import CompassGait
+
+    want = {"gain": DEFAULT_ENERGY_GAIN, "kp": DEFAULT_PD_KP, "kd": DEFAULT_PD_KD,
+            "max_torque": DEFAULT_MAX_TORQUE}
+    for walker in (CompassGait(), load_walker("compass")):
+        assert default_gains(walker.scale) == want
+    heavy = default_gains(CompassGait(leg_mass=10.0).scale)  # 30 kg instead of 20 kg
+    assert heavy["kp"] == pytest.approx(1.5 * DEFAULT_PD_KP, rel=1e-12)

@@ -40,6 +40,7 @@ __all__ = [
     "write_bifurcation",
     "write_bifurcation_files",
     "write_cost_figures",
+    "write_cost_study",
     "write_figure_data",
     "write_gait_map",
     "write_impact_map",
@@ -523,6 +524,14 @@ def write_powered_energy(
     png = out / "powered_energy.png"
     fig.savefig(png)
     return png, write_csv(energy, out / "powered_energy.csv")
+
+
+def write_cost_study(ds: xr.Dataset, path: str | Path) -> Path:
+    """Write the cost study (:func:`heelstrike.analysis.cost_study.cost_study`) to netCDF at
+    ``path`` (its directory made if needed) and return the path."""
+    p = Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    return write_netcdf(ds, p)
 
 
 def write_cost_figures(ds: xr.Dataset, out: str | Path) -> list[Path]:

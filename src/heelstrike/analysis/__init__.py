@@ -47,7 +47,6 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
     ),
     "cost_study": (
         "BRANCH_NOTE", "GAIT_VARIABLES", "STUDY_BYTES_PER_POINT", "check_study_memory", "paper_eta",
-        "save_study",
     ),
     "gait_map": (
         "GaitMap", "NewtonGait", "compass_bifurcation", "model_bifurcation", "model_gait_map",

@@ -54,7 +54,6 @@ from heelstrike.analysis.powered import (
     family_simulator,
     impact_angle_for_step_length,
 )
-from heelstrike.io import write_netcdf
 from heelstrike.models.compass import CompassGait
 
 __all__ = [
@@ -64,7 +63,6 @@ __all__ = [
     "check_study_memory",
     "cost_study",
     "paper_eta",
-    "save_study",
 ]
 
 #: Memory (bytes) a study needs per (actuation, radius, target) point, an upper estimate: the
@@ -483,11 +481,3 @@ def _study_row(
     rows: dict[str, NDArray[Any]] = dict(out)
     return rows | {"failure": failure, "seed": seed, "seed_size": seed_size,
                    "branch": branch, "gaits_found": n_found}
-
-
-
-def save_study(ds: xr.Dataset, path: str | Path) -> Path:
-    """Write the study to netCDF (``path``) and return the path."""
-    p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    return write_netcdf(ds, p)

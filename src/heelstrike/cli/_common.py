@@ -193,6 +193,8 @@ def model_from_args(args: argparse.Namespace) -> Any:
         name, sep, value = item.partition("=")
         if not sep or not name.strip():
             raise CliError(f"invalid --param {item!r}: use NAME=VALUE, e.g. R=0.2")
+        if name.strip() in params:
+            raise CliError(f"--param {name.strip()} is given twice: give it once")
         try:
             params[name.strip()] = float(value)
         except ValueError:

@@ -208,7 +208,7 @@ def add_walk(sub: Any) -> None:
     p.add_argument("--fps", type=float, default=30.0, help="frames per second (default 30)")
     p.add_argument("--out", default="walk.gif",
                    help="output file (.gif or .mp4), or a directory for walk.gif plus the "
-                   "figures (PNG) and their data (CSV)")
+                   "figures (PNG) and their data (CSV) (default ./walk.gif)")
     p.set_defaults(func=_run_walk)
 
 
@@ -323,10 +323,14 @@ def add_bifurcation(sub: Any) -> None:
                        "gait's 45 slopes)", "compiled")
     p.add_argument("--slope-range", default="0.5deg:6deg",
                    type=lambda t: parse_range(t, parse_slope),
-                   help="START:STOP[:COUNT] slopes, e.g. 0.5deg:6deg:56 (default count 45)")
-    p.add_argument("--transient", type=positive_int, default=50, help="steps discarded")
-    p.add_argument("--record", type=positive_int, default=16, help="steps recorded")
-    p.add_argument("--out", default="bifurcation", help="output directory")
+                   help="START:STOP[:COUNT] slopes, e.g. 0.5deg:6deg:56 (default "
+                   "0.5deg:6deg, count 45)")
+    p.add_argument("--transient", type=positive_int, default=50,
+                   help="steps discarded at each slope before recording (default 50)")
+    p.add_argument("--record", type=positive_int, default=16,
+                   help="steps recorded at each slope (default 16)")
+    p.add_argument("--out", default="bifurcation",
+                   help="output directory (default ./bifurcation)")
     p.set_defaults(func=_run_bifurcation)
 
 
@@ -406,7 +410,8 @@ def add_basin(sub: Any) -> None:
     p.add_argument("--steps", type=positive_int, default=60,
                    help="largest number of steps per initial state (default 60)")
     p.add_argument("--tol", type=float, default=1e-3,
-                   help="convergence radius around the fixed point (default 1e-3)")
+                   help="convergence radius around the fixed point, the norm of the section "
+                   "coordinates' difference (rad and rad/s together; default 1e-3)")
     p.add_argument("--out", default="basin", help="output directory (default ./basin)")
     add_store_option(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")

@@ -167,6 +167,11 @@ def _run_impact_model(args: argparse.Namespace) -> int:
     return 0
 
 
+def _shown(x: float) -> float:
+    """``x`` as printed with 6 decimals, without a round-off ``-0.000000``."""
+    return round(float(x), 6) + 0.0
+
+
 def _run_impact(args: argparse.Namespace) -> int:
     from heelstrike.analysis.heel_strike import check_striking_foot_approaches, heel_strike_study
     from heelstrike.models import heel_strike_state
@@ -246,9 +251,10 @@ def _run_impact(args: argparse.Namespace) -> int:
     units = ("m/s", "m/s", "rad/s", "rad/s")
     for i, unit in enumerate(units):
         name = f"q{i + 1}_dot ({unit})"
-        print(f"    {name:<28}{d['qdot_minus'][i]:12.6f} {d['qdot_plus'][i]:12.6f}")
+        print(f"    {name:<28}{_shown(d['qdot_minus'][i]):12.6f} "
+              f"{_shown(d['qdot_plus'][i]):12.6f}")
     lx, ly = d["impulse"]
-    print(f"  ground impulse on the striking foot (x, y)  {lx:.6f}, {ly:.6f} N s")
+    print(f"  ground impulse on the striking foot (x, y)  {_shown(lx):.6f}, {_shown(ly):.6f} N s")
     if d["degenerate_wheel"]:
         verdict = "no: R = l, McGeer's wheel (degenerate, q2_dot+ = 0)"
     else:
@@ -277,7 +283,7 @@ def add_impact_map(sub: Any) -> None:
                    help="impact angle when not swept (default 20deg)")
     p.add_argument("--q3dot", type=float, default=1.0,
                    help="stance rate (rad/s, > 0, default 1)")
-    p.add_argument("--out", default="impact_map", help="output directory")
+    p.add_argument("--out", default="impact_map", help="output directory (default ./impact_map)")
     add_backend_option(p, "heel-strike computation: scipy (default and only: the reference "
                        "complementarity heel strike of the walker's generated numpy "
                        "functions; a map of algebraic impacts, no simulation); compiled is "

@@ -276,7 +276,7 @@ def add_study(sub: Any) -> None:
     c.add_argument("--actuation", action="append", choices=ACTUATIONS, default=None,
                    help="actuation model, repeatable (default pushoff)")
     add_actuation_options(c)
-    c.add_argument("--out", default="cost_study", help="output directory")
+    c.add_argument("--out", default="cost_study", help="output directory (default ./cost_study)")
     add_store_option(c)
     c.set_defaults(func=_run_study, radius=0.0)
 
@@ -284,9 +284,9 @@ def add_study(sub: Any) -> None:
 def _run_study(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from heelstrike.analysis.cost_study import check_study_memory, cost_study, save_study
+    from heelstrike.analysis.cost_study import check_study_memory, cost_study
     from heelstrike.analysis.powered import actuation_family
-    from heelstrike.outputs import write_cost_figures
+    from heelstrike.outputs import write_cost_figures, write_cost_study
 
     model = None
     if args.model is None:
@@ -339,7 +339,7 @@ def _run_study(args: argparse.Namespace) -> int:
         raise CliError(str(exc)) from exc
     out = Path(args.out)
     try:
-        nc = save_study(ds, out / "cost_study.nc")
+        nc = write_cost_study(ds, out / "cost_study.nc")
         paths = [nc, *write_cost_figures(ds, out)]
     except OSError as exc:
         raise CliError(f"cannot write to {args.out!r}: {exc.strerror or exc}") from exc

@@ -404,6 +404,7 @@ def run_robot_impact(args: argparse.Namespace) -> int:
         contact_units = {
             "frame": None, "type": None, "role": None, "mode": None, "T_c_normal": "J",
             "T_c_tangential": "J", "force_impulse": "N s", "moment_impulse": "N m s",
+            "centre_of_pressure": "m",
             "normal_velocity_pre": "m/s", "normal_velocity_post": "m/s",
             "slip_speed_post": "m/s",
         }
@@ -424,6 +425,10 @@ def run_robot_impact(args: argparse.Namespace) -> int:
     for c in d["contacts"]:
         print(f"  {c['role']:<6} {c['frame']:<24} {c['type']:<5} {c['mode']:<8} "
               f"T_c normal {c['T_c_normal']:.6f} J, tangential {c['T_c_tangential']:.6f} J")
+        if c.get("centre_of_pressure") is not None:
+            x, y = c["centre_of_pressure"]
+            print(f"         centre of pressure ({x:+.4f}, {y:+.4f}) m from the frame origin "
+                  "(world x, y; the sole is taken as unbounded: check it lies on the sole)")
     if extra_shown:
         slipping = [c["frame"] for c in d["contacts"] if c["mode"] == "slip"]
         causes = []

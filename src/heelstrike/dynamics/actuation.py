@@ -122,7 +122,10 @@ def default_gains(scale: WalkerScale) -> dict[str, float]:
     """
     torque = float(scale.total_mass) * float(scale.gravity) * float(scale.leg_length)
     time = math.sqrt(float(scale.leg_length) / float(scale.gravity))
-    f_torque, f_time = torque / _REFERENCE_TORQUE, time / _REFERENCE_TIME
+    # the factors to 12 significant digits: a walker of the paper's scale computed another way
+    # (a described walker's g from its potential) gets the documented values, not 2.9999...
+    f_torque = float(f"{torque / _REFERENCE_TORQUE:.12g}")
+    f_time = float(f"{time / _REFERENCE_TIME:.12g}")
     return {
         "gain": DEFAULT_ENERGY_GAIN * f_time,
         "kp": DEFAULT_PD_KP * f_torque,

@@ -7,6 +7,7 @@ importing this package works without it, loading a robot raises :class:`RobotErr
 from heelstrike.robots.contacts import (
     ContactSpec,
     RobotImpact,
+    centre_of_pressure,
     contact_jacobian,
     ground_admissible,
     inert_energy_split_batch,
@@ -45,6 +46,7 @@ __all__ = [
     "RobotImpact",
     "RobotSpec",
     "RobotStudy",
+    "centre_of_pressure",
     "contact_jacobian",
     "gait_configuration",
     "gait_state",

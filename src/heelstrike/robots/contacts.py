@@ -55,6 +55,7 @@ __all__ = [
     "ContactKind",
     "ContactSpec",
     "RobotImpact",
+    "centre_of_pressure",
     "contact_jacobian",
     "ground_admissible",
     "inert_energy_split_batch",
@@ -307,7 +308,8 @@ class RobotImpact(ResultDictMixin):
 
         Per contact: ``frame``, ``type``, ``role`` (strike/keep), ``mode``, ``T_c_normal``,
         ``T_c_tangential`` (J), ``force_impulse`` (N s, world axes), ``moment_impulse`` (N m s
-        about the frame origin, flat contacts), ``normal_velocity_pre``/``_post`` and
+        about the frame origin, flat contacts), ``centre_of_pressure`` (m, flat contacts:
+        :func:`centre_of_pressure`), ``normal_velocity_pre``/``_post`` and
         ``slip_speed_post`` (m/s, of the contact point).
         """
         r = self.result
@@ -329,6 +331,7 @@ class RobotImpact(ResultDictMixin):
             }
             if c.kind == "flat":
                 item["moment_impulse"] = [float(x) for x in lam[3:6]]
+                item["centre_of_pressure"] = centre_of_pressure(lam)
             item["normal_velocity_pre"] = float(u_pre[2])
             item["normal_velocity_post"] = float(u_post[2])
             item["slip_speed_post"] = float(np.hypot(u_post[0], u_post[1]))
@@ -357,6 +360,26 @@ def _row_plan(robot: Robot, contacts: tuple[ContactSpec, ...]) -> _RowPlan:
             plans.clear()
         plan = plans[contacts] = _RowPlan(robot, contacts)
     return plan
+
+
+def centre_of_pressure(impulse: ArrayLike) -> list[float] | None:
+    """Where a flat contact's impulse acts: ``(x, y)`` (m, world axes) from the frame origin.
+
+    For a force impulse ``F`` and a moment impulse ``M`` about the frame origin (the six rows
+    of a ``flat`` contact), the point ``p`` on the sole's plane with ``M_x = p_y F_z`` and
+    ``M_y = -p_x F_z``: ``p = (-M_y / F_z, M_x / F_z)`` (the twist ``M_z`` stays a torsion).
+    A sole is treated as unbounded, so ``p`` may lie outside the real sole: compare it with
+    the sole's size. None when ``F_z`` is zero to round-off (no normal impulse).
+
+    Parameters
+    ----------
+    impulse : array_like, shape (6,)
+        ``(F_x, F_y, F_z, M_x, M_y, M_z)`` (N s, N m s).
+    """
+    lam = np.asarray(impulse, dtype=float)
+    if abs(float(lam[2])) <= 1e-12 * max(float(np.max(np.abs(lam))), 1e-300):
+        return None
+    return [float(-lam[4] / lam[2]), float(lam[3] / lam[2])]
 
 
 def robot_impact(

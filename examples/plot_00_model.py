@@ -20,8 +20,9 @@ fig = model_diagram(walker)
 fig.savefig("model.png")
 
 # %%
-# The mass matrix ``M(q)`` of eq. (1) and the contact Jacobian ``A_L`` of eq. (5) at the drawn
-# configuration (``q3 = 0.32 rad``, ``q4 = -0.72 rad``):
+# The mass matrix ``M(q)`` of eq. (1) and the swing foot's contact Jacobian ``A_L`` at the drawn
+# configuration (``q3 = 0.32 rad``, ``q4 = -0.72 rad``; eq. (5) is its value at heel strike,
+# ``q4 = -2 q3``):
 q = np.array([0.9, 0.3, 0.32, -0.72])
 print("M(q) =\n", walker.mass_matrix(q).round(3))
 print("A_L(q) =\n", walker.contact_jacobian(q, "left").round(3))

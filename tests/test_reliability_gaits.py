@@ -203,3 +203,12 @@ def test_cost_study_keeps_the_cheapest_gait_near_the_wheel(tmp_path: Path, capsy
     assert "cheapest" in ds.attrs["branch_note"]
     assert set(np.unique(ds["branch"].values[np.isfinite(ds["branch"].values)])) <= {0.0, 1.0}
     assert int(ds["gaits_found"].sel(actuation="pushoff").values[1, 0]) >= 1
+
+
+def test_api_slope_in_degrees_by_mistake_fails_at_once() -> None:
+    # QA sweep 4: find_limit_cycle(slope=3) (3 rad = 172 deg) searched 864 seeds and said only
+    # "no period-one gait found"; slopes are radians and the error now says so
+    for slope in (3.0, -2.0, np.pi / 2):
+        with pytest.raises(GaitNotFoundError, match=r"no walkable incline \(slopes are in "
+                                                    r"radians"):
+            find_limit_cycles(CompassGait(), slope=slope)

@@ -381,13 +381,18 @@ def _check_passive_slope(slope: float, *, torque: object = None, push_off: objec
     Raises
     ------
     GaitNotFoundError
-        Passive (no torque, no push-off) and ``slope <= 0``.
+        Passive (no torque, no push-off) and ``slope <= 0``, or ``|slope| >= pi/2``.
     """
+    if not abs(slope) < np.pi / 2:  # a bare 3 meant as degrees is 172 deg
+        raise GaitNotFoundError(
+            f"slope {slope:g} rad is {np.degrees(slope):g} deg: no walkable incline (slopes "
+            f"are in radians, |slope| < pi/2; 3 deg is {np.deg2rad(3.0):.6g} rad)")
     if torque is None and push_off is None and not slope > 0.0:
         raise GaitNotFoundError(
             f"a passive walker has no periodic gait on a slope of "
             f"{np.degrees(slope):g} deg: the energy lost at every heel strike must come "
-            f"from gravity, so the slope must be > 0 (downhill, e.g. 3deg)"
+            f"from gravity, so the slope must be > 0 (downhill, e.g. 3 deg = "
+            f"{np.deg2rad(3.0):.6g} rad)"
         )
 
 

@@ -68,3 +68,13 @@ def test_paper_comparison_draws_the_wheels_zero_loss_as_a_marker() -> None:
         assert lo > 1e-3 and hi < 1e2  # the axis spans the data, not the round-off
         wheel = [ln for ln in ax.get_lines() if ln.get_marker() == "v" and ln.get_color() == "k"]
         assert len(wheel) == 1 and wheel[0].get_xdata().tolist() == [0.3]
+
+
+def test_cost_figure_axis_says_per_step() -> None:
+    # QA sweep 4: "actuator work (J)" did not say it is per step: the variable's long name is
+    stable = np.ones((1, 2, 3))
+    ds = _study(stable)
+    ds["actuator_work"] = (ds["cost_of_transport"].dims, ds["cost_of_transport"].values,
+                           {"units": "J", "long_name": "actuator work per step"})
+    fig = cost_figure(ds, "actuator_work")
+    assert fig.axes[0].get_ylabel() == "actuator work per step (J)"

@@ -176,3 +176,22 @@ def test_bifurcation_branch_pieces_meet_at_the_period_doubling() -> None:
     # without a crossing between them, the pieces meet half-way
     xm, _ = _branch_piece(x, y, stable, False, np.array([]))
     assert xm[0] == 4.5
+
+
+def test_bifurcation_figure_shades_the_slopes_where_the_walker_falls():
+    # QA sweep 4: above 5.2 deg the diagram was blank, with nothing saying the walker falls
+    from heelstrike.analysis.limit_cycle import BifurcationDiagram
+    from heelstrike.plots.gait import bifurcation_figure
+
+    slopes = np.deg2rad([4.0, 4.5, 5.0, 5.5, 6.0])
+    angles = np.tile(np.deg2rad([17.0, 18.0]), (5, 1))
+    angles[3:] = np.nan  # the walker fell at 5.5 and 6 deg
+    periods = np.where(np.isnan(angles), np.nan, 0.75)
+    fig = bifurcation_figure(BifurcationDiagram(slopes=slopes, impact_angles=angles,
+                                                periods=periods))
+    ax = fig.axes[0]
+    spans = sorted((round(float(p.get_x()), 6), round(float(p.get_x() + p.get_width()), 6))
+                   for p in ax.patches)
+    assert spans == [(5.25, 5.75), (5.75, 6.25)]
+    assert "no steady state (the walker falls)" in [t.get_text()
+                                                    for t in ax.get_legend().get_texts()]

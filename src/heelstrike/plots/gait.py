@@ -216,6 +216,21 @@ def _branch_piece(
     return np.asarray(xs), np.asarray(ys)
 
 
+def _shade_without_steady_state(ax: Any, slopes_deg: FloatArray, angles: FloatArray,
+                                label: bool) -> None:
+    """Grey bands over the slopes where no recorded step exists (the walker fell or stopped
+    within the transient), so that a blank stretch is not read as missing data."""
+    empty = ~np.any(np.isfinite(np.asarray(angles, dtype=float)), axis=1)
+    if not np.any(empty) or slopes_deg.size < 2:
+        return
+    half = 0.5 * float(np.min(np.diff(slopes_deg)))
+    first = True
+    for k in np.flatnonzero(empty):
+        ax.axvspan(slopes_deg[k] - half, slopes_deg[k] + half, color="0.85", lw=0,
+                   label="no steady state (the walker falls)" if label and first else None)
+        first = False
+
+
 def bifurcation_figure(
     diagram: BifurcationDiagram, continuation: Continuation | None = None, *, title: str = ""
 ) -> Figure:
@@ -235,6 +250,7 @@ def bifurcation_figure(
         ax.plot(xs, data.ravel() * scale, ".", ms=3, color="k", label="steady state (simulated)")
         ax.set_ylabel(ylabel)
         ax.grid(alpha=0.3)
+        _shade_without_steady_state(ax, slopes_deg, diagram.impact_angles, ax is ax1)
     if continuation is not None and continuation.cycles:
         v = np.rad2deg(continuation.values) if continuation.parameter == "slope" else None
         if v is not None:
@@ -621,8 +637,16 @@ def energy_figure(energy: Any, impacts: Any, *, title: str = "") -> Figure:
             "", xy=(r.time_s, r.total_after_J - U0), xytext=(r.time_s, r.total_before_J - U0),
             arrowprops={"arrowstyle": "->", "color": drop, "lw": 1.5},
         )
-        ax.text(r.time_s, r.total_before_J - U0, f" $T_c$ = {r.T_c_J:.3g} J", fontsize=7,
-                va="bottom" if kind == "heel_strike" else "top", ha="left", color=drop)
+        # above the total's level (a label below it was struck through by the total's line);
+        # a knee strike's to the left of its line (the heel strike's, just after it, takes the
+        # right); a heel strike's near the end (it ran past the axes) left of the arrow's tip
+        late = kind == "heel_strike" and r.time_s > 0.85 * float(t.iloc[-1])
+        left = kind == "knee_strike" or late
+        ax.annotate(f"$T_c$ = {r.T_c_J:.3g} J",
+                    (r.time_s, (r.total_after_J if late else r.total_before_J) - U0),
+                    xytext=(-3 if left else 3, -3 if late else 3), textcoords="offset points",
+                    fontsize=7, va="top" if late else "bottom", ha="right" if left else "left",
+                    color=drop)
     ax.set_xlabel("time (s)")
     ax.set_ylabel("energy (J)")
     ax.grid(alpha=0.3)

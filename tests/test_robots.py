@@ -699,7 +699,8 @@ def test_readme_robot_example_runs(tmp_path) -> None:
     assert shares == pytest.approx(d["T_c"], rel=1e-10)
     assert set(d["contacts"][0]) == {
         "frame", "type", "role", "mode", "T_c_normal", "T_c_tangential", "force_impulse",
-        "moment_impulse", "normal_velocity_pre", "normal_velocity_post", "slip_speed_post"}
+        "moment_impulse", "centre_of_pressure", "normal_velocity_pre", "normal_velocity_post",
+        "slip_speed_post"}
 
 
 def test_cli_impact_from_urdf(tmp_path, capsys) -> None:

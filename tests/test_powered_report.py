@@ -175,3 +175,29 @@ def test_time_limit_is_an_option_and_its_end_says_so(capsys: Capture, tmp_path: 
                         "much faster")
     assert main(["powered", "--time-limit", "nan"]) == 2
     assert "--time-limit must be finite and > 0" in capsys.readouterr().err
+
+
+def test_slow_gait_multipliers_match_an_independent_jacobian() -> None:
+    # QA sweep 5, P1: DP by forward differences at a step of 1e-5 erred by 5e-3 on this slow
+    # gait (its section coordinates are ~0.01) and called it unstable (|m| 1.0018); the
+    # reference: central differences (h = 1e-6) of the scipy walk at rtol = atol = 1e-12
+    from heelstrike.dynamics import simulate
+    from heelstrike.dynamics.actuation import PushOff
+
+    w = CompassGait()
+    g = find_powered_gait(w, speed=0.05)
+    push = PushOff(impulse=g.parameter)
+
+    def step(z: np.ndarray) -> np.ndarray:
+        q, qd = w.section_to_state(z)
+        r = simulate(w, q, qd, steps=1, push_off=push, backend="scipy", rtol=1e-12, atol=1e-12)
+        assert r.ok
+        return w.state_to_section(r.final_q, r.final_q_dot)
+
+    z = np.asarray(g.fixed_point)
+    assert np.max(np.abs(step(z) - z)) < 1e-9  # the gait is periodic on the reference
+    h = 1e-6
+    DP = np.column_stack([(step(z + h * e) - step(z - h * e)) / (2 * h) for e in np.eye(3)])
+    ref = np.sort(np.abs(np.linalg.eigvals(DP)))[::-1]
+    np.testing.assert_allclose(np.abs(g.multipliers), ref, atol=1e-5)
+    assert ref[0] < 1.0 and g.stable

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import importlib
 import subprocess
@@ -70,6 +71,21 @@ def counted(a: np.ndarray, b: np.ndarray) -> dict[str, np.ndarray]:
 def scaled(a: np.ndarray, b: np.ndarray) -> dict[str, np.ndarray]:
     COUNTER.record(a, b)
     return _values(a, b, SCALE)
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class _Scaling:
+    """A model object read as a module global (as a walker would be)."""
+
+    scale: float = 1.0
+
+
+MODEL = _Scaling()
+
+
+def modelled(a: np.ndarray, b: np.ndarray) -> dict[str, np.ndarray]:
+    COUNTER.record(a, b)
+    return _values(a, b, MODEL.scale)
 
 
 def with_default(a: np.ndarray, b: np.ndarray, *, scale: float = 1.0) -> dict[str, np.ndarray]:
@@ -249,6 +265,21 @@ def test_changed_module_constant_is_not_resumed(
         _run(scaled, store)
     counter.calls = []
     _assert_values(_run(scaled, store, overwrite=True), 3.0)
+    assert len(counter.calls) == N_CHUNKS
+
+
+def test_changed_dataclass_global_is_not_resumed(
+    tmp_path: Path, counter: Any, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # QA sweep 5: a walker read from a module global counted by name only, so a resume after
+    # changing it mixed chunks of two walkers in one store
+    store = tmp_path / "s.zarr"
+    _assert_values(_run(modelled, store), 1.0)
+    monkeypatch.setattr(sys.modules[__name__], "MODEL", _Scaling(scale=2.0))
+    with pytest.raises(SweepStoreMismatchError, match=r"function\.globals"):
+        _run(modelled, store)
+    counter.calls = []
+    _assert_values(_run(modelled, store, overwrite=True), 2.0)
     assert len(counter.calls) == N_CHUNKS
 
 

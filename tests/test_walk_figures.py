@@ -193,5 +193,5 @@ def test_bifurcation_figure_shades_the_slopes_where_the_walker_falls():
     spans = sorted((round(float(p.get_x()), 6), round(float(p.get_x() + p.get_width()), 6))
                    for p in ax.patches)
     assert spans == [(5.25, 5.75), (5.75, 6.25)]
-    assert "no steady state (the walker falls)" in [t.get_text()
+    assert "no steady state (the simulated walk fell)" in [t.get_text()
                                                     for t in ax.get_legend().get_texts()]

@@ -166,7 +166,8 @@ def _walk_slice(
     rows = -(-values.size // max(1, min(int(chunks), values.size)))  # rows per ensemble call
     t0 = time.perf_counter()
     res = sweep(
-        func, coords, chunks={first: rows}, store=store, scheduler="sync", progress=progress,
+        func, coords, chunks={first: rows}, store=store, scheduler="sync",
+        progress="basin of attraction" if progress else False,
         units={first: units[0], second: units[1], "status": "1", "steps": "1", "z": "1"},
     )
     status = np.asarray(res["status"].values).ravel()

@@ -295,9 +295,11 @@ def _add_derived(ds: xr.Dataset) -> None:
     """``speed``, ``stable`` and ``gait_found`` of a map dataset, from its gait variables."""
     ds["speed"] = (ds["step_length"] / ds["period"]).assign_attrs(units="m s-1")
     ds["stable"] = (ds["spectral_radius"] < 1.0).assign_attrs(
-        long_name="all Floquet multipliers inside the unit circle")
+        long_name="a stable gait was found: all Floquet multipliers inside the unit circle "
+                  "(false also where no gait was found: see gait_found)", units="1")
     ds["gait_found"] = ds["spectral_radius"].notnull().assign_attrs(
-        long_name="a period-one gait was found (else every output is NaN)")
+        long_name="a period-one gait was found (else every gait variable is NaN and stable "
+                  "is false)", units="1")
 
 
 #: Largest sub-step of the continuation in the compass walker's foot radius (m).
@@ -605,7 +607,7 @@ def gait_map(
         chunks={"foot_radius": 1},
         store=None if store is None else str(store),
         scheduler=scheduler,
-        progress=progress,
+        progress="gait map" if progress else False,
         units={**_UNITS, "fixed_point": "rad, rad s-1, rad s-1", "period_doubling_slope": "rad"},
         output_dims={"fixed_point": ("section",)},
     ).load()

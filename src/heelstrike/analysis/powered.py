@@ -645,8 +645,16 @@ FAMILY_END_RESIDUAL = 1e-6
 FAMILY_END_DOUBLINGS = 6
 
 #: A largest multiplier within this of ``+1`` at the end of a family marks a fold (saddle-node:
-#: the family turns back there, and the minimum of ``|F|`` past it is not zero).
+#: the family turns back there, and the minimum of ``|F|`` past it is not zero), together with
+#: :data:`FOLD_TANGENT_TOLERANCE`.
 FOLD_MULTIPLIER_TOLERANCE = 0.05
+
+#: At a fold in the target the family's tangent ``t`` (the null vector of ``[DP - I, dP/da]``)
+#: is orthogonal to the target's gradient ``g``: ``|g . t| / |g|`` below this (at the verified
+#: end, within :data:`FAMILY_END_RESOLUTION` of the fold) marks one. The torso walker's fold
+#: gives 0.014; the push-off gaits' slow end (0.094, a multiplier near 1 but no fold: QA sweep
+#: 5) and R = 0.9's fast end (0.52, the impact angle reaching 90 deg) are no folds.
+FOLD_TANGENT_TOLERANCE = 0.04
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -1015,7 +1023,7 @@ def _slope_homotopy(
 def _family_end(
     search: _Problem, accurate: _Problem, x: FloatArray, value: float, tol: float, h: float,
     max_iter: int, fd_step: float,
-) -> tuple[float, FloatArray, complex] | None:
+) -> tuple[float, FloatArray, complex, float] | None:
     """Where the family of gaits near a failed target ``value`` ends, verified.
 
     A continuation step or the final solve is accepted at a residual of up to
@@ -1044,12 +1052,13 @@ def _family_end(
 
     Returns
     -------
-    (end, x_end, multiplier) or None
-        The verified target nearest the failure (m/s or m), its gait (shape (d + 1,)) and the
+    (end, x_end, multiplier, turning) or None
+        The verified target nearest the failure (m/s or m), its gait (shape (d + 1,)), the
         largest multiplier (by modulus) of its ``DP`` (central differences on the
-        ``accurate`` map, relative step ``max(fd_step, sqrt(rtol))``; NaN if a step failed);
-        None if ``value`` itself solves to ``tol`` (the failure is not the family's end) or
-        no verified gait was found.
+        ``accurate`` map, relative step ``max(fd_step, sqrt(rtol))``; NaN if a step failed)
+        and ``|g . t| / |g|`` (:data:`FOLD_TANGENT_TOLERANCE`; NaN if a step failed); None if
+        ``value`` itself solves to ``tol`` (the failure is not the family's end) or no
+        verified gait was found.
 
     Raises
     ------
@@ -1094,14 +1103,20 @@ def _family_end(
     # forward differences at ``h`` are off by more than the distance of a multiplier from 1)
     DP = _section_jacobian(accurate, x_lo, fd_step)
     if not np.all(np.isfinite(DP)):
-        return lo, x_lo, complex(np.nan)
+        return lo, x_lo, complex(np.nan), float("nan")
     mult = np.linalg.eigvals(DP)
-    return lo, x_lo, complex(mult[np.argmax(np.abs(mult))])
+    # the family's tangent against the target's gradient (central differences, as DP)
+    J = accurate.jacobian(x_lo, lo, max(fd_step, float(np.sqrt(accurate.rtol))))
+    turning = float("nan")
+    if np.all(np.isfinite(J)) and np.linalg.norm(J[-1]) > 0:
+        tangent = np.linalg.svd(J[:-1])[2][-1]
+        turning = abs(float(J[-1] @ tangent)) / float(np.linalg.norm(J[-1]))
+    return lo, x_lo, complex(mult[np.argmax(np.abs(mult))]), turning
 
 
 def _end_message(
     prob: _Problem, target: Target, value: float, unit: str, path: tuple[float, float],
-    end: tuple[float, FloatArray, complex], exc: Exception, note: str = "",
+    end: tuple[float, FloatArray, complex, float], exc: Exception, note: str = "",
 ) -> str:
     """The error of a search whose family of gaits ends (:func:`_family_end`) short of
     ``value``: a fold (a multiplier at ``+1``) or an end for another reason. ``path``: the
@@ -1109,7 +1124,7 @@ def _end_message(
     verified end is reported as gaits found. ``note`` (what is known of the path's start, the
     seed) is appended when that start is reported, i.e. when the family ends below the target
     side's other end (``side`` "below")."""
-    v_end, x_end, m = end
+    v_end, x_end, m, turning = end
     fam = prob.family
     if value > v_end:
         lo, hi, side = min(*path, v_end), v_end, "above"
@@ -1120,7 +1135,7 @@ def _end_message(
              if hi - lo > FAMILY_END_RESOLUTION * abs(value) else
              f"end near {v_end:.4g} {unit}")
     at = f"{fam.parameter_name} {x_end[-1]:.4g} {fam.parameter_unit}"
-    if abs(m - 1.0) < FOLD_MULTIPLIER_TOLERANCE:
+    if abs(m - 1.0) < FOLD_MULTIPLIER_TOLERANCE and turning < FOLD_TANGENT_TOLERANCE:
         return (
             f"no gait with {target} {value:g} {unit}: the {fam.name} gaits found {found} "
             f"({at}), at a fold: a Floquet multiplier reaches +1 there (largest |m| = "
@@ -1130,9 +1145,13 @@ def _end_message(
             f"{_other_gains(fam, '; ', ' may reach further')}"
         )
     largest = f"; largest multiplier |m| = {abs(m):.3f}" if np.isfinite(abs(m)) else ""
+    # the last gait's impact angle: the legs near horizontal (R near l, fast) or a shuffle
+    angle = f"; impact angle {np.degrees(abs(float(x_end[0]))):.3g} deg"
     return (
         f"no gait with {target} {value:g} {unit}: the {fam.name} gaits found {found} "
-        f"({at}{largest}); Newton finds none {side} it ({exc}){note}"
+        f"({at}{largest}{angle}); Newton finds none {side} it ({exc}), but the family does "
+        f"not turn back there (no fold), so gaits {side} it may exist that this search does "
+        f"not reach{note}"
         f"{_other_gains(fam, '; ', ' may reach further')}"
     )
 
@@ -1252,7 +1271,8 @@ def find_powered_gait(
                 f"no gait with speed {value:g} m/s: it is outside the reachable range "
                 f"0 < speed < {vmax:.3g} m/s "
                 "of this walker: faster, the hip's centripetal acceleration at mid-stance would "
-                "exceed g and the stance foot would leave the ground (v <= l sqrt(g / (l - R)))"
+                "exceed g and the stance foot would leave the ground (v <= l sqrt(g / (l - R)); "
+                "an upper bound: the gaits of an actuation usually end below it)"
             )
     family = actuation if isinstance(actuation, ActuationFamily) else actuation_family(actuation)
     limit = float("inf") if time_limit is None else float(time_limit)
@@ -1473,10 +1493,11 @@ def _characterise(
 ) -> PoweredGait:
     """The gait at ``x`` on the accurate map: books, and multipliers of ``DP``.
 
-    ``DP`` by forward differences from the gait's own step (``d`` more steps instead of the
-    ``2 d`` of central ones), with the relative step ``sqrt(rtol)`` that balances truncation
-    (``~h``) and integration noise (``~rtol / h``): multipliers to ~1e-5, which is as good as
-    central differences at ``h = 1e-6`` get with that noise (``rtol / h ~ 1e-4``).
+    ``DP`` by central differences (``2 d`` steps), step ``max(fd_step, sqrt(rtol))`` times
+    ``max(1, |x_i|)``: truncation ``~h^2``, integration noise ``~rtol / h``, multipliers to
+    about 1e-6. (Forward differences from the gait's own step, ``d`` steps fewer, erred by
+    up to 5e-3 on slow gaits, whose section coordinates are small against the step, and
+    called stable gaits unstable: QA sweep 5.)
     """
     from heelstrike.dynamics.phased import PhasedWalkResult
 
@@ -1486,7 +1507,7 @@ def _characterise(
     assert rec is not None and st.ok
     z = x[:-1]
     d = z.size
-    DP = _section_jacobian(prob, x, fd_step, base=st.z_next)
+    DP = _section_jacobian(prob, x, fd_step)
     mult = np.linalg.eigvals(DP).astype(complex) if np.all(np.isfinite(DP)) else np.full(d, np.nan)
     mult = mult[np.argsort(-np.abs(mult), kind="stable")]
     m, g, _ = _scale(walker)

@@ -367,6 +367,8 @@ class _Identity:
                 self.parts["globals"].append(f"{func.__module__}.{var}={plain}")
             elif isinstance(obj, type | types.ModuleType) or callable(obj):
                 self.value(obj)  # follows code; its name is in the bytecode already
+            elif dataclasses.is_dataclass(obj):  # e.g. a walker: field by field, as an argument
+                self.parts["globals"].append(f"{func.__module__}.{var}={self.value(obj)}")
             # other objects (locks, caches, models): by name, i.e. through the bytecode only
 
     def digest(self) -> dict[str, str]:
@@ -846,7 +848,7 @@ def sweep(
     chunks: int | Mapping[str, int] | None = None,
     store: str | os.PathLike[str] | None = None,
     scheduler: str | Any | None = None,
-    progress: bool = True,
+    progress: bool | str = True,
     units: Mapping[str, str] | None = None,
     output_dims: Mapping[str, Sequence[str]] | None = None,
     num_workers: int | None = None,
@@ -878,10 +880,11 @@ def sweep(
         the standard library and site-packages (and in heelstrike), through globals, closures,
         defaults, partials and the methods of classes it uses; the values of its closure cells,
         defaults and bound arguments; the referenced module globals that are plain data
-        (numbers, strings, numeric arrays and containers of them); and the source text of every
-        module reached. Other objects (third-party functions, locks, caches) count by name
-        only. A store of a different sweep raises :class:`SweepStoreMismatchError` naming what
-        differs (e.g. ``function.closure``), unless ``overwrite=True`` (compute afresh).
+        (numbers, strings, numeric arrays and containers of them) or dataclasses (a
+        ``CompassGait``, field by field); and the source text of every module reached. Other
+        objects (third-party functions, locks, caches) count by name only. A store of a
+        different sweep raises :class:`SweepStoreMismatchError` naming what differs (e.g.
+        ``function.closure``), unless ``overwrite=True`` (compute afresh).
         While the sweep runs it holds an exclusive lock, the sibling file ``<store>.lock``
         (:mod:`filelock`), so a second sweep on the same store cannot interleave with it.
     scheduler : str, distributed.Client or cluster, optional
@@ -893,8 +896,9 @@ def sweep(
         install) ``"threads"`` and ``"sync"`` run on a :mod:`concurrent.futures` thread pool
         with the same results; ``"processes"``, clusters and ``store`` need the ``scale`` extra
         (``pip install 'heelstrike[scale]'``).
-    progress : bool
-        Show a tqdm progress bar over chunks (default True).
+    progress : bool or str
+        Show a tqdm progress bar over chunks (default True), labelled ``sweep <function>``;
+        a string shows it with that label (e.g. ``"basin of attraction"``).
     units : mapping of str to str, optional
         Units of grid names and outputs (UDUNITS strings, ``"1"`` for dimensionless). Defaults
         come from :data:`KNOWN_UNITS`; every grid coordinate must end up with units.
@@ -949,7 +953,7 @@ def _sweep(
     chunks: int | Mapping[str, int] | None,
     store: str | os.PathLike[str] | None,
     scheduler: str | Any | None,
-    progress: bool,
+    progress: bool | str,
     units: Mapping[str, str] | None,
     output_dims: Mapping[str, Sequence[str]] | None,
     num_workers: int | None,
@@ -1047,7 +1051,7 @@ def _sweep(
         total=len(all_chunks),
         initial=len(all_chunks) - len(pending),
         disable=not progress,
-        desc=f"sweep {_func_name(func)}",
+        desc=progress if isinstance(progress, str) else f"sweep {_func_name(func)}",
         unit="chunk",
     )
     try:

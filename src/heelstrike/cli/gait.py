@@ -377,8 +377,9 @@ def _bifurcation_gap_note(start: float, paths: list[Any]) -> str | None:
         return None
     onset = float(branch["slope_deg"].iloc[0])
     note = bifurcation_gap_note(math.degrees(start), onset, bool(branch["stable"].iloc[0]))
-    return (f"note: {note}: the walker's gaits start there (automatic gait search, then "
-            "bisection to 1e-5 rad); the diagram and the branch are empty below it")
+    return (f"note: {note}: the branch followed starts there (automatic gait search, then "
+            "bisection to 1e-5 rad); the diagram and the branch are empty below it (other, "
+            "unstable gaits may exist there: 'heelstrike gait --slope ...' lists them)")
 
 
 def add_basin(sub: Any) -> None:
@@ -488,7 +489,7 @@ def _run_basin_model(args: argparse.Namespace) -> int:
             raise CliError("--q3-range and --q3dot-range need MIN < MAX")
     basin = _basin(args, lambda: basin_module.model_basin_of_attraction(
         walker, args.slope, grid=grid, ranges=ranges, steps=args.steps, tol=args.tol,
-        backend=args.backend, progress=not args.json and sys.stderr.isatty(),
+        backend=args.backend, progress=sys.stderr.isatty(),
         store=args.store,
     ))
     names = walker.section_names
@@ -515,7 +516,7 @@ def _run_basin(args: argparse.Namespace) -> int:
         raise CliError("--q3-range and --q3dot-range need MIN < MAX")
     basin = _basin(args, lambda: basin_of_attraction(
         walker, args.slope, grid=grid, ranges=((a0, a1), (b0, b1)), steps=args.steps,
-        tol=args.tol, progress=not args.json and sys.stderr.isatty(), store=args.store,
+        tol=args.tol, progress=sys.stderr.isatty(), store=args.store,
         backend=args.backend,
     ))
     z = basin.fixed_point
@@ -602,7 +603,7 @@ def _run_map_model(args: argparse.Namespace) -> int:
                            f"{walker.description.name!r}: {exc}{hint}") from None
     writable_dir(args.out)
     gmap = model_gait_map(walker, name, values, slopes, backend=args.backend,
-                          progress=not args.json and sys.stderr.isatty())
+                          progress=sys.stderr.isatty())
     return _render_gait_map(
         gmap, args, {"model": walker.description.name, "parameter_name": name},
         f"stable passive gaits of '{walker.description.name}'", f"({name}, slope)",
@@ -628,7 +629,7 @@ def _run_map(args: argparse.Namespace) -> int:
     writable_dir(args.out)
     try:
         gmap = run_with_store(args.store, lambda: gait_map(
-            base, radii, slopes, progress=not args.json and sys.stderr.isatty(),
+            base, radii, slopes, progress=sys.stderr.isatty(),
             store=args.store, backend=args.backend))
     except GaitNotFoundError as exc:
         raise CliError(f"no starting gait found: {exc}") from exc

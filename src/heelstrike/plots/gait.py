@@ -217,17 +217,27 @@ def _branch_piece(
 
 
 def _shade_without_steady_state(ax: Any, slopes_deg: FloatArray, angles: FloatArray,
-                                label: bool) -> None:
-    """Grey bands over the slopes where no recorded step exists (the walker fell or stopped
-    within the transient), so that a blank stretch is not read as missing data."""
+                                label: bool, branch_deg: FloatArray | None = None) -> None:
+    """Grey bands over the slopes where no recorded step exists (the simulated walk fell
+    within the transient), so that a blank stretch is not read as missing data. A band stops
+    where the period-one branch (``branch_deg``, deg) starts or ends, so that it does not
+    cover the branch drawn there."""
     empty = ~np.any(np.isfinite(np.asarray(angles, dtype=float)), axis=1)
     if not np.any(empty) or slopes_deg.size < 2:
         return
     half = 0.5 * float(np.min(np.diff(slopes_deg)))
     first = True
     for k in np.flatnonzero(empty):
-        ax.axvspan(slopes_deg[k] - half, slopes_deg[k] + half, color="0.85", lw=0,
-                   label="no steady state (the walker falls)" if label and first else None)
+        lo, hi = slopes_deg[k] - half, slopes_deg[k] + half
+        if branch_deg is not None and branch_deg.size:
+            b0, b1 = float(np.min(branch_deg)), float(np.max(branch_deg))
+            if slopes_deg[k] < b0 < hi:
+                hi = b0
+            if lo < b1 < slopes_deg[k]:
+                lo = b1
+        ax.axvspan(lo, hi, color="0.85", lw=0,
+                   label="no steady state (the simulated walk fell)" if label and first
+                   else None)
         first = False
 
 
@@ -250,7 +260,11 @@ def bifurcation_figure(
         ax.plot(xs, data.ravel() * scale, ".", ms=3, color="k", label="steady state (simulated)")
         ax.set_ylabel(ylabel)
         ax.grid(alpha=0.3)
-        _shade_without_steady_state(ax, slopes_deg, diagram.impact_angles, ax is ax1)
+        branch_deg = (np.rad2deg(continuation.values)
+                      if continuation is not None and continuation.cycles
+                      and continuation.parameter == "slope" else None)
+        _shade_without_steady_state(ax, slopes_deg, diagram.impact_angles, ax is ax1,
+                                    branch_deg)
     if continuation is not None and continuation.cycles:
         v = np.rad2deg(continuation.values) if continuation.parameter == "slope" else None
         if v is not None:

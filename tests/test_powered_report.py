@@ -201,3 +201,21 @@ def test_slow_gait_multipliers_match_an_independent_jacobian() -> None:
     ref = np.sort(np.abs(np.linalg.eigvals(DP)))[::-1]
     np.testing.assert_allclose(np.abs(g.multipliers), ref, atol=1e-5)
     assert ref[0] < 1.0 and g.stable
+
+
+@pytest.mark.slow
+def test_slow_end_of_the_search_is_not_called_a_fold(capsys: Capture) -> None:
+    # QA sweep 5, P1: "at a fold ... none of its gaits has a speed below about 0.0207 m/s",
+    # yet gaits exist below (a push-off gait's multiplier nears 1 as it slows: no fold)
+    assert main(["powered", "--radius", "0", "--speed", "0.02"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "at a fold" not in err and "no fold" in err and "may exist" in err
+    # the gaits it says may exist: continued by hand from 0.05 m/s, each periodic with the
+    # push-off's work equal to the heel strike's loss (eqs. 14-15)
+    w = CompassGait()
+    g = find_powered_gait(w, speed=0.05)
+    for v in (0.04, 0.03, 0.025, 0.02, 0.015):
+        g = find_powered_gait(w, speed=v, guess=np.append(g.fixed_point, g.parameter),
+                              fallback=False)
+        assert g.speed == pytest.approx(v, abs=1e-8) and g.residual < 1e-8
+        assert g.actuator_work == pytest.approx(g.collision_loss, abs=1e-9)

@@ -123,3 +123,13 @@ def test_every_slope_option_says_a_bare_number_is_radians(argv, capsys, monkeypa
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "must be below 90deg" in err[0], err
     assert "a bare number is radians; for degrees write" in err[0]
+
+
+def test_bifurcation_csv_slopes_are_the_degrees_asked_for(tmp_path, capsys):
+    # QA sweep 5: slope_deg read 2.0000000000000004 (rad2deg of deg2rad)
+    import pandas as pd
+
+    assert main(["bifurcation", "--slope-range", "2deg:3deg:3", "--transient", "3",
+                 "--record", "2", "--out", str(tmp_path)]) == 0
+    df = pd.read_csv(tmp_path / "bifurcation.csv", dtype={"slope_deg": str})
+    assert sorted(set(df["slope_deg"])) == ["2", "2.5", "3"]

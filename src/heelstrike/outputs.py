@@ -269,7 +269,9 @@ def write_bifurcation_files(
     record = diagram.impact_angles.shape[1]
     csv = write_csv(
         {
-            "slope_deg": np.repeat(np.rad2deg(diagram.slopes), record),
+            # degrees to 1e-12: the slopes come from degrees, and rad2deg(deg2rad(2)) is
+            # 2.0000000000000004
+            "slope_deg": np.repeat(np.round(np.rad2deg(diagram.slopes), 12), record),
             "impact_angle_rad": diagram.impact_angles.ravel(),
             "period_s": diagram.periods.ravel(),
         },
@@ -277,7 +279,7 @@ def write_bifurcation_files(
     )
     bcsv = write_csv(
         {
-            "slope_deg": np.rad2deg(branch.values),
+            "slope_deg": np.round(np.rad2deg(branch.values), 12),
             "impact_angle_rad": [c.impact_angle for c in branch.cycles],
             "period_s": [c.period for c in branch.cycles],
             "spectral_radius": [c.spectral_radius for c in branch.cycles],

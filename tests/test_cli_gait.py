@@ -133,3 +133,33 @@ def test_bifurcation_csv_slopes_are_the_degrees_asked_for(tmp_path, capsys):
                  "--record", "2", "--out", str(tmp_path)]) == 0
     df = pd.read_csv(tmp_path / "bifurcation.csv", dtype={"slope_deg": str})
     assert sorted(set(df["slope_deg"])) == ["2", "2.5", "3"]
+
+
+def test_one_point_basin_draws_without_a_warning(tmp_path, capsys):
+    # QA sweep 5 (P3): a 1x1 grid leaked matplotlib's "identical low and high xlims" warning
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert main(["basin", "--grid", "1x1", "--out", str(tmp_path)]) == 0
+    assert (tmp_path / "basin.png").is_file()
+
+
+@pytest.mark.parametrize("argv", [["basin", "--grid", "5x5"],
+                                  ["basin", "--model", "kneed", "--grid", "5x5"],
+                                  ["map", "--radius", "0:0.3:2", "--slope", "2deg:4deg:3"]])
+def test_netcdf_attributes_state_their_units(argv, tmp_path, capsys):
+    # QA sweep 5 (P3): foot_radius, hip_mass, fixed_point_*, param_* ... had no units
+    import xarray as xr
+
+    assert main([*argv, "--out", str(tmp_path)]) == 0
+    name = "basin.nc" if argv[0] == "basin" else "gait_map.nc"
+    with xr.open_dataset(tmp_path / name) as ds:
+        numeric = [k for k, v in ds.attrs.items()
+                   if not k.endswith("_units") and not isinstance(v, str)]
+        assert numeric and all(f"{k}_units" in ds.attrs for k in numeric), [
+            k for k in numeric if f"{k}_units" not in ds.attrs]
+        if argv[1] == "--model":
+            assert ds.attrs["param_R_units"] == "m" and ds.attrs["param_mH_units"] == "kg"
+        elif argv[0] == "basin":
+            assert ds.attrs["hip_mass_units"] == "kg" and ds.attrs["foot_radius_units"] == "m"

@@ -467,6 +467,32 @@ def test_store_of_other_arguments_is_refused_by_the_command(
     assert "different computation" in err[-1] and "function.bound" in err[-1]
 
 
+def test_store_messages_speak_the_commands_terms(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # QA sweep 5 (P3): "differs in: function.bound" named no option; --out == --store failed
+    # with "exists and is not a heelstrike sweep store"; a repaired store printed a raw Python
+    # warning with its source line
+    from heelstrike.cli import main
+
+    store, out = tmp_path / "store", str(tmp_path / "o")
+    argv = ["basin", "--grid", "4x3", "--steps", "10", "--json", "--out", out]
+    assert main([*argv, "--store", str(store)]) == 0
+    capsys.readouterr()
+    assert main([*argv, "--tol", "2e-3", "--store", str(store)]) == 2
+    assert "the command's options (walker, slope, steps, tol" in capsys.readouterr().err
+    assert main([*argv, "--store", out]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--store and --out are both" in err[0]
+    chunk = next(p for p in sorted((store / "status" / "c").rglob("*")) if p.is_file())
+    chunk.unlink()  # a finished chunk's data deleted: recomputed, with a one-line note
+    assert main([*argv, "--store", str(store)]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    notes = [ln for ln in err if "failed checksum verification" in ln]
+    assert len(notes) == 1 and notes[0].startswith("heelstrike: note: store")
+    assert not any("Warning" in ln for ln in err)
+
+
 _SIGINT_DRIVER = """
 import os, signal, sys
 from heelstrike.analysis import sweep

@@ -189,6 +189,10 @@ def _make_basin(
     fixed point was given."""
     dims = tuple(coords)
     shape = tuple(len(coords[d][1]) for d in dims)
+    from heelstrike.analysis.sweep import _attribute_units
+
+    attrs = {**attrs, **_attribute_units(attrs, {
+        "max_steps": "1", "tol": "rad, rad s-1 (mixed)", "rtol": "1", "atol": "1"})}
     ds = xr.Dataset(
         {
             "outcome": (dims, np.asarray(outcome).reshape(shape), {
@@ -212,11 +216,13 @@ def _make_basin(
     )
     frac = float(np.mean(outcome == 0))
     ds.attrs["converging_fraction"] = frac
+    ds.attrs["converging_fraction_units"] = "1"
     stable = rho = None
     if gait is not None:
         stable, rho = bool(gait.stable), float(gait.spectral_radius)
         ds.attrs["gait_stable"] = np.int8(stable)  # netCDF attributes have no booleans
         ds.attrs["gait_spectral_radius"] = rho
+        ds.attrs.update(gait_stable_units="1", gait_spectral_radius_units="1")
     return Basin(dataset=ds, fixed_point=zstar, converging_fraction=frac, elapsed=elapsed,
                  axes=axes, walker_steps=int(taken.sum()), gait_stable=stable,
                  spectral_radius=rho)
@@ -522,10 +528,17 @@ def model_basin_of_attraction(
         "rtol": float(rtol),
         "atol": float(atol),
     }
+    from heelstrike.models.base import section_unit
+    from heelstrike.models.description import parameter_units
+
     for i, name in enumerate(names):
         attrs[f"fixed_point_{name}"] = float(zstar[i])
+        attrs[f"fixed_point_{name}_units"] = section_unit(name).replace("/s", " s-1")
+    units = parameter_units(w.description)
     for name, value in w.params.items():
         attrs[f"param_{name}"] = float(np.asarray(value))
+        if name in units:
+            attrs[f"param_{name}_units"] = units[name]
     coords = {
         xn: (xn, xa, {"units": "rad", "long_name": f"post-heel-strike stance angle {xn}",
                       "label": f"post-impact stance angle {xn} (rad)"}),

@@ -621,10 +621,14 @@ def gait_map(
         long_name="post-impact fixed point (q3 rad, q3_dot rad/s, q4_dot rad/s)"
     )
     _add_derived(ds)
+    from heelstrike.analysis.sweep import _attribute_units
+
     ds.attrs.update(
         {f"walker_{k}": v for k, v in _walker_kwargs(walker).items()}
         | {"anchor_slope": anchor_slope, "rtol": rtol, "atol": atol, "backend": backend}
     )
+    ds.attrs.update(_attribute_units(ds.attrs, {"anchor_slope": "rad", "rtol": "1",
+                                                "atol": "1"}))
     return GaitMap(dataset=ds)
 
 

@@ -68,6 +68,29 @@ __all__ = [
     "sweep_progress",
 ]
 
+def _attribute_units(attrs: Mapping[str, Any],
+                     units: Mapping[str, str] | None = None) -> dict[str, str]:
+    """``<name>_units`` attributes for the numeric attributes of a result dataset whose unit is
+    known: from ``units`` (name to unit), else from :data:`KNOWN_UNITS` by the name, or by the
+    name without a ``fixed_point_``, ``walker_`` or ``param_`` prefix. Names that already have
+    a ``_units`` attribute, and names of unknown unit, get none."""
+    known = {**KNOWN_UNITS, **(units or {})}
+    out: dict[str, str] = {}
+    for key, value in attrs.items():
+        if key.endswith("_units") or f"{key}_units" in attrs or isinstance(value, bool | str):
+            continue
+        if not isinstance(value, int | float | np.integer | np.floating):
+            continue
+        base = key
+        for prefix in ("fixed_point_", "walker_", "param_"):
+            if key.startswith(prefix):
+                base = key[len(prefix):]
+        unit = known.get(key, known.get(base))
+        if unit is not None:
+            out[f"{key}_units"] = unit
+    return out
+
+
 #: ``func(**chunk_kwargs) -> {output name: array}``; see the module docstring.
 SweepFunction = Callable[..., Mapping[str, ArrayLike]]
 

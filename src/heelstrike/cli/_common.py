@@ -272,16 +272,25 @@ def add_store_option(p: argparse.ArgumentParser) -> None:
                    "after an interruption (Ctrl-C) the same command resumes from it")
 
 
-def run_with_store(store: str | None, compute: Callable[[], Any]) -> Any:
-    """Run ``compute()``; with a store, report its progress on stderr and map store errors."""
+def run_with_store(store: str | None, compute: Callable[[], Any], out: str | None = None) -> Any:
+    """Run ``compute()``; with a store, report its progress on stderr and map store errors.
+    ``out``: the command's ``--out`` directory, which the store must not be."""
     if store is None:
         return compute()
+    from pathlib import Path
+
+    if out is not None and Path(store).resolve() == Path(out).resolve():
+        raise CliError(f"--store and --out are both {store!r}: the store keeps the sweep's "
+                       "chunks and --out its figures and data; give the store a directory of "
+                       "its own")
     import logging
+    import warnings
 
     from heelstrike.analysis.sweep import (
         SweepError,
         SweepStoreLockedError,
         SweepStoreMismatchError,
+        SweepStoreRepairWarning,
     )
 
     logger = logging.getLogger("heelstrike.analysis.sweep")
@@ -290,12 +299,32 @@ def run_with_store(store: str | None, compute: Callable[[], Any]) -> Any:
     level = logger.level
     logger.addHandler(handler)
     logger.setLevel(logging.INFO)
+    show = warnings.showwarning
+
+    def note_repairs(message: Any, category: Any, *args: Any, **kwargs: Any) -> None:
+        # a repaired store is news, not a Python warning with a source line
+        if isinstance(category, type) and issubclass(category, SweepStoreRepairWarning):
+            print(f"heelstrike: note: {message}", file=sys.stderr)
+        else:
+            show(message, category, *args, **kwargs)
+
+    warnings.showwarning = note_repairs
     try:
         return compute()
     except SweepStoreMismatchError as exc:
+        # the sweep's internal names, said in the command's terms
+        def plain(key: str) -> str:
+            if key == "function.bound":
+                return "the command's options (walker, slope, steps, tol, ...)"
+            head = key.split(".", 1)[0]
+            return {"function": "the code that computes it", "grid": "the grid (--grid, ranges)",
+                    "chunks": "the chunking"}.get(head, key)
+
+        what = sorted({plain(d) for d in exc.differs})
         raise CliError(
             f"--store {store!r} holds results of a different computation (differs in: "
-            f"{', '.join(exc.differs)}); remove it or choose another directory"
+            f"{'; '.join(what)}; internally {', '.join(exc.differs)}); remove it or choose "
+            "another directory"
         ) from exc
     except SweepStoreLockedError as exc:
         raise CliError(
@@ -309,6 +338,7 @@ def run_with_store(store: str | None, compute: Callable[[], Any]) -> Any:
               "again to resume", file=sys.stderr)
         raise
     finally:
+        warnings.showwarning = show
         logger.removeHandler(handler)
         logger.setLevel(level)
 

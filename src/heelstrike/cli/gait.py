@@ -427,7 +427,7 @@ def _basin(args: argparse.Namespace, compute: Any) -> Any:
         raise CliError("--tol must be > 0")
     writable_dir(args.out)
     try:
-        return run_with_store(args.store, compute)
+        return run_with_store(args.store, compute, out=args.out)
     except GaitNotFoundError as exc:
         raise _no_gait(args.slope, exc) from exc
 
@@ -630,7 +630,7 @@ def _run_map(args: argparse.Namespace) -> int:
     try:
         gmap = run_with_store(args.store, lambda: gait_map(
             base, radii, slopes, progress=sys.stderr.isatty(),
-            store=args.store, backend=args.backend))
+            store=args.store, backend=args.backend), out=args.out)
     except GaitNotFoundError as exc:
         raise CliError(f"no starting gait found: {exc}") from exc
     return _render_gait_map(gmap, args, {"foot_radius": radii.tolist()}, "stable passive gaits",

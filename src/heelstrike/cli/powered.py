@@ -334,7 +334,7 @@ def _run_study(args: argparse.Namespace) -> int:
         ds = run_with_store(args.store, lambda: cost_study(
             radii, values, target=target, actuations=acts, walker=walker, model=model,
             backend=args.backend, actuation_options=options, progress=True,
-            store=args.store))
+            store=args.store), out=args.out)
     except ValueError as exc:  # e.g. a radius the walker file's constraints reject
         raise CliError(str(exc)) from exc
     out = Path(args.out)

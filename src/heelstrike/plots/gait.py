@@ -317,8 +317,9 @@ def basin_figure(basin: Basin) -> Figure:
     ax = fig.add_subplot()
     cmap = ListedColormap(list(_COLOURS))
     norm = BoundaryNorm(np.arange(len(OUTCOMES) + 1) - 0.5, cmap.N)
-    dx = (q3[-1] - q3[0]) / max(len(q3) - 1, 1) / 2
-    dy = (q3d[-1] - q3d[0]) / max(len(q3d) - 1, 1) / 2
+    # half a cell; a one-point axis gets a cell of 1 % of its value (or 0.01) to be visible
+    dx = (q3[-1] - q3[0]) / max(len(q3) - 1, 1) / 2 or 0.01 * max(abs(float(q3[0])), 1.0)
+    dy = (q3d[-1] - q3d[0]) / max(len(q3d) - 1, 1) / 2 or 0.01 * max(abs(float(q3d[0])), 1.0)
     ax.imshow(
         ds["outcome"].values.T, origin="lower", cmap=cmap, norm=norm, aspect="auto",
         interpolation="nearest",

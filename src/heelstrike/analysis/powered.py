@@ -651,9 +651,10 @@ FOLD_MULTIPLIER_TOLERANCE = 0.05
 
 #: At a fold in the target the family's tangent ``t`` (the null vector of ``[DP - I, dP/da]``)
 #: is orthogonal to the target's gradient ``g``: ``abs(g @ t) / norm(g)`` below this (at the
-#: verified end, within :data:`FAMILY_END_RESOLUTION` of the fold) marks one. The torso walker's fold
-#: gives 0.014; the push-off gaits' slow end (0.094, a multiplier near 1 but no fold: QA sweep
-#: 5) and R = 0.9's fast end (0.52, the impact angle reaching 90 deg) are no folds.
+#: verified end, within :data:`FAMILY_END_RESOLUTION` of the fold) marks one. The torso
+#: walker's fold gives 0.014; the push-off gaits' slow end (0.094, a multiplier near 1 but no
+#: fold: QA sweep 5) and R = 0.9's fast end (0.52, the impact angle reaching 90 deg) are no
+#: folds.
 FOLD_TANGENT_TOLERANCE = 0.04
 
 
@@ -1057,9 +1058,8 @@ def _family_end(
         largest multiplier (by modulus) of its ``DP`` (central differences on the
         ``accurate`` map, relative step ``max(fd_step, sqrt(rtol))``; NaN if a step failed)
         and ``abs(g @ t) / norm(g)`` (:data:`FOLD_TANGENT_TOLERANCE`; NaN if a step failed);
-        None if
-        ``value`` itself solves to ``tol`` (the failure is not the family's end) or no
-        verified gait was found.
+        None if ``value`` itself solves to ``tol`` (the failure is not the family's end) or
+        no verified gait was found.
 
     Raises
     ------

@@ -163,3 +163,15 @@ def test_netcdf_attributes_state_their_units(argv, tmp_path, capsys):
             assert ds.attrs["param_R_units"] == "m" and ds.attrs["param_mH_units"] == "kg"
         elif argv[0] == "basin":
             assert ds.attrs["hip_mass_units"] == "kg" and ds.attrs["foot_radius_units"] == "m"
+
+
+def test_model_map_json_lists_the_swept_values(tmp_path, capsys):
+    # QA sweep 5 (P3): the compass map's JSON had foot_radius, the model map's no values
+    import json
+
+    assert main(["map", "--model", "kneed", "--x", "R:0:0.2:3", "--slope", "2deg:4deg:3",
+                 "--out", str(tmp_path), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["parameter_name"] == "R" and d["parameter_values"] == pytest.approx([0, 0.1, 0.2])
+    assert d["parameter_unit"] == "m" and d["units"]["parameter_values"] == "m"
+    assert len(d["gait_found"]) == 3  # one row per swept value

@@ -115,6 +115,8 @@ def json_units(obj: Mapping[str, Any]) -> dict[str, Any]:
             units[key] = dict.fromkeys(value, "1")
         elif key == "parameter" and isinstance(obj.get("parameter_unit"), str):
             units[key] = obj["parameter_unit"]
+        elif key == "parameter_values":  # a swept walker parameter: its unit, if known
+            units[key] = obj.get("parameter_unit")
         elif key in _OBJECT_LISTS and isinstance(value, list) and not value:
             units[key] = {}
         elif isinstance(value, list) and value and all(isinstance(v, Mapping) for v in value):

@@ -129,10 +129,10 @@ def _grid_guesses(walker: PhasedWalker, *, fine: bool = False) -> list[FloatArra
     (:meth:`~heelstrike.models.base.PlanarWalker.section_point`), the rates scaled by the
     walker's ``sqrt(g / l)`` (those of the paper's walker for ``g = 9.81``, ``l = 1``).
 
+    The coarse grid (120 seeds, step angles 5.7-17 deg) starts the search on both backends;
     ``fine``: the compass search's grid (:func:`~heelstrike.analysis.limit_cycle._seed_grid`,
-    864 seeds over step angles of 3-34 deg), which the compiled backend maps in one batched
-    call; else a coarse grid of 120 seeds (5.7-17 deg), which the scipy reference maps step by
-    step.
+    864 seeds over step angles of 3-34 deg), the compiled backend's second stage
+    (:func:`find_model_gaits`).
     """
     from heelstrike.analysis.limit_cycle import _seed_grid
 

@@ -604,8 +604,13 @@ def _run_map_model(args: argparse.Namespace) -> int:
     writable_dir(args.out)
     gmap = model_gait_map(walker, name, values, slopes, backend=args.backend,
                           progress=sys.stderr.isatty())
+    from heelstrike.models.description import parameter_units
+
+    head = {"model": walker.description.name, "parameter_name": name,
+            "parameter_unit": parameter_units(walker.description).get(name),
+            "parameter_values": values.tolist()}
     return _render_gait_map(
-        gmap, args, {"model": walker.description.name, "parameter_name": name},
+        gmap, args, head,
         f"stable passive gaits of '{walker.description.name}'", f"({name}, slope)",
         [f"{name} = {v:8.4g}" for v in values])
 

@@ -175,6 +175,18 @@ def _energy_book(cycle: LimitCycle) -> ModelGait:
     )
 
 
+def _coarse_ensemble(w: PhasedWalker, Z: FloatArray, kw: dict[str, Any], steps: int) -> Any:
+    """``steps`` compiled steps from every seed of ``Z`` (S, d) at the search's coarse
+    tolerance, serially, with the actuation of ``kw`` (checked for the compiled backend by
+    ``backend_simulator``)."""
+    from heelstrike.dynamics.compiled_phased import ensemble_walk_phased
+
+    return ensemble_walk_phased(w, Z, steps=steps, slope=kw["slope"],
+                                torque=cast(Any, kw["torque"]),
+                                push_off=cast(Any, kw["push_off"]), rtol=1e-7, atol=1e-8,
+                                parallel=False)
+
+
 def _nearly_periodic(w: PhasedWalker, Z: FloatArray, backend: str,
                      kw: dict[str, Any]) -> list[FloatArray]:
     """The seeds ``Z`` (S, d) that take a step, most nearly periodic first (``|P(z) - z|`` at
@@ -186,12 +198,7 @@ def _nearly_periodic(w: PhasedWalker, Z: FloatArray, backend: str,
         No seed takes a step.
     """
     if backend == "compiled":
-        from heelstrike.dynamics.compiled_phased import ensemble_walk_phased
-
-        # the actuation was checked for the compiled backend (backend_simulator)
-        ens = ensemble_walk_phased(w, Z, slope=kw["slope"], torque=cast(Any, kw["torque"]),
-                                   push_off=cast(Any, kw["push_off"]), rtol=1e-7, atol=1e-8,
-                                   parallel=False)
+        ens = _coarse_ensemble(w, Z, kw, steps=1)
         Z1 = np.where(ens.ok[:, None], ens.z, np.nan)
     else:
         coarse = PoincareMap(walker=w, rtol=1e-7, atol=1e-8, **kw)
@@ -206,12 +213,7 @@ def _nearly_periodic(w: PhasedWalker, Z: FloatArray, backend: str,
 def _attractors(w: PhasedWalker, Z: FloatArray, kw: dict[str, Any]) -> list[FloatArray]:
     """Where the seeds ``Z`` settle in :data:`ATTRACTOR_STEPS` compiled steps (a stable
     gait attracts the seeds near it), distinct to 1e-3."""
-    from heelstrike.dynamics.compiled_phased import ensemble_walk_phased
-
-    walked = ensemble_walk_phased(w, Z, steps=ATTRACTOR_STEPS, slope=kw["slope"],
-                                  torque=cast(Any, kw["torque"]),
-                                  push_off=cast(Any, kw["push_off"]), rtol=1e-7, atol=1e-8,
-                                  parallel=False)
+    walked = _coarse_ensemble(w, Z, kw, steps=ATTRACTOR_STEPS)
     out: list[FloatArray] = []
     for z in walked.z[walked.ok]:
         _add_distinct(out, np.asarray(z, dtype=float), 1e-3)

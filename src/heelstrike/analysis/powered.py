@@ -1100,16 +1100,16 @@ def _family_end(
             hi = mid
         else:
             lo, x_lo = mid, x_mid
-    # multipliers by central differences on the accurate map (near a fold the search map's
-    # forward differences at ``h`` are off by more than the distance of a multiplier from 1)
-    DP = _section_jacobian(accurate, x_lo, fd_step)
-    if not np.all(np.isfinite(DP)):
-        return lo, x_lo, complex(np.nan), float("nan")
-    mult = np.linalg.eigvals(DP)
-    # the family's tangent against the target's gradient (central differences, as DP)
+    # one central-difference Jacobian of the augmented residual on the accurate map (near a
+    # fold the search map's forward differences at ``h`` are off by more than the distance of
+    # a multiplier from 1): its section block is ``DP - I`` (the steps of
+    # :func:`_section_jacobian`), its rows give the family's tangent and the target's gradient
     J = accurate.jacobian(x_lo, lo, max(fd_step, float(np.sqrt(accurate.rtol))))
+    if not np.all(np.isfinite(J)):
+        return lo, x_lo, complex(np.nan), float("nan")
+    mult = np.linalg.eigvals(J[:-1, :-1] + np.eye(x_lo.size - 1))
     turning = float("nan")
-    if np.all(np.isfinite(J)) and np.linalg.norm(J[-1]) > 0:
+    if np.linalg.norm(J[-1]) > 0:
         tangent = np.linalg.svd(J[:-1])[2][-1]
         turning = abs(float(J[-1] @ tangent)) / float(np.linalg.norm(J[-1]))
     return lo, x_lo, complex(mult[np.argmax(np.abs(mult))]), turning
@@ -1465,27 +1465,18 @@ def _find(
         raise ended from exc
 
 
-def _section_jacobian(
-    prob: _Problem, x: FloatArray, fd_step: float, *, base: FloatArray | None = None
-) -> FloatArray:
+def _section_jacobian(prob: _Problem, x: FloatArray, fd_step: float) -> FloatArray:
     """``DP``, shape (d, d): the step map's Jacobian in the section point at ``x`` (shape
-    (d + 1,), the parameter held), relative step ``max(fd_step, sqrt(rtol))`` (it balances
-    truncation ``~h`` and integration noise ``~rtol / h``).
-
-    Forward differences from ``base`` (the step's own ``z_next``: ``d`` more steps), else
-    central differences (``2 d`` steps; needed near a fold, where a multiplier's distance
-    from 1 is below the forward differences' error).
-    """
+    (d + 1,), the parameter held), by central differences (``2 d`` steps) with the relative
+    step ``max(fd_step, sqrt(rtol))`` (it balances truncation ``~h^2`` and integration noise
+    ``~rtol / h``)."""
     d = x.size - 1
     h = max(fd_step, float(np.sqrt(prob.rtol)))
     DP = np.empty((d, d))
     for i in range(d):
         dz = np.zeros(d + 1)
         dz[i] = h * max(1.0, abs(x[i]))
-        if base is None:
-            DP[:, i] = (prob.step(x + dz).z_next - prob.step(x - dz).z_next) / (2.0 * dz[i])
-        else:
-            DP[:, i] = (prob.step(x + dz).z_next - base) / dz[i]
+        DP[:, i] = (prob.step(x + dz).z_next - prob.step(x - dz).z_next) / (2.0 * dz[i])
     return DP
 
 

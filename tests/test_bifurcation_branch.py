@@ -26,7 +26,9 @@ def _brute_force_period_one(out: Path) -> tuple[np.ndarray, np.ndarray, np.ndarr
     settled on a period-one gait), with their impact angles (rad) and periods (s)."""
     import pandas as pd
 
-    rows = pd.read_csv(out / "bifurcation.csv").dropna()
+    rows = pd.read_csv(out / "bifurcation.csv")
+    # the recorded steps (the ``status`` column says how each slope's walk ended)
+    rows = rows[["slope_deg", "impact_angle_rad", "period_s"]].dropna()
     g = rows.groupby("slope_deg")
     spread, mean = g.max() - g.min(), g.mean()
     settled = (spread["impact_angle_rad"] < 1e-7) & (spread["period_s"] < 1e-7)

@@ -118,6 +118,17 @@ def test_bad_values_are_echoed(argv, needle, capsys):
     assert len(lines) == 1 and needle in lines[0]
     if "--radius=-0.1" in argv:
         assert "foot_radius = -0.1" in lines[0]
+        assert lines[0].endswith("(--radius sets foot_radius, --leg-length sets leg_length)")
+
+
+def test_compass_rule_names_the_options_that_set_it(capsys):
+    # QA sweep 5 (P3): the error named the model's fields only; --leg-length 0.4 leaves the
+    # default b = 0.5 m outside the leg
+    assert main(["gait", "--leg-length", "0.4"]) == 2
+    line = capsys.readouterr().err.strip()
+    assert line.startswith("heelstrike: error: leg_com_from_hip must satisfy 0 < b < leg_length")
+    assert "leg_com_from_hip = 0.5" in line and "leg_length = 0.4" in line
+    assert line.endswith("(--leg-length sets leg_length, --com-from-hip sets leg_com_from_hip)")
 
 
 def test_impact_table_is_readable(capsys):

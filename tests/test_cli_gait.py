@@ -133,6 +133,12 @@ def test_bifurcation_csv_slopes_are_the_degrees_asked_for(tmp_path, capsys):
                  "--record", "2", "--out", str(tmp_path)]) == 0
     df = pd.read_csv(tmp_path / "bifurcation.csv", dtype={"slope_deg": str})
     assert sorted(set(df["slope_deg"])) == ["2", "2.5", "3"]
+    # a value with no exact binary form too (it read 4.2000000000000002 once rounded)
+    assert main(["bifurcation", "--slope-range", "4deg:4.4deg:3", "--transient", "3",
+                 "--record", "2", "--out", str(tmp_path / "b")]) == 0
+    for name in ("bifurcation.csv", "period_one_branch.csv"):
+        df = pd.read_csv(tmp_path / "b" / name, dtype={"slope_deg": str})
+        assert {"4", "4.2", "4.4"} <= set(df["slope_deg"]), name
 
 
 def test_one_point_basin_draws_without_a_warning(tmp_path, capsys):
@@ -175,3 +181,59 @@ def test_model_map_json_lists_the_swept_values(tmp_path, capsys):
     assert d["parameter_name"] == "R" and d["parameter_values"] == pytest.approx([0, 0.1, 0.2])
     assert d["parameter_unit"] == "m" and d["units"]["parameter_values"] == "m"
     assert len(d["gait_found"]) == 3  # one row per swept value
+
+
+def test_bifurcation_json_says_what_the_diagram_shows(tmp_path, capsys):
+    """QA sweep 5 (P3): ``bifurcation`` had no ``--json`` and its CSV had bare NaN rows where
+    a walk fell. The JSON and the CSV's ``status`` column now say how each slope's walk ended
+    and which period it settled into, consistent with the period-one branch's stability."""
+    import pandas as pd
+
+    assert main(["bifurcation", "--slope-range", "4deg:5.6deg:9", "--transient", "60",
+                 "--record", "8", "--out", str(tmp_path), "--json"]) == 0
+    out = capsys.readouterr().out.strip().splitlines()
+    assert len(out) == 1
+    d = json.loads(out[0])
+    assert d["units"]["walks"] == {"slope": "rad", "status": None, "period_steps": "1"}
+    assert d["units"]["branch"]["slope"] == "rad" and d["units"]["branch"]["period"] == "s"
+    assert d["units"]["period_doubling_slopes"] == "rad"
+    # the compass gait's period doubling (4.39 deg, Goswami et al. 1998's cascade)
+    (pd_slope,) = d["period_doubling_slopes"]
+    assert 4.3 < np.degrees(pd_slope) < 4.5
+    for gait in d["branch"]:  # stable exactly below the period doubling
+        assert gait["stable"] == (gait["slope"] < pd_slope), gait
+        assert (gait["spectral_radius"] < 1) == gait["stable"]
+    rows = pd.read_csv(tmp_path / "bifurcation.csv")
+    branch = {round(g["slope"], 12): g for g in d["branch"]}
+    periods = {}
+    for walk in d["walks"]:
+        at = rows[np.isclose(rows["slope_deg"], np.degrees(walk["slope"]), atol=1e-9)]
+        assert len(at) == 8 and set(at["status"]) == {walk["status"]}
+        angles = at["impact_angle_rad"].to_numpy()
+        periods[walk["period_steps"]] = periods.get(walk["period_steps"], 0) + 1
+        if walk["status"] != "completed":  # the walk fell: no step recorded
+            assert np.isnan(angles).all() and walk["period_steps"] is None
+            continue
+        gait = branch[round(walk["slope"], 12)]
+        if walk["period_steps"] == 1:  # the brute-force walk sits on the Newton gait
+            assert walk["slope"] < pd_slope
+            np.testing.assert_allclose(angles, gait["impact_angle"], rtol=0, atol=1e-6)
+        elif walk["period_steps"] == 2:  # the 2-cycle straddles the unstable period-one gait
+            assert walk["slope"] > pd_slope and not gait["stable"]
+            assert angles.min() < gait["impact_angle"] < angles.max()
+    # what the walks do over this range: period one, the doubled cycle, and falls
+    assert periods[1] >= 2 and periods[2] >= 1 and periods[None] >= 2
+    assert {"lost_contact"} <= {w["status"] for w in d["walks"]}
+
+
+def test_period_steps_of_recorded_walks() -> None:
+    from heelstrike.analysis.limit_cycle import BifurcationDiagram
+
+    a, b, c = 0.3, 0.31, 0.32
+    angles = np.array([[a] * 6, [a, b] * 3, [a, b, c] * 2, [a, b, c, a, b, a], [a] * 5 + [np.nan],
+                       [a, a + 2e-6, a, a, a, a]])
+    diagram = BifurcationDiagram(slopes=np.arange(6.0), impact_angles=angles,
+                                 periods=np.ones_like(angles))
+    assert diagram.period_steps().tolist() == [1, 2, 3, 0, 0, 0]
+    assert diagram.period_steps(tol=1e-5)[-1] == 1
+    assert diagram.statuses == ()  # built by hand: no statuses recorded

@@ -230,7 +230,7 @@ def test_basin_unwritable_out_fails_before_computing(
 
 @pytest.mark.parametrize(
     ("command", "module", "function"),
-    [(["bifurcation"], "heelstrike.outputs", "write_bifurcation"),
+    [(["bifurcation"], "heelstrike.analysis.gait_map", "compass_bifurcation"),
      (["map"], "heelstrike.analysis.gait_map", "gait_map"),
      (["study", "cost"], "heelstrike.analysis.cost_study", "cost_study")],
 )

@@ -204,6 +204,28 @@ def test_bad_inputs_raise_clear_errors() -> None:
         sweep(heel_strike_energies, GRID, chunks={"slope": 2}, progress=False)
 
 
+def test_grid_values_must_be_finite_and_distinct() -> None:
+    """QA sweep 5: a NaN grid value was swept (an all-NaN slice no ``sel`` can reach) and a
+    repeated one computed twice (``ds.sel`` then returns two rows for one value)."""
+    calls = []
+
+    def counted(impact_angle: np.ndarray, foot_radius: np.ndarray) -> dict[str, Any]:
+        calls.append(1)
+        return heel_strike_energies(impact_angle=impact_angle, foot_radius=foot_radius)
+
+    with pytest.raises(SweepError, match=r"grid\['foot_radius'\] must be finite, got nan at "
+                       r"index 1 \(and 1 more\)"):
+        sweep(counted, {"impact_angle": ANGLES, "foot_radius": [0.1, np.nan, 0.3, np.inf]},
+              progress=False)
+    with pytest.raises(SweepError, match=r"grid\['impact_angle'\] repeats 0\.2: every value "
+                       "must be distinct"):
+        sweep(counted, {"impact_angle": [0.1, 0.2, 0.2], "foot_radius": RADII}, progress=False)
+    assert not calls  # refused before anything is computed
+    # the same grids without the bad values sweep
+    ds = sweep(counted, {"impact_angle": [0.1, 0.2], "foot_radius": [0.1, 0.3]}, progress=False)
+    assert ds["T_c"].shape == (2, 2) and calls
+
+
 def test_units_and_attrs_from_dataarray_grid() -> None:
     grid: dict[str, Any] = {
         "impact_angle": xr.DataArray(ANGLES[:3], dims="impact_angle",

@@ -9,8 +9,8 @@ norm over mixed units). A key whose value is
   (``q``, ``q_dot``, ``qdot_minus``, ``qdot_plus``: ``(x, y, angles...)``) and ``impulse`` have a
   list with one unit per entry;
 - an object (``fixed_point``, ``fractions``) has an object of units for its keys;
-- a list of objects (``impacts``, ``gaits``, ``other_gaits``) has the object of units of its
-  entries' keys (``{}`` when it is empty).
+- a list of objects (``impacts``, ``gaits``, ``other_gaits``, ``walks``, ``branch``) has the
+  object of units of its entries' keys (``{}`` when it is empty).
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ UNITS: dict[str, str | None] = {
     # geometry, time, speed
     "step_length": "m", "radius": "m", "foot_radius": "m",
     "impact_angle": "rad", "slope": "rad", "period_doubling_slope": "rad",
+    "period_doubling_slopes": "rad",
     "period": "s", "time": "s", "elapsed": "s",
     "speed": "m/s", "trailing_normal_velocity": "m/s", "trailing_foot_lift_velocity": "m/s",
     "target_speed": "m/s", "target_step_length": "m",
@@ -39,7 +40,7 @@ UNITS: dict[str, str | None] = {
     "restitution": "1", "multipliers": "1", "multipliers_complex": "1",
     "cost_of_transport": "1", "spectral_radius": "1", "converging_fraction": "1",
     "stable_fraction": "1", "gait_found_fraction": "1", "grid": "1", "steps": "1",
-    "gaits_found": "1",
+    "gaits_found": "1", "period_steps": "1",
     "iterations": "1",
     # torque-law gains (heelstrike.analysis.powered.GAIN_UNITS)
     "gain": "s/rad", "kp": "N m/rad", "kd": "N m s/rad", "max_torque": "N m", "angle": "rad",
@@ -49,7 +50,7 @@ UNITS: dict[str, str | None] = {
     "actuation": None, "target_source": None, "backend": None,
     "parameter_name": None, "parameter_unit": None, "kind": None, "figure": None,
     "data": None, "residual": None, "status": None, "message": None, "gait_found": None,
-    "gait_stable": None,
+    "gait_stable": None, "note": None, "branch_data": None, "branch_stopped": None,
     # robots (heelstrike.cli.robot writes its own units maps with these)
     "loss_beyond_T_c": "J", "normal_impulse": "N s", "admissible": None, "frame": None,
     "joint": None, "unit": None,
@@ -59,7 +60,7 @@ UNITS: dict[str, str | None] = {
 
 #: Keys whose value is a list of objects: the object of units of their entries' keys, ``{}``
 #: when the list is empty.
-_OBJECT_LISTS = {"impacts", "gaits", "other_gaits"}
+_OBJECT_LISTS = {"impacts", "gaits", "other_gaits", "walks", "branch"}
 
 _POSITION = {"q"}
 _VELOCITY = {"q_dot", "qdot_minus", "qdot_plus"}

@@ -23,6 +23,7 @@ if TYPE_CHECKING:
     import pandas as pd
     import xarray as xr
 
+    from heelstrike._typing import FloatArray
     from heelstrike.analysis.basin import Basin
     from heelstrike.analysis.gait_map import GaitMap
     from heelstrike.analysis.limit_cycle import BifurcationDiagram, Continuation
@@ -35,6 +36,7 @@ if TYPE_CHECKING:
 __all__ = [
     "COMPASS_ONLY_WALK_FIGURES",
     "bifurcation_gap_note",
+    "bifurcation_title",
     "reproduce_paper",
     "write_basin",
     "write_bifurcation",
@@ -180,10 +182,7 @@ def write_bifurcation(
         record=record, continuation_points=continuation_points, progress=progress,
         backend=backend,
     )
-    return write_bifurcation_files(
-        diagram, branch, out_dir,
-        f"compass gait, R = {float(walker.foot_radius):g} m: bifurcation diagram",
-    )
+    return write_bifurcation_files(diagram, branch, out_dir, bifurcation_title(walker))
 
 
 def write_model_bifurcation(
@@ -208,9 +207,16 @@ def write_model_bifurcation(
         walker, np.linspace(slope_start, slope_stop, count), transient=transient, record=record,
         continuation_points=continuation_points, backend=backend,
     )
-    return write_bifurcation_files(
-        diagram, branch, out_dir, f"{walker.description.name}: bifurcation diagram"
-    )
+    return write_bifurcation_files(diagram, branch, out_dir, bifurcation_title(walker))
+
+
+def bifurcation_title(walker: Any) -> str:
+    """The bifurcation figure's title: ``"compass gait, R = 0.3 m: bifurcation diagram"`` for
+    the compass gait, ``"<model name>: bifurcation diagram"`` for a described walker."""
+    desc = walker.description
+    if desc is not None:
+        return f"{desc.name}: bifurcation diagram"
+    return f"compass gait, R = {float(walker.foot_radius):g} m: bifurcation diagram"
 
 
 def bifurcation_gap_note(start_deg: float, onset_deg: float, stable: bool) -> str:
@@ -245,10 +251,12 @@ def write_bifurcation_files(
     list of Path
         ``bifurcation.png`` and ``.pdf`` (:func:`heelstrike.plots.gait.bifurcation_figure`),
         ``bifurcation.csv`` (one row per recorded step: ``slope_deg``, ``impact_angle_rad``,
-        ``period_s``) and ``period_one_branch.csv`` (``slope_deg``, ``impact_angle_rad``,
-        ``period_s``, ``spectral_radius``, ``stable``). If the branch starts above the
-        diagram's first slope (no gait below it), that part of the range is shaded on the
-        figure and noted in its title.
+        ``period_s``, and ``status``, how that slope's walk ended: ``completed``, or e.g.
+        ``fell_backward`` on rows whose step was not taken, which are NaN; empty where the
+        slope was not walked, below the first gait) and ``period_one_branch.csv``
+        (``slope_deg``, ``impact_angle_rad``, ``period_s``, ``spectral_radius``, ``stable``).
+        If the branch starts above the diagram's first slope (no gait below it), that part of
+        the range is shaded on the figure and noted in its title.
     """
     from heelstrike.plots.gait import bifurcation_figure
 
@@ -267,19 +275,26 @@ def write_bifurcation_files(
     for p in paths:
         fig.savefig(p)
     record = diagram.impact_angles.shape[1]
+
+    def degrees(slopes: FloatArray) -> list[str]:
+        # 12 significant digits, written as text: the slopes come from degrees, and
+        # rad2deg(deg2rad(2)) is 2.0000000000000004, while even a rounded 4.2 reads
+        # 4.2000000000000002 in the 17 digits of every other float column
+        return [format(float(v), ".12g") for v in np.rad2deg(slopes)]
+
     csv = write_csv(
         {
-            # degrees to 1e-12: the slopes come from degrees, and rad2deg(deg2rad(2)) is
-            # 2.0000000000000004
-            "slope_deg": np.repeat(np.round(np.rad2deg(diagram.slopes), 12), record),
+            "slope_deg": np.repeat(degrees(diagram.slopes), record),
             "impact_angle_rad": diagram.impact_angles.ravel(),
             "period_s": diagram.periods.ravel(),
+            "status": np.repeat(np.asarray(diagram.statuses or ("",) * diagram.slopes.size,
+                                           dtype=object), record),
         },
         out / "bifurcation.csv",
     )
     bcsv = write_csv(
         {
-            "slope_deg": np.round(np.rad2deg(branch.values), 12),
+            "slope_deg": degrees(branch.values),
             "impact_angle_rad": [c.impact_angle for c in branch.cycles],
             "period_s": [c.period for c in branch.cycles],
             "spectral_radius": [c.spectral_radius for c in branch.cycles],

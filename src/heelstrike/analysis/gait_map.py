@@ -1064,7 +1064,8 @@ def _diagram_and_branch(
             return np.concatenate([np.full((k0, a.shape[1]), np.nan), a])
 
         diagram = BifurcationDiagram(slopes=slopes, impact_angles=pad(diagram.impact_angles),
-                                     periods=pad(diagram.periods))
+                                     periods=pad(diagram.periods),
+                                     statuses=("",) * k0 + diagram.statuses)
     if continuation_points is None:  # the diagram's slopes: the line meets every column of dots
         values = np.concatenate([[onset], slopes[slopes > onset]])
     else:

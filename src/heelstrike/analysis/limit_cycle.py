@@ -1043,11 +1043,46 @@ class BifurcationDiagram(ResultDictMixin):
     impact_angles, periods : ndarray, shape (K, N)
         The last ``N`` impact angles (rad) and step durations (s) after the transient; NaN
         where the walker fell.
+    statuses : tuple of str, length K or 0
+        How each slope's walk ended (a :class:`~heelstrike.dynamics.hybrid.WalkStatus` value,
+        e.g. ``"completed"`` or ``"fell_backward"``); ``""`` for a slope that was not walked
+        (below the first gait of the range). Empty when not recorded (a diagram built by
+        hand).
     """
 
     slopes: FloatArray
     impact_angles: FloatArray
     periods: FloatArray
+    statuses: tuple[str, ...] = ()
+
+    def period_steps(self, tol: float = 1e-6) -> NDArray[np.int_]:
+        """The period (in steps) each slope's walk settled into, from its recorded steps.
+
+        Parameters
+        ----------
+        tol : float
+            Largest difference (rad) between impact angles ``p`` steps apart.
+
+        Returns
+        -------
+        ndarray of int, shape (K,)
+            The smallest ``p <= N // 2`` with ``|impact_angles[k, i + p] - impact_angles[k, i]|
+            <= tol`` over every recorded step (1: the period-one gait, 2: after its period
+            doubling, ...); 0 where no such ``p`` exists (a longer period, chaos, or a walk
+            still in its transient, as near a period doubling, where it settles slowly) or
+            where a recorded step is missing (the walk fell).
+        """
+        angles = np.asarray(self.impact_angles, dtype=float)
+        out = np.zeros(angles.shape[0], dtype=int)
+        n = angles.shape[1]
+        for k, row in enumerate(angles):
+            if n < 2 or not np.all(np.isfinite(row)):
+                continue
+            for p in range(1, n // 2 + 1):
+                if np.all(np.abs(row[p:] - row[:-p]) <= tol):
+                    out[k] = p
+                    break
+        return out
 
 
 def bifurcation_diagram(
@@ -1074,6 +1109,7 @@ def bifurcation_diagram(
     K = sl.size
     angles = np.full((K, record), np.nan)
     periods = np.full((K, record), np.nan)
+    statuses = [""] * K
     if guess is None:
         z = find_limit_cycle(walker, slope=float(sl[0]), rtol=rtol, atol=atol).fixed_point
     else:
@@ -1085,8 +1121,10 @@ def bifurcation_diagram(
         rec = res.impacts[transient:]
         angles[i, : len(rec)] = [r.impact_angle for r in rec]
         periods[i, : len(rec)] = [r.step_duration for r in rec]
+        statuses[i] = str(res.status.value)
         if res.ok:
             z = walker.state_to_section(res.final_q, res.final_q_dot)
         if callback is not None:
             callback(i)
-    return BifurcationDiagram(slopes=sl, impact_angles=angles, periods=periods)
+    return BifurcationDiagram(slopes=sl, impact_angles=angles, periods=periods,
+                              statuses=tuple(statuses))

@@ -482,6 +482,18 @@ def _plan(
             raise SweepError(f"grid[{name!r}] must be a non-empty 1-D array, got {vals.shape}")
         if vals.dtype.kind not in "biuf":
             raise SweepError(f"grid[{name!r}] must be numeric, got dtype {vals.dtype}")
+        bad = np.flatnonzero(~np.isfinite(vals))
+        if bad.size:
+            more = f" (and {bad.size - 1} more)" if bad.size > 1 else ""
+            raise SweepError(f"grid[{name!r}] must be finite, got {vals[bad[0]].item()} at "
+                             f"index {int(bad[0])}{more}")
+        distinct, counts = np.unique(vals, return_counts=True)
+        if np.any(counts > 1):
+            twice = distinct[counts > 1]
+            more = f" (and {twice.size - 1} more values)" if twice.size > 1 else ""
+            raise SweepError(
+                f"grid[{name!r}] repeats {twice[0].item()!r}{more}: every value must be distinct "
+                "(a repeated one is computed twice, and selecting it by value is ambiguous)")
         unit = units.get(name, raw_attrs.get("units", KNOWN_UNITS.get(name)))
         if unit is None:
             raise SweepError(

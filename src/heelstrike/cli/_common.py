@@ -161,11 +161,18 @@ def add_walker_options(p: argparse.ArgumentParser) -> None:
 
 
 def walker_from_args(args: argparse.Namespace) -> Any:
-    from heelstrike.models.compass import CompassGait
+    from heelstrike.models.compass import CompassGait, WalkerParameterError
 
     if vars(args).get("param"):
         raise CliError("--param needs --model (the compass gait takes --radius, --hip-mass, ...)")
-    return CompassGait(**{field: getattr(args, dest) for dest, field, _ in _COMPASS_OPTIONS})
+    try:
+        return CompassGait(**{field: getattr(args, dest) for dest, field, _ in _COMPASS_OPTIONS})
+    except WalkerParameterError as exc:
+        # the model names its fields; say which options set the ones the failed rule names
+        rule = str(exc).split("; got", 1)[0]
+        named = [f"--{dest.replace('_', '-')} sets {field}" for dest, field, _ in _COMPASS_OPTIONS
+                 if re.search(rf"\b{field}\b", rule)]
+        raise CliError(f"{exc} ({', '.join(named)})" if named else str(exc)) from None
 
 
 def add_model_options(p: argparse.ArgumentParser) -> None:

@@ -331,55 +331,112 @@ def add_bifurcation(sub: Any) -> None:
                    help="steps recorded at each slope (default 16)")
     p.add_argument("--out", default="bifurcation",
                    help="output directory (default ./bifurcation)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=_run_bifurcation)
 
 
 def _run_bifurcation(args: argparse.Namespace) -> int:
     from pathlib import Path
 
+    import numpy as np
+
+    from heelstrike.analysis.gait_map import compass_bifurcation, model_bifurcation
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
-    from heelstrike.outputs import write_bifurcation, write_model_bifurcation
+    from heelstrike.outputs import bifurcation_gap_note, bifurcation_title, write_bifurcation_files
 
     walker = walker_from_args(args) if args.model is None else model_from_args(args)
     start, stop, count = args.slope_range
     if not 0 < start < stop:
         raise CliError("--slope-range needs 0 < START < STOP")
     writable_dir(args.out)
+    slopes = np.linspace(start, stop, count or 45)
+    # the branch over the diagram's slopes, refined where it curves (what the figure draws)
+    kw: dict[str, Any] = {"transient": args.transient, "record": args.record,
+                          "continuation_points": None, "backend": args.backend}
     try:
         if args.model is not None:
-            paths = write_model_bifurcation(
-                walker, start, stop, count or 45, Path(args.out), transient=args.transient,
-                record=args.record, backend=args.backend,
-            )
+            diagram, branch = model_bifurcation(walker, slopes, **kw)
         else:
-            paths = write_bifurcation(
-                walker, start, stop, count or 45, Path(args.out), transient=args.transient,
-                record=args.record, progress=True, backend=args.backend,
-            )
+            diagram, branch = compass_bifurcation(walker, slopes, progress=True, **kw)
     except GaitNotFoundError as exc:  # no gait anywhere in the range (the message says so)
         raise CliError(str(exc)) from exc
+    paths = write_bifurcation_files(diagram, branch, Path(args.out), bifurcation_title(walker))
+    onset = float(branch.values[0]) if branch.values.size else None
+    note = None
+    if onset is not None and onset > start:
+        gap = bifurcation_gap_note(math.degrees(start), math.degrees(onset),
+                                   branch.cycles[0].stable)
+        note = (f"{gap}: the branch followed starts there (automatic gait search, then "
+                "bisection to 1e-5 rad); the diagram and the branch are empty below it (other, "
+                "unstable gaits may exist there: 'heelstrike gait --slope ...' lists them)")
+    period_steps = diagram.period_steps()
+    if args.json:
+        print_json({
+            "model": None if args.model is None else walker.description.name,
+            "backend": args.backend,
+            "walks": [{"slope": float(s), "status": st or None,
+                       "period_steps": int(n) if n else None}
+                      for s, st, n in zip(diagram.slopes, diagram.statuses, period_steps,
+                                          strict=True)],
+            "branch": [{"slope": float(v), "impact_angle": c.impact_angle, "period": c.period,
+                        "spectral_radius": c.spectral_radius, "stable": c.stable}
+                       for v, c in zip(branch.values, branch.cycles, strict=True)],
+            "period_doubling_slopes": [float(v) for v in branch.period_doubling],
+            "branch_stopped": branch.stopped,
+            "note": note,
+            "figure": str(paths[0]),
+            "data": str(paths[2]),
+            "branch_data": str(paths[3]),
+        })
+        return 0
     print_paths(paths)
-    note = _bifurcation_gap_note(start, paths)
+    for line in _bifurcation_summary(diagram, branch, period_steps):
+        print(line)
     if note:
-        print(note)
+        print(f"note: {note}")
     return 0
 
 
-def _bifurcation_gap_note(start: float, paths: list[Any]) -> str | None:
-    """The note of a range that starts below the walker's first gait, or None; the onset is
-    the first slope of the written ``period_one_branch.csv``."""
-    import pandas as pd
+def _bifurcation_summary(diagram: Any, branch: Any, period_steps: Any) -> list[str]:
+    """Lines saying what the diagram shows: the branch's span, stability and period
+    doublings, and the periods the walks settled into (or where they fell)."""
+    import numpy as np
 
-    from heelstrike.outputs import bifurcation_gap_note
+    from heelstrike.dynamics.hybrid import WalkStatus
 
-    branch = pd.read_csv(next(p for p in paths if p.name == "period_one_branch.csv"))
-    if branch.empty or float(branch["slope_deg"].iloc[0]) <= math.degrees(start):
-        return None
-    onset = float(branch["slope_deg"].iloc[0])
-    note = bifurcation_gap_note(math.degrees(start), onset, bool(branch["stable"].iloc[0]))
-    return (f"note: {note}: the branch followed starts there (automatic gait search, then "
-            "bisection to 1e-5 rad); the diagram and the branch are empty below it (other, "
-            "unstable gaits may exist there: 'heelstrike gait --slope ...' lists them)")
+    deg = np.rad2deg
+    lines = []
+    if branch.values.size:
+        stable = [float(v) for v, c in zip(branch.values, branch.cycles, strict=True) if c.stable]
+        span = f"{deg(branch.values[0]):.4g} to {deg(branch.values[-1]):.4g} deg"
+        if stable:
+            span += f", stable from {deg(min(stable)):.4g} to {deg(max(stable)):.4g} deg"
+        else:
+            span += ", unstable throughout"
+        lines.append(f"period-one branch: {span}")
+        if branch.period_doubling.size:
+            slopes = ", ".join(f"{deg(v):.4g}" for v in branch.period_doubling)
+            lines.append(f"period doubling at {slopes} deg")
+        if branch.stopped:
+            lines.append(f"branch stopped: {branch.stopped}")
+    counts: dict[str, list[float]] = {}
+    for s, st, n in zip(diagram.slopes, diagram.statuses, period_steps, strict=True):
+        if not st:
+            continue
+        longest = diagram.impact_angles.shape[1] // 2
+        if st != "completed":
+            key = f"{st} ({WalkStatus(st).message})"
+        elif n:
+            key = f"settled on period {n}"
+        else:
+            key = (f"no period of at most {longest} step{'s' if longest > 1 else ''} (chaotic, "
+                   "or still settling)")
+        counts.setdefault(key, []).append(float(deg(s)))
+    for what, at in counts.items():
+        where = ", ".join(f"{a:.4g}" for a in at) if len(at) <= 6 else (
+            f"{len(at)} slopes from {at[0]:.4g} to {at[-1]:.4g}")
+        lines.append(f"walks at {where} deg: {what}")
+    return lines
 
 
 def add_basin(sub: Any) -> None:

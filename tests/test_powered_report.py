@@ -219,3 +219,41 @@ def test_slow_end_of_the_search_is_not_called_a_fold(capsys: Capture) -> None:
                               fallback=False)
         assert g.speed == pytest.approx(v, abs=1e-8) and g.residual < 1e-8
         assert g.actuator_work == pytest.approx(g.collision_loss, abs=1e-9)
+
+
+@pytest.mark.slow
+def test_slow_gaits_books_close_relative_to_their_size(capsys: Capture) -> None:
+    # QA sweep 5, P2: at R = 0.9 m and 0.02 m/s (W = 4.7e-9 J against T = 4e-3 J) the absolute
+    # tolerances left the change of T + V over a step at 0.6 % of the work, and the backends
+    # 1.8e-3 apart in W; the gait is now converged again at tolerances scaled to its size
+    from heelstrike.analysis.powered import (
+        BOOKS_RTOL,
+        actuation_family,
+        books_gap,
+        family_simulator,
+    )
+
+    w = CompassGait(foot_radius=0.9)
+    fam = actuation_family("pushoff")
+    gaits = [find_powered_gait(w, speed=0.02, simulator=family_simulator(w, fam, b))
+             for b in ("compiled", "scipy")]
+    for g in gaits:
+        # a period-one gait on level ground: push-off work = collision loss, no change of E
+        assert books_gap(g) < 1e-4
+        assert g.actuator_work == pytest.approx(g.collision_loss, rel=1e-4)
+        assert abs(g.energy_change) < 1e-4 * g.actuator_work
+        assert g.speed == pytest.approx(0.02, rel=1e-9)
+    assert gaits[0].actuator_work == pytest.approx(gaits[1].actuator_work, rel=2e-5)
+    assert gaits[0].parameter == pytest.approx(gaits[1].parameter, rel=2e-5)
+    # an ordinary gait's books close to the bar too
+    assert books_gap(find_powered_gait(w, speed=0.5)) < BOOKS_RTOL
+    # the report shows them: six significant digits (the work read "0.000000 J"), and the
+    # largest multiplier with the digits that tell it from 1 (it read "1.0000")
+    assert main(["powered", "--radius", "0.9", "--speed", "0.02"]) == 0
+    out = capsys.readouterr().out
+    work = re.search(r"actuator work\s+(\S+) J", out)
+    assert work is not None and float(work.group(1)) == pytest.approx(
+        gaits[0].actuator_work, rel=1e-5)
+    mods = re.search(r"\|multipliers\|\s+(\S+),", out)
+    assert mods is not None and mods.group(1).startswith("0.99999") and len(mods.group(1)) > 6
+    assert "note: the books close" not in out  # 1e-5 after the refinement: below BOOKS_NOTE

@@ -77,7 +77,8 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
     ),
     "powered": (
         "ACTUATIONS", "ActuationFamily", "PoweredGait", "PoweredGaitNotFoundError",
-        "SearchLimitError", "actuation_family", "check_model_actuation", "declared_posture_law",
+        "SearchLimitError", "actuation_family", "books_gap", "check_model_actuation",
+        "declared_posture_law",
         "energy_book_tables", "family_simulator",
         "find_model_powered_gait", "find_powered_gait", "impact_angle_for_step_length",
         "law_gains", "max_walking_speed", "powered_gaits",

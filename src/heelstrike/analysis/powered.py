@@ -90,6 +90,7 @@ __all__ = [
     "PoweredGaitNotFoundError",
     "SearchLimitError",
     "actuation_family",
+    "books_gap",
     "check_model_actuation",
     "declared_posture_law",
     "energy_book_tables",
@@ -656,6 +657,22 @@ FOLD_MULTIPLIER_TOLERANCE = 0.05
 #: fold: QA sweep 5) and R = 0.9's fast end (0.52, the impact angle reaching 90 deg) are no
 #: folds.
 FOLD_TANGENT_TOLERANCE = 0.04
+
+#: Largest relative disagreement of a gait's energy books, ``max(|ΔE|, |W - T_c - ΔE|)`` over
+#: ``max(|W|, |T_c|)`` (``ΔE``: change of ``T + V`` over the step, zero for a period-one gait on
+#: level ground), before :func:`_books_refined` converges the gait again at tolerances scaled
+#: down in proportion. Gaits of ordinary size meet it at the default tolerances; very slow ones
+#: do not: at R = 0.9 m and 0.02 m/s (W = 4.7e-9 J against T = 4e-3 J, a largest multiplier of
+#: 0.999997) the absolute tolerances (residual 1e-9, integration 1e-10) left ``ΔE`` at 0.6 % of
+#: W and the two backends 1.8e-3 apart in W (QA sweep 5).
+BOOKS_RTOL = 1e-6
+
+#: A report notes a gait whose books (:func:`books_gap`) still disagree by more than this.
+BOOKS_NOTE = 1e-4
+
+#: Smallest factor by which :func:`_books_refined` scales the tolerances down, and the smallest
+#: integration tolerance it asks for (round-off bounds what a tighter one could give).
+BOOKS_MIN_FACTOR, BOOKS_MIN_TOLERANCE = 1e-5, 1e-13
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -1318,7 +1335,8 @@ def _find(
 
     def finish(x: FloatArray, J: FloatArray, its: int) -> PoweredGait:
         x, res, it = _polish(prob, x, value, tol, J, max_iter, fd_step)
-        return _characterise(prob, x, res, its + it, fd_step)
+        gait = _characterise(prob, x, res, its + it, fd_step)
+        return _books_refined(prob, gait, x, value, tol, J, max_iter, fd_step)
 
     seed_note = [""]  # what the failure messages say about a seed that is not quite a gait
 
@@ -1463,6 +1481,54 @@ def _find(
         if ended is None:
             raise
         raise ended from exc
+
+
+def books_gap(gait: PoweredGait) -> float:
+    """How far a powered gait's energy books are from closing, relative to their size.
+
+    Parameters
+    ----------
+    gait : PoweredGait
+
+    Returns
+    -------
+    float
+        ``max(|ΔE|, |W - T_c - ΔE|) / max(|W|, |T_c|)``: ``ΔE`` the change of ``T + V`` over
+        the step (zero for a period-one gait on level ground), ``W`` the actuator work, ``T_c``
+        the collision loss; 0 when both are 0 (McGeer's wheel), inf when only the gap is not.
+    """
+    gap = max(abs(gait.energy_change), abs(gait.energy_balance_error))
+    size = max(abs(gait.actuator_work), abs(gait.collision_loss))
+    if size > 0:
+        return gap / size
+    return 0.0 if gap == 0 else float("inf")
+
+
+def _books_refined(
+    prob: _Problem, gait: PoweredGait, x: FloatArray, value: float, tol: float, J: FloatArray,
+    max_iter: int, fd_step: float,
+) -> PoweredGait:
+    """``gait`` converged again at tighter tolerances if its books disagree by more than
+    :data:`BOOKS_RTOL` (:func:`books_gap`), else ``gait``.
+
+    The Newton tolerance and the integration tolerances are scaled down by the factor
+    ``BOOKS_RTOL / gap`` (at least :data:`BOOKS_MIN_FACTOR`; integration at least
+    :data:`BOOKS_MIN_TOLERANCE`), so that slow gaits, whose velocities and energies are small
+    against the absolute tolerances, are resolved relative to their own size. The refined gait
+    is kept if its books are closer; a refinement that fails (the walker falls, the budget or
+    the clock runs out) keeps ``gait``.
+    """
+    gap = books_gap(gait)
+    if not gap > BOOKS_RTOL:
+        return gait
+    factor = max(BOOKS_RTOL / gap, BOOKS_MIN_FACTOR)
+    fine = prob.at_tolerance(max(min(prob.rtol, prob.atol) * factor, BOOKS_MIN_TOLERANCE))
+    try:
+        x2, res2, it2 = _polish(fine, x, value, tol * factor, J, max_iter, fd_step)
+        refined = _characterise(fine, x2, res2, gait.iterations + it2, fd_step)
+    except PoweredGaitNotFoundError:  # SearchLimitError included
+        return gait
+    return refined if books_gap(refined) < gap else gait
 
 
 def _section_jacobian(prob: _Problem, x: FloatArray, fd_step: float) -> FloatArray:

@@ -62,8 +62,16 @@ def fixed_point_text(fixed_point: dict[str, float]) -> str:
 
 
 def multipliers_text(multipliers: Iterable[complex]) -> str:
-    """The Floquet multipliers' moduli, ``'0.5200, 0.5200, 0.1800'``."""
-    return ", ".join(f"{abs(m):.4f}" for m in multipliers)
+    """The Floquet multipliers' moduli, ``'0.5200, 0.5200, 0.1800'``; one near 1 with the
+    digits that tell it from 1 (``0.9999971``: 4 decimals read ``1.0000``, which says neither
+    stable nor unstable)."""
+
+    def text(m: complex) -> str:
+        gap = abs(abs(m) - 1.0)
+        digits = 4 if gap >= 5e-5 or gap == 0 else min(12, math.ceil(-math.log10(gap)) + 1)
+        return f"{abs(m):.{digits}f}"
+
+    return ", ".join(text(m) for m in multipliers)
 
 
 def print_step_lines(gait: Any) -> None:

@@ -187,9 +187,9 @@ def _run_powered(args: argparse.Namespace) -> int:
     unit = "m/s" if target == "speed" else "m"
     given = "the walker's declared target" if source == "walker" else source
     print(f"  target          {target.replace('_', ' ')} {value:g} {unit} ({given})")
-    from heelstrike.analysis.powered import actuation_family
+    from heelstrike.analysis.powered import BOOKS_NOTE, actuation_family, books_gap
 
-    print(f"  {gait.parameter_name:15s} {gait.parameter:10.5f} {gait.parameter_unit} "
+    print(f"  {gait.parameter_name:15s} {gait.parameter:10.6g} {gait.parameter_unit} "
           f"({actuation_family(gait.actuation).parameter_meaning})")
     if gait.gains:
         from heelstrike.analysis.powered import GAIN_UNITS
@@ -200,16 +200,22 @@ def _run_powered(args: argparse.Namespace) -> int:
     print_step_lines(gait)
     print_stability_lines(gait)
     print("  energy books per step")
-    print(f"    actuator work   {gait.actuator_work:12.6f} J (push-off "
-          f"{gait.push_off_work:.6f} J, {gait.torque_joint} {gait.torque_work:.6f} J)")
+    # six significant digits: a slow gait's work is ~1e-9 J (it read 0.000000 J)
+    print(f"    actuator work   {gait.actuator_work:12.6g} J (push-off "
+          f"{gait.push_off_work:.6g} J, {gait.torque_joint} {gait.torque_work:.6g} J)")
     losses = gait.walk.impact_losses()
-    split = (" = " + " + ".join(f"{kind} {loss:.6f} J" for kind, loss in losses)
+    split = (" = " + " + ".join(f"{kind} {loss:.6g} J" for kind, loss in losses)
              if len(losses) > 1 else "")
-    print(f"    collision loss  {gait.collision_loss:12.6f} J (T_c{split})")
+    print(f"    collision loss  {gait.collision_loss:12.6g} J (T_c{split})")
     print(f"    change of T + V {gait.energy_change:12.3e} J")
     print(f"    imbalance       {gait.energy_balance_error:12.3e} J")
-    print(f"  cost of transport {gait.cost_of_transport:10.6f}")
-    print(f"  eta             {gait.eta:10.6f} J/m")
+    gap = books_gap(gait)
+    if gap > BOOKS_NOTE:
+        print(f"  note: the books close to {gap:.1e} of the work only (change of T + V and "
+              "imbalance): the gait is resolved no better than that; tighter tolerances "
+              "(find_powered_gait's tol, rtol, atol) would resolve it further")
+    print(f"  cost of transport {gait.cost_of_transport:10.6g}")
+    print(f"  eta             {gait.eta:10.6g} J/m")
     if others:
         which = ("this is the stable one needing the least actuator work" if gait.stable else
                  "none is stable: this is the one needing the least actuator work")
@@ -217,8 +223,8 @@ def _run_powered(args: argparse.Namespace) -> int:
               "keeps the cheapest, stable or not); the others:")
         for g in others:
             o = _gait_summary(g)
-            print(f"    {g.parameter_name} {g.parameter:.5f} {g.parameter_unit}: actuator work "
-                  f"{g.actuator_work:.6f} J, speed {g.speed:.5f} m/s, step length "
+            print(f"    {g.parameter_name} {g.parameter:.6g} {g.parameter_unit}: actuator work "
+                  f"{g.actuator_work:.6g} J, speed {g.speed:.5f} m/s, step length "
                   f"{g.step_length:.5f} m, stable {'yes' if g.stable else 'no'} (|m| "
                   f"{o['spectral_radius']:.4f})")
     if gait.trailing_foot_grazes:

@@ -237,3 +237,30 @@ def test_period_steps_of_recorded_walks() -> None:
     assert diagram.period_steps().tolist() == [1, 2, 3, 0, 0, 0]
     assert diagram.period_steps(tol=1e-5)[-1] == 1
     assert diagram.statuses == ()  # built by hand: no statuses recorded
+
+
+@pytest.mark.parametrize("slope", ["3deg", "0.5deg"])
+def test_mcgeer_wheel_has_no_passive_gait_and_says_why(slope, capsys, monkeypatch):
+    # QA sweep 5 (P3): `gait --radius 1` searched 864 seeds and said "no period-one gait
+    # found"; R = l is McGeer's wheel, whose heel strike loses nothing, so on a slope it gains
+    # m g L sin(slope) every step and cannot be periodic: said at once, without a search
+    from heelstrike.analysis import limit_cycle as lc
+    from heelstrike.analysis.heel_strike import heel_strike_study
+
+    def forbidden(*args, **kwargs):
+        raise AssertionError("searched")
+
+    monkeypatch.setattr(lc, "_compiled_seeds", forbidden)
+    monkeypatch.setattr(lc, "_automatic_guess", forbidden)
+    assert main(["gait", "--radius", "1", "--slope", slope]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("heelstrike: error: no gait found at slope")
+    assert "McGeer's wheel" in err and "loses nothing (T_c = 0)" in err
+    # the premise, from the paper's impact algebra: T_c = 0 at R = l at every impact angle,
+    # and not just below it
+    angles = np.deg2rad([5.0, 15.0, 30.0])
+    wheel = heel_strike_study(CompassGait(foot_radius=1.0), angles)
+    below = heel_strike_study(CompassGait(foot_radius=0.99), angles)
+    assert np.all(np.abs(wheel.kinetic_energy_constrained) < 1e-12 * wheel.kinetic_energy)
+    assert np.all(below.kinetic_energy_constrained > 1e-6 * below.kinetic_energy)
+    assert CompassGait(foot_radius=1.0).is_wheel and not CompassGait(foot_radius=0.99).is_wheel

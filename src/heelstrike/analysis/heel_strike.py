@@ -25,7 +25,7 @@ from heelstrike._typing import FloatArray
 from heelstrike.core._scalars import python_scalars
 from heelstrike.core.impact import ImpactResult, impact
 from heelstrike.models._contact import LIFT_TOLERANCE, trailing_foot_lifts
-from heelstrike.models.base import Foot, PlanarWalker
+from heelstrike.models.base import Foot, PlanarWalker, is_mcgeer_wheel
 from heelstrike.models.compass import CompassGait, heel_strike_state
 
 BoolArray = NDArray[np.bool_]
@@ -359,6 +359,6 @@ def heel_strike_study(
         step_length=L_S,
         eta=eta,
         trailing_foot_lifts=np.asarray(lifts, dtype=bool),
-        degenerate_wheel=np.asarray(np.isclose(R, l, rtol=1e-12, atol=0.0), dtype=bool),
+        degenerate_wheel=is_mcgeer_wheel(R, l),
         impact=res,
     )

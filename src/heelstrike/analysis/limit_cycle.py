@@ -367,9 +367,13 @@ _CONTINUATION_MIN_STEP = 1.0 / 1024.0
 SAME_GAIT_TOL = 1e-6
 
 
-def _check_passive_slope(slope: float, *, torque: object = None, push_off: object = None) -> None:
+def _check_passive_slope(
+    slope: float, *, torque: object = None, push_off: object = None,
+    walker: PlanarWalker | None = None,
+) -> None:
     """A passive walker cannot walk periodically on level or uphill ground: nothing supplies the
-    energy lost at heel strike. Fail at once instead of searching.
+    energy lost at heel strike. Nor can McGeer's wheel on a slope: it loses nothing. Fail at
+    once instead of searching.
 
     Parameters
     ----------
@@ -377,11 +381,14 @@ def _check_passive_slope(slope: float, *, torque: object = None, push_off: objec
         Ground slope (rad), positive downhill.
     torque, push_off : optional
         The walk's actuation; with either, any slope may have a gait.
+    walker : PlanarWalker, optional
+        The walker (None: not checked for being McGeer's wheel).
 
     Raises
     ------
     GaitNotFoundError
-        Passive (no torque, no push-off) and ``slope <= 0``, or ``|slope| >= pi/2``.
+        Passive (no torque, no push-off) and ``slope <= 0``, or ``|slope| >= pi/2``; a passive
+        :attr:`~heelstrike.models.base.PlanarWalker.is_wheel` walker on a slope.
     """
     if not abs(slope) < np.pi / 2:  # a bare 3 meant as degrees is 172 deg
         raise GaitNotFoundError(
@@ -393,6 +400,14 @@ def _check_passive_slope(slope: float, *, torque: object = None, push_off: objec
             f"{np.degrees(slope):g} deg: the energy lost at every heel strike must come "
             f"from gravity, so the slope must be > 0 (downhill, e.g. 3 deg = "
             f"{np.deg2rad(3.0):.6g} rad)"
+        )
+    if torque is None and push_off is None and walker is not None and walker.is_wheel:
+        raise GaitNotFoundError(
+            "McGeer's wheel (foot radius R = leg length l) has no passive periodic gait on a "
+            f"slope: its feet are arcs of one circle about the hip, so a heel strike loses "
+            f"nothing (T_c = 0), and every step of length L gains m g L sin(slope) of kinetic "
+            f"energy on this {np.degrees(slope):g} deg slope; a periodic gait must lose at "
+            "heel strike what the slope gives (try R < l)"
         )
 
 
@@ -597,7 +612,8 @@ def find_limit_cycles(
         walker=walker, slope=slope, torque=torque, push_off=push_off, rtol=rtol, atol=atol,
         method=method, simulator=simulator,
     )
-    _check_passive_slope(pmap.slope, torque=pmap.torque, push_off=pmap.push_off)
+    _check_passive_slope(pmap.slope, torque=pmap.torque, push_off=pmap.push_off,
+                         walker=walker)
     deadline = time.monotonic() + float(time_limit)
     if _compiled_ok(pmap):
         gaits = _compiled_seeds(

@@ -288,8 +288,8 @@ def find_model_gaits(
     ValueError
         Unknown backend, or actuation the compiled backend does not support.
     """
-    _check_passive_slope(slope, torque=torque, push_off=push_off)
     w = PhasedWalker.from_built(walker)
+    _check_passive_slope(slope, torque=torque, push_off=push_off, walker=w)
     # the one entry point, checked for this walker and actuation (ValueError if unsupported)
     simulator = backend_simulator(w, backend, torque=torque, push_off=push_off)
     kw: dict[str, Any] = dict(slope=slope, torque=torque, push_off=push_off, simulator=simulator)

@@ -385,12 +385,6 @@ class PoweredStep(ResultDictMixin):
         return bool(np.all(np.isfinite(self.z_next)))
 
 
-def _is_wheel(walker: PlanarWalker) -> bool:
-    R = float(np.asarray(walker.foot_radii[0]))
-    l = _scale(walker)[2]
-    return bool(np.isclose(R, l, rtol=1e-12, atol=0.0))
-
-
 def powered_step(
     walker: PlanarWalker,
     z: ArrayLike,
@@ -422,7 +416,7 @@ def powered_step(
     grazes = False
     if walk.ok:
         qf, qdf = walk.final_q, walk.final_q_dot
-    elif walk.status is WalkStatus.TRAILING_FOOT_STAYS and rec is not None and _is_wheel(walker):
+    elif walk.status is WalkStatus.TRAILING_FOOT_STAYS and rec is not None and walker.is_wheel:
         l = _scale(walker)[2]
         scale = l * (abs(rec.q_dot_minus[2]) + abs(rec.q_dot_minus[3]))
         if abs(rec.trailing_normal_velocity) > GRAZING_TOLERANCE * scale:

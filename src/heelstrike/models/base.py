@@ -37,7 +37,7 @@ from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._typing import FloatArray
 from heelstrike.models._contact import step_length as _step_length
@@ -71,8 +71,29 @@ __all__ = [
     "PlanarWalker",
     "WalkerScale",
     "gravity_vector",
+    "is_mcgeer_wheel",
     "section_unit",
 ]
+
+
+def is_mcgeer_wheel(foot_radius: ArrayLike, leg_length: ArrayLike) -> NDArray[np.bool_]:
+    """Whether a foot radius makes McGeer's synthetic wheel: ``R = l`` (to 1e-12 relative).
+
+    The one definition of the degenerate walker whose two feet are arcs of one circle about
+    the hip: its heel strike loses nothing (``T_c = 0``), the trailing foot's lift velocity is
+    exactly zero, and on a slope it gains ``m g L sin(slope)`` every step.
+
+    Parameters
+    ----------
+    foot_radius, leg_length : array_like
+        ``R`` and ``l`` (m), broadcasting together.
+
+    Returns
+    -------
+    ndarray of bool
+        Their broadcast shape.
+    """
+    return np.asarray(np.isclose(foot_radius, leg_length, rtol=1e-12, atol=0.0), dtype=bool)
 
 
 def section_unit(name: str) -> str:
@@ -342,6 +363,13 @@ class PlanarWalker(ABC):
         return WalkerScale(
             total_mass=m, gravity=np.asarray(g), leg_length=np.asarray(0.5 * rise + r_swing)
         )
+
+    @property
+    def is_wheel(self) -> bool:
+        """Whether the walker is McGeer's synthetic wheel: its stance foot radius is its leg
+        length (:func:`is_mcgeer_wheel` of ``foot_radii[0]`` and ``scale.leg_length``; for a
+        batched walker, every member)."""
+        return bool(np.all(is_mcgeer_wheel(self.foot_radii[0], self.scale.leg_length)))
 
     def heel_strike_function(self, q: ArrayLike) -> FloatArray:
         """Smooth function that crosses zero upwards when the swing foot strikes ahead.

@@ -2,9 +2,9 @@
 
 This module computes nothing: it takes the results of :mod:`heelstrike.analysis`, draws them
 with :mod:`heelstrike.plots` and writes the data with :mod:`heelstrike.io` (CSV and netCDF).
-The few writers that are given a walker rather than a result (:func:`write_bifurcation`,
-:func:`write_model_bifurcation`, :func:`write_walk_figures`, :func:`write_model_walk_figures`,
-:func:`reproduce_paper`) get their results from :mod:`heelstrike.analysis` first.
+The few writers that are given a walker rather than a result (:func:`write_walk_figures`,
+:func:`write_model_walk_figures`, :func:`reproduce_paper`) get their results from
+:mod:`heelstrike.analysis` first.
 
 Every function creates its output directory and returns the paths it wrote, in a fixed order.
 """
@@ -39,14 +39,12 @@ __all__ = [
     "bifurcation_title",
     "reproduce_paper",
     "write_basin",
-    "write_bifurcation",
     "write_bifurcation_files",
     "write_cost_figures",
     "write_cost_study",
     "write_figure_data",
     "write_gait_map",
     "write_impact_map",
-    "write_model_bifurcation",
     "write_model_walk_figures",
     "write_powered_energy",
     "write_walk_figures",
@@ -148,68 +146,6 @@ def _metadata(ext: str) -> dict[str, str | None]:
 
 
 # -- bifurcation diagrams ------------------------------------------------------------------------
-def write_bifurcation(
-    walker: CompassGait,
-    slope_start: float,
-    slope_stop: float,
-    count: int,
-    out_dir: Path,
-    *,
-    transient: int = 50,
-    record: int = 16,
-    continuation_points: int | None = None,
-    progress: bool = False,
-    backend: str = "compiled",
-) -> list[Path]:
-    """The compass gait's slope bifurcation diagram, written (PNG, PDF and CSV).
-
-    Computed by :func:`heelstrike.analysis.gait_map.compass_bifurcation` over ``count`` slopes
-    from ``slope_start`` to ``slope_stop`` (rad) on ``backend``; written by
-    :func:`write_bifurcation_files`. The period-one branch is continued over
-    ``continuation_points`` evenly spaced slopes or, by default (None), over the diagram's
-    slopes and refined where it curves, so that the line drawn through its gaits follows it.
-
-    Returns
-    -------
-    list of Path
-        ``bifurcation.png``, ``bifurcation.pdf``, ``bifurcation.csv``,
-        ``period_one_branch.csv``.
-    """
-    from heelstrike.analysis.gait_map import compass_bifurcation
-
-    diagram, branch = compass_bifurcation(
-        walker, np.linspace(slope_start, slope_stop, count), transient=transient,
-        record=record, continuation_points=continuation_points, progress=progress,
-        backend=backend,
-    )
-    return write_bifurcation_files(diagram, branch, out_dir, bifurcation_title(walker))
-
-
-def write_model_bifurcation(
-    walker: Any,
-    slope_start: float,
-    slope_stop: float,
-    count: int,
-    out_dir: Path,
-    *,
-    transient: int = 50,
-    record: int = 16,
-    continuation_points: int | None = None,
-    backend: str = "compiled",
-) -> list[Path]:
-    """:func:`write_bifurcation` for a described walker (a ``BuiltWalker``; same files).
-
-    Computed by :func:`heelstrike.analysis.gait_map.model_bifurcation` with ``backend``.
-    """
-    from heelstrike.analysis.gait_map import model_bifurcation
-
-    diagram, branch = model_bifurcation(
-        walker, np.linspace(slope_start, slope_stop, count), transient=transient, record=record,
-        continuation_points=continuation_points, backend=backend,
-    )
-    return write_bifurcation_files(diagram, branch, out_dir, bifurcation_title(walker))
-
-
 def bifurcation_title(walker: Any) -> str:
     """The bifurcation figure's title: ``"compass gait, R = 0.3 m: bifurcation diagram"`` for
     the compass gait, ``"<model name>: bifurcation diagram"`` for a described walker."""

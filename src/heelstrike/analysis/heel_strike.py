@@ -18,17 +18,15 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from heelstrike._results import ResultDictMixin
-from heelstrike._typing import FloatArray
+from heelstrike._typing import BoolArray, FloatArray
 from heelstrike.core._scalars import python_scalars
 from heelstrike.core.impact import ImpactResult, impact
 from heelstrike.models._contact import LIFT_TOLERANCE, trailing_foot_lifts
 from heelstrike.models.base import Foot, PlanarWalker, is_mcgeer_wheel
 from heelstrike.models.compass import CompassGait, heel_strike_state
-
-BoolArray = NDArray[np.bool_]
 
 __all__ = [
     "CONTACT_TOLERANCE",

@@ -23,14 +23,12 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from heelstrike._results import ResultDictMixin
-from heelstrike._typing import FloatArray
+from heelstrike._typing import BoolArray, FloatArray
 from heelstrike.analysis.heel_strike import heel_strike_study
 from heelstrike.models.compass import CompassGait
-
-BoolArray = NDArray[np.bool_]
 
 __all__ = [
     "FIGURE_RADII",

@@ -257,3 +257,59 @@ def test_slow_gaits_books_close_relative_to_their_size(capsys: Capture) -> None:
     mods = re.search(r"\|multipliers\|\s+(\S+),", out)
     assert mods is not None and mods.group(1).startswith("0.99999") and len(mods.group(1)) > 6
     assert "note: the books close" not in out  # 1e-5 after the refinement: below BOOKS_NOTE
+
+
+@pytest.mark.slow
+def test_report_qualifies_what_it_cannot_decide(capsys: Capture) -> None:
+    # QA sweep 6 (F7): McGeer's wheel with push-off printed "|m| 1.0000 ... stable yes" for
+    # |m| = 1 - 3.5e-9, below the multipliers' accuracy; (F1) an unstable gait was reported
+    # with no word that a stable one may exist (one does at --step-length 0.05, 61x cheaper)
+    from heelstrike.analysis.limit_cycle import MULTIPLIER_ACCURACY
+
+    assert main(["powered", "--radius", "1", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert abs(max(d["multipliers"]) - 1.0) < MULTIPLIER_ACCURACY  # the premise: neutral
+    assert main(["powered", "--radius", "1"]) == 0
+    out = capsys.readouterr().out
+    assert re.search(r"stable +(yes|no), barely: the largest \|multiplier\| is within 1e-6 of 1",
+                     out)
+    assert "1.0000," not in out and "|m| 1.0000)" not in out
+    assert main(["powered", "--step-length", "0.05", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert main(["powered", "--step-length", "0.05"]) == 0
+    out = capsys.readouterr().out
+    note = "note: the search met no stable gait at this target, which does not show that none"
+    assert (note in out) == (not d["stable"])
+    # an ordinary stable gait is reported plainly
+    assert main(["powered"]) == 0
+    out = capsys.readouterr().out
+    assert re.search(r"stable +yes\n", out) and note not in out
+
+
+@pytest.mark.slow
+def test_kneed_energy_books_mark_the_knee_strike(tmp_path: Path, capsys: Capture) -> None:
+    # QA sweep 6 (F6): powered --out drew and wrote the kneed walker's step with its knee strike
+    # unmarked, and titled the heel strike with the step's whole T_c (knee strike included)
+    import pandas as pd
+
+    from heelstrike.analysis.powered import energy_book_tables, find_model_powered_gait
+    from heelstrike.dynamics.phased import load_phased_walker
+
+    walker = load_phased_walker("kneed")
+    gait = find_model_powered_gait(walker, speed=1.3)
+    energy, impacts = energy_book_tables(walker, gait)
+    assert list(impacts["kind"]) == ["knee_strike", "heel_strike"]
+    # each inert impact drops the total energy by its own T_c (eq. 13), and they add up to the
+    # step's collision loss
+    np.testing.assert_allclose(impacts["drop_J"], impacts["T_c_J"], rtol=1e-6)
+    assert impacts["T_c_J"].sum() == pytest.approx(gait.collision_loss, rel=1e-12)
+    knee = energy[energy["event"] == "knee_strike"]
+    assert len(knee) == 1
+    i = knee.index[0]
+    assert energy.loc[i - 1, "t_s"] == energy.loc[i, "t_s"]  # the sample just before it
+    assert energy.loc[i - 1, "total_J"] - energy.loc[i, "total_J"] == pytest.approx(
+        impacts["T_c_J"].iloc[0], rel=1e-6)
+    assert main(["powered", "--model", "kneed", "--out", str(tmp_path)]) == 0
+    capsys.readouterr()
+    written = pd.read_csv(tmp_path / "powered_energy.csv")
+    assert list(written["event"].dropna()) == ["knee_strike", "push_off", "heel_strike"]

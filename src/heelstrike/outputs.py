@@ -470,10 +470,13 @@ def write_powered_energy(
 
     out = _directory(out_dir)
     name = gait.model or "compass gait"
+    # each impact's own loss (a kneed walker's knee strike, then the heel strike)
+    losses = ", ".join(f"{str(r.kind).replace('_', ' ')} -T_c = {-float(r.T_c_J):.4f} J"
+                       for r in impacts.itertuples(index=False))
     fig = energy_figure(energy, impacts, title=(
         f"{name}, powered gait at {gait.speed:.3g} m/s: {gait.torque_joint} torque "
         f"{gait.torque_work:+.4f} J over the step,\npush-off {gait.push_off_work:+.4f} J "
-        f"(jump at heel strike), heel strike -T_c = {-gait.collision_loss:.4f} J"))
+        f"(jump at heel strike), {losses}"))
     png = out / "powered_energy.png"
     fig.savefig(png)
     return png, write_csv(energy, out / "powered_energy.csv")

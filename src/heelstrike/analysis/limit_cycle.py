@@ -366,6 +366,11 @@ _CONTINUATION_MIN_STEP = 1.0 / 1024.0
 #: Two fixed points closer than this (Euclidean norm in section coordinates) are the same gait.
 SAME_GAIT_TOL = 1e-6
 
+#: Accuracy of the Floquet multipliers' moduli (central differences of the step map, passive
+#: and powered gaits alike): a largest ``|m|`` within this of 1 says the gait is neutral to that
+#: accuracy, not stable or unstable (McGeer's wheel with push-off: ``|m| = 1 - 3.5e-9``).
+MULTIPLIER_ACCURACY = 1e-6
+
 
 def _check_passive_slope(
     slope: float, *, torque: object = None, push_off: object = None,

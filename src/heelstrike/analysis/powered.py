@@ -1897,14 +1897,18 @@ def energy_book_tables(walker: PlanarWalker, gait: PoweredGait) -> tuple[Any, An
         the push-off (``event`` ``"push_off"``: the total jumps by its work, none for a hip
         law) and just after the heel strike (``"heel_strike"``: the total drops by ``T_c``,
         back to its start value on the periodic gait). Between them the torque law's work
-        changes the total.
+        changes the total. The sample just after an impact within the step (a knee strike)
+        has that impact's kind as ``event``.
     impacts : pandas.DataFrame
-        One row, the columns of
+        One row per impact of the step (a knee strike, then the heel strike), the columns of
         :func:`~heelstrike.analysis.walk_tables.walk_impact_table`: ``step``, ``kind``
-        (``"heel_strike"``), ``time_s``, ``impact_angle_rad``, ``total_before_J`` (after the
-        push-off), ``total_after_J``, ``drop_J`` and ``T_c_J`` (J).
+        (``"knee_strike"``, ``"heel_strike"``), ``time_s``, ``impact_angle_rad`` (``q[2]``),
+        ``total_before_J`` (the heel strike's after the push-off), ``total_after_J``,
+        ``drop_J`` and ``T_c_J`` (J, that impact's own).
     """
     import pandas as pd
+
+    from heelstrike.dynamics.phased import PhasedWalkResult
 
     walk = gait.walk
     rec = walk.impacts[0]
@@ -1915,16 +1919,33 @@ def energy_book_tables(walker: PlanarWalker, gait: PoweredGait) -> tuple[Any, An
     U = np.asarray([float(np.asarray(walker.potential_energy(q, 0.0))) for q in q_all])
     t = np.concatenate((walk.t, [rec.time, rec.time]))
     event = [""] * walk.t.size + ["push_off", "heel_strike"]
+    E = T + U
+    rows = []
+    # impacts within the step (a kneed walker's knee strike): the walk samples both sides of
+    # each at its time; the later sample is just after it (QA sweep 6: it was unlabelled, and
+    # its loss counted in the heel strike's)
+    events = walk.events if isinstance(walk, PhasedWalkResult) else ()
+    for e in events[:-1]:
+        at = np.flatnonzero(np.isclose(walk.t, e.time, rtol=0.0, atol=1e-12))
+        if at.size < 2:
+            continue
+        event[int(at[-1])] = str(e.kind)
+        rows.append({"step": 0, "kind": str(e.kind), "time_s": e.time,
+                     "impact_angle_rad": float(e.q[2]), "total_before_J": float(E[at[0]]),
+                     "total_after_J": float(E[at[-1]]),
+                     "drop_J": float(E[at[0]] - E[at[-1]]),
+                     "T_c_J": float(e.kinetic_energy_constrained)})
     energy = pd.DataFrame({"t_s": t, "step": np.zeros(t.size, dtype=int), "event": event,
-                           "kinetic_J": T, "potential_J": U, "total_J": T + U})
-    before, after = float(T[-2] + U[-2]), float(T[-1] + U[-1])
-    impacts = pd.DataFrame([{
+                           "kinetic_J": T, "potential_J": U, "total_J": E})
+    before, after = float(E[-2]), float(E[-1])
+    heel = (float(events[-1].kinetic_energy_constrained) if events
+            else gait.collision_loss)
+    rows.append({
         "step": 0, "kind": "heel_strike", "time_s": rec.time,
         "impact_angle_rad": rec.impact_angle, "total_before_J": before,
-        "total_after_J": after, "drop_J": before - after,
-        "T_c_J": gait.collision_loss,
-    }])
-    return energy, impacts
+        "total_after_J": after, "drop_J": before - after, "T_c_J": heel,
+    })
+    return energy, pd.DataFrame(rows)
 
 
 # -- every gait at one design point (what `powered` reports and `study cost` keeps) -----------

@@ -384,8 +384,9 @@ def add_actuation_options(p: argparse.ArgumentParser) -> None:
     # defaults (None) come from heelstrike.dynamics.actuation.default_gains, which scales the
     # DEFAULT_* constants (they explain them) to the walker
     g = p.add_argument_group(
-        "actuation (defaults for the paper's walker, m g l = 196.2 N m, sqrt(l/g) = 0.319 s; "
-        "another walker's are the same dimensionless gains: torques scaled by its m g l, "
+        "actuation (defaults for the paper's walker, m_total g l = 196.2 N m with m_total = "
+        "mH + 2 m = 20 kg, sqrt(l/g) = 0.319 s; another walker's are the same dimensionless "
+        "gains: torques scaled by its m_total g l, "
         "times by its sqrt(l/g); heelstrike.dynamics.actuation.default_gains)")
     g.add_argument("--gain", type=float, default=None,
                    help="energy-tracking gain k of hip-energy (s/rad, default 3)")

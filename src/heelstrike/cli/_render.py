@@ -82,9 +82,18 @@ def print_step_lines(gait: Any) -> None:
 
 
 def print_stability_lines(gait: Any) -> None:
-    """The ``|multipliers|`` and ``stable`` lines of a gait report."""
+    """The ``|multipliers|`` and ``stable`` lines of a gait report; a largest ``|m|`` within
+    :data:`~heelstrike.analysis.limit_cycle.MULTIPLIER_ACCURACY` of 1 is called neutral."""
+    from heelstrike.analysis.limit_cycle import MULTIPLIER_ACCURACY
+
     print(f"  |multipliers|   {multipliers_text(gait.multipliers)}")
-    print(f"  stable          {'yes' if gait.stable else 'no'}")
+    verdict = "yes" if gait.stable else "no"
+    largest = max((abs(m) for m in gait.multipliers), default=0.0)
+    if abs(largest - 1.0) < MULTIPLIER_ACCURACY:
+        accuracy = format(MULTIPLIER_ACCURACY, ".0e").replace("e-0", "e-")
+        verdict += (f", barely: the largest |multiplier| is within {accuracy} of 1, "
+                    "the multipliers' accuracy (neutral to that accuracy)")
+    print(f"  stable          {verdict}")
 
 
 def one_line(exc: BaseException) -> str:

@@ -29,6 +29,7 @@ from heelstrike.cli._common import (
 )
 from heelstrike.cli._render import (
     fixed_point_text,
+    multipliers_text,
     print_json,
     print_paths,
     print_stability_lines,
@@ -226,7 +227,15 @@ def _run_powered(args: argparse.Namespace) -> int:
             print(f"    {g.parameter_name} {g.parameter:.6g} {g.parameter_unit}: actuator work "
                   f"{g.actuator_work:.6g} J, speed {g.speed:.5f} m/s, step length "
                   f"{g.step_length:.5f} m, stable {'yes' if g.stable else 'no'} (|m| "
-                  f"{o['spectral_radius']:.4f})")
+                  f"{multipliers_text([o['spectral_radius']])})")
+    if not gait.stable:
+        # the search is local (seeds, continuation, a few fresh starts): QA sweep 6 found a
+        # stable gait needing 1/61 of this work at --step-length 0.05, reached by continuing
+        # from the 0.1 m/s gait
+        print("  note: the search met no stable gait at this target, which does not show that "
+              "none exists: it is local (seed gaits continued to the target, a few fresh "
+              "starts); a stable one may be reached by continuing from a nearby target "
+              "(find_powered_gait(..., guess=(*fixed_point, parameter)) in small steps)")
     if gait.trailing_foot_grazes:
         print("  note: R = l (McGeer's wheel): the trailing foot's lift velocity is exactly 0; "
               "both contacts are the same point, so the step was accepted")

@@ -78,3 +78,30 @@ def test_cost_figure_axis_says_per_step() -> None:
                            {"units": "J", "long_name": "actuator work per step"})
     fig = cost_figure(ds, "actuator_work")
     assert fig.axes[0].get_ylabel() == "actuator work per step (J)"
+
+
+def test_cost_figure_labels_fit_and_legend_leaves_the_data() -> None:
+    # QA sweep 6 (F8): eta.png's y label ran off the figure ("ollision loss per metre..."),
+    # the legend covered data points, and values over five decades lay on the axis
+    stable = np.ones((1, 2, 3))
+    ds = _study(stable)
+    ds["eta"] = ds["cost_of_transport"].copy()
+    ds["eta"].attrs = {"units": "J/m", "long_name": "collision loss per metre T_c / L_S (eq. 16)"}
+    ds["eta"][0, 1] = [1e-5, 2e-5, 4e-5]  # a near-wheel row, decades below the other
+    fig = cost_figure(ds, "eta")
+    fig.canvas.draw()
+    ax = fig.axes[0]
+    frame = fig.bbox
+    label = ax.yaxis.label.get_window_extent()
+    assert frame.x0 <= label.x0 and label.x1 <= frame.x1
+    assert frame.y0 <= label.y0 and label.y1 <= frame.y1
+    assert ax.get_yscale() == "log"
+    legend = ax.get_legend().get_window_extent()
+    for line in ax.get_lines():
+        xy = np.column_stack([line.get_xdata(), line.get_ydata()]).astype(float)
+        xy = xy[np.all(np.isfinite(xy), axis=1)]
+        if xy.size and line.get_transform() == ax.transData:
+            for px, py in ax.transData.transform(xy):
+                assert not legend.contains(px, py), (line.get_label(), px, py)
+    # values within two decades keep a linear axis
+    assert cost_figure(_study(stable)).axes[0].get_yscale() == "linear"

@@ -6,6 +6,8 @@ Drawing only, from the study's :class:`xarray.Dataset`; matplotlib object API, A
 
 from __future__ import annotations
 
+import textwrap
+
 import numpy as np
 import xarray as xr
 from matplotlib import colormaps
@@ -35,10 +37,11 @@ def _mark_missing(ax: Axes, x: np.ndarray, y: np.ndarray, colour: object,
 
 def cost_figure(ds: xr.Dataset, variable: str = "cost_of_transport") -> Figure:
     """``variable`` against the target (step length or speed), one line per foot radius,
-    one panel per actuation model."""
+    one panel per actuation model; on a log axis where the panel's values are positive and span
+    more than two decades."""
     tgt = _target(ds)
     acts = [str(a) for a in ds["actuation"].values]
-    fig = _new_figure(4.2 * len(acts), 3.6)
+    fig = _new_figure(4.2 * len(acts) + 1.6, 4.4)
     axes = fig.subplots(1, len(acts), squeeze=False)[0]
     radii = ds["radius"].values
     cmap = colormaps["viridis"]
@@ -60,9 +63,18 @@ def cost_figure(ds: xr.Dataset, variable: str = "cost_of_transport") -> Figure:
         ax.set_title(act)
         ax.set_xlabel(f"{tgt.replace('_', ' ')} ({ds[tgt].attrs.get('units', '')})")
         name = ds[variable].attrs.get("long_name", variable.replace("_", " "))
-        ax.set_ylabel(f"{name} ({unit})")
-        ax.grid(alpha=0.3)
-    axes[-1].legend(fontsize=7, loc="best")
+        # wrapped: "collision loss per metre T_c / L_S (eq. 16) (J/m)" ran off the figure
+        ax.set_ylabel(textwrap.fill(f"{name} ({unit})", 34))
+        values = np.asarray(ds[variable].sel(actuation=act).values, dtype=float)
+        finite = values[np.isfinite(values)]
+        if finite.size and finite.min() > 0 and finite.max() > 100 * finite.min():
+            # positive values over more than two decades (R = 0.9 lay on the axis of R = 0)
+            ax.set_yscale("log")
+            ax.grid(alpha=0.3, which="both")
+        else:
+            ax.grid(alpha=0.3)
+    # beside the panels: inside, "best" still covered data points (QA sweep 6)
+    axes[-1].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     fig.suptitle(BRANCH_CAPTION, fontsize=7)
     return fig
 

@@ -311,3 +311,26 @@ def test_compiled_heel_strike_study_agrees_with_the_reference(e: float) -> None:
                                atol=1e-12)
     with pytest.raises(ValueError, match="backend"):
         heel_strike_study(walker, angles, backend="numba")  # type: ignore[arg-type]
+
+
+def test_symmetric_step_length_is_one_definition_and_its_inverse_any_walker() -> None:
+    # QA sweep 6 (layout audit): L = 2 (l - R) sin q3 + 2 R q3 was written three times, and the
+    # powered search built a CompassGait from a described walker to invert it
+    from heelstrike.analysis.heel_strike import step_length, symmetric_step_length
+    from heelstrike.analysis.powered import impact_angle_for_step_length
+    from heelstrike.dynamics.phased import load_phased_walker
+    from heelstrike.models.compass import CompassGait
+
+    q3 = np.linspace(0.05, 1.4, 7)
+    w = CompassGait(foot_radius=0.3)
+    np.testing.assert_array_equal(step_length(w, q3), symmetric_step_length(q3, 1.0, 0.3))
+    # the chord between the contact points plus the arc rolled, from the geometry itself
+    chord = 2 * 0.7 * np.sin(q3)
+    np.testing.assert_allclose(symmetric_step_length(q3, 1.0, 0.3), chord + 0.6 * q3, rtol=1e-15)
+    kneed = load_phased_walker("kneed")
+    l, R = float(kneed.scale.leg_length), float(kneed.foot_radii[0])
+    for walker, (ll, rr) in ((w, (1.0, 0.3)), (kneed, (l, R))):
+        for a in (0.1, 0.4, 1.2):
+            L = float(symmetric_step_length(a, ll, rr))
+            assert impact_angle_for_step_length(walker, L) == pytest.approx(a, abs=1e-12)
+        assert np.isnan(impact_angle_for_step_length(walker, 2.0 * (ll - rr) + np.pi * rr + 0.1))

@@ -56,7 +56,7 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "CONTACT_TOLERANCE", "LIFT_TOLERANCE", "HeelStrikeStudy", "NotAHeelStrikeError",
         "check_heel_strike_state", "check_stance_foot_rolls",
         "check_striking_foot_approaches", "heel_strike_study",
-        "step_length", "trailing_foot_lifts",
+        "step_length", "symmetric_step_length", "trailing_foot_lifts",
     ),
     "limit_cycle": (
         "BifurcationDiagram", "Continuation", "GaitNotFoundError", "LimitCycle", "PoincareMap",

@@ -38,6 +38,7 @@ __all__ = [
     "check_striking_foot_approaches",
     "heel_strike_study",
     "step_length",
+    "symmetric_step_length",
     "trailing_foot_lifts",
 ]
 
@@ -154,11 +155,36 @@ def check_heel_strike_state(
         )
 
 
-def step_length(walker: CompassGait, impact_angle: ArrayLike) -> FloatArray:
-    """Step length ``L_S = 2 (l - R) sin q3 + 2 R q3`` (m), the denominator of eq. (16).
+def symmetric_step_length(
+    impact_angle: ArrayLike, leg_length: ArrayLike, foot_radius: ArrayLike
+) -> FloatArray:
+    """Step length ``L_S = 2 (l - R) sin q3 + 2 R q3`` (m) of a symmetric heel strike, the
+    denominator of eq. (16): the one definition (:func:`step_length` of a compass gait, the
+    powered search's targets and its geometric limit at ``q3 = pi/2``).
 
     The distance between the two contact points at heel strike (``2 (l - R) sin q3``) plus the
     arc ``2 R q3`` rolled by the stance foot while its leg turns from ``-q3`` to ``q3``.
+
+    Parameters
+    ----------
+    impact_angle : array_like
+        ``q3`` at impact (rad).
+    leg_length, foot_radius : array_like
+        ``l`` and ``R`` (m).
+
+    Returns
+    -------
+    ndarray, shape broadcast of the inputs
+        ``L_S`` (m).
+    """
+    q3 = np.asarray(impact_angle, dtype=float)
+    l = np.asarray(leg_length, dtype=float)
+    R = np.asarray(foot_radius, dtype=float)
+    return np.asarray(2.0 * (l - R) * np.sin(q3) + 2.0 * R * q3)
+
+
+def step_length(walker: CompassGait, impact_angle: ArrayLike) -> FloatArray:
+    """Step length ``L_S`` (m) of the compass gait (:func:`symmetric_step_length`).
 
     Parameters
     ----------
@@ -172,10 +198,7 @@ def step_length(walker: CompassGait, impact_angle: ArrayLike) -> FloatArray:
     ndarray, shape broadcast of ``impact_angle`` and the walker's parameters
         ``L_S`` (m).
     """
-    q3 = np.asarray(impact_angle, dtype=float)
-    l = np.asarray(walker.leg_length, dtype=float)
-    R = np.asarray(walker.foot_radius, dtype=float)
-    return np.asarray(2.0 * (l - R) * np.sin(q3) + 2.0 * R * q3)
+    return symmetric_step_length(impact_angle, walker.leg_length, walker.foot_radius)
 
 
 @dataclass(frozen=True, kw_only=True)

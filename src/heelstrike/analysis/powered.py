@@ -1277,8 +1277,10 @@ def find_powered_gait(
     if not (np.isfinite(value) and value > 0):
         raise ValueError(f"the target {target} must be > 0, got {value}")
     if target == "step_length":
+        from heelstrike.analysis.heel_strike import symmetric_step_length
+
         l, R = _scale(walker)[2], float(np.asarray(walker.foot_radii[0]))
-        longest = 2.0 * (l - R) + np.pi * R  # L_S at q3 = 90 deg
+        longest = float(symmetric_step_length(np.pi / 2, l, R))  # L_S at q3 = 90 deg
         if value >= longest:
             raise PoweredGaitNotFoundError(
                 f"no gait with step_length {value:g} m: it is not below the geometric limit "
@@ -1957,12 +1959,19 @@ def energy_book_tables(walker: PlanarWalker, gait: PoweredGait) -> tuple[Any, An
 
 
 # -- every gait at one design point (what `powered` reports and `study cost` keeps) -----------
-def impact_angle_for_step_length(walker: CompassGait, step_length: float) -> float:
-    """``q3`` (rad) with ``2 (l - R) sin q3 + 2 R q3 = L`` (increasing on [0, pi/2])."""
-    l, R = float(walker.leg_length), float(walker.foot_radius)
+def impact_angle_for_step_length(walker: PlanarWalker, step_length: float) -> float:
+    """``q3`` (rad) of the symmetric heel strike with step length ``step_length`` (m): the
+    inverse of :func:`~heelstrike.analysis.heel_strike.symmetric_step_length` (increasing on
+    [0, pi/2]) with the walker's leg length (:attr:`~PlanarWalker.scale`) and stance foot
+    radius; NaN if even ``q3 = pi/2`` steps shorter."""
+    from heelstrike.analysis.heel_strike import symmetric_step_length
+
+    l, R = float(walker.scale.leg_length), float(np.asarray(walker.foot_radii[0]))
+    if not 0.0 <= R <= l:  # a described walker's foot radius beyond its leg length
+        return float("nan")
 
     def f(q3: float) -> float:
-        return 2 * (l - R) * np.sin(q3) + 2 * R * q3 - step_length
+        return float(symmetric_step_length(q3, l, R)) - step_length
 
     if f(np.pi / 2) < 0:
         return float("nan")
@@ -2189,11 +2198,7 @@ def _fresh_gaits(
     except (PoweredGaitNotFoundError, ValueError) as exc:
         err = exc
     if length is not None:
-        try:
-            q3 = impact_angle_for_step_length(
-                CompassGait(leg_length=float(w.scale.leg_length), foot_radius=r), length)
-        except ValueError:  # a described walker's R beyond its leg length
-            q3 = float("nan")
+        q3 = impact_angle_for_step_length(w, length)  # NaN: no symmetric step that long
     else:
         q3 = 0.2
     if not np.isfinite(q3):

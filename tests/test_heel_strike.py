@@ -334,3 +334,23 @@ def test_symmetric_step_length_is_one_definition_and_its_inverse_any_walker() ->
             L = float(symmetric_step_length(a, ll, rr))
             assert impact_angle_for_step_length(walker, L) == pytest.approx(a, abs=1e-12)
         assert np.isnan(impact_angle_for_step_length(walker, 2.0 * (ll - rr) + np.pi * rr + 0.1))
+
+
+def test_loss_per_metre_is_eq_16_with_one_guard() -> None:
+    # QA sweep 6 (layout audit): eta = loss / L was written six times, three without a guard
+    # for L <= 0 (a divide-by-zero warning and inf)
+    import warnings
+
+    from heelstrike.analysis.heel_strike import loss_per_metre
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        eta = loss_per_metre([1.0, 2.0, 3.0, 0.5], [0.5, 0.0, -1.0, 0.25])
+    np.testing.assert_array_equal(eta[[0, 3]], [2.0, 2.0])
+    assert np.isnan(eta[1]) and np.isnan(eta[2])
+    # the compass study's eta is it, with the study's own step length (eq. 16)
+    from heelstrike.analysis.heel_strike import heel_strike_study
+    from heelstrike.models.compass import CompassGait
+
+    s = heel_strike_study(CompassGait(foot_radius=0.4), np.deg2rad([10.0, 25.0]))
+    np.testing.assert_array_equal(s.eta, loss_per_metre(s.energy_lost, s.step_length))

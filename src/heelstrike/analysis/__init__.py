@@ -55,7 +55,7 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
     "heel_strike": (
         "CONTACT_TOLERANCE", "LIFT_TOLERANCE", "HeelStrikeStudy", "NotAHeelStrikeError",
         "check_heel_strike_state", "check_stance_foot_rolls",
-        "check_striking_foot_approaches", "heel_strike_study",
+        "check_striking_foot_approaches", "heel_strike_study", "loss_per_metre",
         "step_length", "symmetric_step_length", "trailing_foot_lifts",
     ),
     "limit_cycle": (

@@ -37,6 +37,7 @@ __all__ = [
     "check_stance_foot_rolls",
     "check_striking_foot_approaches",
     "heel_strike_study",
+    "loss_per_metre",
     "step_length",
     "symmetric_step_length",
     "trailing_foot_lifts",
@@ -181,6 +182,30 @@ def symmetric_step_length(
     l = np.asarray(leg_length, dtype=float)
     R = np.asarray(foot_radius, dtype=float)
     return np.asarray(2.0 * (l - R) * np.sin(q3) + 2.0 * R * q3)
+
+
+def loss_per_metre(energy_lost: ArrayLike, step_length: ArrayLike) -> FloatArray:
+    """Energy lost per metre walked, ``eta = W / L_S`` (J/m), paper eq. (16): the one
+    definition (the heel-strike study, passive and powered gaits, described walkers).
+
+    Parameters
+    ----------
+    energy_lost : array_like
+        Energy lost per step (J), e.g. ``T_c``.
+    step_length : array_like
+        Step length ``L_S`` (m).
+
+    Returns
+    -------
+    ndarray, shape broadcast of the inputs
+        ``energy_lost / step_length``; NaN where ``step_length <= 0`` (no step: no distance to
+        spread the loss over).
+    """
+    W, L = np.broadcast_arrays(np.asarray(energy_lost, dtype=float),
+                               np.asarray(step_length, dtype=float))
+    eta = np.full(W.shape, np.nan)
+    np.divide(W, L, out=eta, where=L > 0)
+    return eta
 
 
 def step_length(walker: CompassGait, impact_angle: ArrayLike) -> FloatArray:
@@ -358,8 +383,7 @@ def heel_strike_study(
     R = bc(walker.foot_radius)
     l = bc(walker.leg_length)
     L_S = bc(step_length(walker, q3))
-    eta = np.full(shape, np.nan)
-    np.divide(lost, L_S, out=eta, where=L_S > 0)
+    eta = loss_per_metre(lost, L_S)
     qd_pre = np.broadcast_to(q_dot, (*shape, 4))
     scale = l * (np.abs(qd_pre[..., 2]) + np.abs(qd_pre[..., 3]))
     lifts = trailing_foot_lifts(np.asarray(v_post)[..., 1], scale)

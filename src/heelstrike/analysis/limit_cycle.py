@@ -22,6 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
+from heelstrike.analysis.heel_strike import loss_per_metre
 from heelstrike.dynamics.backends import BoundSimulator
 from heelstrike.dynamics.hybrid import PushOff, WalkResult, simulate
 from heelstrike.dynamics.single_support import TorqueLaw
@@ -772,7 +773,7 @@ def _characterise(
         collision_loss=rec.energy_lost,
         kinetic_energy_pre=rec.kinetic_energy,
         kinetic_energy_admissible=rec.kinetic_energy_admissible,
-        eta=rec.energy_lost / rec.step_length,
+        eta=float(loss_per_metre(rec.energy_lost, rec.step_length)),
         potential_energy_released=rec.potential_energy_released,
         actuator_work=rec.actuator_work,
         residual=residual,
@@ -833,7 +834,7 @@ def _characterise_compiled(
         collision_loss=loss,
         kinetic_energy_pre=float(impact.kinetic_energy),
         kinetic_energy_admissible=float(impact.kinetic_energy_admissible),
-        eta=loss / step_length,
+        eta=float(loss_per_metre(loss, step_length)),
         potential_energy_released=float(
             walker.potential_energy(q0, slope) - walker.potential_energy(q, slope)
         ),

@@ -27,7 +27,7 @@ from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
 from heelstrike.analysis._continuation import PARAMETER_STEP, SLOPE_STEP, Point, follow
 from heelstrike.analysis._memory import require_memory
-from heelstrike.analysis.heel_strike import trailing_foot_lifts
+from heelstrike.analysis.heel_strike import loss_per_metre, trailing_foot_lifts
 from heelstrike.analysis.limit_cycle import (
     GaitNotFoundError,
     LimitCycle,
@@ -100,7 +100,7 @@ class ModelGait(ResultDictMixin):
     @property
     def eta(self) -> float:
         """Total collision loss per metre walked (J/m)."""
-        return self.collision_loss / self.cycle.step_length
+        return float(loss_per_metre(self.collision_loss, self.cycle.step_length))
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary: the compass-gait keys, ``collision_loss`` the step total, and
@@ -587,7 +587,7 @@ def model_heel_strike(walker: BuiltWalker, q: ArrayLike, q_dot: ArrayLike) -> Mo
         q_dot_plus=np.asarray(mc.velocity_post),
         impulse=np.asarray(mc.impact.constraint_impulse),
         step_length=L,
-        eta=T_c / L if L > 0 else float("nan"),
+        eta=float(loss_per_metre(T_c, L)),
         trailing_foot_lifts=mc.modes[0] == "separate"
         and bool(
             trailing_foot_lifts(

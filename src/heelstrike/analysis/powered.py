@@ -66,6 +66,7 @@ from numpy.typing import ArrayLike, NDArray
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
 from heelstrike._units import UNITS
+from heelstrike.analysis.heel_strike import loss_per_metre
 from heelstrike.core.impact import kinetic_energy
 from heelstrike.dynamics._aot import compile_seconds
 from heelstrike.dynamics.actuation import (
@@ -1598,7 +1599,7 @@ def _characterise(
         energy_change=dE,
         energy_balance_error=rec.actuator_work - loss - dE,
         cost_of_transport=rec.actuator_work / (m * g * L),
-        eta=loss / L,
+        eta=float(loss_per_metre(loss, L)),
         multipliers=mult,
         stable=bool(np.all(np.abs(mult) < 1.0)),
         residual=residual,

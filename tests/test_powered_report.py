@@ -206,10 +206,28 @@ def test_slow_gait_multipliers_match_an_independent_jacobian() -> None:
 @pytest.mark.slow
 def test_slow_end_of_the_search_is_not_called_a_fold(capsys: Capture) -> None:
     # QA sweep 5, P1: "at a fold ... none of its gaits has a speed below about 0.0207 m/s",
-    # yet gaits exist below (a push-off gait's multiplier nears 1 as it slows: no fold)
-    assert main(["powered", "--radius", "0", "--speed", "0.02"]) == 2
-    err = capsys.readouterr().err.strip().splitlines()[-1]
-    assert "at a fold" not in err and "no fold" in err and "may exist" in err
+    # yet gaits exist below (a push-off gait's multiplier nears 1 as it slows: no fold). The
+    # seed search still stops there, on either backend, and says so:
+    from heelstrike.analysis.powered import (
+        PoweredGaitNotFoundError,
+        actuation_family,
+        family_simulator,
+    )
+
+    fam = actuation_family("pushoff")
+    for backend in ("compiled", "scipy"):
+        sim = family_simulator(CompassGait(), fam, backend)
+        with pytest.raises(PoweredGaitNotFoundError) as info:
+            find_powered_gait(CompassGait(), speed=0.02, simulator=sim)
+        err = str(info.value)
+        assert "at a fold" not in err and "no fold" in err and "may exist" in err
+    # ... and the command reaches such a gait now (QA sweep 6: from the gait at 0.75 times the
+    # target, continued to it): stable, at the speed asked, its push-off work the heel
+    # strike's loss
+    assert main(["powered", "--radius", "0", "--speed", "0.02", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["speed"] == pytest.approx(0.02, rel=1e-9) and d["stable"]
+    assert d["actuator_work"] == pytest.approx(d["collision_loss"], rel=1e-6)
     # the gaits it says may exist: continued by hand from 0.05 m/s, each periodic with the
     # push-off's work equal to the heel strike's loss (eqs. 14-15)
     w = CompassGait()
@@ -313,3 +331,49 @@ def test_kneed_energy_books_mark_the_knee_strike(tmp_path: Path, capsys: Capture
     capsys.readouterr()
     written = pd.read_csv(tmp_path / "powered_energy.csv")
     assert list(written["event"].dropna()) == ["knee_strike", "push_off", "heel_strike"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("argv", "own"), [
+    (["--radius", "0", "--speed", "0.9"], False),  # "no gait ... end near 0.8878 m/s"
+    (["--model", "compass", "--param", "mH=40", "--param", "m=8", "--param", "l=0.9",
+      "--param", "b=0.35", "--param", "R=0.25", "--param", "I=0.3", "--speed", "0.5"], True),
+])
+def test_gaits_beyond_a_fold_are_reached_from_another_target(
+    argv: list[str], own: bool, capsys: Capture, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # QA sweep 6 (F2): the seed gait's continuation stopped at a fold of its family and the
+    # command said "no gait", where stable gaits exist (continued from 1.2 m/s, or from the
+    # walker's 1 m/s gait); the command now also continues gaits from 1.35 and 0.75 times the
+    # target
+    from heelstrike.analysis import powered as P
+    from heelstrike.dynamics.actuation import PushOff
+
+    with monkeypatch.context() as m:
+        m.setattr(P, "ANCHOR_FACTORS", ())
+        assert main(["powered", *argv]) == 2  # the premise: the search alone finds none
+    capsys.readouterr()
+    assert main(["powered", *argv, "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    target = float(argv[-1])
+    assert d["speed"] == pytest.approx(target, rel=1e-9) and d["stable"]
+    assert d["actuator_work"] == pytest.approx(d["collision_loss"], rel=1e-6)
+    if own:
+        return
+    # periodic and stable on the scipy reference: its own step map, central differences
+    w = CompassGait()
+    z = np.array([d["fixed_point"][k] for k in ("q3", "q3_dot", "q4_dot")])
+    push = PushOff(impulse=d["parameter"])
+
+    def step(x: np.ndarray) -> np.ndarray:
+        st = P.powered_step(w, x, None, push, rtol=1e-12, atol=1e-12)
+        assert st.ok
+        return st.z_next
+
+    assert np.max(np.abs(step(z) - z)) < 1e-8
+    h = 1e-6
+    DP = np.column_stack([(step(z + h * e) - step(z - h * e)) / (2 * h) for e in np.eye(3)])
+    moduli = np.sort(np.abs(np.linalg.eigvals(DP)))[::-1]
+    assert moduli[0] < 1.0
+    np.testing.assert_allclose(moduli, sorted(map(abs, d["multipliers"]), reverse=True),
+                               atol=1e-5)

@@ -2034,7 +2034,9 @@ def powered_gaits(
     gait, or of a model with a foot radius parameter ``R``) are also continued in the radius
     from ``NEAR_WHEEL l``, as a study's grid would reach them
     (:func:`_gaits_from_farther_radius`): the fresh starts alone miss the cheap branch at
-    ``R = 0.99 l``. Several gaits can meet one target; the first is the one the study keeps
+    ``R = 0.99 l``. When none of these meets the target, the gaits at :data:`ANCHOR_FACTORS`
+    times the target are continued to it (:func:`_gaits_from_anchor_targets`). Several gaits can
+    meet one target; the first is the one the study keeps
     there, the one needing the least actuator work (issue 11, item 8), stable or not. Each gait
     is polished to ``tol`` (default 1e-9).
 
@@ -2079,6 +2081,8 @@ def powered_gaits(
     if family.name == "pushoff" and (model is None or "R" in model.params):
         gaits += _gaits_from_farther_radius(solve, base, model, family, float(radius), speed,
                                             step_length, kwargs)
+    if not gaits:
+        gaits = _gaits_from_anchor_targets(solve, float(radius), speed, step_length, kwargs)
     if not gaits:
         assert err is not None
         raise err
@@ -2133,6 +2137,46 @@ def _gaits_from_farther_radius(
                 g = solve(float(r_sub), guess=x, speed=speed, step_length=length,
                           fallback=False, **kwargs)
                 x = np.append(g.fixed_point, g.parameter)
+        except (PoweredGaitNotFoundError, ValueError):
+            continue
+        found.append(g)
+    return found
+
+
+#: Targets (factors of the asked one) that :func:`powered_gaits` searches from when the search
+#: at the target itself met no gait, each gait then continued to the target in
+#: :data:`ANCHOR_STEPS` geometric steps. Natural-parameter continuation from the seed gait
+#: stops at a fold of its family; from beyond the target it comes in on another branch (QA
+#: sweep 6, R = 0 push-off: no gait at 0.9 m/s from the seed gait at 0.51 m/s, a stable one
+#: from 0.675 m/s). Only then: where an unstable gait was met they could also find a stable
+#: one (at 0.073 m/s one needing 1/59 of the work), but a failing anchor search costs seconds
+#: on the scipy reference (8 s more for the R = 0 hip-energy gait at 0.5 m/s).
+ANCHOR_FACTORS = (1.35, 0.75)
+ANCHOR_STEPS = 4
+
+
+def _gaits_from_anchor_targets(
+    solve: Callable[..., PoweredGait], r: float, speed: float | None, length: float | None,
+    kwargs: dict[str, Any],
+) -> list[PoweredGait]:
+    """Gaits at the target continued from the seed search at :data:`ANCHOR_FACTORS` times it
+    (radius ``r``, m); none where a search or a continuation fails. A time limit in
+    ``kwargs`` bounds all of them together."""
+    target = "speed" if speed is not None else "step_length"
+    value = float(speed if speed is not None else length)  # type: ignore[arg-type]
+    limit = kwargs.get("time_limit")
+    deadline = time.monotonic() + float(limit) if limit is not None else float("inf")
+    found: list[PoweredGait] = []
+    for factor in ANCHOR_FACTORS:
+        left = deadline - time.monotonic()
+        if left <= 0:
+            break
+        opts = kwargs | ({"time_limit": left} if limit is not None else {})
+        try:
+            g = solve(r, **{target: value * factor}, **opts)
+            for v in np.geomspace(value * factor, value, ANCHOR_STEPS + 1)[1:]:
+                g = solve(r, guess=np.append(g.fixed_point, g.parameter), fallback=False,
+                          **{target: float(v)}, **opts)
         except (PoweredGaitNotFoundError, ValueError):
             continue
         found.append(g)

@@ -234,7 +234,7 @@ def _run_powered(args: argparse.Namespace) -> int:
         # from the 0.1 m/s gait
         print("  note: the search met no stable gait at this target, which does not show that "
               "none exists: it is local (seed gaits continued to the target, a few fresh "
-              "starts); a stable one may be reached by continuing from a nearby target "
+              "starts); a stable one may be reached by continuing from another target "
               "(find_powered_gait(..., guess=(*fixed_point, parameter)) in small steps)")
     if gait.trailing_foot_grazes:
         print("  note: R = l (McGeer's wheel): the trailing foot's lift velocity is exactly 0; "

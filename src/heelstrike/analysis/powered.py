@@ -2035,10 +2035,11 @@ def powered_gaits(
     from ``NEAR_WHEEL l``, as a study's grid would reach them
     (:func:`_gaits_from_farther_radius`): the fresh starts alone miss the cheap branch at
     ``R = 0.99 l``. When none of these meets the target, the gaits at :data:`ANCHOR_FACTORS`
-    times the target are continued to it (:func:`_gaits_from_anchor_targets`). Several gaits can
-    meet one target; the first is the one the study keeps
-    there, the one needing the least actuator work (issue 11, item 8), stable or not. Each gait
-    is polished to ``tol`` (default 1e-9).
+    times the target are continued to it (:func:`_gaits_from_anchor_targets`); the study does
+    not do this (its grid's neighbours are its anchors; on the kneed walker's default grid the
+    anchors found nothing more, for twice the time). Several gaits can meet one target; the
+    first is the one the study keeps there, the one needing the least actuator work (issue 11,
+    item 8), stable or not. Each gait is polished to ``tol`` (default 1e-9).
 
     Parameters
     ----------

@@ -377,3 +377,37 @@ def test_gaits_beyond_a_fold_are_reached_from_another_target(
     assert moduli[0] < 1.0
     np.testing.assert_allclose(moduli, sorted(map(abs, d["multipliers"]), reverse=True),
                                atol=1e-5)
+
+
+@pytest.mark.slow
+def test_multi_swing_gaits_are_counted_and_kept_last(capsys: Capture, tmp_path: Path) -> None:
+    # QA sweep 6 (F3): study cost kept, as the cheapest at R = 0.6 m and L = 0.5 m, a gait whose
+    # legs cross three times a step, the swing foot 4.4 mm under the ground for 0.4 s with the
+    # legs up to 19 deg apart: outside the scuffing convention (one crossing, near mid-stance)
+    import xarray as xr
+
+    from heelstrike.analysis.powered import powered_gaits, preferred_gait
+
+    gaits = powered_gaits(0.6, step_length=0.5)
+    multi = [g for g in gaits if g.multi_swing]
+    single = [g for g in gaits if g.leg_crossings == 1]
+    assert multi and single
+    w = CompassGait(foot_radius=0.6)
+    for g in gaits:  # what the count stands for, from the walker's own geometry
+        q = np.asarray(g.walk.q)
+        clearance = np.asarray(w.foot_clearance(q, "left"))
+        deep = clearance < -1e-3
+        if g.multi_swing:
+            assert deep.any() and np.abs(q[deep, 3]).max() > 0.1
+        else:
+            assert not deep.any()
+    assert not preferred_gait(gaits).multi_swing
+    # the study keeps an ordinary step wherever one was found
+    assert main(["study", "cost", "--radius", "0.6:0.6:1", "--step-length", "0.4:0.6:3",
+                 "--out", str(tmp_path)]) == 0
+    capsys.readouterr()
+    ds = xr.open_dataset(tmp_path / "cost_study.nc")
+    assert ds["leg_crossings"].attrs["units"] == "1"
+    assert np.all(ds["leg_crossings"].values == 1)
+    work = ds["actuator_work"].values.ravel()
+    assert np.all(np.diff(work) > 0)  # no dip where the multi-swing gait was kept

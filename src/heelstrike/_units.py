@@ -40,7 +40,7 @@ UNITS: dict[str, str | None] = {
     "restitution": "1", "multipliers": "1", "multipliers_complex": "1",
     "cost_of_transport": "1", "spectral_radius": "1", "converging_fraction": "1",
     "stable_fraction": "1", "gait_found_fraction": "1", "grid": "1", "steps": "1",
-    "gaits_found": "1", "period_steps": "1",
+    "gaits_found": "1", "period_steps": "1", "leg_crossings": "1",
     "iterations": "1",
     # torque-law gains (heelstrike.analysis.powered.GAIN_UNITS)
     "gain": "s/rad", "kp": "N m/rad", "kd": "N m s/rad", "max_torque": "N m", "angle": "rad",

@@ -81,7 +81,7 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "declared_posture_law",
         "energy_book_tables", "family_simulator",
         "find_model_powered_gait", "find_powered_gait", "impact_angle_for_step_length",
-        "law_gains", "max_walking_speed", "powered_gaits",
+        "law_gains", "leg_crossings", "max_walking_speed", "powered_gaits",
         "passive_gait_finder", "powered_step", "preferred_gait",
     ),
     "sweep": (

@@ -227,7 +227,12 @@ def _run_powered(args: argparse.Namespace) -> int:
             print(f"    {g.parameter_name} {g.parameter:.6g} {g.parameter_unit}: actuator work "
                   f"{g.actuator_work:.6g} J, speed {g.speed:.5f} m/s, step length "
                   f"{g.step_length:.5f} m, stable {'yes' if g.stable else 'no'} (|m| "
-                  f"{multipliers_text([o['spectral_radius']])})")
+                  f"{multipliers_text([o['spectral_radius']])})"
+                  + (f", legs cross {g.leg_crossings} times a step" if g.multi_swing else ""))
+    if gait.multi_swing:
+        print(f"  note: the swing leg crosses the stance leg {gait.leg_crossings} times a step: "
+              "its foot passes through the ground away from mid-stance, outside the scuffing "
+              "convention (one crossing, near mid-stance); no ordinary step was found")
     if not gait.stable:
         # the search is local (seeds, continuation, a few fresh starts): QA sweep 6 found a
         # stable gait needing 1/61 of this work at --step-length 0.05, reached by continuing

@@ -81,7 +81,8 @@ def cost_figure(ds: xr.Dataset, variable: str = "cost_of_transport") -> Figure:
 
 #: Figure caption of how the study chose its gaits (see ``cost_study.BRANCH_NOTE``).
 BRANCH_CAPTION = (
-    "each point: the cheapest periodic gait found\n(continuation from neighbours and fresh "
+    "each point: the cheapest periodic gait found, legs crossing once a step where one was\n"
+    "(continuation from neighbours and fresh "
     "searches;\nopen squares: found by a fresh search, not by continuation;\nred x: unstable "
     "gait, a Floquet multiplier |m| > 1;\nopen triangles on the bottom edge: no gait found there)"
 )

@@ -2,7 +2,9 @@
 
 Every public result of heelstrike (impacts, walks, limit cycles, powered gaits, ensembles,
 basins, gait maps, robot impacts, ...) is a frozen dataclass deriving from
-:class:`ResultDictMixin`, so that ``json.dumps(result.to_dict())`` works for all of them.
+:class:`ResultDictMixin`, so that ``json.dumps(result.to_dict())`` works for all of them; the
+compiled paths' few small results are :class:`typing.NamedTuple` (unpackable, cheap to build
+per call) whose ``to_dict()`` is :func:`tuple_dict`.
 Results that define their own summary (e.g. :meth:`~heelstrike.analysis.LimitCycle.to_dict`,
 whose keys the CLI's ``--json`` output promises) keep it.
 """
@@ -17,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["ResultDictMixin", "to_plain"]
+__all__ = ["ResultDictMixin", "to_plain", "tuple_dict"]
 
 #: numpy dtype kinds whose ``tolist()`` is already plain Python (bool, int, float, str).
 _PLAIN_KINDS = frozenset("biufU")
@@ -128,3 +130,20 @@ class ResultDictMixin:
             ``float('nan')``.
         """
         return _fields_dict(self)
+
+
+def tuple_dict(result: Any) -> dict[str, Any]:
+    """The ``to_dict()`` of a result that is a :class:`typing.NamedTuple` (the compiled paths'
+    results: :class:`~heelstrike.core.fast.FastImpactResult`,
+    :class:`~heelstrike.dynamics.compiled.CompiledStep`, ...).
+
+    Parameters
+    ----------
+    result : NamedTuple
+
+    Returns
+    -------
+    dict
+        ``{field name: value}`` as plain Python (:func:`to_plain`).
+    """
+    return {str(k): to_plain(v) for k, v in result._asdict().items()}

@@ -30,6 +30,7 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import ArrayLike, NDArray
 
+from heelstrike._results import tuple_dict
 from heelstrike._typing import FloatArray
 from heelstrike.core._parallel import use_parallel
 from heelstrike.core.impact import ImpactInputError
@@ -76,6 +77,10 @@ class FastImpactResult(NamedTuple):
     velocity_post: FloatArray
     constraint_impulse: FloatArray
     energy_lost: FloatArray
+
+    def to_dict(self) -> dict[str, Any]:
+        """Every field as plain Python (:func:`~heelstrike._results.tuple_dict`)."""
+        return tuple_dict(self)
 
 
 def serial_and_parallel(py_func: Callable[..., None], **options: Any) -> tuple[Any, Any]:

@@ -61,7 +61,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from heelstrike._results import ResultDictMixin
+from heelstrike._results import ResultDictMixin, tuple_dict
 from heelstrike._typing import FloatArray, IntArray
 from heelstrike.core._parallel import use_parallel
 from heelstrike.dynamics._aot import AotExport, AotLibrary, load_library
@@ -400,6 +400,10 @@ class CompiledStep(NamedTuple):
     collision_loss: float
     step_length: float
     status: WalkStatus
+
+    def to_dict(self) -> dict[str, Any]:
+        """Every field as plain Python (:func:`~heelstrike._results.tuple_dict`)."""
+        return tuple_dict(self)
 
 
 def step_map_compiled(

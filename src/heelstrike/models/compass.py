@@ -27,6 +27,7 @@ from typing import Any, ClassVar, NamedTuple, final
 import numpy as np
 from numpy.typing import ArrayLike
 
+from heelstrike._results import tuple_dict
 from heelstrike._typing import FloatArray
 from heelstrike.models.base import (
     CompiledKernel,
@@ -76,6 +77,10 @@ class CompassPositions(NamedTuple):
     left_contact: FloatArray
     right_leg_com: FloatArray
     left_leg_com: FloatArray
+
+    def to_dict(self) -> dict[str, Any]:
+        """Every field as plain Python (:func:`~heelstrike._results.tuple_dict`)."""
+        return tuple_dict(self)
 
 
 def _e(theta: FloatArray) -> FloatArray:

@@ -123,3 +123,25 @@ def test_gait_map_figure_axes_stay_on_the_computed_grid():
     s0, s1 = ax.get_xlim()
     assert r0 >= 0.0 and r1 <= 0.3 + 1e-12
     assert s0 >= 2.0 - 1e-9 and s1 <= 4.0 + 1e-9
+
+
+def test_every_walk_status_has_its_own_basin_outcome() -> None:
+    # QA sweep 6 (layout audit): slipped, no_consistent_assignment and no_leg_swap were
+    # counted as integration_failed, and the colours matched the outcomes by position
+    from heelstrike.analysis import basin as basin_module
+    from heelstrike.dynamics.hybrid import WalkStatus
+    from heelstrike.plots import gait as gait_plots
+
+    others = [s for s in WalkStatus if s is not WalkStatus.COMPLETED]
+    assert {s.value for s in others} <= set(OUTCOMES)
+    assert len(set(OUTCOMES)) == len(OUTCOMES)
+    # the codes stored in earlier basin files keep their meaning
+    assert OUTCOMES[:8] == ("converged", "keeps_walking", "fell_forward", "fell_backward",
+                            "trailing_foot_stays", "lost_contact", "no_heel_strike",
+                            "integration_failed")
+    codes = np.array([s.code for s in others] + [WalkStatus.COMPLETED.code] * 2)
+    dist = np.array([0.0] * len(others) + [1e-5, 1.0])
+    out = basin_module._classify(codes, dist, 1e-3)
+    assert [OUTCOMES[k] for k in out] == [s.value for s in others] + ["converged",
+                                                                        "keeps_walking"]
+    assert set(gait_plots._COLOURS) == set(OUTCOMES)

@@ -61,7 +61,11 @@ __all__ = [
     "model_slice_axes",
 ]
 
-#: Outcome codes of the basin (``flag_values`` / ``flag_meanings`` of the dataset).
+#: Outcome codes of the basin (``flag_values`` / ``flag_meanings`` of the dataset): a walk that
+#: took every step ends ``converged`` (within the tolerance of the gait) or ``keeps_walking``;
+#: any other ends as its :class:`~heelstrike.dynamics.hybrid.WalkStatus`, each of which has its
+#: own code (``slipped``, ``no_consistent_assignment`` and ``no_leg_swap`` were counted as
+#: ``integration_failed``: QA sweep 6). Codes never change meaning; new ones are appended.
 OUTCOMES: tuple[str, ...] = (
     "converged",
     "keeps_walking",
@@ -71,6 +75,9 @@ OUTCOMES: tuple[str, ...] = (
     "lost_contact",
     "no_heel_strike",
     "integration_failed",
+    "slipped",
+    "no_consistent_assignment",
+    "no_leg_swap",
 )
 
 #: Default window of the slice: ``q3`` (rad) and ``q3_dot`` (rad/s) ranges.
@@ -372,7 +379,7 @@ def _classify(status: NDArray[np.int64], dist: FloatArray, tol: float) -> NDArra
     completed = status == WalkStatus.COMPLETED.code
     outcome = np.full(status.size, OUTCOMES.index("integration_failed"), dtype=np.int8)
     for st in WalkStatus:
-        if st.value in OUTCOMES:
+        if st is not WalkStatus.COMPLETED:  # every status has its outcome (a test checks)
             outcome[status == st.code] = OUTCOMES.index(st.value)
     outcome[completed] = OUTCOMES.index("keeps_walking")
     outcome[completed & (dist < tol)] = OUTCOMES.index("converged")

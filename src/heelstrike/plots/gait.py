@@ -287,16 +287,20 @@ def bifurcation_figure(
 
 
 # -- basin of attraction and stable-gait map ----------------------------------------------------
-_COLOURS = (
-    "#1a9850",  # converged
-    "#91cf60",  # keeps walking
-    "#d73027",  # fell forward
-    "#4575b4",  # fell backward
-    "#fdae61",  # trailing foot stays
-    "#984ea3",  # lost contact
-    "#bdbdbd",  # no heel strike
-    "#000000",  # integration failed
-)
+#: Colour of each basin outcome, by name (:data:`~heelstrike.analysis.basin.OUTCOMES`).
+_COLOURS = {
+    "converged": "#1a9850",
+    "keeps_walking": "#91cf60",
+    "fell_forward": "#d73027",
+    "fell_backward": "#4575b4",
+    "trailing_foot_stays": "#fdae61",
+    "lost_contact": "#984ea3",
+    "no_heel_strike": "#bdbdbd",
+    "integration_failed": "#000000",
+    "slipped": "#8c510a",
+    "no_consistent_assignment": "#f781bf",
+    "no_leg_swap": "#636363",
+}
 
 
 def basin_figure(basin: Basin) -> Figure:
@@ -315,7 +319,7 @@ def basin_figure(basin: Basin) -> Figure:
     q3, q3d = ds[xname].values, ds[yname].values
     fig = _new_figure(7.5, 5.5)
     ax = fig.add_subplot()
-    cmap = ListedColormap(list(_COLOURS))
+    cmap = ListedColormap([_COLOURS[name] for name in OUTCOMES])
     norm = BoundaryNorm(np.arange(len(OUTCOMES) + 1) - 0.5, cmap.N)
     # half a cell; a one-point axis gets a cell of 1 % of its value (or 0.01) to be visible
     dx = (q3[-1] - q3[0]) / max(len(q3) - 1, 1) / 2 or 0.01 * max(abs(float(q3[0])), 1.0)
@@ -330,8 +334,8 @@ def basin_figure(basin: Basin) -> Figure:
             ls="none", label="fixed point")
     fr = basin.fractions()
     handles = [
-        Patch(color=c, label=f"{name.replace('_', ' ')} ({100 * fr[name]:.1f} %)")
-        for c, name in zip(_COLOURS, OUTCOMES, strict=True)
+        Patch(color=_COLOURS[name], label=f"{name.replace('_', ' ')} ({100 * fr[name]:.1f} %)")
+        for name in OUTCOMES
         if fr[name] > 0
     ]
     handles.append(ax.get_lines()[0])  # type: ignore[arg-type]

@@ -109,10 +109,7 @@ def walk_impact_table(walker: PlanarWalker, walk: WalkResult) -> pd.DataFrame:
         If the walk has no samples, or its samples do not split into one stretch per impact.
     """
     _check_walk(walk)
-    E = np.asarray(
-        walker.kinetic_energy(walk.q, walk.q_dot) + walker.potential_energy(walk.q, walk.slope),
-        dtype=float,
-    )
+    E = np.asarray(walker.mechanical_energy(walk.q, walk.q_dot, walk.slope), dtype=float)
     impacts = _impacts(walk)
     # the samples split into stretches between impacts: a heel strike starts a new step, a
     # knee strike a new phase of the same step (both sides of an impact are sampled)
@@ -129,10 +126,7 @@ def walk_impact_table(walker: PlanarWalker, walk: WalkResult) -> pd.DataFrame:
             before, after = float(E[last[i]]), float(E[last[i] + 1])
         else:  # nothing sampled after the walk's last impact
             before = float(E[-1])
-            after = float(
-                walker.kinetic_energy(walk.final_q, walk.final_q_dot)
-                + walker.potential_energy(walk.final_q, walk.slope)
-            )
+            after = float(walker.mechanical_energy(walk.final_q, walk.final_q_dot, walk.slope))
         rows.append(
             {
                 "step": step,

@@ -2202,6 +2202,9 @@ def _gaits_from_farther_radius(
 #: one (at 0.073 m/s one needing 1/59 of the work), but a failing anchor search costs seconds
 #: on the scipy reference (8 s more for the R = 0 hip-energy gait at 0.5 m/s).
 ANCHOR_FACTORS = (1.35, 0.75)
+
+#: Geometric continuation steps from an anchor target to the asked one (see
+#: :data:`ANCHOR_FACTORS`).
 ANCHOR_STEPS = 4
 
 

@@ -260,3 +260,19 @@ def test_wheel_impact_text_has_no_negative_zero(capsys):
     assert main(["impact", "--radius", "1", "--angle", "20deg"]) == 0
     out = capsys.readouterr().out
     assert "-0.000000" not in out and "0.000000, 0.000000 N s" in out
+
+
+@pytest.mark.parametrize("argv", [
+    ["map", "--radius", "0.2:0.2:3", "--slope", "2deg:3deg:2"],
+    ["study", "cost", "--radius", "0.3:0.3:3", "--step-length", "0.3:0.5:2"],
+    ["impact-map", "--x", "R:0.2:0.2:2", "--y", "angle:10deg:20deg:2"],
+    ["basin", "--q3-range=-0.2:-0.2", "--grid", "3x3"],
+])
+def test_a_range_that_repeats_one_value_is_refused(argv, capsys, tmp_path):
+    # QA sweep 7 (P2): map --radius 0.2:0.2:3 reached sweep() and failed as an "unexpected
+    # SweepError" naming foot_radius; study cost and impact-map computed the repeats
+    assert main([*argv, "--out", str(tmp_path / "o")]) == 2
+    captured = capsys.readouterr()
+    line = captured.err.strip()
+    assert captured.out == "" and len(line.splitlines()) == 1
+    assert "START = STOP is one value" in line and "unexpected" not in line

@@ -237,15 +237,30 @@ def test_period_steps_of_recorded_walks() -> None:
     assert diagram.period_steps().tolist() == [1, 2, 3, 0, 0, 0]
     assert diagram.period_steps(tol=1e-5)[-1] == 1
     assert diagram.statuses == ()  # built by hand: no statuses recorded
+    # QA sweep 7 (P1): a walk converging to a stable gait through a multiplier of -0.9
+    # alternates with a shrinking amplitude; angles two steps apart agree to 1e-6 before one
+    # step apart do, and it was called "settled on period 2"
+    k = np.arange(16)
+    settling = a + 5e-6 * (-0.9) ** k
+    assert np.max(np.abs(settling[2:] - settling[:-2])) < 1e-6 < np.max(np.abs(np.diff(settling)))
+    two = a + 1e-3 * (-1.0) ** k  # a genuine 2-cycle
+    d = BifurcationDiagram(slopes=np.arange(2.0), impact_angles=np.stack([settling, two]),
+                           periods=np.ones((2, 16)))
+    assert d.period_steps().tolist() == [0, 2]
+    assert BifurcationDiagram(slopes=np.arange(1.0), impact_angles=np.full((1, 1), a),
+                              periods=np.ones((1, 1))).period_steps().tolist() == [0]
 
 
 @pytest.mark.parametrize("slope", ["3deg", "0.5deg"])
 def test_mcgeer_wheel_has_no_passive_gait_and_says_why(slope, capsys, monkeypatch):
     # QA sweep 5 (P3): `gait --radius 1` searched 864 seeds and said "no period-one gait
-    # found"; R = l is McGeer's wheel, whose heel strike loses nothing, so on a slope it gains
-    # m g L sin(slope) every step and cannot be periodic: said at once, without a search
+    # found". R = l is McGeer's wheel: after a heel strike its trailing foot neither lifts nor
+    # presses, so no passive step completes; said at once, without a search. (QA sweep 7: the
+    # first wording, "a heel strike loses nothing", holds only for q4_dot = 0.)
     from heelstrike.analysis import limit_cycle as lc
     from heelstrike.analysis.heel_strike import heel_strike_study
+    from heelstrike.dynamics import simulate
+    from heelstrike.dynamics.hybrid import WalkStatus
 
     def forbidden(*args, **kwargs):
         raise AssertionError("searched")
@@ -255,12 +270,43 @@ def test_mcgeer_wheel_has_no_passive_gait_and_says_why(slope, capsys, monkeypatc
     assert main(["gait", "--radius", "1", "--slope", slope]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("heelstrike: error: no gait found at slope")
-    assert "McGeer's wheel" in err and "loses nothing (T_c = 0)" in err
-    # the premise, from the paper's impact algebra: T_c = 0 at R = l at every impact angle,
-    # and not just below it
+    assert "McGeer's wheel" in err and "exactly zero normal velocity" in err
+    assert "loses nothing" not in err
+    # the premise, simulated: a passive step of the wheel ends at its heel strike with the
+    # trailing foot's normal velocity zero to round-off (and losing energy: the swing leg
+    # moves relative to the stance leg); just below the wheel the same start lifts it
+    z = np.array([-0.3, 1.0, -1.0])
+    for radius, lifts in ((1.0, False), (0.99, True)):
+        w = CompassGait(foot_radius=radius)
+        q, qd = w.section_to_state(z)
+        r = simulate(w, q, qd, steps=1, slope=np.deg2rad(3.0), backend="scipy", rtol=1e-11,
+                     atol=1e-11)
+        (imp,) = r.impacts
+        if lifts:
+            assert r.status is WalkStatus.COMPLETED and imp.trailing_normal_velocity > 1e-3
+        else:
+            assert r.status is WalkStatus.TRAILING_FOOT_STAYS
+            assert abs(imp.trailing_normal_velocity) < 1e-12 and imp.energy_lost > 0.1
+    # the paper's heel strike (imposed q4_dot = 0) loses nothing at R = l only
     angles = np.deg2rad([5.0, 15.0, 30.0])
     wheel = heel_strike_study(CompassGait(foot_radius=1.0), angles)
     below = heel_strike_study(CompassGait(foot_radius=0.99), angles)
     assert np.all(np.abs(wheel.kinetic_energy_constrained) < 1e-12 * wheel.kinetic_energy)
     assert np.all(below.kinetic_energy_constrained > 1e-6 * below.kinetic_energy)
     assert CompassGait(foot_radius=1.0).is_wheel and not CompassGait(foot_radius=0.99).is_wheel
+
+
+def test_coarse_bifurcation_grid_does_not_carry_a_fall_along_a_stable_branch(tmp_path, capsys):
+    # QA sweep 7 (P2): on 0.5deg:6deg:12 the walk at 1 deg, released from the 0.5 deg gait,
+    # lost contact, and every later slope started from that same stale state: 11 slopes of a
+    # stable branch "lost contact". A walk that falls is now walked again from the period-one
+    # gait at its slope
+    assert main(["bifurcation", "--slope-range", "0.5deg:6deg:12", "--out", str(tmp_path),
+                 "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    stable = {round(g["slope"], 12) for g in d["branch"] if g["stable"]}
+    walks = {round(w["slope"], 12): w for w in d["walks"]}
+    on_stable = [walks[s] for s in stable if s in walks]
+    assert len(on_stable) >= 7
+    for w in on_stable:  # released on a stable gait, the walker walks and stays on it
+        assert w["status"] == "completed" and w["period_steps"] == 1, w

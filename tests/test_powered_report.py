@@ -411,3 +411,17 @@ def test_multi_swing_gaits_are_counted_and_kept_last(capsys: Capture, tmp_path: 
     assert np.all(ds["leg_crossings"].values == 1)
     work = ds["actuator_work"].values.ravel()
     assert np.all(np.diff(work) > 0)  # no dip where the multi-swing gait was kept
+
+
+@pytest.mark.slow
+def test_other_gaits_say_how_often_their_legs_cross(capsys: Capture) -> None:
+    # QA sweep 7 (P2): the text said "legs cross 3 times a step" of another gait, the JSON did
+    # not; and the list put the 3-crossing gait first although the study keeps the other
+    from heelstrike.analysis.powered import powered_gaits
+
+    gaits = powered_gaits(0.6, step_length=0.5)
+    assert [g.multi_swing for g in gaits] == sorted(g.multi_swing for g in gaits)
+    assert main(["powered", "--radius", "0.6", "--step-length", "0.5", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["leg_crossings"] == 1 and d["units"]["other_gaits"]["leg_crossings"] == "1"
+    assert any(o["leg_crossings"] == 3 for o in d["other_gaits"])

@@ -1056,9 +1056,15 @@ def _diagram_and_branch(
 
     onset, z0 = family[0][0], family[0][1].fixed_point
     k0 = int(np.searchsorted(slopes, onset))  # the first slope of the grid with a gait
+
+    def restart(slope: float, z: FloatArray) -> FloatArray:
+        # a walk that fell: the period-one gait at its slope, Newton from the last state
+        return find_limit_cycle(walker, slope=slope, guess=z, simulator=simulator,
+                                **branch_tolerances).fixed_point
+
     diagram = bifurcation_diagram(walker, slopes[k0:], guess=nearest(float(slopes[k0])),
                                   transient=transient, record=record, progress=progress,
-                                  simulator=simulator, **walk_tolerances)
+                                  simulator=simulator, restart=restart, **walk_tolerances)
     if k0 > 0:  # no gait below the onset: nothing to walk or draw there
         def pad(a: FloatArray) -> FloatArray:
             return np.concatenate([np.full((k0, a.shape[1]), np.nan), a])

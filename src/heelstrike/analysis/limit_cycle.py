@@ -378,8 +378,8 @@ def _check_passive_slope(
     walker: PlanarWalker | None = None,
 ) -> None:
     """A passive walker cannot walk periodically on level or uphill ground: nothing supplies the
-    energy lost at heel strike. Nor can McGeer's wheel on a slope: it loses nothing. Fail at
-    once instead of searching.
+    energy lost at heel strike. Nor can McGeer's wheel, whose trailing foot neither lifts nor
+    presses after a heel strike. Fail at once instead of searching.
 
     Parameters
     ----------
@@ -394,7 +394,8 @@ def _check_passive_slope(
     ------
     GaitNotFoundError
         Passive (no torque, no push-off) and ``slope <= 0``, or ``|slope| >= pi/2``; a passive
-        :attr:`~heelstrike.models.base.PlanarWalker.is_wheel` walker on a slope.
+        :attr:`~heelstrike.models.base.PlanarWalker.is_wheel` walker (its passive step cannot
+        end: the trailing foot grazes).
     """
     if not abs(slope) < np.pi / 2:  # a bare 3 meant as degrees is 172 deg
         raise GaitNotFoundError(
@@ -409,11 +410,12 @@ def _check_passive_slope(
         )
     if torque is None and push_off is None and walker is not None and walker.is_wheel:
         raise GaitNotFoundError(
-            "McGeer's wheel (foot radius R = leg length l) has no passive periodic gait on a "
-            f"slope: its feet are arcs of one circle about the hip, so a heel strike loses "
-            f"nothing (T_c = 0), and every step of length L gains m g L sin(slope) of kinetic "
-            f"energy on this {np.degrees(slope):g} deg slope; a periodic gait must lose at "
-            "heel strike what the slope gives (try R < l)"
+            "McGeer's wheel (foot radius R = leg length l): its two feet are arcs of one "
+            "circle about the hip, so after every heel strike the trailing foot's contact "
+            "point has exactly zero normal velocity (it neither lifts nor presses) and a "
+            "passive step ends there ('trailing_foot_stays'): there is no passive step map "
+            "to search (powered gaits accept this grazing contact, 'heelstrike powered "
+            "--radius ...'; for passive gaits take R < l)"
         )
 
 
@@ -1054,6 +1056,11 @@ def _most_negative_real(mult: NDArray[np.complex128]) -> float | None:
     return min(real) if real else None
 
 
+#: A period-``p`` cycle (``p > 1``) of :meth:`BifurcationDiagram.period_steps` must be this many
+#: times wider (step to step) than its angles ``p`` steps apart disagree.
+CYCLE_CONTRAST = 100.0
+
+
 @dataclass(frozen=True, kw_only=True)
 class BifurcationDiagram(ResultDictMixin):
     """Steady-state step-to-step values along the slope (brute force, as Goswami et al. 1998).
@@ -1090,9 +1097,14 @@ class BifurcationDiagram(ResultDictMixin):
         ndarray of int, shape (K,)
             The smallest ``p <= N // 2`` with ``|impact_angles[k, i + p] - impact_angles[k, i]|
             <= tol`` over every recorded step (1: the period-one gait, 2: after its period
-            doubling, ...); 0 where no such ``p`` exists (a longer period, chaos, or a walk
-            still in its transient, as near a period doubling, where it settles slowly) or
-            where a recorded step is missing (the walk fell).
+            doubling, ...) and, for ``p > 1``, a cycle at least :data:`CYCLE_CONTRAST` times
+            wider than that (its largest step-to-step difference): a walk still converging
+            to the period-one gait through a multiplier near -1 alternates with an amplitude
+            that shrinks, and its angles two steps apart agree ~10x better than one step
+            apart (QA sweep 7: "settled on period 2" on the stable branch). 0 where no such
+            ``p`` exists (a longer period, chaos, or a walk still in its transient, as near a
+            period doubling, where it settles slowly), where a recorded step is missing (the
+            walk fell), or with fewer than 2 recorded steps.
         """
         angles = np.asarray(self.impact_angles, dtype=float)
         out = np.zeros(angles.shape[0], dtype=int)
@@ -1100,8 +1112,10 @@ class BifurcationDiagram(ResultDictMixin):
         for k, row in enumerate(angles):
             if n < 2 or not np.all(np.isfinite(row)):
                 continue
+            width = float(np.max(np.abs(np.diff(row))))
             for p in range(1, n // 2 + 1):
-                if np.all(np.abs(row[p:] - row[:-p]) <= tol):
+                residual = float(np.max(np.abs(row[p:] - row[:-p])))
+                if residual <= tol and (p == 1 or width >= CYCLE_CONTRAST * residual):
                     out[k] = p
                     break
         return out
@@ -1119,6 +1133,7 @@ def bifurcation_diagram(
     progress: bool = False,
     callback: Callable[[int], None] | None = None,
     simulator: Callable[..., WalkResult] | None = None,
+    restart: Callable[[float, FloatArray], ArrayLike] | None = None,
 ) -> BifurcationDiagram:
     """Brute-force bifurcation diagram over increasing slopes.
 
@@ -1126,6 +1141,13 @@ def bifurcation_diagram(
     (the first from ``guess`` or an automatically found gait), walks ``transient`` steps, and
     the next ``record`` impact angles and step durations are stored. ``simulator`` is the
     step simulator of :class:`PoincareMap` (default: the scipy reference).
+
+    A walk that falls is walked once more from ``restart(slope, z)`` (e.g. the period-one gait
+    at that slope by Newton from ``z``, the last state that walked; None: no second walk;
+    nothing if ``restart`` raises :class:`GaitNotFoundError`), and the longer of the two walks
+    is kept. Without it a coarse grid's step in the slope can throw the walker off a stable
+    gait, and every later slope starts from the same stale state (QA sweep 7: 11 slopes of a
+    stable branch "lost contact").
     """
     sl = np.asarray(slopes, dtype=float)
     K = sl.size
@@ -1140,6 +1162,14 @@ def bifurcation_diagram(
         pmap = PoincareMap(walker=walker, slope=float(sl[i]), rtol=rtol, atol=atol,
                            simulator=simulator)
         res = pmap.walk(z, transient + record)
+        if not res.ok and restart is not None:
+            try:
+                again = pmap.walk(np.asarray(restart(float(sl[i]), z), dtype=float),
+                                  transient + record)
+            except GaitNotFoundError:
+                again = None
+            if again is not None and len(again.impacts) > len(res.impacts):
+                res = again
         rec = res.impacts[transient:]
         angles[i, : len(rec)] = [r.impact_angle for r in rec]
         periods[i, : len(rec)] = [r.step_duration for r in rec]

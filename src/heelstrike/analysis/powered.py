@@ -2087,8 +2087,9 @@ def powered_gaits(
     times the target are continued to it (:func:`_gaits_from_anchor_targets`); the study does
     not do this (its grid's neighbours are its anchors; on the kneed walker's default grid the
     anchors found nothing more, for twice the time). Several gaits can meet one target; the
-    first is the one the study keeps there, the one needing the least actuator work (issue 11,
-    item 8), stable or not. Each gait is polished to ``tol`` (default 1e-9).
+    first is the one the study keeps there, the ordinary step (legs crossing once) needing the
+    least actuator work (issue 11, item 8), stable or not. Each gait is polished to ``tol``
+    (default 1e-9).
 
     Parameters
     ----------
@@ -2112,8 +2113,8 @@ def powered_gaits(
     Returns
     -------
     list of PoweredGait
-        Distinct gaits (fixed point and parameter differing by more than 1e-6), by actuator
-        work.
+        Distinct gaits (fixed point and parameter differing by more than 1e-6), ordinary steps
+        first, each group by actuator work (a multi-swing gait last, as the study keeps it).
 
     Raises
     ------
@@ -2150,7 +2151,7 @@ def powered_gaits(
     if not polished:
         assert err is not None
         raise err
-    return sorted(polished, key=lambda g: g.actuator_work)
+    return sorted(polished, key=lambda g: (g.multi_swing, g.actuator_work))
 
 
 #: Foot radius (fraction of the leg length) above which :func:`powered_gaits` also continues the

@@ -490,7 +490,8 @@ def _plan(
         distinct, counts = np.unique(vals, return_counts=True)
         if np.any(counts > 1):
             twice = distinct[counts > 1]
-            more = f" (and {twice.size - 1} more values)" if twice.size > 1 else ""
+            more = (f" (and {twice.size - 1} more value{'s' if twice.size > 2 else ''})"
+                    if twice.size > 1 else "")
             raise SweepError(
                 f"grid[{name!r}] repeats {twice[0].item()!r}{more}: every value must be distinct "
                 "(a repeated one is computed twice, and selecting it by value is ambiguous)")

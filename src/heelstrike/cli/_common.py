@@ -92,6 +92,10 @@ def parse_range(
     if count == 1 and start != stop:  # one point: STOP would be ignored
         raise argparse.ArgumentTypeError(
             f"invalid range {text!r}: COUNT 1 is one point, START, so STOP must equal START")
+    if count != 1 and start == stop:  # the one value repeated (a sweep refuses repeats)
+        raise argparse.ArgumentTypeError(
+            f"invalid range {text!r}: START = STOP is one value; write START:START:1 for one "
+            "point, or give STOP != START")
     return start, stop, count
 
 

@@ -428,9 +428,12 @@ def _bifurcation_summary(diagram: Any, branch: Any, period_steps: Any) -> list[s
             key = f"{st} ({WalkStatus(st).message})"
         elif n:
             key = f"settled on period {n}"
+        elif longest < 2:  # 1 step tells nothing, 2-3 only period 1
+            key = (f"walked, period not told from {diagram.impact_angles.shape[1]} recorded "
+                   f"step{'s' if longest else ''} (--record 2P tells periods up to P)")
         else:
-            key = (f"no period of at most {longest} step{'s' if longest > 1 else ''} (chaotic, "
-                   "or still settling)")
+            key = (f"no period of at most {longest} steps (chaotic, or still settling: "
+                   "--transient longer)")
         counts.setdefault(key, []).append(float(deg(s)))
     for what, at in counts.items():
         where = ", ".join(f"{a:.4g}" for a in at) if len(at) <= 6 else (

@@ -94,7 +94,7 @@ def add_powered(sub: Any) -> None:
         "With --model: push-off (the impulse is found) plus the posture law the walker file "
         "declares ([control.torso], e.g. --model torso), or a hip law on a walker whose one "
         "actuated joint is its hip (compass, kneed); the hip laws' default gains are scaled "
-        "to the walker's m g l and sqrt(l/g).",
+        "to the walker's m_total g l and sqrt(l/g).",
     )
     add_walker_options(p)
     add_model_options(p)
@@ -151,7 +151,8 @@ def _run_powered(args: argparse.Namespace) -> int:
         step_simulator = compass_simulator(walker, family, args.backend)
         backend = "scipy" if step_simulator is None else "compiled"
     try:
-        # the gaits study cost meets at this design point (it keeps the cheapest, issue 11.8)
+        # the gaits study cost meets at this design point (it keeps the cheapest ordinary
+        # step, issue 11.8)
         gaits = powered_gaits(
             radius, speed=speed, step_length=step_length, actuation=args.actuation,
             walker=walker if args.model is None else None,
@@ -221,7 +222,7 @@ def _run_powered(args: argparse.Namespace) -> int:
         which = ("this is the stable one needing the least actuator work" if gait.stable else
                  "none is stable: this is the one needing the least actuator work")
         print(f"  note: {len(gaits)} distinct gaits meet this target; {which} (study cost "
-              "keeps the cheapest, stable or not); the others:")
+              "keeps the cheapest ordinary step, stable or not); the others:")
         for g in others:
             o = _gait_summary(g)
             print(f"    {g.parameter_name} {g.parameter:.6g} {g.parameter_unit}: actuator work "
@@ -256,6 +257,7 @@ def _gait_summary(gait: Any) -> dict[str, Any]:
             "period": gait.period, "step_length": gait.step_length, "speed": gait.speed,
             "stable": bool(gait.stable),
             "spectral_radius": float(np.max(np.abs(gait.multipliers))),
+            "leg_crossings": gait.leg_crossings,
             "fixed_point": dict(zip(gait.section_names, map(float, gait.fixed_point),
                                     strict=True))}
 

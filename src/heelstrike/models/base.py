@@ -80,8 +80,10 @@ def is_mcgeer_wheel(foot_radius: ArrayLike, leg_length: ArrayLike) -> NDArray[np
     """Whether a foot radius makes McGeer's synthetic wheel: ``R = l`` (to 1e-12 relative).
 
     The one definition of the degenerate walker whose two feet are arcs of one circle about
-    the hip: its heel strike loses nothing (``T_c = 0``), the trailing foot's lift velocity is
-    exactly zero, and on a slope it gains ``m g L sin(slope)`` every step.
+    the hip: after any heel strike the trailing foot's lift velocity is exactly zero (it
+    neither lifts nor presses), and the paper's heel strike with imposed velocities
+    (``q4_dot = 0``, Figs. 2-3) loses nothing (``T_c = 0``; a swing leg moving relative to the
+    stance leg does lose energy).
 
     Parameters
     ----------

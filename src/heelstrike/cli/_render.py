@@ -54,11 +54,12 @@ def print_paths(paths: Iterable[Any]) -> None:
 
 
 def fixed_point_text(fixed_point: dict[str, float]) -> str:
-    """``'q3 = -0.200000 rad, q3_dot = ... rad/s'``: a fixed point's section coordinates
-    (angles, then rates)."""
+    """``'q3 = -0.2 rad, q3_dot = ... rad/s'``: a fixed point's section coordinates (angles,
+    then rates) to six significant digits (a slow gait's ``q4_dot`` of 3e-6 rad/s read
+    ``-0.000003``)."""
     from heelstrike.models.base import section_unit
 
-    return ", ".join(f"{k} = {v:.6f} {section_unit(k)}" for k, v in fixed_point.items())
+    return ", ".join(f"{k} = {v:.6g} {section_unit(k)}" for k, v in fixed_point.items())
 
 
 def multipliers_text(multipliers: Iterable[complex]) -> str:

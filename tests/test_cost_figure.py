@@ -105,3 +105,15 @@ def test_cost_figure_labels_fit_and_legend_leaves_the_data() -> None:
                 assert not legend.contains(px, py), (line.get_label(), px, py)
     # values within two decades keep a linear axis
     assert cost_figure(_study(stable)).axes[0].get_yscale() == "linear"
+
+
+def test_cost_legend_lists_what_is_drawn_radii_first() -> None:
+    # QA sweep 7 (P3): "unstable gait" was in the legend with no unstable gait drawn, and the
+    # markers' entries sat between the radii's lines
+    ds = _study(np.ones((1, 2, 3)))
+    labels = [t.get_text() for t in cost_figure(ds).axes[0].get_legend().get_texts()]
+    assert "unstable gait" not in labels
+    assert labels == ["R = 0 m", "R = 0.3 m", "R = 0 m: no gait found"]
+    stable = np.array([[[1.0, 1.0, 0.0], [1.0, 0.0, 1.0]]])
+    labels = [t.get_text() for t in cost_figure(_study(stable)).axes[0].get_legend().get_texts()]
+    assert labels == ["R = 0 m", "R = 0.3 m", "unstable gait", "R = 0 m: no gait found"]

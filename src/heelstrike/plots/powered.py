@@ -47,6 +47,7 @@ def cost_figure(ds: xr.Dataset, variable: str = "cost_of_transport") -> Figure:
     cmap = colormaps["viridis"]
     unit = ds[variable].attrs.get("units", "")
     for ax, act in zip(axes, acts, strict=True):
+        unstable_labelled = False
         for k, r in enumerate(radii):
             y = ds[variable].sel(actuation=act).isel(radius=k).values
             colour = cmap(0.85 * k / max(len(radii) - 1, 1))
@@ -56,8 +57,11 @@ def cost_figure(ds: xr.Dataset, variable: str = "cost_of_transport") -> Figure:
                 ax.plot(ds[tgt].values[fresh], y[fresh], "s", ms=7, mfc="none", color=colour)
             if "stable" in ds:  # an unstable gait is no walker's steady state: marked
                 unstable = ds["stable"].sel(actuation=act).isel(radius=k).values == 0
+                label = None
+                if np.any(unstable) and not unstable_labelled:  # in the legend only if drawn
+                    label, unstable_labelled = "unstable gait", True
                 ax.plot(ds[tgt].values[unstable], y[unstable], "x", ms=7, mew=1.5,
-                        color="tab:red", label="unstable gait" if k == 0 else None)
+                        color="tab:red", label=label)
             _mark_missing(ax, ds[tgt].values, y, colour,
                           f"R = {r:g} m: no gait found" if np.any(~np.isfinite(y)) else None)
         ax.set_title(act)
@@ -73,16 +77,22 @@ def cost_figure(ds: xr.Dataset, variable: str = "cost_of_transport") -> Figure:
             ax.grid(alpha=0.3, which="both")
         else:
             ax.grid(alpha=0.3)
-    # beside the panels: inside, "best" still covered data points (QA sweep 6)
-    axes[-1].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
+    # beside the panels: inside, "best" still covered data points (QA sweep 6); the radii
+    # first, then the markers (QA sweep 7: they were interleaved)
+    handles, labels = axes[-1].get_legend_handles_labels()
+    order = sorted(range(len(labels)),
+                   key=lambda i: (2 if "no gait" in labels[i] else labels[i] == "unstable gait",
+                                  i))
+    axes[-1].legend([handles[i] for i in order], [labels[i] for i in order], fontsize=7,
+                    loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     fig.suptitle(BRANCH_CAPTION, fontsize=7)
     return fig
 
 
 #: Figure caption of how the study chose its gaits (see ``cost_study.BRANCH_NOTE``).
 BRANCH_CAPTION = (
-    "each point: the cheapest periodic gait found, legs crossing once a step where one was\n"
-    "(continuation from neighbours and fresh "
+    "each point: the cheapest periodic gait found (a gait whose legs cross more than once\n"
+    "a step only where no other was found; continuation from neighbours and fresh "
     "searches;\nopen squares: found by a fresh search, not by continuation;\nred x: unstable "
     "gait, a Floquet multiplier |m| > 1;\nopen triangles on the bottom edge: no gait found there)"
 )

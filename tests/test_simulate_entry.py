@@ -9,6 +9,7 @@ paper's ``2 (l - R) sin q3 + 2 R q3`` on a symmetric gait.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from typing import Any
 
@@ -295,3 +296,48 @@ def test_step_length_equals_the_analytic_formula_at_impact_on_the_gait() -> None
                 rec.step_length, analytic_step_length(walker, rec.impact_angle), rtol=0,
                 atol=1e-10, err_msg=f"{type(w).__name__} {b}",
             )
+
+
+START_ERRORS = {
+    "foot": "stance foot on the ground (y = R) and rolling without slip",
+    "knee": "stance_knee locked at",
+    "steps": "steps must be >= 1",
+    "finite": "initial state must be finite",
+}
+
+
+def _bad_starts(walker: PlanarWalker, z: list[float]) -> dict[str, tuple[Any, Any, int]]:
+    q, qd = walker.section_to_state(np.asarray(z))
+    lifted = q.copy()
+    lifted[1] += 1e-3  # stance foot 1 mm above the ground
+    nan_rate = qd.copy()
+    nan_rate[-1] = np.nan
+    starts = {"foot": (lifted, qd, 1), "steps": (q, qd, 0), "finite": (q, nan_rate, 1)}
+    if "stance_knee" in walker.coordinate_names:
+        bent = q.copy()
+        bent[walker.coordinate_names.index("stance_knee")] = 0.2  # the stance knee unlocked
+        starts["knee"] = (bent, qd, 1)
+    return starts
+
+
+@pytest.mark.parametrize(("name", "backend"), sorted(k for k in DIRECT if k[0] != "torso"))
+def test_every_backend_refuses_the_same_invalid_starts(
+    name: str, backend: str, described: dict[str, Any]
+) -> None:
+    """One start check (``check_initial_state``) serves every backend, with one message."""
+    walker, args = _setup(name, described)
+    for what, (q, qd, steps) in _bad_starts(walker, args["z"]).items():
+        with pytest.raises(ValueError, match=re.escape(START_ERRORS[what])):
+            simulate(walker, q, qd, slope=args["slope"], steps=steps, backend=backend)
+
+
+def test_compiled_ensemble_names_the_invalid_start(described: dict[str, Any]) -> None:
+    from heelstrike.dynamics.compiled_phased import ensemble_walk_phased
+
+    kneed = described["kneed"]
+    good = kneed.section_to_state(np.asarray(KNEED_GAIT))
+    for what in ("foot", "knee"):
+        bad = _bad_starts(kneed, KNEED_GAIT)[what]
+        states = (np.stack([good[0], bad[0]]), np.stack([good[1], bad[1]]))
+        with pytest.raises(ValueError, match=r"^state 1: .*" + re.escape(START_ERRORS[what])):
+            ensemble_walk_phased(kneed, states=states, slope=KNEED_SLOPE, steps=1)

@@ -78,6 +78,8 @@ from heelstrike.dynamics.actuation import (
 )
 from heelstrike.dynamics.hybrid import ImpactRecord, WalkResult, WalkStatus, simulate
 from heelstrike.dynamics.single_support import TorqueLaw
+from heelstrike.models._contact import grazes as foot_grazes
+from heelstrike.models._contact import lift_velocity_scale
 from heelstrike.models.base import PlanarWalker
 from heelstrike.models.compass import CompassGait
 
@@ -110,11 +112,6 @@ __all__ = [
 
 #: Names of the built-in actuation models.
 ACTUATIONS = ("pushoff", "hip-energy", "hip-pd")
-
-#: Relative tolerance (of ``l`` times the angular speeds) under which a wheel's trailing foot
-#: is considered to graze the ground (``q2_dot+ = 0`` exactly in exact arithmetic).
-GRAZING_TOLERANCE = 1e-9
-
 
 class PoweredGaitNotFoundError(RuntimeError):
     """No periodic powered gait was found for the requested target (the message says why)."""
@@ -419,9 +416,8 @@ def powered_step(
     if walk.ok:
         qf, qdf = walk.final_q, walk.final_q_dot
     elif walk.status is WalkStatus.TRAILING_FOOT_STAYS and rec is not None and walker.is_wheel:
-        l = _scale(walker)[2]
-        scale = l * (abs(rec.q_dot_minus[2]) + abs(rec.q_dot_minus[3]))
-        if abs(rec.trailing_normal_velocity) > GRAZING_TOLERANCE * scale:
+        scale = lift_velocity_scale(_scale(walker)[2], np.asarray(rec.q_dot_minus[2:], float))
+        if not foot_grazes(rec.trailing_normal_velocity, scale):
             return PoweredStep(z_next=np.full(z_.shape, np.nan), walk=walk, record=rec,
                                energy_start=E0, energy_end=np.nan, trailing_foot_grazes=False)
         qf, qdf = walker.swap_legs(rec.q, rec.q_dot_plus)

@@ -65,7 +65,12 @@ from heelstrike._results import ResultDictMixin, tuple_dict
 from heelstrike._typing import FloatArray, IntArray
 from heelstrike.core._parallel import use_parallel
 from heelstrike.dynamics._aot import AotExport, AotLibrary, load_library
-from heelstrike.dynamics.hybrid import ImpactRecord, WalkResult, WalkStatus
+from heelstrike.dynamics.hybrid import (
+    ImpactRecord,
+    WalkResult,
+    WalkStatus,
+    check_initial_state,
+)
 from heelstrike.models import _contact
 from heelstrike.models.base import PlanarWalker
 from heelstrike.models.compass import CompassGait
@@ -616,8 +621,6 @@ def simulate_compiled(
     """
     check_compiled_compass(torque, push_off, friction, restitution, walker=walker,
                            max_step=max_step)
-    if steps < 1:
-        raise ValueError("steps must be >= 1")
     if _on_generated_kernel(torque, push_off, friction, max_step):
         from heelstrike.dynamics.compiled_phased import simulate_phased_compiled
 
@@ -630,18 +633,8 @@ def simulate_compiled(
     p = walker_parameters(walker, slope)
     if p.shape != (8,):
         raise ValueError("the compiled compass kernel walks one walker (scalar parameters)")
-    q = np.array(q0, dtype=float)
-    qd = np.array(q_dot0, dtype=float)
-    if q.shape != (4,) or qd.shape != (4,):
-        raise ValueError("q0 and q_dot0 must have shape (4,)")
-    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
-        raise ValueError("initial state must be finite")
+    q, qd = check_initial_state(walker, q0, q_dot0, steps)
     R = float(p[4])
-    if abs(q[1] - R) > 1e-9 or np.max(np.abs(walker.contact_jacobian(q, "right") @ qd)) > 1e-9:
-        raise ValueError(
-            "initial state must have the stance foot on the ground (q2 = R) and rolling "
-            "without slip (q1_dot = -R q3_dot, q2_dot = 0)"
-        )
     leg_length = float(walker.scale.leg_length)
     kernel = _serial()
     k = np.empty((7, 4))
@@ -689,7 +682,7 @@ def simulate_compiled(
         qd_plus = qp.copy()
         M = walker.mass_matrix(q)
         A_L = walker.contact_jacobian(q, "left")
-        impulse = np.linalg.solve(A_L @ A_L.T, A_L @ (M @ (qd_plus - qd)))
+        impulse = np.asarray(np.linalg.solve(A_L @ A_L.T, A_L @ (M @ (qd_plus - qd))), np.float64)
         v_trailing = float((walker.contact_jacobian(q, "right") @ qd_plus)[1])
         impacts.append(
             ImpactRecord(

@@ -609,14 +609,13 @@ def ensemble_walk_phased(
     check_compiled_actuation(walker, torque, push_off)
     w = PhasedWalker.from_built(walker)
     n = w.n_coordinates
-    R = float(np.asarray(w.foot_radii[0]))
     stance_locks, swing_locks, lockv = _locks(w)
     if states is not None:
         Q = np.array(np.atleast_2d(np.asarray(states[0], dtype=float)))
         QD = np.array(np.atleast_2d(np.asarray(states[1], dtype=float)))
         if Q.ndim != 2 or Q.shape[1] != n or QD.shape != Q.shape:
             raise ValueError(f"states must be two arrays of shape (N, {n})")
-        _check_post_impact(w, Q, QD, lockv, R)
+        _check_post_impact(w, Q, QD)
     else:
         Q, QD = section_states(w, z0)  # type: ignore[arg-type]
     if not (np.all(np.isfinite(Q)) and np.all(np.isfinite(QD))):
@@ -679,22 +678,10 @@ def ensemble_walk_phased(
     )
 
 
-def _check_post_impact(
-    walker: BuiltWalker, Q: FloatArray, QD: FloatArray, lockv: FloatArray, R: float
-) -> None:
-    """Raise ``ValueError`` unless every row is a post-heel-strike state (as the single walk)."""
+def _check_post_impact(walker: BuiltWalker, Q: FloatArray, QD: FloatArray) -> None:
+    """Raise ``ValueError`` unless every row is a valid start (:func:`check_initial_state`)."""
     for i in range(Q.shape[0]):
-        q, qd = Q[i], QD[i]
-        if abs(q[1] - R) > 1e-9 or np.max(
-            np.abs(walker.contact_jacobian(q, "right") @ qd)
-        ) > 1e-9:
-            raise ValueError(
-                f"state {i} must have the stance foot on the ground (y = R) and rolling "
-                "without slip (A_R q_dot = 0)"
-            )
-        for j in walker.lockable_joints:
-            if abs(q[j] - lockv[j]) > 1e-9 or abs(qd[j]) > 1e-9:
-                raise ValueError(
-                    f"state {i} must have {walker.coordinate_names[j]} locked at {lockv[j]} "
-                    "rad with zero rate (the state just after a heel strike)"
-                )
+        try:
+            check_initial_state(walker, Q[i], QD[i], 1)
+        except ValueError as exc:
+            raise ValueError(f"state {i}: {exc}") from None

@@ -16,10 +16,11 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-BoolArray = NDArray[np.bool_]
+from heelstrike._typing import BoolArray
 
 __all__ = [
     "LIFT_TOLERANCE",
+    "grazes",
     "lift_velocity_scale",
     "lifts",
     "step_length",
@@ -44,6 +45,22 @@ def lifts(normal_velocity: float, velocity_scale: float) -> bool:
         Size of the pre-impact velocities (m/s), :func:`lift_velocity_scale`.
     """
     return normal_velocity > LIFT_TOLERANCE * velocity_scale
+
+
+def grazes(normal_velocity: float, velocity_scale: float) -> bool:
+    """The trailing foot neither lifts nor presses: ``|v_n| <= LIFT_TOLERANCE * scale``.
+
+    The borderline of :func:`lifts`, met by McGeer's wheel (``R = l``), whose trailing foot
+    leaves a heel strike with ``v_n+ = 0`` in exact arithmetic.
+
+    Parameters
+    ----------
+    normal_velocity : float
+        Post-impact normal (upward) velocity of the trailing foot's contact point (m/s).
+    velocity_scale : float
+        Size of the pre-impact velocities (m/s), :func:`lift_velocity_scale`.
+    """
+    return abs(normal_velocity) <= LIFT_TOLERANCE * velocity_scale
 
 
 def lift_velocity_scale(leg_length: float, joint_rates: NDArray[np.float64]) -> float:

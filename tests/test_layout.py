@@ -157,3 +157,36 @@ def test_outputs_names_replace_the_old_plot_writers() -> None:
         for name in names:
             assert name in outputs.__all__ and hasattr(outputs, name), name
             assert not hasattr(plots_module, name), (module, name)
+
+
+@pytest.mark.parametrize(
+    ("command", "option", "function", "parameter"),
+    [
+        ("bifurcation", "transient", "gait_map.compass_bifurcation", "transient"),
+        ("bifurcation", "transient", "gait_map.model_bifurcation", "transient"),
+        ("bifurcation", "transient", "limit_cycle.bifurcation_diagram", "transient"),
+        ("bifurcation", "record", "gait_map.compass_bifurcation", "record"),
+        ("bifurcation", "record", "gait_map.model_bifurcation", "record"),
+        ("bifurcation", "record", "limit_cycle.bifurcation_diagram", "record"),
+        ("basin", "steps", "basin.basin_of_attraction", "steps"),
+        ("basin", "steps", "basin.model_basin_of_attraction", "steps"),
+        ("basin", "tol", "basin.basin_of_attraction", "tol"),
+        ("basin", "tol", "basin.model_basin_of_attraction", "tol"),
+    ],
+)
+def test_cli_defaults_are_the_analysis_defaults(
+    command: str, option: str, function: str, parameter: str
+) -> None:
+    """The CLI reads an analysis default (and its help text) from the analysis, not a copy."""
+    import argparse
+    import inspect
+
+    from heelstrike.cli import build_parser
+
+    module, name = function.split(".")
+    fn = getattr(importlib.import_module(f"heelstrike.analysis.{module}"), name)
+    expected = inspect.signature(fn).parameters[parameter].default
+    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    action = next(a for a in sub.choices[command]._actions if a.dest == option)
+    assert action.default == expected
+    assert action.help is not None and f"default {expected:g}" in action.help

@@ -38,6 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
+from heelstrike.analysis._defaults import BASIN_STEPS, BASIN_TOLERANCE
 from heelstrike.analysis._memory import available_memory, require_memory
 from heelstrike.analysis.limit_cycle import LimitCycle, find_limit_cycle
 from heelstrike.dynamics.compiled import ensemble_walk
@@ -260,9 +261,9 @@ def basin_of_attraction(
     slope: float,
     grid: tuple[int, int] = (400, 400),
     ranges: tuple[tuple[float, float], tuple[float, float]] = DEFAULT_RANGES,
-    steps: int = 60,
+    steps: int = BASIN_STEPS,
     *,
-    tol: float = 1e-3,
+    tol: float = BASIN_TOLERANCE,
     fixed_point: ArrayLike | None = None,
     rtol: float = 1e-8,
     atol: float = 1e-9,
@@ -432,9 +433,9 @@ def model_basin_of_attraction(
     slope: float,
     grid: tuple[int, int] = (100, 100),
     ranges: tuple[tuple[float, float], tuple[float, float]] | None = None,
-    steps: int = 60,
+    steps: int = BASIN_STEPS,
     *,
-    tol: float = 1e-3,
+    tol: float = BASIN_TOLERANCE,
     fixed_point: ArrayLike | None = None,
     backend: str = "compiled",
     rtol: float = 1e-8,

@@ -36,6 +36,7 @@ from heelstrike.analysis._continuation import (
     follow,
     follow_both_ways,
 )
+from heelstrike.analysis._defaults import BIFURCATION_RECORD, BIFURCATION_TRANSIENT
 from heelstrike.analysis.limit_cycle import (
     GaitNotFoundError,
     _most_negative_real,
@@ -950,8 +951,8 @@ def compass_bifurcation(
     walker: CompassGait,
     slopes: ArrayLike,
     *,
-    transient: int = 50,
-    record: int = 16,
+    transient: int = BIFURCATION_TRANSIENT,
+    record: int = BIFURCATION_RECORD,
     continuation_points: int | None = 12,
     progress: bool = False,
     backend: str = "compiled",
@@ -1220,8 +1221,8 @@ def model_bifurcation(
     walker: BuiltWalker,
     slopes: ArrayLike,
     *,
-    transient: int = 50,
-    record: int = 16,
+    transient: int = BIFURCATION_TRANSIENT,
+    record: int = BIFURCATION_RECORD,
     continuation_points: int | None = 12,
     backend: str = "compiled",
     rtol: float = 1e-9,

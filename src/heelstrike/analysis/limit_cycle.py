@@ -22,6 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
+from heelstrike.analysis._defaults import BIFURCATION_RECORD, BIFURCATION_TRANSIENT
 from heelstrike.analysis.heel_strike import loss_per_metre
 from heelstrike.dynamics.backends import BoundSimulator
 from heelstrike.dynamics.hybrid import PushOff, WalkResult, simulate
@@ -1126,8 +1127,8 @@ def bifurcation_diagram(
     slopes: ArrayLike,
     *,
     guess: ArrayLike | None = None,
-    transient: int = 60,
-    record: int = 16,
+    transient: int = BIFURCATION_TRANSIENT,
+    record: int = BIFURCATION_RECORD,
     rtol: float = 1e-9,
     atol: float = 1e-10,
     progress: bool = False,

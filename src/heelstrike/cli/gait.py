@@ -8,6 +8,12 @@ import sys
 from collections.abc import Sequence
 from typing import Any
 
+from heelstrike.analysis._defaults import (
+    BASIN_STEPS,
+    BASIN_TOLERANCE,
+    BIFURCATION_RECORD,
+    BIFURCATION_TRANSIENT,
+)
 from heelstrike.cli._common import (
     CliError,
     add_backend_option,
@@ -325,10 +331,11 @@ def add_bifurcation(sub: Any) -> None:
                    type=lambda t: parse_range(t, parse_slope),
                    help="START:STOP[:COUNT] slopes, e.g. 0.5deg:6deg:56 (default "
                    "0.5deg:6deg, count 45)")
-    p.add_argument("--transient", type=positive_int, default=50,
-                   help="steps discarded at each slope before recording (default 50)")
-    p.add_argument("--record", type=positive_int, default=16,
-                   help="steps recorded at each slope (default 16)")
+    p.add_argument("--transient", type=positive_int, default=BIFURCATION_TRANSIENT,
+                   help="steps discarded at each slope before recording (default "
+                   f"{BIFURCATION_TRANSIENT})")
+    p.add_argument("--record", type=positive_int, default=BIFURCATION_RECORD,
+                   help=f"steps recorded at each slope (default {BIFURCATION_RECORD})")
     p.add_argument("--out", default="bifurcation",
                    help="output directory (default ./bifurcation)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -468,11 +475,11 @@ def add_basin(sub: Any) -> None:
     p.add_argument("--q3dot-range", type=parse_range, default=None,
                    help="MIN:MAX post-impact stance velocities in rad/s (default 0.3:2.3; with "
                    "--model -0.9:+1.1 about the fixed point)")
-    p.add_argument("--steps", type=positive_int, default=60,
-                   help="largest number of steps per initial state (default 60)")
-    p.add_argument("--tol", type=float, default=1e-3,
+    p.add_argument("--steps", type=positive_int, default=BASIN_STEPS,
+                   help=f"largest number of steps per initial state (default {BASIN_STEPS})")
+    p.add_argument("--tol", type=float, default=BASIN_TOLERANCE,
                    help="convergence radius around the fixed point, the norm of the section "
-                   "coordinates' difference (rad and rad/s together; default 1e-3)")
+                   f"coordinates' difference (rad and rad/s together; default {BASIN_TOLERANCE:g})")
     p.add_argument("--out", default="basin", help="output directory (default ./basin)")
     add_store_option(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")

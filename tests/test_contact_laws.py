@@ -233,6 +233,43 @@ def test_flat_contact_cone_weights_the_twist() -> None:
     np.testing.assert_allclose(res.contact_velocity_post[0][[2, 3, 4]], 0.0, atol=1e-10)
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_flat_contact_never_separates_into_the_ground(seed: int) -> None:
+    """QA sweep 9: a flat sole whose hold needs a pull was reported "separate" while it went on
+    into the ground (Bolt's foot at -0.3 m/s: zero impulse, T_c = 0, "admissible"). Every
+    result is now complementary, or refused where flat-or-nothing has no consistent answer."""
+    rng = np.random.default_rng(300 + seed)
+    n = 10
+    M = _spd(rng, n)
+    J = rng.standard_normal((6, n))
+    N = [2, 3, 4]
+    flat = ContactRows(jacobian=J, normal=tuple(N), tangential=(0, 1, 5),
+                       law=ContactLaw(friction=0.6), name="sole")
+    G = J[N] @ np.linalg.solve(M, J[N].T)
+    outcomes = {"refused": 0, "separate": 0, "held": 0}
+    for _ in range(300):
+        v = rng.standard_normal(n)
+        u = J @ v
+        try:
+            res = resolve_contact_impact(M, v, [flat])
+        except ImpactInputError as exc:
+            assert "'sole': no consistent impact" in str(exc)
+            # independently: holding all three normal rows pulls, released it approaches
+            assert np.linalg.solve(G, -u[N])[0] <= 0.0 and u[2] < 0.0
+            outcomes["refused"] += 1
+            continue
+        post = res.contact_velocity_post[0]
+        if res.modes[0] == "separate":
+            assert post[2] >= -1e-10 * np.max(np.abs(u))
+            np.testing.assert_array_equal(res.impulse, 0.0)
+            outcomes["separate"] += 1
+        else:
+            assert res.impulse[2] > 0.0
+            np.testing.assert_allclose(post[N], 0.0, atol=1e-9 * np.max(np.abs(u)))
+            outcomes["held"] += 1
+    assert all(outcomes.values()), outcomes  # every branch met
+
+
 @pytest.mark.parametrize("seed", range(5))
 def test_energy_split_shares_add_up_and_normal_part_is_normal_projection(seed: int) -> None:
     rng = np.random.default_rng(seed)

@@ -191,6 +191,28 @@ def test_a_strike_moving_away_is_noted_and_round_off_does_not_pull(talos, tmp_pa
     assert _notes(capsys.readouterr().err) == []
 
 
+def test_a_flat_strike_never_passes_through_the_ground(tmp_path, capsys) -> None:
+    """QA sweep 9: Bolt's point foot given as a flat strike, descending at 0.3 m/s, came out
+    'separate' with normal velocity -0.3 m/s after the impact, zero impulse, T_c 0 and
+    admissible, exit 0. Holding it flat needs a pull, releasing it passes through the ground:
+    refused now, and as a point contact it sticks and stops."""
+    bolt = load_robot("bolt")
+    q, v = gait_state(bolt, 0.2, 0.3)
+    state = _state_file(tmp_path / "bolt.json", q, v)
+    assert main(["impact", "--robot", "bolt", "--state", state, "--strike", "FL_FOOT:flat",
+                 "--json"]) == 2
+    cap = capsys.readouterr()
+    assert cap.out == ""
+    assert cap.err.startswith("heelstrike: error: contact 'FL_FOOT': no consistent impact")
+    assert "moving into the ground at -0.3 m/s" in cap.err
+    assert main(["impact", "--robot", "bolt", "--state", state, "--strike", "FL_FOOT:point",
+                 "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["contacts"][0]["mode"] == "stick" and d["admissible"] is True
+    assert d["contacts"][0]["normal_velocity_post"] == pytest.approx(0.0, abs=1e-12)
+    assert d["T_c"] > 0.0 and d["T"] == pytest.approx(d["T_c"] + d["T_a"], rel=1e-12)
+
+
 def test_a_non_unit_base_quaternion_is_noted_and_normalised(talos, tmp_path, capsys) -> None:
     """QA P3: a base quaternion of norm 0.5-1.5 was normalised silently. The impact is that
     of the normalised pose (the same as the unit state's), and stderr says so once; a unit

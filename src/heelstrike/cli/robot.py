@@ -258,8 +258,10 @@ def add_robot_impact_options(p: argparse.ArgumentParser) -> None:
         "sticking inert contacts; a slipping contact's friction also dissipates admissible "
         "energy, loss_beyond_T_c = energy_lost - T_c = T_a - T_plus (with --restitution the "
         "rebound's returned energy is subtracted too). admissible is false, with a note on "
-        "stderr, when a --keep contact pulls on the ground (negative normal impulse): released, "
-        "it would lift; pass it as --strike (complementarity decides) or drop it.")
+        "stderr, when a --keep contact pulls on the ground (negative normal impulse): pass it "
+        "as --strike (complementarity decides whether it lifts) or drop it. A striking flat or "
+        "arc sole that needs a pull to stay flat, yet would move into the ground if released, "
+        "is refused: it lands on an edge or a corner, which is not modelled (use FRAME:point).")
     g.add_argument("--robot", default=None, metavar="NAME",
                    help="a shipped robot (see 'heelstrike robot list')")
     g.add_argument("--urdf", default=None, metavar="FILE", help="a URDF robot (floating base)")
@@ -382,9 +384,9 @@ def run_robot_impact(args: argparse.Namespace) -> int:
     keep_text = dict(zip([c.frame for c in keep], args.keep or [], strict=True))
     for frame, lam_n in res.pulling_contacts():
         print(f"heelstrike: note: the kept contact {frame} pulls on the ground (normal impulse "
-              f"{lam_n:.4g} N s < 0), so this impact is not admissible: released, it would "
-              f"lift; pass it as --strike {keep_text.get(frame, frame)} (complementarity then "
-              "decides whether it lifts) or drop it", file=sys.stderr)
+              f"{lam_n:.4g} N s < 0), so this impact is not admissible: pass it as --strike "
+              f"{keep_text.get(frame, frame)} (complementarity then decides whether it lifts) "
+              "or drop it", file=sys.stderr)
     _note_separating_strikes(d["contacts"])
     if d["T_plus"] > d["T"] + 1e-9 * max(d["T"], 1e-300):
         print(f"heelstrike: note: the impact adds {d['T_plus'] - d['T']:.6g} J of kinetic "

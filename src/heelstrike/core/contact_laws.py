@@ -367,6 +367,43 @@ def _solve_local(
     return lam, "slip"
 
 
+#: Relative tolerance (of the largest striking-contact velocity) on the separation condition
+#: ``u_n+ >= -e min(u_n-, 0)`` of a contact reported as separating: it absorbs round-off.
+SEPARATION_TOLERANCE = 1e-9
+
+
+def _check_separations(
+    contacts: Sequence[ContactRows],
+    uni: list[int],
+    modes: list[ImpactMode],
+    targets: list[FloatArray],
+    u_post: FloatArray,
+    offs: list[slice],
+    u_pre: FloatArray,
+) -> None:
+    """Raise unless every contact reported as separating really separates.
+
+    A contact with several normal rows (a flat or arcing sole: the normal force and the moments
+    that hold it flat) is resolved as all of them active or none. When holding it needs a pull
+    and releasing it lets it move on into the ground, neither is consistent: the sole lands on
+    an edge or a corner, which these laws do not model. Such a result is refused, not reported.
+    """
+    scale = max(float(np.max(np.abs(u_pre), initial=0.0)),
+                float(np.max(np.abs(u_post), initial=0.0)), 1e-300)
+    for j, i in enumerate(uni):
+        if modes[j] != "separate":
+            continue
+        c = contacts[i]
+        u_n = float(u_post[offs[j]][c.normal[0]])
+        if u_n < float(targets[j][0]) - SEPARATION_TOLERANCE * scale:
+            raise ImpactInputError(
+                f"contact {c.name!r}: no consistent impact: holding its {len(c.normal)} normal "
+                "rows (the sole flat on the ground) needs a pull, and releasing it leaves it "
+                f"moving into the ground at {u_n:.4g} m/s; the sole lands on an edge or a "
+                "corner, which this contact law does not model (give it as a point contact)"
+            )
+
+
 def resolve_contact_impact(
     M: ArrayLike,
     q_dot: ArrayLike,
@@ -471,6 +508,7 @@ def resolve_contact_impact(
     else:
         raise ImpactInputError(f"Gauss-Seidel over contacts did not converge in {max_sweeps}")
     v_plus = v0 + Y @ lam_s
+    _check_separations(contacts, uni, modes_s, targets, A_s @ v_plus, offs, u_pre_s)
     if bil:
         lam_b = -scipy.linalg.cho_solve(cho_b, A_b @ v + A_b @ X_s @ lam_s)
     else:

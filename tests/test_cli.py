@@ -213,8 +213,17 @@ def test_reproduce_writes_figures_and_data(tmp_path, capsys):
     assert (fig3a.loc[fig3a["R_m"] == 1.0, "eta_J_per_m"].abs() < 1e-12).all()
     fig3b = pd.read_csv(out / "fig3b.csv")
     big_R = fig3b[fig3b["R_m"] > 0.4]
-    assert big_R["admissible"].all() and big_R["eta_J_per_m"].notna().all()
-    assert fig3b.loc[~fig3b["admissible"], "eta_J_per_m"].isna().all()
+    assert big_R["shown"].all() and big_R["eta_J_per_m"].notna().all()
+    assert fig3b.loc[~fig3b["shown"], "eta_J_per_m"].isna().all()
+    # QA sweep 9: McGeer's wheel is drawn (shown) but its impacts are not admissible
+    # (q2_dot+ = 0): 'admissible' means the trailing foot lifts, in every figure's CSV
+    for table in (fig2, fig3a, fig3b):
+        wheel = table["degenerate_wheel"]
+        assert wheel.any() and "admissible" not in table
+        assert not table.loc[wheel, "trailing_foot_lifts"].any()
+        np.testing.assert_array_equal(table.loc[~wheel, "trailing_foot_lifts"],
+                                      table.loc[~wheel, "q2_dot_plus_m_per_s"] > 0)
+    assert fig3b.loc[fig3b["degenerate_wheel"], "shown"].all()
 
 
 def test_reproduce_into_unwritable_place_fails_cleanly(tmp_path, capsys):

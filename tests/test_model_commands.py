@@ -210,6 +210,24 @@ def test_model_option_errors(
     assert message in err and err.count("\n") == 1
 
 
+@pytest.mark.parametrize("command", [["impact", "--angle", "15deg"], ["gait"]])
+def test_unknown_param_is_refused_before_the_derivation(
+    command: list[str], monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """QA sweep 9: ``--param Q=3`` was refused only after the walker's derivation (seconds on a
+    cold cache). It is checked against the description's parameters first."""
+    import heelstrike.models.builder as builder
+
+    def no_derivation(*args: object, **kwargs: object) -> None:
+        raise AssertionError("derived the walker before checking --param")
+
+    monkeypatch.setattr(builder, "build", no_derivation)
+    assert main([*command, "--model", "kneed", "--param", "Q=3"]) == 2
+    err = capsys.readouterr().err
+    assert err == ("heelstrike: error: --param Q: model 'kneed' has no parameter 'Q' (its "
+                   "parameters: Is, It, R, a1, a2, b1, b2, g, mH, ms, mt)\n")
+
+
 # -- map -------------------------------------------------------------------------------------------
 def test_model_gait_map_points_are_fixed_points(kneed: PhasedWalker) -> None:
     from heelstrike.analysis.gait_map import model_gait_map

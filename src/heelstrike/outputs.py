@@ -78,7 +78,8 @@ def write_figure_data(data: PaperFigureData, out_dir: str | Path) -> list[Path]:
         The files written, in figure order. Columns carry their units: ``R_m`` (m), ``q3_deg``
         (deg), ``q3_rad`` (rad), ``T_J``, ``T_c_J``, ``T_a_J``, ``energy_lost_J`` (J),
         ``eta_J_per_m`` (J/m), ``step_length_m`` (m), ``q2_dot_plus_m_per_s`` (m/s) and the
-        flags ``trailing_foot_lifts`` and ``degenerate_wheel``.
+        flags ``trailing_foot_lifts`` (the impact is admissible) and ``degenerate_wheel``
+        (McGeer's wheel, drawn as in the paper; ``fig3b.csv`` also has ``shown``: drawn).
     """
     out = _directory(out_dir)
     fig2_cols = ["R_m", "q3_deg", "q3_rad", "T_J", "T_c_J", "T_a_J", "q2_dot_plus_m_per_s",

@@ -14,7 +14,9 @@ Conventions shared by the figures
 - ``R = l`` (McGeer's synthetic wheel) is degenerate: both feet are arcs of one circle about the
   hip, so the impact changes nothing, ``T_c = 0`` and ``q2_dot+ = 0`` exactly. It is the limit
   ``R -> l`` of admissible impacts (``q2_dot+ > 0`` for every ``R < l`` near ``l``), and the paper
-  plots it, so the figures keep it, flagged by the ``degenerate_wheel`` column.
+  plots it, so the figures keep it, flagged by the ``degenerate_wheel`` column. Its impacts
+  are not admissible (``trailing_foot_lifts`` is false there); the ``shown`` column marks what
+  the figures draw: admissible impacts and the wheel.
 """
 
 from __future__ import annotations
@@ -88,7 +90,9 @@ def heel_strike_table(
     pandas.DataFrame
         ``n_R * n_q3`` rows ordered by ``R`` then ``q3``; columns ``R_m, q3_deg, q3_rad, T_J,
         T_c_J, T_a_J, energy_lost_J, step_length_m, eta_J_per_m, q2_dot_plus_m_per_s,
-        trailing_foot_lifts, degenerate_wheel, admissible``.
+        trailing_foot_lifts, degenerate_wheel, shown``: an impact is admissible when
+        ``trailing_foot_lifts`` (``q2_dot+ > 0``); ``shown`` is what the figures draw
+        (admissible, or McGeer's wheel, see the module docstring).
     """
     w = CompassGait() if walker is None else walker
     R = np.atleast_1d(np.asarray(radii, dtype=float))
@@ -110,7 +114,7 @@ def heel_strike_table(
         "q2_dot_plus_m_per_s": s.trailing_foot_velocity,
         "trailing_foot_lifts": lifts,
         "degenerate_wheel": s.degenerate_wheel,
-        "admissible": lifts | s.degenerate_wheel,
+        "shown": lifts | s.degenerate_wheel,
     }
     return pd.DataFrame({k: np.ravel(v) for k, v in data.items()})
 
@@ -122,11 +126,11 @@ def figure2_data(
 ) -> pd.DataFrame:
     """Data of Fig. 2: ``T_c`` and ``T_a`` (J) against ``q3`` for several ``R``.
 
-    Admissible impacts only (plus the degenerate wheel ``R = l``, see the module docstring).
-    Columns as :func:`heel_strike_table`.
+    Admissible impacts only (plus the degenerate wheel ``R = l``, see the module docstring):
+    the rows with ``shown``. Columns as :func:`heel_strike_table`.
     """
     table = heel_strike_table(walker, radii, impact_angles)
-    return table[table["admissible"]].reset_index(drop=True)
+    return table[table["shown"]].reset_index(drop=True)
 
 
 def figure3a_data(
@@ -152,13 +156,15 @@ class Figure3bData(ResultDictMixin):
     foot_radius : ndarray, shape (n_R,)
         ``R`` (m), in ``[0, l]``.
     eta : ndarray, shape (n_R, n_q3)
-        Energy lost per metre (J/m), ``nan`` where the impact is not admissible (white).
+        Energy lost per metre (J/m), ``nan`` where not ``shown`` (white).
     eta_all : ndarray, shape (n_R, n_q3)
         ``eta`` everywhere (J/m).
     q2_dot_plus : ndarray, shape (n_R, n_q3)
         Post-impact ``q2_dot+`` (m/s); its zero level is the dashed boundary.
-    admissible : ndarray of bool, shape (n_R, n_q3)
-        Trailing foot lifts, or the degenerate wheel ``R = l``.
+    trailing_foot_lifts : ndarray of bool, shape (n_R, n_q3)
+        The impact is admissible: the trailing foot lifts (``q2_dot+ > 0``).
+    shown : ndarray of bool, shape (n_R, n_q3)
+        Drawn in the figure: admissible, or the degenerate wheel ``R = l``.
     degenerate_wheel : ndarray of bool, shape (n_R,)
         ``R = l``.
     """
@@ -168,13 +174,14 @@ class Figure3bData(ResultDictMixin):
     eta: FloatArray
     eta_all: FloatArray
     q2_dot_plus: FloatArray
-    admissible: BoolArray
+    trailing_foot_lifts: BoolArray
+    shown: BoolArray
     degenerate_wheel: BoolArray
 
     def to_frame(self) -> pd.DataFrame:
         """Long table, one row per grid point (``R`` major): ``R_m, q3_deg, q3_rad,
-        eta_J_per_m, q2_dot_plus_m_per_s, admissible, degenerate_wheel``; ``eta`` is
-        ``nan`` where not admissible."""
+        eta_J_per_m, q2_dot_plus_m_per_s, trailing_foot_lifts, shown, degenerate_wheel``; ``eta`` is
+        ``nan`` where not shown."""
         Rg, qg = np.meshgrid(self.foot_radius, self.impact_angle, indexing="ij")
         wheel = np.broadcast_to(self.degenerate_wheel[:, None], Rg.shape)
         return pd.DataFrame(
@@ -184,7 +191,8 @@ class Figure3bData(ResultDictMixin):
                 "q3_rad": qg.ravel(),
                 "eta_J_per_m": self.eta.ravel(),
                 "q2_dot_plus_m_per_s": self.q2_dot_plus.ravel(),
-                "admissible": self.admissible.ravel(),
+                "trailing_foot_lifts": self.trailing_foot_lifts.ravel(),
+                "shown": self.shown.ravel(),
                 "degenerate_wheel": wheel.ravel(),
             }
         )
@@ -211,14 +219,15 @@ def figure3b_data(
     R = np.linspace(0.0, l, 101) if radii is None else np.asarray(radii, dtype=float)
     q3 = impact_angle_grid() if impact_angles is None else np.asarray(impact_angles, float)
     s = heel_strike_study(w.replace(foot_radius=R[:, None]), q3[None, :])
-    admissible = np.asarray(s.trailing_foot_lifts | s.degenerate_wheel)
+    shown = np.asarray(s.trailing_foot_lifts | s.degenerate_wheel)
     return Figure3bData(
         impact_angle=q3,
         foot_radius=R,
-        eta=np.where(admissible, s.eta, np.nan),
+        eta=np.where(shown, s.eta, np.nan),
         eta_all=np.asarray(s.eta),
         q2_dot_plus=s.trailing_foot_velocity,
-        admissible=admissible,
+        trailing_foot_lifts=np.asarray(s.trailing_foot_lifts),
+        shown=shown,
         degenerate_wheel=np.asarray(s.degenerate_wheel)[:, 0],
     )
 

@@ -197,7 +197,8 @@ def add_backend_option(
 
 
 def model_from_args(args: argparse.Namespace) -> Any:
-    from heelstrike.dynamics.phased import load_phased_walker
+    from heelstrike.dynamics.phased import PhasedWalker
+    from heelstrike.models.builder import walker_description
 
     params: dict[str, float] = {}
     for item in args.param:
@@ -215,9 +216,15 @@ def model_from_args(args: argparse.Namespace) -> Any:
     if os.path.exists(model) and not os.path.isfile(model):
         raise CliError(f"--model {model!r} is not a regular file")
     try:
-        walker = load_phased_walker(model)
+        description = walker_description(model)
     except OSError as exc:
         raise CliError(f"cannot read model {model!r}: {exc.strerror or exc}") from exc
+    names = sorted(name for name, _ in description.params)
+    unknown = sorted(set(params) - set(names))
+    if unknown:  # before the derivation, which takes seconds on a cold cache (QA sweep 9)
+        raise CliError(f"--param {unknown[0]}: model {description.name!r} has no parameter "
+                       f"{unknown[0]!r} (its parameters: {', '.join(names)})")
+    walker = PhasedWalker(description)
     known = walker.params
     by_option = compass_params()
     for dest in sorted(explicit_options(args) & set(by_option)):
@@ -280,7 +287,8 @@ def parse_guess(text: str | None) -> list[float] | None:
 def add_store_option(p: argparse.ArgumentParser) -> None:
     p.add_argument("--store", metavar="DIR", default=None,
                    help="keep every finished chunk in this Zarr directory as it is computed; "
-                   "after an interruption (Ctrl-C) the same command resumes from it")
+                   "after an interruption (Ctrl-C) the same command resumes from it. The "
+                   "finished figure and data are still written to --out (as without --store)")
 
 
 def run_with_store(store: str | None, compute: Callable[[], Any], out: str | None = None) -> Any:

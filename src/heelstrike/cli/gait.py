@@ -673,13 +673,13 @@ def _run_map_model(args: argparse.Namespace) -> int:
                           progress=sys.stderr.isatty())
     from heelstrike.models.description import parameter_units
 
+    unit = parameter_units(walker.description).get(name)
     head = {"model": walker.description.name, "parameter_name": name,
-            "parameter_unit": parameter_units(walker.description).get(name),
-            "parameter_values": values.tolist()}
+            "parameter_unit": unit, "parameter_values": values.tolist()}
     return _render_gait_map(
         gmap, args, head,
         f"stable passive gaits of '{walker.description.name}'", f"({name}, slope)",
-        [f"{name} = {v:8.4g}" for v in values])
+        [f"{name} = {v:8.4g}{'' if unit is None else ' ' + unit}" for v in values])
 
 
 def _run_map(args: argparse.Namespace) -> int:
@@ -739,12 +739,17 @@ def _render_gait_map(gmap: Any, args: argparse.Namespace, head: dict[str, Any], 
         return 0
     # counts of grid points, written "K of N grid points" / "K/N slopes" so that no count
     # reads as a parameter value ("no gait at 0" read as "at R = 0")
+    # the map follows the period-one branch from its anchor gaits: where it finds none, another
+    # gait (e.g. an unstable one off the branch) may still exist (QA sweep 9)
+    missing = int((~found).sum())
     print(f"{title}: stable at {int(stable.sum())} of {stable.size} {points} grid points; no "
-          f"gait found at {int((~found).sum())} of {found.size} grid points (NaN in the data, "
-          "blank in the figure)")
+          f"gait found on the followed branch at {missing} of {found.size} grid points"
+          + (" (NaN in the data, blank in the figure; a gait off the branch may still exist "
+             "there: 'heelstrike gait' searches one point)" if missing else ""))
     for label, v, row, frow in zip(rows, pd, stable, found, strict=True):
         pd_text = "none in range" if v is None else f"{math.degrees(v):.3f} deg"
         print(f"  {label}: stable at {int(row.sum()):3d}/{row.size} slopes, "
-              f"no gait at {int((~frow).sum()):3d}/{frow.size} slopes, period doubling {pd_text}")
+              f"no gait on the branch at {int((~frow).sum()):3d}/{frow.size} slopes, "
+              f"period doubling {pd_text}")
     print_paths((png, nc))
     return 0

@@ -213,6 +213,23 @@ def test_a_flat_strike_never_passes_through_the_ground(tmp_path, capsys) -> None
     assert d["T_c"] > 0.0 and d["T"] == pytest.approx(d["T_c"] + d["T_a"], rel=1e-12)
 
 
+def test_a_contact_off_the_ground_is_noted(talos, tmp_path, capsys) -> None:
+    """QA sweep 9: a strike frame away from the ground plane was treated as touching, silently.
+    An arc heel centred on the sole frame (on the ground) reaches ``radius`` below it."""
+    from heelstrike.robots import contact_heights
+
+    q, v = gait_state(talos, 0.3, 0.3)
+    state = _state_file(tmp_path / "s.json", q, v)
+    flat, arc = ContactSpec(frame="left_sole_link", kind="flat"), ContactSpec(
+        frame="left_sole_link", kind="arc", radius=0.05)
+    z_flat, z_arc = contact_heights(talos, q, [flat, arc])
+    assert abs(z_flat) < 1e-9 and z_arc == pytest.approx(z_flat - 0.05, abs=1e-12)
+    assert main(["impact", "--robot", "talos", "--state", state, "--strike",
+                 "left_sole_link:arc:0.05", "--json"]) == 0
+    notes = _notes(capsys.readouterr().err)
+    assert len(notes) == 1 and "contact left_sole_link is 50 mm below the ground" in notes[0]
+
+
 def test_a_non_unit_base_quaternion_is_noted_and_normalised(talos, tmp_path, capsys) -> None:
     """QA P3: a base quaternion of norm 0.5-1.5 was normalised silently. The impact is that
     of the normalised pose (the same as the unit state's), and stderr says so once; a unit

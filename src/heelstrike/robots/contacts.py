@@ -56,6 +56,7 @@ __all__ = [
     "ContactSpec",
     "RobotImpact",
     "centre_of_pressure",
+    "contact_heights",
     "contact_jacobian",
     "ground_admissible",
     "inert_energy_split_batch",
@@ -482,6 +483,29 @@ def _matrices(robot: Robot, plan: _RowPlan, q: FloatArray) -> tuple[FloatArray, 
     A = np.empty((plan.k, robot.nv))
     plan.fill(data, A)
     return M, A
+
+
+#: Height (m) of a contact point above or below the ground plane ``z = 0`` beyond which
+#: ``heelstrike impact --robot`` notes that the contact does not touch the ground.
+GROUND_GAP_TOLERANCE = 1e-3
+
+
+def contact_heights(
+    robot: Robot, q: ArrayLike, contacts: Sequence[ContactSpec]
+) -> list[float]:
+    """World height ``z`` (m) of each contact's point at configuration ``q`` (nq,).
+
+    The frame's origin for point and flat contacts; for an arc heel, the lowest point of the
+    arc, ``radius`` below its centre (the frame's origin). The ground is the plane ``z = 0``
+    (:func:`heelstrike.robots.states.gait_configuration` places the feet on it): an impact
+    computed with a contact far from it treats that contact as touching all the same.
+    """
+    pin = _pin()
+    q_, _ = robot.check_state(q)
+    data = robot.data
+    pin.framesForwardKinematics(robot.model, data, q_)
+    return [float(data.oMf[robot.frame_id(c.frame)].translation[2])
+            - (c.radius if c.kind == "arc" else 0.0) for c in contacts]
 
 
 def robot_matrices(

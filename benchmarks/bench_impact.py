@@ -7,7 +7,6 @@ a = b = 0.5 m, l = 1 m) at random impact angles q3 in [0.02, pi/4] rad and foot 
 Paths
 -----
 fast        ``heelstrike.models.compass_fast.heel_strike_impact`` (compiled closed form), batched.
-fast-2x4    ``heelstrike.core.fast.impact_2x4`` on prebuilt M, A (compiled generic k=2, n=4).
 reference   ``heelstrike.core.impact.impact`` on ``CompassGait`` matrices, batched numpy
             (matrix assembly included).
 loop        the same, one configuration per Python call.
@@ -34,7 +33,6 @@ from typing import Any
 import numpy as np
 from _common import machine, run_main
 
-from heelstrike.core.fast import impact_2x4
 from heelstrike.core.impact import impact
 from heelstrike.models.compass import CompassGait, heel_strike_state
 from heelstrike.models.compass_fast import heel_strike_impact
@@ -63,14 +61,6 @@ def reference_batched(q3: np.ndarray, R: np.ndarray) -> object:
     walker = WALKER.replace(foot_radius=R)
     q, qd = heel_strike_state(walker, q3)
     return impact(walker.mass_matrix(q), walker.contact_jacobian(q, "left"), qd)
-
-
-def time_generic_kernel(q3: np.ndarray, R: np.ndarray, repeats: int) -> float:
-    """Median time of ``impact_2x4`` on prebuilt matrices (assembly not timed)."""
-    walker = WALKER.replace(foot_radius=R)
-    q, qd = heel_strike_state(walker, q3)
-    M, A = walker.mass_matrix(q), walker.contact_jacobian(q, "left")
-    return median_time(lambda: impact_2x4(M, A, qd), repeats)
 
 
 def reference_loop(q3: np.ndarray, R: np.ndarray) -> None:
@@ -184,8 +174,6 @@ def run(quick: bool = False) -> dict[str, Any]:
     q3, R = configurations(n_fast)
     add("heelstrike fast (compass closed form, numba)", n_fast,
         median_time(lambda: heel_strike_impact(q3, foot_radius=R), reps))
-    add("heelstrike fast generic 2x4 kernel (M, A given)", n_fast,
-        time_generic_kernel(q3, R, reps))
     add("heelstrike reference core.impact, batched numpy", n_ref,
         median_time(lambda: reference_batched(q3[:n_ref], R[:n_ref]), max(3, reps // 2)))
     add("heelstrike reference core.impact, Python loop", n_loop,

@@ -15,8 +15,8 @@ per-item matrices. With ``s = l - R``, ``c = cos q3``, ``S = sin q3``, ``mt = mH
          [ .,            .,            .,              m b^2 + I    ]]
 
 and the striking foot's Jacobian (eq. 5) is ``A = [I_2 | C]`` with
-``C = [[R, s c + R], [-2 s S, -s S]]``. Each item is then solved as in
-:func:`heelstrike.core.fast.impact_2x4`, with every matrix entry a scalar: ``M = L L^T``
+``C = [[R, s c + R], [-2 s S, -s S]]``. Each item is then solved without projectors (eqs.
+6-13 of the paper), with every matrix entry a scalar: ``M = L L^T``
 (Cholesky, written out; ``L10 = 0``), ``Y = L^-1 A^T``, ``W = Y^T Y = A M^-1 A^T`` (2x2),
 ``mu = W^-1 A q_dot-``, ``z = Y mu = L^T v_c``, ``v_c = P_c q_dot-`` by back substitution, and
 

@@ -131,6 +131,20 @@ def test_compass_rule_names_the_options_that_set_it(capsys):
     assert line.endswith("(--leg-length sets leg_length, --com-from-hip sets leg_com_from_hip)")
 
 
+def test_every_failed_compass_rule_is_named_with_its_values_only(capsys):
+    # QA sweep 9: --leg-length 0.2 --radius 0.25 named only the centre-of-mass rule, and every
+    # message listed all seven parameter values
+    assert main(["impact", "--radius", "0.25", "--angle", "20deg", "--leg-length", "0.2"]) == 2
+    line = capsys.readouterr().err.strip()
+    assert line.startswith("heelstrike: error: leg_com_from_hip must satisfy 0 < b < leg_length "
+                           "(m); foot_radius must satisfy 0 <= R <= leg_length (m); got "
+                           "leg_length = 0.2, leg_com_from_hip = 0.5, foot_radius = 0.25 (")
+    assert "hip_mass" not in line and "gravity" not in line
+    assert main(["impact", "--radius", "-0.1", "--angle", "20deg"]) == 2
+    line = capsys.readouterr().err.strip()
+    assert "got leg_length = 1, foot_radius = -0.1 (" in line and "hip_mass" not in line
+
+
 def test_impact_table_is_readable(capsys):
     assert main(["impact", "--radius", "0.25", "--angle", "20deg"]) == 0
     out = capsys.readouterr().out

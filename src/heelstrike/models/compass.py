@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass, fields, replace
 from types import MappingProxyType
 from typing import Any, ClassVar, NamedTuple, final
@@ -146,37 +146,48 @@ class CompassGait(PlanarWalker):
             if not np.all(np.isfinite(val)):
                 raise WalkerParameterError(f"{f.name} must be finite, got {val}")
             object.__setattr__(self, f.name, float(val) if val.ndim == 0 else val)
+        # (holds, rule, the fields it involves): every failed rule is reported, with the values
+        # of its fields only (QA sweep 9: one rule was named, with all seven values)
         checks = [
-            (np.all(np.asarray(self.hip_mass) > 0), "hip_mass must be > 0 (kg)"),
-            (np.all(np.asarray(self.leg_mass) > 0), "leg_mass must be > 0 (kg)"),
-            (np.all(np.asarray(self.leg_length) > 0), "leg_length must be > 0 (m)"),
-            (np.all(np.asarray(self.gravity) > 0), "gravity must be > 0 (m/s^2)"),
-            (np.all(np.asarray(self.leg_inertia) >= 0), "leg_inertia must be >= 0 (kg m^2)"),
+            (np.all(np.asarray(self.hip_mass) > 0), "hip_mass must be > 0 (kg)", ("hip_mass",)),
+            (np.all(np.asarray(self.leg_mass) > 0), "leg_mass must be > 0 (kg)", ("leg_mass",)),
+            (np.all(np.asarray(self.leg_length) > 0), "leg_length must be > 0 (m)",
+             ("leg_length",)),
+            (np.all(np.asarray(self.gravity) > 0), "gravity must be > 0 (m/s^2)", ("gravity",)),
+            (np.all(np.asarray(self.leg_inertia) >= 0), "leg_inertia must be >= 0 (kg m^2)",
+             ("leg_inertia",)),
             (
                 np.all((self.leg_com_from_hip > 0) & (self.leg_com_from_hip < self.leg_length)),
                 "leg_com_from_hip must satisfy 0 < b < leg_length (m)",
+                ("leg_length", "leg_com_from_hip"),
             ),
             (
                 np.all((self.foot_radius >= 0) & (self.foot_radius <= self.leg_length)),
                 "foot_radius must satisfy 0 <= R <= leg_length (m)",
+                ("leg_length", "foot_radius"),
             ),
         ]
-        for ok, msg in checks:
-            if not ok:
-                raise WalkerParameterError(f"{msg}; got {self._values_text()}")
+        failed = [(msg, names) for ok, msg, names in checks if not ok]
+        if failed:
+            involved = {name for _, names in failed for name in names}
+            raise WalkerParameterError(
+                f"{'; '.join(msg for msg, _ in failed)}; got {self._values_text(involved)}"
+            )
         # One state of a walker with scalar parameters: the dynamics run on Python floats.
         object.__setattr__(
             self, "_scalar", all(isinstance(getattr(self, f.name), float) for f in fields(self))
         )
 
-    def _values_text(self) -> str:
-        """The parameter values, for messages (arrays by their range)."""
+    def _values_text(self, names: Collection[str]) -> str:
+        """The values of the parameters ``names`` (field order), for messages (arrays by their
+        range)."""
 
         def one(v: Any) -> str:
             a = np.asarray(v, dtype=float)
             return f"{float(a):g}" if a.ndim == 0 else f"{a.min():g}..{a.max():g}"
 
-        return ", ".join(f"{f.name} = {one(getattr(self, f.name))}" for f in fields(self))
+        return ", ".join(f"{f.name} = {one(getattr(self, f.name))}" for f in fields(self)
+                         if f.name in names)
 
     # -- the walker contract -------------------------------------------------------------------
     def replace(self, **changes: Any) -> CompassGait:

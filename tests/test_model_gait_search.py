@@ -102,6 +102,20 @@ def test_cli_lists_the_gaits_stable_first() -> None:
     assert "period-one gaits found (the first, the most attracting stable one" in text.stdout
 
 
+def test_model_compass_lists_the_gaits_of_the_compass_shorthand() -> None:
+    """QA sweep 9: ``gait --model compass --param R=0.2`` listed 1 gait (the search stopped at
+    the first stable one) where ``gait --radius 0.2`` lists 2; the same walker, one list."""
+
+    outs = []
+    for argv in (["--model", "compass", "--param", "R=0.2"], ["--radius", "0.2"]):
+        r = _cli("gait", *argv, "--slope", "3deg", "--json")
+        assert r.returncode == 0, r.stderr
+        outs.append([list(g["fixed_point"].values()) for g in json.loads(r.stdout)["gaits"]])
+    model, shorthand = outs
+    assert len(shorthand) == 2 and len(model) == len(shorthand)
+    np.testing.assert_allclose(model, shorthand, atol=1e-9)
+
+
 def test_cli_says_when_no_stable_gait_was_found() -> None:
     """At 2 deg the kneed walker's stable family has ended (near 2.16 deg); the one gait found
     is unstable, and the command says that no stable gait was found."""

@@ -233,6 +233,7 @@ def find_model_gaits(
     atol: float = 1e-11,
     backend: str = "compiled",
     from_reference: bool = True,
+    every_start: bool = False,
 ) -> tuple[ModelGait, ...]:
     """Find the period-one gaits of a described walker, the stable one first, with energy books.
 
@@ -274,6 +275,11 @@ def find_model_gaits(
         :func:`~heelstrike.dynamics.phased.simulate_phased` (any actuation).
     from_reference : bool
         Allow stage 2.
+    every_start : bool
+        Run Newton from every coarse start of stage 1, not only until a stable gait is found,
+        so that the gaits returned are all those the starts reach (``heelstrike gait`` lists
+        them on the compiled backend, as the compass gait's search does). Costs a few more
+        Newton solves: on the scipy reference, seconds each.
 
     Returns
     -------
@@ -321,7 +327,7 @@ def find_model_gaits(
             except GaitNotFoundError as exc:
                 last = exc
                 continue
-            if any(c.stable for c in found):
+            if not every_start and any(c.stable for c in found):
                 break
 
     newton_from(starts)

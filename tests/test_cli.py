@@ -145,6 +145,26 @@ def test_every_failed_compass_rule_is_named_with_its_values_only(capsys):
     assert "got leg_length = 1, foot_radius = -0.1 (" in line and "hip_mass" not in line
 
 
+@pytest.mark.parametrize("argv", [
+    ["impact", "--model", "torso", "--angle", "20deg", "--json"],
+    ["impact", "--radius", "0", "--angle", "20deg", "--json"],
+])
+def test_json_has_no_negative_zero(argv, capsys):
+    # QA sweep 9: R = 0 printed "qdot_minus": [-0.0, ...] (-R q3_dot with R = 0)
+    assert main(argv) == 0
+    raw = json.loads(capsys.readouterr().out, parse_float=str)  # numbers as printed
+
+    def numbers(x):
+        if isinstance(x, dict):
+            return [n for v in x.values() for n in numbers(v)]
+        if isinstance(x, list):
+            return [n for v in x for n in numbers(v)]
+        return [x] if isinstance(x, str) else []
+
+    printed = numbers(raw)
+    assert "0.0" in printed and "-0.0" not in printed
+
+
 def test_impact_table_is_readable(capsys):
     assert main(["impact", "--radius", "0.25", "--angle", "20deg"]) == 0
     out = capsys.readouterr().out

@@ -32,17 +32,34 @@ def require_finite(obj: Any) -> None:
                        "degenerate; use smaller velocities or other parameters")
 
 
-def print_json(obj: Any) -> None:
+def _plain_zeros(obj: Any) -> Any:
+    """``obj`` with every ``-0.0`` written ``0.0`` (a signed zero says nothing physical)."""
+    if isinstance(obj, float):
+        return 0.0 if obj == 0.0 else obj
+    if isinstance(obj, dict):
+        return {k: _plain_zeros(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_plain_zeros(v) for v in obj]
+    return obj
+
+
+def json_text(obj: Any) -> str:
+    """The JSON text of a result: finite (:func:`require_finite`), no ``-0.0``."""
+    require_finite(obj)
+    return json.dumps(_plain_zeros(obj), allow_nan=False)
+
+
+def print_json(obj: Any, units: dict[str, Any] | None = None) -> None:
     """Print one whole JSON object on stdout, or nothing (the text is built before writing).
 
-    A ``units`` map for the object's keys is added (:func:`heelstrike._units.json_units`).
+    A ``units`` map for the object's keys is added: ``units`` if given, else
+    :func:`heelstrike._units.json_units`.
     """
     from heelstrike._units import json_units
 
-    require_finite(obj)
     if isinstance(obj, dict) and "units" not in obj:
-        obj = {**obj, "units": json_units(obj)}
-    text = json.dumps(obj, allow_nan=False) + "\n"
+        obj = {**obj, "units": json_units(obj) if units is None else units}
+    text = json_text(obj) + "\n"
     sys.stdout.write(text)
     sys.stdout.flush()
 

@@ -16,6 +16,8 @@ import textwrap
 from pathlib import Path
 from typing import Any
 
+from heelstrike.cli._render import json_text, print_json
+
 __all__ = [
     "RobotCliError",
     "add_robot_command",
@@ -27,12 +29,6 @@ __all__ = [
 
 class RobotCliError(ValueError):
     """Bad robot input on the command line (one line, exit status 2)."""
-
-
-def _print_json(obj: Any, units: dict[str, Any]) -> None:
-    """Print one JSON object with its ``units`` map (the CLI's convention)."""
-    json.dump({**obj, "units": units}, sys.stdout, allow_nan=False)
-    sys.stdout.write("\n")
 
 
 _LIST_UNITS: dict[str, Any] = {
@@ -117,7 +113,7 @@ def _run_robot_list(args: argparse.Namespace) -> int:
 
     robots = list_robots()
     if args.json:
-        _print_json({"robots": [{k: r[k] for k in _LIST_UNITS} for r in robots]},
+        print_json({"robots": [{k: r[k] for k in _LIST_UNITS} for r in robots]},
                     {"robots": dict(_LIST_UNITS)})
         return 0
     print(f"{'name':<8} {'nq':>4} {'nv':>4} {'mass (kg)':>10}  source")
@@ -140,7 +136,7 @@ def _run_robot_info(args: argparse.Namespace) -> int:
     }
     if args.json:
         q_units, _ = _joint_units(model)
-        _print_json(info, {**_LIST_UNITS, "reference_q": q_units, "joints": None,
+        print_json(info, {**_LIST_UNITS, "reference_q": q_units, "joints": None,
                            "frames": None})
         return 0
     print(f"{r.name}: nq={r.nq} nv={r.nv} mass={r.mass:.3f} kg")
@@ -193,15 +189,15 @@ def _run_robot_state(args: argparse.Namespace) -> int:
              "joint_limit_violations": _violation_units(violations)}
     _note_limit_violations(violations, f"robot state {robot.name}")
     if args.out is None:
-        _print_json(state, units)
+        print_json(state, units)
         return 0
-    text = json.dumps({**state, "units": units}, allow_nan=False)
+    text = json_text({**state, "units": units})
     try:
         args.out.write_text(text + "\n")
     except OSError as exc:
         raise RobotCliError(f"cannot write {str(args.out)!r}: {exc.strerror or exc}") from None
     if args.json:
-        _print_json({"out": str(args.out), "robot": robot.name, "nq": robot.nq, "nv": robot.nv,
+        print_json({"out": str(args.out), "robot": robot.name, "nq": robot.nq, "nv": robot.nv,
                      "leading_foot": lead, "trailing_foot": trail,
                      "joint_limit_violations": violations},
                     {"out": None, "robot": None, "nq": "1", "nv": "1", "leading_foot": None,
@@ -422,7 +418,7 @@ def run_robot_impact(args: argparse.Namespace) -> int:
             "impulse": impulse_units, "contacts": contact_units, "admissible": None,
             "pulling_contacts": {"frame": None, "normal_impulse": "N s"},
         }
-        _print_json(d, {k: units[k] for k in d})
+        print_json(d, {k: units[k] for k in d})
         return 0
     print(f"impact of '{robot.name}' (nq={robot.nq}, nv={robot.nv})")
     extra = d["loss_beyond_T_c"]

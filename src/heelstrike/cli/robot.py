@@ -255,8 +255,8 @@ def add_robot_impact_options(p: argparse.ArgumentParser) -> None:
         "energy, loss_beyond_T_c = energy_lost - T_c = T_a - T_plus (with --restitution the "
         "rebound's returned energy is subtracted too). admissible is false, with a note on "
         "stderr, when a --keep contact pulls on the ground (negative normal impulse): pass it "
-        "as --strike (complementarity decides whether it lifts) or drop it. A striking flat or "
-        "arc sole that needs a pull to stay flat, yet would move into the ground if released, "
+        "as --strike (complementarity decides whether it lifts) or drop it. A striking flat "
+        "sole that needs a pull to stay flat, yet would move into the ground if released, "
         "is refused: it lands on an edge or a corner, which is not modelled (use FRAME:point).")
     g.add_argument("--robot", default=None, metavar="NAME",
                    help="a shipped robot (see 'heelstrike robot list')")

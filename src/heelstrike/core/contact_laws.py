@@ -35,6 +35,11 @@ to one scalar secular equation in the multiplier ``beta`` of the disc constraint
 method to machine precision. Several striking contacts are coupled by a block (non-smooth)
 Gauss-Seidel iteration over contacts; with one striking contact it is exact in one sweep.
 Uniqueness is not guaranteed for Painlevé-type configurations (the first root is returned).
+A contact with several normal rows (a flat sole) is resolved all rows or none: where holding it
+needs a pull yet releasing it leaves it moving into the ground (an edge or corner landing, which
+these laws do not model), :func:`resolve_contact_impact` raises
+:class:`~heelstrike.core.impact.ImpactInputError` rather than report a contact passing through
+the ground.
 
 Energy split (every law)
 ------------------------
@@ -383,7 +388,7 @@ def _check_separations(
 ) -> None:
     """Raise unless every contact reported as separating really separates.
 
-    A contact with several normal rows (a flat or arcing sole: the normal force and the moments
+    A contact with several normal rows (a flat sole: the normal force and the moments
     that hold it flat) is resolved as all of them active or none. When holding it needs a pull
     and releasing it lets it move on into the ground, neither is consistent: the sole lands on
     an edge or a corner, which these laws do not model. Such a result is refused, not reported.

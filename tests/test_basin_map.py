@@ -85,7 +85,7 @@ def test_gait_map_period_doubling_of_point_feet_near_4_4_deg():
     assert bool(ds["stable"].sel(foot_radius=0.3).all())
     # the multipliers' sign change brackets the refined slope
     g = newton_gait(CompassGait(), float(pd[0]) + 0.002, Z3)
-    assert g.most_negative_real < -1.0
+    assert g.smallest_real < -1.0
     assert ds["period"].sel(foot_radius=0.0).values[0] == pytest.approx(0.7343, abs=1e-4)
 
 

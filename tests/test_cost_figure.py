@@ -66,8 +66,10 @@ def test_paper_comparison_draws_the_wheels_zero_loss_as_a_marker() -> None:
     for ax in fig.axes:
         lo, hi = ax.get_ylim()
         assert lo > 1e-3 and hi < 1e2  # the axis spans the data, not the round-off
-        wheel = [ln for ln in ax.get_lines() if ln.get_marker() == "v" and ln.get_color() == "k"]
+        wheel = [ln for ln in ax.get_lines() if ln.get_marker() == "D" and ln.get_color() == "k"]
         assert len(wheel) == 1 and wheel[0].get_xdata().tolist() == [0.3]
+        # QA sweep 9: not the open triangle that means "no gait found" on the same edge
+        assert not [ln for ln in ax.get_lines() if ln.get_marker() == "v" and ln.get_color() == "k"]
 
 
 def test_cost_figure_axis_says_per_step() -> None:

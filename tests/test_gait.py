@@ -187,7 +187,7 @@ def test_period_doubling_slope_has_one_definition():
     """Continuation (any walker, any parameter) and the stable-gait map locate the period
     doubling of the point-foot compass gait by the same refinement: they agree to 1e-4 deg
     although their brackets differ (0.5 deg here, 1 deg in the map), and at the slope found
-    the most negative real multiplier is -1 to 1e-3."""
+    the smallest real multiplier is -1 to 1e-3."""
     from heelstrike.analysis.gait_map import gait_map, newton_gait
 
     walker = CompassGait(foot_radius=0.0)
@@ -200,7 +200,7 @@ def test_period_doubling_slope_has_one_definition():
     assert np.degrees(cont.period_doubling[0]) == pytest.approx(
         np.degrees(gm.period_doubling_slope[0]), abs=1e-4)
     g = newton_gait(walker, float(cont.period_doubling[0]), cont.cycles[0].fixed_point)
-    assert g.most_negative_real == pytest.approx(-1.0, abs=1e-3)
+    assert g.smallest_real == pytest.approx(-1.0, abs=1e-3)
 
 
 # --------------------------------------------------------------------------------------------
@@ -367,7 +367,7 @@ def test_period_doubling_of_a_described_walker_has_the_same_definition():
     gm = model_gait_map(load_walker("compass"), "R", [0.0], slopes)
     pd = np.degrees(float(gm.dataset["period_doubling_slope"].values[0]))
     assert pd == pytest.approx(pd_ref, abs=1e-3)
-    m = gm.dataset["most_negative_real_multiplier"].values[0]
+    m = gm.dataset["smallest_real_multiplier"].values[0]
     linear = 4.0 + 0.5 * (m[0] + 1.0) / (m[0] - m[1])
     assert abs(linear - pd_ref) > 1e-3  # the old rule: a different answer
 

@@ -53,11 +53,11 @@ def test_compass_map_coarse_and_fine_grids_agree_and_find_period_doubling() -> N
     assert np.degrees(pd_c[0]) == pytest.approx(4.39, abs=0.01)
     assert np.degrees(pd_c[0]) == pytest.approx(np.degrees(pd_f[0]), abs=1e-5)
     assert np.isnan(pd_c[1:]).all() and np.isnan(pd_f[1:]).all()
-    # the refined slope brackets the sign change of the most negative real multiplier
+    # the refined slope brackets the sign change of the smallest real multiplier
     z = coarse.dataset["fixed_point"].values[0, 1]
     below = newton_gait(CompassGait(), float(pd_c[0]) - 1e-4, z)
     above = newton_gait(CompassGait(), float(pd_c[0]) + 1e-4, below.z)
-    assert below.most_negative_real > -1.0 > above.most_negative_real
+    assert below.smallest_real > -1.0 > above.smallest_real
 
 
 @pytest.mark.slow

@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from heelstrike.analysis.newton import NewtonStatus, newton_solve
+from heelstrike.analysis.newton import NewtonStatus, floquet_multipliers, newton_solve
 
 
 def _circle_line(X: np.ndarray) -> np.ndarray:
@@ -184,3 +184,30 @@ def test_no_point_is_evaluated_twice(at_root: bool) -> None:
     assert len(seen) == len(set(seen))
     # and the roots are still the roots
     np.testing.assert_allclose(np.abs(sol.x), np.sqrt(2.0), atol=1e-12)
+
+
+def test_floquet_multipliers_are_the_eigenvalues_largest_first() -> None:
+    # a rotation by 60 deg scaled by 0.5 (multipliers 0.5 e^{+-i pi/3}) beside a real -0.9
+    c, s = 0.5 * np.cos(np.pi / 3), 0.5 * np.sin(np.pi / 3)
+    basis = np.array([[1.0, 2.0, 0.0], [0.0, 1.0, 3.0], [1.0, 0.0, 1.0]])
+    DP = basis @ np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, -0.9]]) @ np.linalg.inv(basis)
+    mult = floquet_multipliers(DP)
+    assert mult.dtype == complex and mult.shape == (3,)
+    assert mult[0] == pytest.approx(-0.9, abs=1e-12)
+    np.testing.assert_allclose(sorted(mult[1:].imag), [-s, s], atol=1e-12)
+    np.testing.assert_allclose(mult[1:].real, [c, c], atol=1e-12)
+    # a Jacobian that failed (NaN) has no multipliers, and says so with NaN
+    DP[1, 2] = np.nan
+    assert np.all(np.isnan(floquet_multipliers(DP)))
+
+
+def test_backend_names_are_checked_in_one_place() -> None:
+    from heelstrike.analysis.gait_map import gait_map
+    from heelstrike.models.base import BACKEND_NAMES, check_backend_name
+    from heelstrike.models.compass import CompassGait
+
+    assert set(BACKEND_NAMES) == {"scipy", "compiled"}
+    for name in BACKEND_NAMES:
+        check_backend_name(name)
+    with pytest.raises(ValueError, match="backend must be 'scipy' or 'compiled', got 'numba'"):
+        gait_map(CompassGait(foot_radius=0.0), [0.0], np.deg2rad([3.0, 4.0]), backend="numba")

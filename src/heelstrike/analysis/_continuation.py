@@ -63,7 +63,7 @@ class Point:
     z : ndarray, shape (d,)
         The solution there (a fixed point on the section, possibly with extra unknowns).
     mnr : float
-        Most negative real Floquet multiplier (NaN if none is real, or not computed).
+        Smallest real Floquet multiplier (NaN if none is real, or not computed).
     gait : object
         The solver's own result at this point.
     """
@@ -74,7 +74,7 @@ class Point:
     gait: Any
 
 
-#: ``solve(value, guess, max_iter) -> (gait, solution, Newton iterations, most negative real
+#: ``solve(value, guess, max_iter) -> (gait, solution, Newton iterations, smallest real
 #: multiplier)``; raises one of ``follow``'s ``failures`` where it finds no solution.
 Solve = Callable[[float, FloatArray, int], tuple[Any, FloatArray, int, float]]
 

@@ -43,7 +43,7 @@ from heelstrike.analysis._memory import available_memory, require_memory
 from heelstrike.analysis.limit_cycle import LimitCycle, find_limit_cycle
 from heelstrike.dynamics.compiled import ensemble_walk
 from heelstrike.dynamics.hybrid import WalkStatus
-from heelstrike.models.base import PlanarWalker
+from heelstrike.models.base import PlanarWalker, check_backend_name
 from heelstrike.models.compass import CompassGait
 
 if TYPE_CHECKING:
@@ -321,8 +321,7 @@ def basin_of_attraction(
     ValueError
         Unknown backend, or decreasing ranges.
     """
-    if backend not in ("compiled", "scipy"):
-        raise ValueError(f"backend must be 'compiled' or 'scipy', got {backend!r}")
+    check_backend_name(backend)
     n3, nd = _check_grid(grid, steps)
     (a0, a1), (b0, b1) = ranges
     if not (a0 < a1 and b0 < b1):
@@ -492,8 +491,7 @@ def model_basin_of_attraction(
     from heelstrike.analysis.model_gaits import find_model_gait
     from heelstrike.dynamics.phased import PhasedWalker
 
-    if backend not in ("compiled", "scipy"):
-        raise ValueError(f"backend must be 'compiled' or 'scipy', got {backend!r}")
+    check_backend_name(backend)
     w = PhasedWalker.from_built(walker)
     n1, n2 = _check_grid(grid, steps)
     names = w.section_names

@@ -55,6 +55,7 @@ from heelstrike.analysis.powered import (
     family_simulator,
     impact_angle_for_step_length,
 )
+from heelstrike.models.base import check_backend_name
 from heelstrike.models.compass import CompassGait
 
 __all__ = [
@@ -343,8 +344,7 @@ def _check_model(
     if actuation_options and set(actuations) == {"pushoff"}:
         raise ValueError("actuation_options set the hip laws, not the push-off (a posture "
                          "law's gains are declared in the walker file)")
-    if backend not in ("compiled", "scipy"):
-        raise ValueError(f"backend must be 'compiled' or 'scipy', got {backend!r}")
+    check_backend_name(backend)
     if "R" not in model.params:
         raise ValueError(f"model {name!r} has no foot radius parameter 'R' (its parameters: "
                          f"{', '.join(sorted(model.params))})")

@@ -8,7 +8,7 @@ Newton fails, is slow or lands far from the prediction (``follow``), so the bran
 the gaits at the grid's slopes, do not depend on the grid. Each radius's branch starts from an
 *anchor* gait at 3 deg (or the nearest end of the slope range), obtained by continuation in the
 radius from the point-foot gait (found by the automatic attractor search). At every point the
-Floquet multipliers give the spectral radius and stability; where the most negative real
+Floquet multipliers give the spectral radius and stability; where the smallest real
 multiplier crosses -1 between two continuation points (grid slopes or sub-steps) the
 period-doubling slope is refined by bisection. Radii are evaluated with
 :func:`heelstrike.analysis.sweep.sweep` (Dask threads, one radius per chunk).
@@ -39,11 +39,13 @@ from heelstrike.analysis._continuation import (
 from heelstrike.analysis._defaults import BIFURCATION_RECORD, BIFURCATION_TRANSIENT
 from heelstrike.analysis.limit_cycle import (
     GaitNotFoundError,
-    _most_negative_real,
+    _smallest_real,
     find_limit_cycle,
     refine_period_doubling,
 )
+from heelstrike.analysis.newton import floquet_multipliers
 from heelstrike.dynamics.compiled import COMPLETED, ensemble_walk
+from heelstrike.models.base import check_backend_name
 from heelstrike.models.compass import CompassGait
 
 if TYPE_CHECKING:
@@ -103,10 +105,10 @@ class NewtonGait(ResultDictMixin):
         return float(np.max(np.abs(self.multipliers)))
 
     @property
-    def most_negative_real(self) -> float:
-        """Most negative real multiplier (NaN if none is real; the rule of
+    def smallest_real(self) -> float:
+        """Smallest real multiplier (NaN if none is real; the rule of
         :func:`~heelstrike.analysis.limit_cycle.refine_period_doubling`)."""
-        m = _most_negative_real(self.multipliers)
+        m = _smallest_real(self.multipliers)
         return float("nan") if m is None else float(m)
 
 
@@ -153,8 +155,7 @@ def _map_many(
     ensemble call, or the scipy reference row by row."""
     if backend == "scipy":
         return _scipy_steps(walker, Z, slope, rtol, atol)
-    if backend != "compiled":
-        raise ValueError(f"backend must be 'compiled' or 'scipy', got {backend!r}")
+    check_backend_name(backend)
     res = ensemble_walk(walker, Z, slope, steps=1, rtol=rtol, atol=atol, parallel=False)
     out = np.where((res.status == COMPLETED)[:, None], res.z, np.nan)
     return out, res
@@ -223,10 +224,9 @@ def newton_gaits(
         if not np.all(np.isfinite(jac)):
             out[k] = NewtonStatus.JACOBIAN_FAILED.message
             continue
-        mult = np.linalg.eigvals(jac).astype(complex)
         out[k] = NewtonGait(
             z=sol.x[k].copy(),
-            multipliers=mult[np.argsort(-np.abs(mult), kind="stable")],
+            multipliers=floquet_multipliers(jac),
             period=float(res.step_time[j, 0]),
             step_length=float(res.step_length[j, 0]),
             collision_loss=float(res.collision_loss[j, 0]),
@@ -276,7 +276,7 @@ def newton_gait(
 _OUTPUTS = ("spectral_radius", "period", "step_length", "collision_loss", "impact_angle")
 #: Units of the map's per-gait variables (compass and described walkers alike).
 _UNITS = {"spectral_radius": "1", "period": "s", "step_length": "m", "collision_loss": "J",
-          "impact_angle": "rad", "most_negative_real_multiplier": "1"}
+          "impact_angle": "rad", "smallest_real_multiplier": "1"}
 
 
 def _check_slopes(slopes: FloatArray) -> None:
@@ -298,6 +298,9 @@ def _add_derived(ds: xr.Dataset) -> None:
     ds["stable"] = (ds["spectral_radius"] < 1.0).assign_attrs(
         long_name="a stable gait was found: all Floquet multipliers inside the unit circle "
                   "(false also where no gait was found: see gait_found)", units="1")
+    ds["smallest_real_multiplier"].attrs["long_name"] = (
+        "smallest real Floquet multiplier (it crosses -1 at a period doubling; positive when "
+        "no real multiplier is negative; NaN if none is real)")
     ds["gait_found"] = ds["spectral_radius"].notnull().assign_attrs(
         long_name="a period-one gait was found (else every gait variable is NaN and stable "
                   "is false)", units="1")
@@ -313,7 +316,7 @@ def _pd_bracket(
     points: Sequence[Point], any_sign: bool = True
 ) -> tuple[Point, Point] | None:
     """The first pair of consecutive continuation points (by increasing value) between which the
-    most negative real multiplier crosses -1 (with ``any_sign`` False: from above -1 to -1 or
+    smallest real multiplier crosses -1 (with ``any_sign`` False: from above -1 to -1 or
     below), or None."""
     for a, b in itertools.pairwise(points):
         fa, fb = a.mnr + 1.0, b.mnr + 1.0
@@ -342,7 +345,7 @@ def _branch(
     up and down through ``slopes`` (``follow``: sub-steps of at most ``SLOPE_STEP``, so
     the branch does not depend on the grid).
 
-    Returns per-slope outputs, fixed points (S, 3), most negative real multiplier (S,) and the
+    Returns per-slope outputs, fixed points (S, 3), smallest real multiplier (S,) and the
     refined period-doubling slope: the first crossing of -1 between any two continuation points,
     grid slopes or sub-steps (NaN if none in range).
     """
@@ -354,7 +357,7 @@ def _branch(
     def solve(slope: float, z: FloatArray, max_iter: int) -> tuple[Any, FloatArray, int, float]:
         g = newton_gait(walker, slope, z, rtol=rtol, atol=atol, max_iter=max_iter,
                         backend=backend)
-        return g, g.z, g.iterations, g.most_negative_real
+        return g, g.z, g.iterations, g.smallest_real
 
     try:
         g0, z0, _, m0 = solve(anchor_slope, anchor, 20)
@@ -367,7 +370,7 @@ def _branch(
             continue  # the branch ends (fold or failure) before this slope: NaN
         g = p.gait
         fixed[i] = g.z
-        mnr[i] = g.most_negative_real
+        mnr[i] = g.smallest_real
         out["spectral_radius"][i] = g.spectral_radius
         out["period"][i] = g.period
         out["step_length"][i] = g.step_length
@@ -397,7 +400,7 @@ def _refine_period_doubling(
 
     def solve(slope: float, z: FloatArray) -> tuple[float, FloatArray]:
         g = newton_gait(walker, slope, z, rtol=rtol, atol=atol, backend=backend)
-        return g.most_negative_real, g.z
+        return g.smallest_real, g.z
 
     return refine_period_doubling(solve, s0, s1, m0, g0.z, iterations=_pd_iterations(s0, s1))
 
@@ -426,7 +429,7 @@ def _map_chunk(
     R_, S_ = radii.size, slopes.size
     res: dict[str, FloatArray] = {k: np.full((R_, S_), np.nan) for k in _OUTPUTS}
     res["fixed_point"] = np.full((R_, S_, 3), np.nan)
-    res["most_negative_real_multiplier"] = np.full((R_, S_), np.nan)
+    res["smallest_real_multiplier"] = np.full((R_, S_), np.nan)
     res["period_doubling_slope"] = np.full((R_, S_), np.nan)
     for j, R in enumerate(radii):
         entry = table.get(float(R))
@@ -437,7 +440,7 @@ def _map_chunk(
         for k in _OUTPUTS:
             res[k][j] = out[k]
         res["fixed_point"][j] = fixed
-        res["most_negative_real_multiplier"][j] = mnr
+        res["smallest_real_multiplier"][j] = mnr
         res["period_doubling_slope"][j] = pd
     return res
 
@@ -451,7 +454,7 @@ class GaitMap(ResultDictMixin):
     dataset : xarray.Dataset
         Over ``foot_radius`` (m) x ``slope`` (rad): ``spectral_radius``, ``stable``, ``period``
         (s), ``step_length`` (m), ``speed`` (m/s), ``collision_loss`` (J), ``impact_angle``
-        (rad), ``fixed_point`` (+ ``section`` dim), ``most_negative_real_multiplier``; over
+        (rad), ``fixed_point`` (+ ``section`` dim), ``smallest_real_multiplier``; over
         ``foot_radius``: ``period_doubling_slope`` (rad, NaN if none in range). NaN where no
         period-one gait was found, and ``gait_found`` (bool) False there.
     """
@@ -502,7 +505,7 @@ def _anchors(
     def solve(R: float, z: FloatArray, max_iter: int) -> tuple[Any, FloatArray, int, float]:
         g = newton_gait(walker.replace(foot_radius=R), slope, z, rtol=rtol, atol=atol,
                         max_iter=max_iter, backend=backend)
-        return g, g.z, g.iterations, g.most_negative_real
+        return g, g.z, g.iterations, g.smallest_real
 
     if guess is None:
         R_prev = 0.0
@@ -590,8 +593,7 @@ def gait_map(
     if np.any(R < 0) or np.any(R > float(walker.leg_length)):
         raise ValueError("radii must satisfy 0 <= R <= leg_length")
     anchor_slope = _anchor_slope(S)
-    if backend not in ("compiled", "scipy"):
-        raise ValueError(f"backend must be 'compiled' or 'scipy', got {backend!r}")
+    check_backend_name(backend)
     anchors = _anchors(walker, R, S, guess, rtol, atol, backend)
     func = functools.partial(
         _map_chunk,
@@ -637,7 +639,7 @@ def gait_map(
 def _model_multiplier(
     walker: BuiltWalker, backend: str, slope: float, guess: FloatArray
 ) -> tuple[float, FloatArray]:
-    """Most negative real multiplier and fixed point of a described walker's gait at a slope
+    """Smallest real multiplier and fixed point of a described walker's gait at a slope
     (the ``solve`` of :func:`~heelstrike.analysis.limit_cycle.refine_period_doubling`)."""
     from heelstrike.analysis.model_gaits import find_model_gait
 
@@ -645,7 +647,7 @@ def _model_multiplier(
         g = find_model_gait(walker, slope=slope, guess=guess, backend=backend)
     except ValueError as exc:
         raise GaitNotFoundError(str(exc)) from exc
-    mnr = _most_negative_real(np.asarray(g.cycle.multipliers))
+    mnr = _smallest_real(np.asarray(g.cycle.multipliers))
     return (np.nan if mnr is None else mnr), np.asarray(g.cycle.fixed_point, dtype=float)
 
 
@@ -744,7 +746,7 @@ def model_gait_map(
             g = find_model_gait(w, slope=slope, guess=guess, backend=backend, max_iter=max_iter)
         except ValueError as exc:
             raise GaitNotFoundError(str(exc)) from exc
-        m = _most_negative_real(np.asarray(g.cycle.multipliers))
+        m = _smallest_real(np.asarray(g.cycle.multipliers))
         return (g, np.asarray(g.cycle.fixed_point, dtype=float), int(g.cycle.iterations),
                 float("nan") if m is None else float(m))
 
@@ -817,7 +819,7 @@ def model_gait_map(
                 out["step_length"][i, j] = g.cycle.step_length
                 out["collision_loss"][i, j] = g.collision_loss
                 out["impact_angle"][i, j] = g.cycle.impact_angle
-                out["most_negative_real_multiplier"][i, j] = at.mnr
+                out["smallest_real_multiplier"][i, j] = at.mnr
                 fixed[i, j] = g.cycle.fixed_point
             prev = (value, points)
             bracket = _pd_bracket(points, any_sign=False)
@@ -1097,14 +1099,14 @@ def _diagram_and_branch(
     pd = list(rest.period_doubling)
     if rest.cycles and float(rest.values[0]) == float(values[1]):
         # a period doubling between the onset and the next slope
-        ma = _most_negative_real(head.cycles[0].multipliers)
-        mb = _most_negative_real(rest.cycles[0].multipliers)
+        ma = _smallest_real(head.cycles[0].multipliers)
+        mb = _smallest_real(rest.cycles[0].multipliers)
         if ma is not None and mb is not None and (ma + 1.0) * (mb + 1.0) < 0:
 
             def solve(v: float, z: FloatArray) -> tuple[float, FloatArray]:
                 c = find_limit_cycle(walker, slope=v, guess=z, simulator=simulator,
                                      **branch_tolerances)
-                m = _most_negative_real(c.multipliers)
+                m = _smallest_real(c.multipliers)
                 return (np.nan if m is None else m), c.fixed_point
 
             pd.insert(0, refine_period_doubling(solve, onset, float(values[1]), ma, z0))

@@ -25,7 +25,7 @@ from heelstrike._typing import BoolArray, FloatArray
 from heelstrike.core._scalars import python_scalars
 from heelstrike.core.impact import ImpactResult, impact
 from heelstrike.models._contact import LIFT_TOLERANCE, trailing_foot_lifts
-from heelstrike.models.base import Foot, PlanarWalker, is_mcgeer_wheel
+from heelstrike.models.base import Foot, PlanarWalker, check_backend_name, is_mcgeer_wheel
 from heelstrike.models.compass import CompassGait, heel_strike_state
 
 __all__ = [
@@ -350,8 +350,7 @@ def heel_strike_study(
     heelstrike.core.impact.ImpactInputError
         For non-finite angles or velocities or ``restitution`` outside [0, 1].
     """
-    if backend not in ("scipy", "compiled"):
-        raise ValueError(f"backend must be 'scipy' or 'compiled', got {backend!r}")
+    check_backend_name(backend)
     q, q_dot = heel_strike_state(walker, impact_angle, q3_dot=q3_dot, q4_dot=q4_dot)
     res: ImpactResult | None = None
     if backend == "compiled":

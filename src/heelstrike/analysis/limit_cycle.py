@@ -24,10 +24,11 @@ from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
 from heelstrike.analysis._defaults import BIFURCATION_RECORD, BIFURCATION_TRANSIENT
 from heelstrike.analysis.heel_strike import loss_per_metre
+from heelstrike.analysis.newton import floquet_multipliers
 from heelstrike.dynamics.backends import BoundSimulator
 from heelstrike.dynamics.hybrid import PushOff, WalkResult, simulate
 from heelstrike.dynamics.single_support import TorqueLaw
-from heelstrike.models.base import PlanarWalker
+from heelstrike.models.base import PlanarWalker, check_backend_name
 
 if TYPE_CHECKING:
     from heelstrike.analysis.gait_map import NewtonGait
@@ -87,8 +88,7 @@ class PoincareMap:
     simulator: Callable[..., WalkResult] | None = None
 
     def __post_init__(self) -> None:
-        if self.method not in ("scipy", "compiled"):
-            raise ValueError(f"method must be 'scipy' or 'compiled', got {self.method!r}")
+        check_backend_name(self.method, "method")
         if self.method == "compiled" and (self.torque is not None or self.push_off is not None):
             raise ValueError("method='compiled' supports passive walkers only")
 
@@ -748,8 +748,7 @@ def _characterise(
 ) -> LimitCycle:
     walker = pmap.walker
     Jac = pmap.jacobian(z, fd_step)
-    mult = np.linalg.eigvals(Jac).astype(complex)
-    mult = mult[np.argsort(-np.abs(mult), kind="stable")]
+    mult = floquet_multipliers(Jac)
     if pmap.method == "compiled":
         from heelstrike.dynamics.compiled import step_map_compiled
 
@@ -761,28 +760,33 @@ def _characterise(
         return _characterise_compiled(pmap, z, step.step_time, mult, residual, iterations)
     walk = pmap.walk(z, 1)
     rec = walk.impacts[0]
-    q, q_dot = walker.section_to_state(z)
-    return LimitCycle(
-        fixed_point=np.asarray(z, dtype=float),
-        section_names=walker.section_names,
-        q=q,
-        q_dot=q_dot,
-        period=rec.step_duration,
-        step_length=rec.step_length,
-        speed=rec.step_length / rec.step_duration,
-        impact_angle=rec.impact_angle,
-        multipliers=mult,
-        stable=bool(np.all(np.abs(mult) < 1.0)),
-        collision_loss=rec.energy_lost,
+    return _cycle(
+        pmap, z, mult, period=rec.step_duration, step_length=rec.step_length,
+        impact_angle=rec.impact_angle, collision_loss=rec.energy_lost,
         kinetic_energy_pre=rec.kinetic_energy,
         kinetic_energy_admissible=rec.kinetic_energy_admissible,
-        eta=float(loss_per_metre(rec.energy_lost, rec.step_length)),
         potential_energy_released=rec.potential_energy_released,
-        actuator_work=rec.actuator_work,
-        residual=residual,
-        iterations=iterations,
-        slope=float(pmap.slope),
-        walk=walk,
+        actuator_work=rec.actuator_work, residual=residual, iterations=iterations, walk=walk,
+    )
+
+
+def _cycle(
+    pmap: PoincareMap, z: FloatArray, multipliers: NDArray[np.complex128], *, period: float,
+    step_length: float, collision_loss: float, iterations: int, walk: Any, **values: float,
+) -> LimitCycle:
+    """The :class:`LimitCycle` at the fixed point ``z`` of ``pmap``: its speed, stability and
+    ``eta`` from the step's ``period`` (s), ``step_length`` (m), ``collision_loss`` (J) and
+    ``multipliers``; ``values`` are the other float fields (the step's energies,
+    ``impact_angle``, the Newton ``residual``)."""
+    q, q_dot = pmap.walker.section_to_state(z)
+    mult = np.asarray(multipliers, dtype=complex)
+    return LimitCycle(
+        fixed_point=np.array(z, dtype=float), section_names=pmap.walker.section_names, q=q,
+        q_dot=q_dot, period=float(period), step_length=float(step_length),
+        speed=float(step_length) / float(period), multipliers=mult,
+        stable=bool(np.all(np.abs(mult) < 1.0)), collision_loss=float(collision_loss),
+        eta=float(loss_per_metre(collision_loss, step_length)), slope=float(pmap.slope),
+        iterations=int(iterations), walk=walk, **{k: float(v) for k, v in values.items()},
     )
 
 
@@ -820,31 +824,15 @@ def _characterise_compiled(
     )
     q, q_dot = support.unpack(path[-1], q0)
     impact, _ = heel_strike(walker, q, q_dot)
-    step_length = float(walker.step_length(q0, q))
-    loss = float(impact.energy_lost)
-    mult = np.asarray(multipliers, dtype=complex)
-    return LimitCycle(
-        fixed_point=z.copy(),
-        section_names=walker.section_names,
-        q=q0,
-        q_dot=qd0,
-        period=float(period),
-        step_length=step_length,
-        speed=step_length / float(period),
-        impact_angle=float(q[2]),
-        multipliers=mult,
-        stable=bool(np.all(np.abs(mult) < 1.0)),
-        collision_loss=loss,
+    return _cycle(
+        pmap, z, multipliers, period=period, step_length=float(walker.step_length(q0, q)),
+        impact_angle=float(q[2]), collision_loss=float(impact.energy_lost),
         kinetic_energy_pre=float(impact.kinetic_energy),
         kinetic_energy_admissible=float(impact.kinetic_energy_admissible),
-        eta=float(loss_per_metre(loss, step_length)),
         potential_energy_released=float(
             walker.potential_energy(q0, slope) - walker.potential_energy(q, slope)
         ),
-        actuator_work=0.0,
-        residual=float(residual),
-        iterations=int(iterations),
-        slope=slope,
+        actuator_work=0.0, residual=residual, iterations=iterations,
         walk=_OneStep(pmap=pmap, z=z.copy()),
     )
 
@@ -896,7 +884,7 @@ def continue_limit_cycle(
     the next value is halved, so the branch does not depend on how finely ``values`` sample
     it; the continuation stops where the sub-step would fall below 1/1024 of the values'
     largest spacing (a fold, or the end of the walker's gaits). Period doubling is
-    detected where the most negative real multiplier crosses -1 between consecutive values,
+    detected where the smallest real multiplier crosses -1 between consecutive values,
     and located by :func:`refine_period_doubling` (bisection, 12 halvings of the bracket).
 
     Parameters
@@ -987,13 +975,13 @@ def continue_limit_cycle(
         found.append(float(v))
     pd: list[float] = []
     for a, b, ca, cb in zip(found[:-1], found[1:], cycles[:-1], cycles[1:], strict=True):
-        ma, mb = _most_negative_real(ca.multipliers), _most_negative_real(cb.multipliers)
+        ma, mb = _smallest_real(ca.multipliers), _smallest_real(cb.multipliers)
         if ma is not None and mb is not None and (ma + 1.0) * (mb + 1.0) < 0:
 
             def solve(v: float, z0: FloatArray) -> tuple[float, FloatArray]:
                 w, s = at(v)
                 c = find_limit_cycle(w, slope=s, guess=z0, **kwargs)
-                m = _most_negative_real(c.multipliers)
+                m = _smallest_real(c.multipliers)
                 return (np.nan if m is None else m), c.fixed_point
 
             pd.append(refine_period_doubling(solve, a, b, ma, ca.fixed_point))
@@ -1015,7 +1003,7 @@ def refine_period_doubling(
     *,
     iterations: int = 12,
 ) -> float:
-    """The parameter value where the most negative real multiplier crosses -1 (period
+    """The parameter value where the smallest real multiplier crosses -1 (period
     doubling): the one definition, used by continuation and by the gait maps.
 
     Bisection on ``[lo, hi]`` (the crossing is bracketed: ``m(lo) + 1`` and ``m(hi) + 1`` have
@@ -1026,12 +1014,12 @@ def refine_period_doubling(
     Parameters
     ----------
     solve : callable
-        ``solve(value, z0) -> (most negative real multiplier, fixed point)``; may raise
+        ``solve(value, z0) -> (smallest real multiplier, fixed point)``; may raise
         :class:`GaitNotFoundError`.
     lo, hi : float
         The bracket (parameter units).
     m_lo : float
-        Most negative real multiplier at ``lo``.
+        Smallest real multiplier at ``lo``.
     z_lo : ndarray
         Fixed point at ``lo``.
     """
@@ -1052,7 +1040,7 @@ def refine_period_doubling(
     return 0.5 * (lo + hi)
 
 
-def _most_negative_real(mult: NDArray[np.complex128]) -> float | None:
+def _smallest_real(mult: NDArray[np.complex128]) -> float | None:
     real = [m.real for m in mult if abs(m.imag) < 1e-9 * max(1.0, abs(m))]
     return min(real) if real else None
 

@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
 
-__all__ = ["NewtonSolution", "NewtonStatus", "newton_solve"]
+__all__ = ["NewtonSolution", "NewtonStatus", "floquet_multipliers", "newton_solve"]
 
 Residual = Callable[[FloatArray], FloatArray]
 
@@ -120,6 +120,26 @@ class NewtonSolution(ResultDictMixin):
     def converged(self) -> NDArray[np.bool_]:
         """``status is CONVERGED`` per start, shape (K,)."""
         return np.array([s is NewtonStatus.CONVERGED for s in self.status], dtype=bool)
+
+
+def floquet_multipliers(jacobian: ArrayLike) -> NDArray[np.complex128]:
+    """The Floquet multipliers of a gait: the eigenvalues of its Poincare map's Jacobian.
+
+    Parameters
+    ----------
+    jacobian : array_like, shape (d, d)
+        ``DP`` at the fixed point (section coordinates).
+
+    Returns
+    -------
+    ndarray of complex, shape (d,)
+        Largest modulus first (ties in the eigensolver's order); NaN if ``DP`` is not finite.
+    """
+    DP = np.asarray(jacobian, dtype=float)
+    if not np.all(np.isfinite(DP)):
+        return np.full(DP.shape[-1], np.nan, dtype=complex)
+    mult = np.linalg.eigvals(DP).astype(complex)
+    return mult[np.argsort(-np.abs(mult), kind="stable")]
 
 
 def _differences(x: FloatArray, fd_step: float, central: bool) -> tuple[FloatArray, FloatArray]:

@@ -67,6 +67,7 @@ from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
 from heelstrike._units import UNITS
 from heelstrike.analysis.heel_strike import loss_per_metre
+from heelstrike.analysis.newton import floquet_multipliers
 from heelstrike.core.impact import kinetic_energy
 from heelstrike.dynamics._aot import compile_seconds
 from heelstrike.dynamics.actuation import (
@@ -1613,10 +1614,8 @@ def _characterise(
     rec = st.record
     assert rec is not None and st.ok
     z = x[:-1]
-    d = z.size
     DP = _section_jacobian(prob, x, fd_step)
-    mult = np.linalg.eigvals(DP).astype(complex) if np.all(np.isfinite(DP)) else np.full(d, np.nan)
-    mult = mult[np.argsort(-np.abs(mult), kind="stable")]
+    mult = floquet_multipliers(DP)
     m, g, _ = _scale(walker)
     L = rec.step_length
     dE = st.energy_end - st.energy_start

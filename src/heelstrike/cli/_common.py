@@ -193,7 +193,9 @@ def add_backend_option(
     p: argparse.ArgumentParser, help: str, default: str | None = None
 ) -> None:
     """``--backend compiled|scipy`` with the command's help (what runs on each backend)."""
-    p.add_argument("--backend", choices=("compiled", "scipy"), default=default, help=help)
+    from heelstrike.models.base import BACKEND_NAMES
+
+    p.add_argument("--backend", choices=sorted(BACKEND_NAMES), default=default, help=help)
 
 
 def model_from_args(args: argparse.Namespace) -> Any:

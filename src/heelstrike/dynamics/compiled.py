@@ -685,16 +685,11 @@ def simulate_compiled(
         impulse = np.asarray(np.linalg.solve(A_L @ A_L.T, A_L @ (M @ (qd_plus - qd))), np.float64)
         v_trailing = float((walker.contact_jacobian(q, "right") @ qd_plus)[1])
         impacts.append(
-            ImpactRecord(
-                step=n, time=t, q=q.copy(), q_dot_minus=qd.copy(), q_dot_plus=qd_plus.copy(),
-                impact_angle=float(q[2]), kinetic_energy=float(T),
+            ImpactRecord.of_step(
+                walker, slope, step=n, step_start=(t_step, q_start), time=t, q=q,
+                q_dot_minus=qd, q_dot_plus=qd_plus, kinetic_energy=float(T),
                 kinetic_energy_constrained=float(Tc), kinetic_energy_admissible=float(T - Tc),
-                energy_lost=float(Tc), impulse=impulse,
-                step_length=float(walker.step_length(q_start, q)),
-                trailing_normal_velocity=v_trailing,
-                potential_energy_released=float(walker.potential_energy(q_start, slope))
-                - float(walker.potential_energy(q, slope)),
-                actuator_work=0.0, push_off_work=0.0, step_duration=t - t_step,
+                impulse=impulse, trailing_normal_velocity=v_trailing,
             )
         )
         if not _contact.lifts(v_trailing, _contact.lift_velocity_scale(leg_length, qd[2:])):

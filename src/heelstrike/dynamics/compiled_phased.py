@@ -443,17 +443,12 @@ def _result(
             t0, w0 = float(starts[k, 0]), float(starts[k, 1])
             q_start = starts[k, 2:]
             records.append(
-                ImpactRecord(
-                    step=k, time=t, q=q, q_dot_minus=qdm, q_dot_plus=qdp,
-                    impact_angle=float(q[2]), kinetic_energy=T,
+                ImpactRecord.of_step(
+                    walker, slope, step=k, step_start=(t0, q_start), time=t, q=q,
+                    q_dot_minus=qdm, q_dot_plus=qdp, kinetic_energy=T,
                     kinetic_energy_constrained=T_c, kinetic_energy_admissible=T_a,
-                    energy_lost=T_c, impulse=lam[:2].copy(),
-                    step_length=float(walker.step_length(q_start, q)),
-                    trailing_normal_velocity=v_trail,
-                    potential_energy_released=float(walker.potential_energy(q_start, slope))
-                    - float(walker.potential_energy(q, slope)),
+                    impulse=lam[:2].copy(), trailing_normal_velocity=v_trail,
                     actuator_work=float(row[9]) - w0, push_off_work=float(row[10]),
-                    step_duration=t - t0,
                 )
             )
     st = WalkStatus.from_code(status)

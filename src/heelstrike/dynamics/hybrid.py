@@ -205,6 +205,54 @@ class ImpactRecord(ResultDictMixin):
     push_off_work: float
     step_duration: float
 
+    @classmethod
+    def of_step(
+        cls,
+        walker: PlanarWalker,
+        slope: float,
+        *,
+        step: int,
+        step_start: tuple[float, FloatArray],
+        time: float,
+        q: FloatArray,
+        q_dot_minus: FloatArray,
+        q_dot_plus: FloatArray,
+        kinetic_energy: float,
+        kinetic_energy_constrained: float,
+        kinetic_energy_admissible: float,
+        impulse: FloatArray,
+        trailing_normal_velocity: float,
+        energy_lost: float | None = None,
+        actuator_work: float = 0.0,
+        push_off_work: float = 0.0,
+    ) -> ImpactRecord:
+        """The record of a heel strike, every backend's one bookkeeping of a step.
+
+        ``step_start`` is the step's start ``(time (s), configuration q, shape (n,))``; the
+        step's length, duration and potential energy released are measured from it, with the
+        walker's own :meth:`~heelstrike.models.base.PlanarWalker.step_length` and
+        :meth:`~heelstrike.models.base.PlanarWalker.potential_energy` on ``slope`` (rad).
+        ``energy_lost`` is ``T_c`` unless given (an inert impact destroys ``T_c``); the other
+        arguments are the attributes of the same name.
+        """
+        t_start, q_start = step_start
+        T_c = float(kinetic_energy_constrained)
+        return cls(
+            step=step, time=time, q=np.array(q, dtype=float),
+            q_dot_minus=np.array(q_dot_minus, dtype=float),
+            q_dot_plus=np.array(q_dot_plus, dtype=float), impact_angle=float(q[2]),
+            kinetic_energy=float(kinetic_energy), kinetic_energy_constrained=T_c,
+            kinetic_energy_admissible=float(kinetic_energy_admissible),
+            energy_lost=T_c if energy_lost is None else float(energy_lost),
+            impulse=np.asarray(impulse, dtype=float),
+            step_length=float(walker.step_length(q_start, q)),
+            trailing_normal_velocity=float(trailing_normal_velocity),
+            potential_energy_released=float(walker.potential_energy(q_start, slope))
+            - float(walker.potential_energy(q, slope)),
+            actuator_work=float(actuator_work), push_off_work=float(push_off_work),
+            step_duration=time - t_start,
+        )
+
 
 @dataclass(frozen=True, kw_only=True)
 class WalkResult(ResultDictMixin):
@@ -703,7 +751,6 @@ def simulate(
 
     for k in range(steps):
         t_step, work_start = t, work
-        V_start = float(walker.potential_energy(q, slope))
         q_start = q.copy()
         law = torque
         if torque is not None and torque_resets_each_step:
@@ -775,20 +822,14 @@ def simulate(
         events_out.append(_impact_event("heel_strike", k, t, q, qd, res, rows, A_lock, v_trail,
                                         mode))
         records.append(
-            ImpactRecord(
-                step=k, time=t, q=q.copy(), q_dot_minus=qd.copy(), q_dot_plus=qd_plus.copy(),
-                impact_angle=float(q[2]),
-                kinetic_energy=float(res.kinetic_energy),
+            ImpactRecord.of_step(
+                walker, slope, step=k, step_start=(t_step, q_start), time=t, q=q,
+                q_dot_minus=qd, q_dot_plus=qd_plus, kinetic_energy=float(res.kinetic_energy),
                 kinetic_energy_constrained=float(res.kinetic_energy_constrained),
                 kinetic_energy_admissible=float(res.kinetic_energy_admissible),
-                energy_lost=float(res.energy_lost),
-                impulse=foot_impulse,
-                step_length=float(walker.step_length(q_start, q)),
-                trailing_normal_velocity=v_trail,
-                potential_energy_released=V_start - float(walker.potential_energy(q, slope)),
-                actuator_work=work - work_start,
+                energy_lost=float(res.energy_lost), impulse=foot_impulse,
+                trailing_normal_velocity=v_trail, actuator_work=work - work_start,
                 push_off_work=push_work,
-                step_duration=t - t_step,
             )
         )
         lifted = lifts(v_trail, lift_velocity_scale(leg_length, qd[2:]))

@@ -34,7 +34,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -56,6 +56,23 @@ if TYPE_CHECKING:
 Foot = Literal["right", "left"]
 #: A simulation backend: ``"scipy"`` (the reference integrator, every walker) or ``"compiled"``.
 Backend = Literal["scipy", "compiled"]
+#: The names of the simulation backends, as :data:`Backend` lists them.
+BACKEND_NAMES: tuple[str, ...] = get_args(Backend)
+
+
+def check_backend_name(backend: object, what: str = "backend") -> None:
+    """Raise ``ValueError`` unless ``backend`` is one of :data:`BACKEND_NAMES`.
+
+    Parameters
+    ----------
+    backend : object
+        The name given.
+    what : str
+        The argument's name in the message (``"backend"`` or ``"method"``).
+    """
+    if backend not in BACKEND_NAMES:
+        raise ValueError(f"{what} must be 'scipy' or 'compiled', got {backend!r}")
+
 #: Which compiled kernel simulates a walker: ``"compass"`` (the hand-written compass-gait kernel
 #: of :mod:`heelstrike.dynamics.compiled`) or ``"generated"`` (the kernel generated from a
 #: walker description, :mod:`heelstrike.dynamics.compiled_phased`).
@@ -64,12 +81,14 @@ CompiledKernel = Literal["compass", "generated"]
 ParameterValue = float | FloatArray
 
 __all__ = [
+    "BACKEND_NAMES",
     "Backend",
     "CompiledKernel",
     "Foot",
     "ParameterValue",
     "PlanarWalker",
     "WalkerScale",
+    "check_backend_name",
     "gravity_vector",
     "is_mcgeer_wheel",
     "section_unit",

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 from matplotlib.animation import FFMpegWriter, FuncAnimation, PillowWriter
 from matplotlib.artist import Artist
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
@@ -453,17 +454,24 @@ def strobe_figure(
     ax.plot(strobe["hip_x_m"], strobe["hip_y_m"], ":", color="0.4", lw=1, label="hip path")
     xs = np.concatenate([strobe[k].to_numpy() for k in ("hip_x_m", "swing_foot_x_m",
                                                           "stance_foot_x_m")])
-    x0, x1 = float(xs.min()) - foot_radius - 0.1, float(xs.max()) + foot_radius + 0.1
+    _finish_strobe(ax, (float(xs.min()) - foot_radius - 0.1, float(xs.max()) + foot_radius + 0.1),
+                   slope, n, float(strobe["t_s"].iloc[-1]), title)
+    return fig
+
+
+def _finish_strobe(ax: Axes, xlim: tuple[float, float], slope: float, frames: int,
+                   duration: float, title: str) -> None:
+    """The ground over ``xlim`` (m) on ``slope`` (rad), the axes' labels, legend and title
+    (a default names the ``frames`` over the step's ``duration``, s) of a strobe figure."""
+    x0, x1 = xlim
     ground = _to_world(np.array([[x0 / np.cos(slope), 0.0], [x1 / np.cos(slope), 0.0]]), slope)
     ax.plot(ground[:, 0], ground[:, 1], color="0.3", lw=2, label="ground")
     ax.set_xlim(x0, x1)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.legend(loc="upper right", fontsize=8)
-    dt = float(strobe["t_s"].iloc[-1])
-    ax.set_title(title or f"one step, {n} frames over {dt:.3f} s (darkest: heel strike); "
-                 f"blue and red: the two legs", fontsize=10)
-    return fig
+    ax.set_title(title or f"one step, {frames} frames over {duration:.3f} s (darkest: heel "
+                 "strike); blue and red: the two legs", fontsize=10)
 
 
 def model_strobe_figure(strobe: Any, *, slope: float = 0.0, title: str = "") -> Figure:
@@ -507,16 +515,8 @@ def model_strobe_figure(strobe: Any, *, slope: float = 0.0, title: str = "") -> 
         ax.plot(d["x0_m"], d["y0_m"], ":", color="0.4", lw=1, label=f"{name} path")
     xs = strobe[["x0_m", "x1_m"]].to_numpy()
     pad = float(strobe["radius_m"].max()) + 0.1
-    x0, x1 = float(xs.min()) - pad, float(xs.max()) + pad
-    ground = _to_world(np.array([[x0 / np.cos(slope), 0.0], [x1 / np.cos(slope), 0.0]]), slope)
-    ax.plot(ground[:, 0], ground[:, 1], color="0.3", lw=2, label="ground")
-    ax.set_xlim(x0, x1)
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.legend(loc="upper right", fontsize=8)
-    dt = float(strobe["t_s"].max())
-    ax.set_title(title or f"one step, {n} frames over {dt:.3f} s (darkest: heel strike); "
-                 f"blue and red: the two legs", fontsize=10)
+    _finish_strobe(ax, (float(xs.min()) - pad, float(xs.max()) + pad), slope, n,
+                   float(strobe["t_s"].max()), title)
     return fig
 
 

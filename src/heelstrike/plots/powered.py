@@ -116,7 +116,8 @@ def paper_comparison_figure(ds: xr.Dataset) -> Figure:
         ax.plot(R, np.where(zero, np.nan, eta), "k--",
                 label="paper: impact only, q3_dot = 1 rad/s")
         if np.any(zero):
-            ax.plot(R[zero], np.full(int(zero.sum()), 0.03), "kv", ms=6,
+            # a filled diamond: the open triangles on the same edge mean "no gait found"
+            ax.plot(R[zero], np.full(int(zero.sum()), 0.03), "kD", ms=5,
                     transform=ax.get_xaxis_transform(), clip_on=False,
                     label="paper: no loss (McGeer's wheel)" if j == 0 else None)
         for act in ds["actuation"].values:

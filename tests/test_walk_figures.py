@@ -192,6 +192,15 @@ def test_bifurcation_figure_shades_the_slopes_where_the_walker_falls():
     ax = fig.axes[0]
     spans = sorted((round(float(p.get_x()), 6), round(float(p.get_x() + p.get_width()), 6))
                    for p in ax.patches)
-    assert spans == [(5.25, 5.75), (5.75, 6.25)]
+    # QA sweep 10: the last band ended half a grid step past the range, at 6.25 deg
+    assert spans == [(5.25, 5.75), (5.75, 6.0)]
     assert "no steady state (the simulated walk fell)" in [t.get_text()
                                                     for t in ax.get_legend().get_texts()]
+    # slopes below a walker's first gait are not walked (status ""): no band says it fell there
+    statuses = ("", "completed", "completed", "lost_contact", "lost_contact")
+    angles[0] = np.nan
+    fig = bifurcation_figure(BifurcationDiagram(slopes=slopes, impact_angles=angles,
+                                                periods=periods, statuses=statuses))
+    spans = sorted((round(float(p.get_x()), 6), round(float(p.get_x() + p.get_width()), 6))
+                   for p in fig.axes[0].patches)
+    assert spans == [(5.25, 5.75), (5.75, 6.0)]

@@ -1047,9 +1047,7 @@ def _diagram_and_branch(
     """
     from heelstrike.analysis.limit_cycle import (
         BifurcationDiagram,
-        Continuation,
         bifurcation_diagram,
-        continue_limit_cycle,
     )
 
     at = np.array([s for s, _ in family])
@@ -1058,13 +1056,33 @@ def _diagram_and_branch(
         return family[int(np.argmin(np.abs(at - slope)))][1].fixed_point
 
     onset, z0 = family[0][0], family[0][1].fixed_point
-    k0 = int(np.searchsorted(slopes, onset))  # the first slope of the grid with a gait
+    branch = _continued_branch(walker, slopes, family, simulator, onset=onset, z0=z0,
+                               continuation_points=continuation_points, progress=progress,
+                               branch_tolerances=branch_tolerances)
 
     def restart(slope: float, z: FloatArray) -> FloatArray:
-        # a walk that fell: the period-one gait at its slope, Newton from the last state
-        return find_limit_cycle(walker, slope=slope, guess=z, simulator=simulator,
-                                **branch_tolerances).fixed_point
+        # A walk that fell: the period-one gait at its slope, preferably a stable one. Newton
+        # from the last state that walked can land on another, unstable gait when the grid is
+        # coarse (QA sweep 10: `--slope-range 1deg:6deg:6` fell at 2-6 deg through a stable
+        # branch), so Newton from the continued branch's gait nearest the slope comes first.
+        starts = [z]
+        if branch.cycles:
+            starts.insert(0, branch.cycles[int(np.argmin(np.abs(branch.values - slope)))]
+                          .fixed_point)
+        found: list[LimitCycle] = []
+        for start in starts:
+            try:
+                found.append(find_limit_cycle(walker, slope=slope, guess=start,
+                                              simulator=simulator, **branch_tolerances))
+            except GaitNotFoundError:
+                continue
+            if found[-1].stable:
+                break
+        if not found:
+            raise GaitNotFoundError(f"no period-one gait at slope {slope:g} rad")
+        return min(found, key=lambda c: (not c.stable, c.spectral_radius)).fixed_point
 
+    k0 = int(np.searchsorted(slopes, onset))  # the first slope of the grid with a gait
     diagram = bifurcation_diagram(walker, slopes[k0:], guess=nearest(float(slopes[k0])),
                                   transient=transient, record=record, progress=progress,
                                   simulator=simulator, restart=restart, **walk_tolerances)
@@ -1075,6 +1093,23 @@ def _diagram_and_branch(
         diagram = BifurcationDiagram(slopes=slopes, impact_angles=pad(diagram.impact_angles),
                                      periods=pad(diagram.periods),
                                      statuses=("",) * k0 + diagram.statuses)
+    return diagram, branch
+
+
+def _continued_branch(
+    walker: Any, slopes: FloatArray, family: list[tuple[float, LimitCycle]], simulator: Any, *,
+    onset: float, z0: FloatArray, continuation_points: int | None, progress: bool,
+    branch_tolerances: dict[str, Any],
+) -> Continuation:
+    """The period-one branch continued from the ``onset`` gait ``z0`` over ``slopes`` (see
+    :func:`_diagram_and_branch`)."""
+    from heelstrike.analysis.limit_cycle import Continuation, continue_limit_cycle
+
+    at = np.array([s for s, _ in family])
+
+    def nearest(slope: float) -> FloatArray:
+        return family[int(np.argmin(np.abs(at - slope)))][1].fixed_point
+
     if continuation_points is None:  # the diagram's slopes: the line meets every column of dots
         values = np.concatenate([[onset], slopes[slopes > onset]])
     else:
@@ -1089,13 +1124,12 @@ def _diagram_and_branch(
         return c if continuation_points is not None else _refine_branch(c, gait_at)
 
     if len(family) == 1 or values.size == 1:
-        branch = continue_limit_cycle(walker, "slope", values, guess=z0, **kw)
-        return diagram, refined(branch)
+        return refined(continue_limit_cycle(walker, "slope", values, guess=z0, **kw))
     head = continue_limit_cycle(walker, "slope", values[:1], guess=z0, **kw)
     rest = continue_limit_cycle(walker, "slope", values[1:], guess=nearest(float(values[1])),
                                 **kw)
     if not head.cycles:
-        return diagram, head
+        return head
     pd = list(rest.period_doubling)
     if rest.cycles and float(rest.values[0]) == float(values[1]):
         # a period doubling between the onset and the next slope
@@ -1114,7 +1148,7 @@ def _diagram_and_branch(
         parameter="slope", values=np.concatenate([head.values, rest.values]),
         cycles=head.cycles + rest.cycles, period_doubling=np.asarray(pd), stopped=rest.stopped,
     )
-    return diagram, refined(branch)
+    return refined(branch)
 
 
 #: Largest miss of the branch's drawn polyline (straight segments between its gaits), as a

@@ -23,7 +23,7 @@ from matplotlib.figure import Figure
 from numpy.typing import NDArray
 
 from heelstrike._frames import slope_to_world as _to_world
-from heelstrike._typing import FloatArray
+from heelstrike._typing import BoolArray, FloatArray
 from heelstrike.analysis.basin import OUTCOMES, Basin
 from heelstrike.analysis.gait_map import GaitMap
 from heelstrike.analysis.limit_cycle import BifurcationDiagram, Continuation
@@ -218,18 +218,23 @@ def _branch_piece(
 
 
 def _shade_without_steady_state(ax: Any, slopes_deg: FloatArray, angles: FloatArray,
-                                label: bool, branch_deg: FloatArray | None = None) -> None:
-    """Grey bands over the slopes where no recorded step exists (the simulated walk fell
-    within the transient), so that a blank stretch is not read as missing data. A band stops
-    where the period-one branch (``branch_deg``, deg) starts or ends, so that it does not
-    cover the branch drawn there."""
+                                label: bool, branch_deg: FloatArray | None = None,
+                                walked: BoolArray | None = None) -> None:
+    """Grey bands over the slopes where a walk was simulated (``walked``, default every slope)
+    and no recorded step exists (it fell within the transient), so that a blank stretch is not
+    read as missing data. Bands stay within the slope range, and stop where the period-one
+    branch (``branch_deg``, deg) starts or ends, so that they do not cover the branch drawn
+    there."""
     empty = ~np.any(np.isfinite(np.asarray(angles, dtype=float)), axis=1)
+    if walked is not None:
+        empty &= np.asarray(walked, dtype=bool)
     if not np.any(empty) or slopes_deg.size < 2:
         return
     half = 0.5 * float(np.min(np.diff(slopes_deg)))
     first = True
     for k in np.flatnonzero(empty):
-        lo, hi = slopes_deg[k] - half, slopes_deg[k] + half
+        lo = max(slopes_deg[k] - half, float(slopes_deg[0]))
+        hi = min(slopes_deg[k] + half, float(slopes_deg[-1]))
         if branch_deg is not None and branch_deg.size:
             b0, b1 = float(np.min(branch_deg)), float(np.max(branch_deg))
             if slopes_deg[k] < b0 < hi:
@@ -264,8 +269,11 @@ def bifurcation_figure(
         branch_deg = (np.rad2deg(continuation.values)
                       if continuation is not None and continuation.cycles
                       and continuation.parameter == "slope" else None)
+        # slopes below the first gait are not walked (status ""): nothing fell there
+        walked = (np.asarray([s != "" for s in diagram.statuses])
+                  if len(diagram.statuses) == slopes_deg.size else None)
         _shade_without_steady_state(ax, slopes_deg, diagram.impact_angles, ax is ax1,
-                                    branch_deg)
+                                    branch_deg, walked)
     if continuation is not None and continuation.cycles:
         v = np.rad2deg(continuation.values) if continuation.parameter == "slope" else None
         if v is not None:

@@ -143,6 +143,9 @@ def test_every_failed_compass_rule_is_named_with_its_values_only(capsys):
     assert main(["impact", "--radius", "-0.1", "--angle", "20deg"]) == 2
     line = capsys.readouterr().err.strip()
     assert "got leg_length = 1, foot_radius = -0.1 (" in line and "hip_mass" not in line
+    # QA sweep 10: R just above l was refused as "foot_radius = 1", hiding why
+    assert main(["impact", "--radius", "1.0000001", "--angle", "20deg"]) == 2
+    assert "got leg_length = 1, foot_radius = 1.0000001 (" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("argv", [

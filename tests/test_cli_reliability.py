@@ -377,7 +377,7 @@ def _synthetic_map() -> ImpactMap:
     return ImpactMap(
         x_name="R", y_name="angle", x=x, y=y, T=T, T_c=0.3 * T, T_a=0.7 * T, eta=0.5 * T,
         step_length=np.ones_like(T), trailing_normal_velocity=0.8 - X, lifts=lifts,
-        angle=0.3, stance_rate=1.0, walker_name="synthetic",
+        held=~lifts, angle=0.3, stance_rate=1.0, walker_name="synthetic",
     )
 
 

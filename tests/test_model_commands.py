@@ -322,3 +322,46 @@ def test_impact_map_backend_scipy_is_its_reference(tmp_path: Path) -> None:
     assert main([*grid, "--backend", "scipy", "--out", str(tmp_path / "b")]) == 0
     a = (tmp_path / "a" / "impact_map.csv").read_bytes()
     assert a == (tmp_path / "b" / "impact_map.csv").read_bytes() and len(a) > 100
+
+
+def test_impact_model_says_when_the_ground_holds_the_trailing_foot(capsys, tmp_path) -> None:
+    """QA sweep 10: at 40 deg ``impact --model compass`` printed T_c 8.131197 J where ``impact``
+    prints the paper's 7.664558 J, with nothing saying why: the ground holds the trailing foot
+    (a frictionless contact), whose loss the first includes. Both checked here against
+    independent projections, and the impulse units follow the rows (locks N m s)."""
+    from heelstrike.core.impact import impact
+    from heelstrike.models import CompassGait, heel_strike_state
+
+    assert main(["impact", "--model", "compass", "--angle", "40deg", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["trailing_foot_held"] is True and d["trailing_foot_lifts"] is False
+    assert d["units"]["impulse"] == ["N s"] * 3
+    w = CompassGait(foot_radius=0.0)
+    q, qd = heel_strike_state(w, math.radians(40.0), q3_dot=1.0)
+    A_L, A_R = w.contact_jacobian(q, "left"), w.contact_jacobian(q, "right")
+    both = impact(w.mass_matrix(q), np.vstack((A_L, A_R[1:])), qd)  # + the trailing normal row
+    striking = impact(w.mass_matrix(q), A_L, qd)  # the paper's eq. 10
+    assert d["T_c"] == pytest.approx(float(both.kinetic_energy_constrained), rel=1e-12)
+    assert d["T_c"] > float(striking.kinetic_energy_constrained) + 0.4
+    np.testing.assert_allclose(d["impulse"][-1], float(both.constraint_impulse[-1]), rtol=1e-10)
+    assert main(["impact", "--angle", "40deg", "--json"]) == 0
+    paper = json.loads(capsys.readouterr().out)
+    assert paper["T_c"] == pytest.approx(float(striking.kinetic_energy_constrained), rel=1e-12)
+    # the text says so, and a map's CSV marks the cells
+    assert main(["impact", "--model", "compass", "--angle", "40deg"]) == 0
+    assert "the ground holds the trailing foot" in capsys.readouterr().out
+    assert main(["impact", "--model", "compass", "--angle", "20deg"]) == 0
+    assert "holds" not in capsys.readouterr().out
+    assert main(["impact-map", "--model", "compass", "--x", "R:0:0.5:2", "--y",
+                 "angle:20deg:40deg:2", "--out", str(tmp_path)]) == 0
+    capsys.readouterr()
+    import pandas as pd
+
+    rows = pd.read_csv(tmp_path / "impact_map.csv")
+    assert (rows["trailing_foot_held"] == 1 - rows["trailing_foot_lifts"]).all()
+    assert rows["trailing_foot_held"].tolist() == [0, 0, 1, 0]  # R = 0 at 40 deg
+    # the kneed walker: striking foot (N s), two knee locks (N m s), trailing foot (N s)
+    assert main(["impact", "--model", "kneed", "--angle", "40deg", "--json"]) == 0
+    k = json.loads(capsys.readouterr().out)
+    assert k["trailing_foot_held"] is True
+    assert k["units"]["impulse"] == ["N s", "N s", "N m s", "N m s", "N s"]

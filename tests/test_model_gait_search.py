@@ -125,6 +125,20 @@ def test_cli_says_when_no_stable_gait_was_found() -> None:
     assert d["stable"] is False
     assert all(not g["stable"] for g in d["gaits"])
     assert "no stable period-one gait found" in r.stderr
+    # 2 deg is not the walker file's reference slope: the reference gait was followed too
+    assert "nor by following the walker file's own parameters' stable gait at 3 deg" in r.stderr
+
+
+def test_cli_note_claims_no_stable_reference_gait_that_does_not_exist() -> None:
+    """QA sweep 10: ``gait --model torso`` (the file's own parameters at 3 deg, where the passive
+    torso walker has no stable gait) said it had followed the file's gait at 3 deg, "where it
+    has a stable one"."""
+    r = _cli("gait", "--model", "torso", "--slope", "3deg", "--json")
+    assert r.returncode == 0, r.stderr
+    d = json.loads(r.stdout)
+    assert all(not g["stable"] for g in d["gaits"])
+    assert "no stable period-one gait found (not by the automatic search)" in r.stderr
+    assert "stable one" not in r.stderr and "following" not in r.stderr
 
 
 def test_cli_level_ground_message_for_walk_and_basin(tmp_path) -> None:

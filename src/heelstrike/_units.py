@@ -45,7 +45,8 @@ UNITS: dict[str, str | None] = {
     # torque-law gains (heelstrike.analysis.powered.GAIN_UNITS)
     "gain": "s/rad", "kp": "N m/rad", "kd": "N m s/rad", "max_torque": "N m", "angle": "rad",
     # not quantities
-    "trailing_foot_lifts": None, "degenerate_wheel": None, "stable": None,
+    "trailing_foot_lifts": None, "trailing_foot_held": None, "degenerate_wheel": None,
+    "stable": None,
     "trailing_foot_grazes": None, "model": None, "torque_joint": None, "coordinates": None,
     "actuation": None, "target_source": None, "backend": None,
     "parameter_name": None, "parameter_unit": None, "kind": None, "figure": None,
@@ -76,7 +77,7 @@ def _impulse(obj: Mapping[str, Any], n: int) -> list[str]:
     trailing foot's (N s) when it stays on the ground."""
     if "coordinates" not in obj:  # the compass gait: the striking foot's (x, y) only
         return ["N s"] * n
-    trailing = 0 if obj.get("trailing_foot_lifts", True) else 2
+    trailing = 1 if obj.get("trailing_foot_held", False) else 0  # its normal impulse
     locks = n - 2 - trailing
     if locks < 0:  # not the layout of model_heel_strike: forces only
         return ["N s"] * n

@@ -410,7 +410,8 @@ def write_impact_map(
         values (x varying fastest; columns named with their unit, e.g. ``R_m`` and
         ``angle_rad``, when ``units`` knows it), ``T_J``, ``T_c_J``, ``T_a_J`` (J),
         ``eta_J_per_m`` (J/m), ``step_length_m`` (m), ``trailing_normal_velocity_m_per_s`` (m/s) and
-        ``trailing_foot_lifts`` (0 or 1).
+        ``trailing_foot_lifts`` (0 or 1) and ``trailing_foot_held`` (0 or 1: the ground holds
+        the trailing foot, and the energies include that contact's loss).
     """
     from heelstrike.analysis.model_gaits import ANGLE
     from heelstrike.plots.models import impact_map_figure
@@ -439,6 +440,7 @@ def write_impact_map(
             "trailing_normal_velocity_m_per_s":
                 np.asarray(m.trailing_normal_velocity, dtype=float).ravel(),
             "trailing_foot_lifts": np.asarray(m.lifts, dtype=bool).ravel().astype(int),
+            "trailing_foot_held": np.asarray(m.held, dtype=bool).ravel().astype(int),
         },
         out / "impact_map.csv",
     )

@@ -515,6 +515,11 @@ class ModelHeelStrike(ResultDictMixin):
         ``T_c / step_length`` (J/m).
     trailing_foot_lifts : bool
         Complementarity decision (``resolve_impact``) for the trailing foot.
+    trailing_foot_held : bool
+        The ground holds the trailing foot (a frictionless contact, its normal impulse the last
+        entry of ``impulse``): ``T_c`` then includes what that contact destroys too, and is
+        larger than the paper's ``T_c`` of the striking foot's constraints alone (eq. 10), which
+        describes an inadmissible impact there (QA sweep 10).
     trailing_normal_velocity : float
         Its normal velocity after impact (m/s).
     """
@@ -530,6 +535,7 @@ class ModelHeelStrike(ResultDictMixin):
     step_length: float
     eta: float
     trailing_foot_lifts: bool
+    trailing_foot_held: bool
     trailing_normal_velocity: float
 
     def to_dict(self) -> dict[str, Any]:
@@ -547,6 +553,7 @@ class ModelHeelStrike(ResultDictMixin):
             "qdot_plus": [float(v) for v in self.q_dot_plus],
             "impulse": [float(v) for v in self.impulse],
             "trailing_foot_lifts": self.trailing_foot_lifts,
+            "trailing_foot_held": self.trailing_foot_held,
             "trailing_normal_velocity": self.trailing_normal_velocity,
         }
 
@@ -601,6 +608,7 @@ def model_heel_strike(walker: BuiltWalker, q: ArrayLike, q_dot: ArrayLike) -> Mo
                 float(walker.scale.leg_length) * float(np.sum(np.abs(qd[2:]))),
             )
         ),
+        trailing_foot_held=mc.modes[0] != "separate",
         trailing_normal_velocity=float(mc.normal_velocity[0]),
     )
 
@@ -620,6 +628,9 @@ class ImpactMap(ResultDictMixin):
         At each grid point (J, J, J, J/m, m, m/s); NaN where the walker is invalid.
     lifts : ndarray of bool, shape (ny, nx)
         The trailing foot lifts (the impact is admissible).
+    held : ndarray of bool, shape (ny, nx)
+        The ground holds the trailing foot (:attr:`ModelHeelStrike.trailing_foot_held`: the
+        energies include its contact's loss).
     angle : float
         Impact angle (rad) when it is not swept.
     stance_rate : float
@@ -638,6 +649,7 @@ class ImpactMap(ResultDictMixin):
     step_length: FloatArray
     trailing_normal_velocity: FloatArray
     lifts: NDArray[np.bool_]
+    held: NDArray[np.bool_]
     angle: float
     stance_rate: float
     walker_name: str
@@ -711,7 +723,7 @@ def impact_map(
     # the section walker: replace() keeps it, so each point builds one walker, not two
     walker = PhasedWalker.from_built(walker)
     out = {k: np.full(shape, np.nan) for k in ("T", "T_c", "T_a", "eta", "L", "v")}
-    lifts = np.zeros(shape, dtype=bool)
+    lifts, held = np.zeros(shape, dtype=bool), np.zeros(shape, dtype=bool)
     for i, yy in _progress(list(enumerate(ya)), progress, "impact map"):
         for j, xx in enumerate(xa):
             vals = {xn: float(xx), yn: float(yy)}
@@ -725,10 +737,10 @@ def impact_map(
             out["T"][i, j], out["T_c"][i, j], out["T_a"][i, j] = hs.T, hs.T_c, hs.T_a
             out["eta"][i, j], out["L"][i, j] = hs.eta, hs.step_length
             out["v"][i, j] = hs.trailing_normal_velocity
-            lifts[i, j] = hs.trailing_foot_lifts
+            lifts[i, j], held[i, j] = hs.trailing_foot_lifts, hs.trailing_foot_held
     return ImpactMap(
         x_name=xn, y_name=yn, x=xa, y=ya, T=out["T"], T_c=out["T_c"], T_a=out["T_a"],
         eta=out["eta"], step_length=out["L"], trailing_normal_velocity=out["v"], lifts=lifts,
-        angle=float(angle), stance_rate=float(stance_rate),
+        held=held, angle=float(angle), stance_rate=float(stance_rate),
         walker_name=walker.description.name,
     )

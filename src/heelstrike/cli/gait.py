@@ -72,6 +72,8 @@ def add_gait(sub: Any) -> None:
 
 
 def _run_gait_model(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
     from heelstrike.analysis.model_gaits import REFERENCE_SLOPE, find_model_gaits
 
@@ -92,10 +94,17 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     # each gait's collision loss is its step's total (knee strikes included), as in d
     d["gaits"] = [_gait_summary(g.cycle) | {"collision_loss": g.collision_loss} for g in gaits]
     if guess is None and not gait.cycle.stable:
+        # QA sweep 10: this said "where it has a stable one" of the torso walker, which has none
+        reference = abs(float(args.slope) - REFERENCE_SLOPE) <= 1e-12 and all(
+            np.array_equal(np.asarray(v, dtype=float),
+                           np.asarray(walker.description.default_params[k], dtype=float))
+            for k, v in walker.params.items())
+        followed = ("" if reference else
+                    f", nor by following the walker file's own parameters' stable gait at "
+                    f"{math.degrees(REFERENCE_SLOPE):g} deg, if it has one, to these "
+                    "parameters and slope")
         print(f"heelstrike: note: no stable period-one gait found (not by the automatic "
-              f"search, nor by following the walker file's own gait at "
-              f"{math.degrees(REFERENCE_SLOPE):g} deg, where it has a stable one, to these "
-              "parameters and slope); the least unstable gait found is shown", file=sys.stderr)
+              f"search{followed}); the least unstable gait found is shown", file=sys.stderr)
     if args.json:
         print_json(d)
         return 0
@@ -512,8 +521,8 @@ def _render_basin(basin: Any, args: argparse.Namespace, grid: tuple[int, int],
     if basin.gait_stable is False:
         print(f"heelstrike: note: the period-one gait the basin is built around is unstable "
               f"(largest |multiplier| {basin.spectral_radius:.4g} > 1): no start converges to "
-              "it, its basin is empty (see 'heelstrike bifurcation' for the slopes where it is "
-              "stable)", file=sys.stderr)
+              "it, its basin is empty ('heelstrike bifurcation' shows over which slopes, if "
+              "any, it is stable)", file=sys.stderr)
     if args.json:
         print_json({
             **head,

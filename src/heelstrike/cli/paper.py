@@ -164,6 +164,12 @@ def _run_impact_model(args: argparse.Namespace) -> int:
                       ("step_length", "m"), ("eta", "J/m")):
         print(f"  {key:<12} {d[key]:12.6f} {unit}")
     print(f"  trailing foot lifts  {'yes' if d['trailing_foot_lifts'] else 'no'}")
+    if d["trailing_foot_held"]:
+        # QA sweep 10: T_c differed from `impact`'s (the paper's, eq. 10) with nothing saying why
+        print(f"  (the ground holds the trailing foot, a frictionless contact with normal impulse "
+              f"{d['impulse'][-1]:.6f} N s:\n   T_c and T_a are those of both feet's "
+              "constraints; the paper's T_c, eq. 10, is the striking foot's alone,\n   for an "
+              "impact after which the trailing foot lifts)")
     return 0
 
 

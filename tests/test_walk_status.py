@@ -46,6 +46,12 @@ def test_members_compare_equal_to_their_old_strings() -> None:
         assert s == s.value and str(s) == s.value and f"{s}" == s.value
     assert WalkStatus.FELL_BACKWARD == "fell_backward"
     assert "backward" in WalkStatus.FELL_BACKWARD.message
+    # QA sweep 10: McGeer's wheel (R = l) "fell forward to the ground" at q3 = 90 deg with its
+    # hip at height l: the guard is the leg reaching the horizontal, and the message says that
+    assert "horizontal" in WalkStatus.FELL_FORWARD.message
+    assert "ground" not in WalkStatus.FELL_FORWARD.message
+    # forward topples reach negative normal force first (basin counts them as lost_contact)
+    assert "topples forward" in WalkStatus.LOST_CONTACT.message
 
 
 def test_codes_of_saved_results_are_stable() -> None:

@@ -98,7 +98,10 @@ class WalkStatus(StrEnum):
         return obj
 
     COMPLETED = "completed", 0, "all requested steps were taken"
-    FELL_FORWARD = "fell_forward", 1, "the stance leg fell forward to the ground"
+    FELL_FORWARD = (
+        "fell_forward", 1,
+        "the stance leg rotated forward to the horizontal, q3 = 90 deg, with no heel strike",
+    )
     FELL_BACKWARD = "fell_backward", 2, "the walker stopped and fell backward"
     TRAILING_FOOT_STAYS = (
         "trailing_foot_stays",
@@ -110,7 +113,8 @@ class WalkStatus(StrEnum):
     LOST_CONTACT = (
         "lost_contact",
         4,
-        "the ground's normal force on the stance foot became negative",
+        "the ground's normal force on the stance foot became negative: the ground would have "
+        "to pull, so the walker leaves it, as when it topples forward fast",
     )
     SLIPPED = "slipped", 5, "the stance foot needs more friction than the given coefficient"
     NO_HEEL_STRIKE = (

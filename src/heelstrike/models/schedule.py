@@ -145,7 +145,8 @@ class StepSchedule:
 
 
 def fell_forward() -> Guard:
-    """The stance leg reaching the ground ahead: ``q3 - pi/2`` rising through zero."""
+    """The stance leg reaching the horizontal ahead (the ground, for a point foot):
+    ``q3 - pi/2`` rising through zero."""
     return Guard(name="fell_forward", function=lambda q, qd: float(q[2]) - 0.5 * np.pi,
                  direction=1)
 

@@ -9,7 +9,8 @@ URDF shipped offline by the ``example-robot-data`` package) is loaded through Pi
 0.3 m/s, base moving forward at 0.5 m/s), and its left sole strikes the ground flat, inert and
 without slip (:func:`heelstrike.robots.robot_impact`). Then the paper's Figs. 2-3 for the robot:
 ``T_c`` and ``T_a`` over step length and strike speed
-(:func:`heelstrike.robots.robot_heel_strike_study`). Needs
+(:func:`heelstrike.robots.robot_heel_strike_study`, drawn by
+:func:`heelstrike.plots.robots.plot_robot_study`). Needs
 ``pip install 'heelstrike[robots]'``.
 """
 
@@ -17,11 +18,11 @@ from pathlib import Path
 
 import numpy as np
 
+from heelstrike.plots.robots import plot_robot_study
 from heelstrike.robots import (
     ContactSpec,
     gait_state,
     load_robot,
-    plot_robot_study,
     robot_heel_strike_study,
     robot_impact,
 )

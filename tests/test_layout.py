@@ -25,6 +25,8 @@ RESULT_TYPES = frozenset({
 })
 #: ... and plain constants (names of outcomes, of the impact-angle axis).
 CONSTANTS = frozenset({"ANGLE", "OUTCOMES"})
+#: The :mod:`heelstrike.robots` names ``plots/`` may import: result types only.
+ROBOT_RESULT_TYPES = frozenset({"RobotStudy"})
 
 #: Attribute calls that write data files; only :mod:`heelstrike.io` may make them.
 DATA_WRITERS = frozenset({"to_csv", "to_netcdf", "savetxt"})
@@ -73,7 +75,7 @@ def _attribute_calls(path: Path) -> list[tuple[str, int]]:
 
 def test_plots_modules_are_found() -> None:
     names = {p.stem for p in PLOTS}
-    assert {"__init__", "gait", "paper", "models", "powered"} <= names
+    assert {"__init__", "gait", "paper", "models", "powered", "robots"} <= names
 
 
 @pytest.mark.parametrize("path", PLOTS, ids=lambda p: p.name)
@@ -85,6 +87,22 @@ def test_plots_import_neither_dynamics_nor_analysis_functions(path: Path) -> Non
             assert names, f"{path.name}: 'import {module}' gives access to its functions"
             bad = set(names) - RESULT_TYPES - CONSTANTS
             assert not bad, f"{path.name} imports {sorted(bad)} from {module}"
+        if module == "heelstrike.robots" or module.startswith("heelstrike.robots."):
+            assert names, f"{path.name}: 'import {module}' gives access to its functions"
+            bad = set(names) - ROBOT_RESULT_TYPES
+            assert not bad, f"{path.name} imports {sorted(bad)} from {module}"
+
+
+@pytest.mark.parametrize(
+    "path",
+    sorted(p for p in PACKAGE.rglob("*.py") if "plots" not in p.relative_to(PACKAGE).parts),
+    ids=lambda p: str(p.relative_to(PACKAGE)),
+)
+def test_only_plots_draw(path: Path) -> None:
+    """Figures are drawn in ``plots/`` alone: no other module imports matplotlib
+    (:mod:`heelstrike.outputs` saves the figures it is given)."""
+    for module, _ in _imports(path):
+        assert module.split(".")[0] != "matplotlib", (str(path.relative_to(PACKAGE)), module)
 
 
 def test_the_allowed_analysis_names_are_results_and_constants() -> None:

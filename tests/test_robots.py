@@ -26,6 +26,7 @@ from heelstrike.cli import main
 from heelstrike.core.contact_laws import ContactRows, resolve_contact_impact
 from heelstrike.core.impact import ImpactInputError, impact
 from heelstrike.models.compass import CompassGait, heel_strike_state
+from heelstrike.plots.robots import plot_robot_study
 from heelstrike.robots import (
     ContactSpec,
     RobotError,
@@ -43,7 +44,7 @@ from heelstrike.robots import (
     robot_matrices,
 )
 from heelstrike.robots.states import gait_state
-from heelstrike.robots.study import plot_robot_study, robot_heel_strike_study
+from heelstrike.robots.study import robot_heel_strike_study
 
 pytestmark = pytest.mark.robots
 

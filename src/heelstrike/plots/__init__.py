@@ -4,7 +4,8 @@
 - :mod:`heelstrike.plots.gait`: passive gaits (walks, animations, phase portraits, bifurcation
   diagrams, basins, gait maps);
 - :mod:`heelstrike.plots.models`: impact maps of described walkers;
-- :mod:`heelstrike.plots.powered`: cost-of-transport figures of powered gaits.
+- :mod:`heelstrike.plots.powered`: cost-of-transport figures of powered gaits;
+- :mod:`heelstrike.plots.robots`: heel-strike studies of URDF/MJCF robots.
 
 Drawing only: no computing (the data come from :mod:`heelstrike.analysis`), no file writing
 (:mod:`heelstrike.outputs` writes figures and data, :mod:`heelstrike.io` the data files; the

@@ -36,7 +36,7 @@ from heelstrike.robots.states import (
     gait_velocity,
     joint_limit_violations,
 )
-from heelstrike.robots.study import RobotStudy, plot_robot_study, robot_heel_strike_study
+from heelstrike.robots.study import RobotStudy, robot_heel_strike_study
 
 __all__ = [
     "SHIPPED_ROBOTS",
@@ -63,7 +63,6 @@ __all__ = [
     "load_urdf",
     "mass_matrices_and_jacobians",
     "parse_contact",
-    "plot_robot_study",
     "robot_data_dir",
     "robot_heel_strike_study",
     "robot_impact",

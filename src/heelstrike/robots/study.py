@@ -15,7 +15,6 @@ trailing foot). All impacts of the grid are resolved in one batched call of
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -31,7 +30,7 @@ from heelstrike.robots.contacts import (
 from heelstrike.robots.loading import Robot, RobotError
 from heelstrike.robots.states import Leading, gait_configuration, gait_velocity
 
-__all__ = ["RobotStudy", "plot_robot_study", "robot_heel_strike_study"]
+__all__ = ["RobotStudy", "robot_heel_strike_study"]
 
 
 
@@ -141,58 +140,3 @@ def robot_heel_strike_study(
         trailing_lift_speed=np.asarray(lift),
         admissible=ground_admissible(lift, kept=False),
     )
-
-
-def plot_robot_study(study: RobotStudy, fig: Any = None) -> Any:
-    """Draw the study on a matplotlib figure (draw only: nothing is shown or saved).
-
-    Left: ``T_c`` (solid) and ``T_a`` (dashed) against step length, one colour per strike
-    speed, inadmissible impacts (trailing foot not lifting) marked with crosses. Right: loss per
-    metre ``T_c / L`` over (step length, strike speed).
-
-    Parameters
-    ----------
-    study : RobotStudy
-    fig : matplotlib.figure.Figure, optional
-        Figure to draw on (a new ``Figure`` if None; pyplot is not used).
-
-    Returns
-    -------
-    matplotlib.figure.Figure
-    """
-    from matplotlib.figure import Figure
-    from matplotlib.lines import Line2D
-
-    fig = Figure(figsize=(10, 4.6), layout="constrained") if fig is None else fig
-    ax1, ax2 = fig.subplots(1, 2)
-    L, S = study.step_length, study.strike_speed
-    colours = [f"C{i % 10}" for i in range(S.size)]
-    for j in range(S.size):
-        ax1.plot(L, study.T_c[:, j], "-", color=colours[j])
-        ax1.plot(L, study.T_a[:, j], "--", color=colours[j])
-        bad = ~study.admissible[:, j]
-        ax1.plot(L[bad], study.T_c[bad, j], "x", color=colours[j])
-    ax1.set_xlabel("step length (m)")
-    ax1.set_ylabel("energy (J)")
-    ax1.set_title(f"{study.robot}: {study.contact} strike")
-    # one legend below the panels (inside, it covered curves): line style = energy, colour =
-    # strike speed
-    handles = [Line2D([], [], color="k", ls="-", label="T_c (lost)"),
-               Line2D([], [], color="k", ls="--", label="T_a (kept)"),
-               Line2D([], [], color="k", ls="none", marker="x", label="inadmissible"),
-               *(Line2D([], [], color=c, label=f"{s:g} m/s")
-                 for c, s in zip(colours, S, strict=True))]
-    fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 9),
-               fontsize="small")
-    if L.size > 1 and S.size > 1:
-        mesh = ax2.pcolormesh(L, S, study.loss_per_metre.T, shading="nearest")
-        fig.colorbar(mesh, ax=ax2, label="T_c / L (J/m)")
-        ax2.contour(L, S, study.trailing_lift_speed.T, levels=[0.0], colors="k",
-                    linestyles="--")
-        ax2.set_ylabel("strike speed (m/s)")
-    else:
-        ax2.plot(L, study.loss_per_metre[:, 0], "o-")
-        ax2.set_ylabel("T_c / L (J/m)")
-    ax2.set_xlabel("step length (m)")
-    return fig
-

@@ -175,6 +175,54 @@ def test_gait_search_is_bounded_in_time() -> None:
                           time_limit=0.0)
 
 
+def _clock_jumps_after(monkeypatch: pytest.MonkeyPatch, module: object, name: str) -> None:
+    """After the first call of ``module.name``, ``time.monotonic`` runs 10^6 s ahead: every
+    deadline of the search has passed from then on."""
+    import time
+
+    real, shift = time.monotonic, [0.0]
+    monkeypatch.setattr(time, "monotonic", lambda: real() + shift[0])
+    inner = getattr(module, name)
+
+    def wrapped(*args: object, **kwargs: object) -> object:
+        out = inner(*args, **kwargs)
+        shift[0] = 1e6
+        return out
+
+    monkeypatch.setattr(module, name, wrapped)
+
+
+def test_a_search_cut_by_its_time_limit_says_so(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The gaits found before the time limit are returned with a warning: the search did not
+    look everywhere (it returned a subset without a word). 3 deg, point foot: Garcia's long
+    and short gaits; scipy Newton from each compiled start, cut after the first."""
+    import heelstrike.analysis.limit_cycle as lc
+    from heelstrike.analysis.newton import SearchTimeLimitWarning
+
+    walker, slope = CompassGait(foot_radius=0.0), np.deg2rad(3.0)
+    assert len(find_limit_cycles(walker, slope=slope, method="compiled")) == 2
+    _clock_jumps_after(monkeypatch, lc, "_newton")
+    with pytest.warns(SearchTimeLimitWarning, match="time limit of 300 s: the 1 gait found"):
+        gaits = find_limit_cycles(walker, slope=slope, method="scipy")
+    assert len(gaits) == 1 and gaits[0].residual < 1e-9
+
+
+def test_gait_notes_a_search_cut_by_its_time_limit(
+    monkeypatch: pytest.MonkeyPatch, capsys: Capture
+) -> None:
+    """On the command line the warning is a note on stderr (no Python warning line), and the
+    gaits found are printed as usual."""
+    import heelstrike.analysis.limit_cycle as lc
+
+    _clock_jumps_after(monkeypatch, lc, "_compiled_seeds")
+    assert main(["gait", "--radius", "0", "--slope", "3deg", "--json"]) == 0
+    captured = capsys.readouterr()
+    assert ("heelstrike: note: the gait search reached its time limit of 300 s: the 2 gaits "
+            "found by then are returned, and others may exist") in captured.err
+    assert "Warning" not in captured.err
+    assert len(json.loads(captured.out)["gaits"]) == 2
+
+
 # -- item 8: the cost study keeps the cheapest gait ---------------------------------------------
 
 

@@ -69,7 +69,8 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "ModelGait", "ModelHeelStrike", "REFERENCE_SLOPE", "find_model_gait",
         "find_model_gaits", "impact_map", "model_heel_strike", "symmetric_heel_strike_state",
     ),
-    "newton": ("NewtonSolution", "NewtonStatus", "floquet_multipliers", "newton_solve"),
+    "newton": ("NewtonSolution", "NewtonStatus", "SearchTimeLimitWarning", "floquet_multipliers",
+               "newton_solve"),
     "paper": (
         "FIGURE_RADII", "MAX_IMPACT_ANGLE", "Figure3bData", "PaperFigureData", "figure2_data",
         "figure3a_data", "figure3b_data", "heel_strike_table", "impact_angle_grid",

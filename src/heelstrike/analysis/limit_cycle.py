@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import sys
 import time
+import warnings
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, cast
@@ -603,7 +604,8 @@ def find_limit_cycles(
     progress : bool
         Progress bar on stderr (shown after 2 s).
     time_limit : float
-        Bound on the search (s); the gaits found by then are returned.
+        Bound on the search (s); the gaits found by then are returned, with a
+        :class:`~heelstrike.analysis.newton.SearchTimeLimitWarning` (others may exist).
 
     Returns
     -------
@@ -616,6 +618,11 @@ def find_limit_cycles(
     ------
     GaitNotFoundError
         A passive walker on a slope <= 0, no step possible, or no gait found.
+
+    Warns
+    -----
+    SearchTimeLimitWarning
+        The search ran past ``time_limit``: the gaits found by then are returned.
     """
     pmap = PoincareMap(
         walker=walker, slope=slope, torque=torque, push_off=push_off, rtol=rtol, atol=atol,
@@ -648,6 +655,7 @@ def find_limit_cycles(
                                        g.iterations)
                 for g in gaits
             ]
+            _warn_if_cut(deadline, time_limit, len(cycles))
             return tuple(sorted(cycles, key=_preference))
     else:
         starts = [_automatic_guess(pmap, progress)]
@@ -666,7 +674,22 @@ def find_limit_cycles(
             cycles.append(_characterise(pmap, z, residual, it, fd_step))
     if not cycles:
         raise GaitNotFoundError(str(last) if last else "no period-one gait found")
+    _warn_if_cut(deadline, time_limit, len(cycles))
     return tuple(sorted(cycles, key=_preference))
+
+
+def _warn_if_cut(deadline: float, time_limit: float, found: int) -> None:
+    """Warn that the search ran past its deadline (its stages stop there, so gaits may have
+    been missed)."""
+    if time.monotonic() > deadline:
+        from heelstrike.analysis.newton import SearchTimeLimitWarning
+
+        warnings.warn(
+            f"the gait search reached its time limit of {time_limit:g} s: the {found} "
+            f"gait{'s' if found != 1 else ''} found by then {'are' if found != 1 else 'is'} "
+            "returned, and others may exist",
+            SearchTimeLimitWarning, stacklevel=3,
+        )
 
 
 def find_limit_cycle(

@@ -27,9 +27,17 @@ from numpy.typing import ArrayLike, NDArray
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
 
-__all__ = ["NewtonSolution", "NewtonStatus", "floquet_multipliers", "newton_solve"]
+__all__ = [
+    "NewtonSolution", "NewtonStatus", "SearchTimeLimitWarning", "floquet_multipliers",
+    "newton_solve",
+]
 
 Residual = Callable[[FloatArray], FloatArray]
+
+
+class SearchTimeLimitWarning(UserWarning):
+    """A search reached its time limit: what it found by then is returned, and it may have
+    missed solutions (e.g. :func:`heelstrike.analysis.find_limit_cycles`)."""
 
 
 class NewtonStatus(enum.Enum):

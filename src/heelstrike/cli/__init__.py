@@ -30,7 +30,13 @@ from typing import Any
 from heelstrike._optional import MissingExtraError
 from heelstrike._version import __version__
 from heelstrike.cli import gait, paper, powered, robot
-from heelstrike.cli._common import CliError, Parser, parse_angle, parse_range
+from heelstrike.cli._common import (
+    CliError,
+    Parser,
+    parse_angle,
+    parse_range,
+    warnings_as_notes,
+)
 from heelstrike.cli._render import fail, one_line
 
 __all__ = ["CliError", "build_parser", "main", "parse_angle", "parse_range"]
@@ -73,7 +79,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
-        status = int(args.func(args))
+        from heelstrike.analysis.newton import SearchTimeLimitWarning
+
+        with warnings_as_notes(SearchTimeLimitWarning):  # a cut search is news, said as such
+            status = int(args.func(args))
     except CliError as exc:
         return fail(one_line(exc))
     except (ValueError, ArithmeticError) as exc:

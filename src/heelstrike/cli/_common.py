@@ -4,11 +4,13 @@ options, output directories and resumable stores. It builds inputs; it computes 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 import re
 import sys
-from collections.abc import Callable, Sequence
+import warnings
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any, NoReturn
 
 
@@ -293,6 +295,25 @@ def add_store_option(p: argparse.ArgumentParser) -> None:
                    "finished figure and data are still written to --out (as without --store)")
 
 
+@contextlib.contextmanager
+def warnings_as_notes(*categories: type[Warning]) -> Iterator[None]:
+    """Within the block, warnings of ``categories`` print as ``heelstrike: note: ...`` on
+    stderr (news for the user, not a Python warning with a source line); others as before."""
+    show = warnings.showwarning
+
+    def note(message: Any, category: Any, *args: Any, **kwargs: Any) -> None:
+        if isinstance(category, type) and issubclass(category, categories):
+            print(f"heelstrike: note: {message}", file=sys.stderr)
+        else:
+            show(message, category, *args, **kwargs)
+
+    warnings.showwarning = note
+    try:
+        yield
+    finally:
+        warnings.showwarning = show
+
+
 def run_with_store(store: str | None, compute: Callable[[], Any], out: str | None = None) -> Any:
     """Run ``compute()``; with a store, report its progress on stderr and map store errors.
     ``out``: the command's ``--out`` directory, which the store must not be."""
@@ -305,7 +326,6 @@ def run_with_store(store: str | None, compute: Callable[[], Any], out: str | Non
                        "chunks and --out its figures and data; give the store a directory of "
                        "its own")
     import logging
-    import warnings
 
     from heelstrike.analysis.sweep import (
         SweepError,
@@ -320,48 +340,39 @@ def run_with_store(store: str | None, compute: Callable[[], Any], out: str | Non
     level = logger.level
     logger.addHandler(handler)
     logger.setLevel(logging.INFO)
-    show = warnings.showwarning
+    with warnings_as_notes(SweepStoreRepairWarning):  # a repaired store is news
+        try:
+            return compute()
+        except SweepStoreMismatchError as exc:
+            # the sweep's internal names, said in the command's terms
+            def plain(key: str) -> str:
+                if key == "function.bound":
+                    return "the command's options (walker, slope, steps, tol, ...)"
+                head = key.split(".", 1)[0]
+                return {"function": "the code that computes it",
+                        "grid": "the grid (--grid, ranges)",
+                        "chunks": "the chunking"}.get(head, key)
 
-    def note_repairs(message: Any, category: Any, *args: Any, **kwargs: Any) -> None:
-        # a repaired store is news, not a Python warning with a source line
-        if isinstance(category, type) and issubclass(category, SweepStoreRepairWarning):
-            print(f"heelstrike: note: {message}", file=sys.stderr)
-        else:
-            show(message, category, *args, **kwargs)
-
-    warnings.showwarning = note_repairs
-    try:
-        return compute()
-    except SweepStoreMismatchError as exc:
-        # the sweep's internal names, said in the command's terms
-        def plain(key: str) -> str:
-            if key == "function.bound":
-                return "the command's options (walker, slope, steps, tol, ...)"
-            head = key.split(".", 1)[0]
-            return {"function": "the code that computes it", "grid": "the grid (--grid, ranges)",
-                    "chunks": "the chunking"}.get(head, key)
-
-        what = sorted({plain(d) for d in exc.differs})
-        raise CliError(
-            f"--store {store!r} holds results of a different computation (differs in: "
-            f"{'; '.join(what)}; internally {', '.join(exc.differs)}); remove it or choose "
-            "another directory"
-        ) from exc
-    except SweepStoreLockedError as exc:
-        raise CliError(
-            f"--store {store!r} is in use by another heelstrike run; wait for it to finish or "
-            "choose another directory"
-        ) from exc
-    except SweepError as exc:
-        raise CliError(str(exc)) from exc
-    except KeyboardInterrupt:
-        print(f"heelstrike: finished chunks are kept in {store!r}; run the same command "
-              "again to resume", file=sys.stderr)
-        raise
-    finally:
-        warnings.showwarning = show
-        logger.removeHandler(handler)
-        logger.setLevel(level)
+            what = sorted({plain(d) for d in exc.differs})
+            raise CliError(
+                f"--store {store!r} holds results of a different computation (differs in: "
+                f"{'; '.join(what)}; internally {', '.join(exc.differs)}); remove it or choose "
+                "another directory"
+            ) from exc
+        except SweepStoreLockedError as exc:
+            raise CliError(
+                f"--store {store!r} is in use by another heelstrike run; wait for it to finish "
+                "or choose another directory"
+            ) from exc
+        except SweepError as exc:
+            raise CliError(str(exc)) from exc
+        except KeyboardInterrupt:
+            print(f"heelstrike: finished chunks are kept in {store!r}; run the same command "
+                  "again to resume", file=sys.stderr)
+            raise
+        finally:
+            logger.removeHandler(handler)
+            logger.setLevel(level)
 
 
 # -- basin of attraction and stable-gait map (issue 6) ------------------------------------------

@@ -1026,6 +1026,12 @@ def compass_bifurcation(
     )
 
 
+def _nearest_gait(family: list[tuple[float, LimitCycle]], slope: float) -> FloatArray:
+    """Fixed point of the ``family`` gait (``(slope, gait)`` pairs) whose slope is nearest."""
+    at = np.array([s for s, _ in family])
+    return family[int(np.argmin(np.abs(at - slope)))][1].fixed_point
+
+
 def _diagram_and_branch(
     walker: Any, slopes: FloatArray, family: list[tuple[float, LimitCycle]], simulator: Any, *,
     transient: int, record: int, continuation_points: int | None, progress: bool,
@@ -1049,11 +1055,6 @@ def _diagram_and_branch(
         BifurcationDiagram,
         bifurcation_diagram,
     )
-
-    at = np.array([s for s, _ in family])
-
-    def nearest(slope: float) -> FloatArray:
-        return family[int(np.argmin(np.abs(at - slope)))][1].fixed_point
 
     onset, z0 = family[0][0], family[0][1].fixed_point
     branch = _continued_branch(walker, slopes, family, simulator, onset=onset, z0=z0,
@@ -1083,7 +1084,8 @@ def _diagram_and_branch(
         return min(found, key=lambda c: (not c.stable, c.spectral_radius)).fixed_point
 
     k0 = int(np.searchsorted(slopes, onset))  # the first slope of the grid with a gait
-    diagram = bifurcation_diagram(walker, slopes[k0:], guess=nearest(float(slopes[k0])),
+    diagram = bifurcation_diagram(walker, slopes[k0:],
+                                  guess=_nearest_gait(family, float(slopes[k0])),
                                   transient=transient, record=record, progress=progress,
                                   simulator=simulator, restart=restart, **walk_tolerances)
     if k0 > 0:  # no gait below the onset: nothing to walk or draw there
@@ -1105,11 +1107,6 @@ def _continued_branch(
     :func:`_diagram_and_branch`)."""
     from heelstrike.analysis.limit_cycle import Continuation, continue_limit_cycle
 
-    at = np.array([s for s, _ in family])
-
-    def nearest(slope: float) -> FloatArray:
-        return family[int(np.argmin(np.abs(at - slope)))][1].fixed_point
-
     if continuation_points is None:  # the diagram's slopes: the line meets every column of dots
         values = np.concatenate([[onset], slopes[slopes > onset]])
     else:
@@ -1126,8 +1123,8 @@ def _continued_branch(
     if len(family) == 1 or values.size == 1:
         return refined(continue_limit_cycle(walker, "slope", values, guess=z0, **kw))
     head = continue_limit_cycle(walker, "slope", values[:1], guess=z0, **kw)
-    rest = continue_limit_cycle(walker, "slope", values[1:], guess=nearest(float(values[1])),
-                                **kw)
+    rest = continue_limit_cycle(walker, "slope", values[1:],
+                                guess=_nearest_gait(family, float(values[1])), **kw)
     if not head.cycles:
         return head
     pd = list(rest.period_doubling)

@@ -162,7 +162,7 @@ def test_generated_numba_functions_equal_numpy(name: str, walkers: dict[str, Pha
     w = walkers[name]
     model = build_numba(w.description)
     n = w.n_coordinates
-    p = np.array([float(w.params[k]) for k in w.description.param_names])
+    p = np.array([float(w.parameters[k]) for k in w.description.param_names])
     rng = np.random.default_rng(3)
     for _ in range(5):
         q = rng.uniform(-0.7, 0.7, n)
@@ -339,7 +339,7 @@ def test_numba_source_cache_round_trip_and_tampering(
     assert again.from_cache and again.key == first.key
     n = 4
     q, u = np.array([0.0, 0.0, 0.2, -0.4]), np.array([0.0, 0.0, 1.0, -0.5])
-    p = np.array([float(walkers["compass"].params[k]) for k in desc.param_names])
+    p = np.array([float(walkers["compass"].parameters[k]) for k in desc.param_names])
     M1, M2, h = np.empty((n, n)), np.empty((n, n)), np.empty(n)
     first.dynamics(q, u, p, 0.05, M1, h)
     again.dynamics(q, u, p, 0.05, M2, h)

@@ -307,7 +307,7 @@ def test_kneed_locks_and_actuation() -> None:
     # straight, vertical legs: the hip is at the height of a straight leg above the ground
     q = np.array([0.3, 0.1, 0.0, 0.0, 0.0, 0.0])
     pos = w.positions(q)
-    p = w.params
+    p = w.parameters
     np.testing.assert_allclose(pos["hip"], [0.3, p["a1"] + p["b1"] + p["a2"] + p["b2"]])
     np.testing.assert_allclose(pos["swing_foot.contact"], [0.3, 0.0], atol=1e-15)
     np.testing.assert_allclose(w.total_mass, p["mH"] + 2 * p["mt"] + 2 * p["ms"])

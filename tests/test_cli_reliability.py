@@ -409,7 +409,7 @@ def test_impact_map_axes_have_units() -> None:
     for name in ("compass", "kneed", "torso"):
         w = load_walker(name)
         units = parameter_units(w.description)
-        assert set(w.params) <= set(units), name
+        assert set(w.parameters) <= set(units), name
     compass = parameter_units(load_walker("compass").description)
     assert (compass["R"], compass["m"], compass["I"], compass["g"]) == (
         "m", "kg", "kg m^2", "m/s^2")
@@ -462,7 +462,7 @@ def test_every_walker_has_one_scale() -> None:
         assert float(s.leg_length) == pytest.approx(1.0, rel=1e-12)
         assert _scale(walker) == pytest.approx((20.0, 3.7, 1.0), rel=1e-12)
     kneed = load_walker("kneed", g=1.62, R=0.2)
-    p = kneed.params
+    p = kneed.parameters
     s = kneed.scale
     assert float(s.gravity) == pytest.approx(1.62, rel=1e-12)
     assert float(s.leg_length) == pytest.approx(p["a1"] + p["b1"] + p["a2"] + p["b2"], rel=1e-12)

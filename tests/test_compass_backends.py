@@ -75,7 +75,7 @@ def test_described_compass_has_the_same_equations() -> None:
                         gravity=rng.uniform(1, 20))
         d = w.as_described()
         assert d is not None
-        assert dict(d.params) == {DESCRIBED_PARAMETERS[k]: float(v)
+        assert dict(d.parameters) == {DESCRIBED_PARAMETERS[k]: float(v)
                                   for k, v in w.parameters.items()}
         for _ in range(4):
             q = rng.uniform(-1, 1, 4)
@@ -284,7 +284,7 @@ def test_generated_dynamics_returns_the_potential_energy() -> None:
     for name in ("compass", "kneed", "torso"):
         w = load_walker(name)
         fns = numba_model(w)
-        p = np.array([float(w.params[k]) for k in w.description.param_names])
+        p = np.array([float(w.parameters[k]) for k in w.description.param_names])
         n = w.n_coordinates
         for _ in range(4):
             q, u = rng.uniform(-1, 1, n), rng.uniform(-2, 2, n)

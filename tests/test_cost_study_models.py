@@ -129,7 +129,7 @@ def test_model_study_refuses_in_library() -> None:
 
 def test_largest_admissible_radius_follows_the_walker_files_constraints() -> None:
     kneed = load_walker("kneed")
-    a1, b1 = kneed.params["a1"], kneed.params["b1"]
+    a1, b1 = kneed.parameters["a1"], kneed.parameters["b1"]
     r = kneed.largest_admissible("R", 1.0)  # the constraint R <= a1 + b1 (0.5 m) binds
     assert abs(r - (a1 + b1)) < 1e-9 and r <= a1 + b1
     kneed.replace(R=r)  # admitted

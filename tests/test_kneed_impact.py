@@ -168,7 +168,7 @@ ALL = ("shank1", "thigh1", "hip", "thigh2", "shank2")
 
 def test_hand_kinematics_agree_with_builder(walker: BuiltWalker) -> None:
     """Sanity of the reference itself: same points and same kinetic energy."""
-    hand = Hand(walker.params)
+    hand = Hand(walker.parameters)
     rng = np.random.default_rng(2)
     for _ in range(5):
         q, qd = rng.normal(size=6) * 0.5, rng.normal(size=6)
@@ -186,9 +186,9 @@ def test_hand_kinematics_agree_with_builder(walker: BuiltWalker) -> None:
 
 @pytest.mark.parametrize("seed", range(5))
 def test_knee_strike_conserves_the_right_angular_momenta(walker: BuiltWalker, seed: int) -> None:
-    hand = Hand(walker.params)
+    hand = Hand(walker.parameters)
     rng = np.random.default_rng(seed)
-    R = walker.params["R"]
+    R = walker.parameters["R"]
     # single support, stance knee locked (q3 = 0), swing knee reaching its lock (q5 = 0)
     q = np.array([0.0, R, rng.uniform(-0.3, 0.1), 0.0, rng.uniform(0.2, 0.6), 0.0])
     w3, w4 = rng.uniform(0.3, 1.5), rng.uniform(0.5, 3.0)
@@ -215,8 +215,8 @@ def test_knee_strike_conserves_the_right_angular_momenta(walker: BuiltWalker, se
 @pytest.mark.parametrize("q2", [0.15, 0.25, 0.35])
 def test_heel_strike_with_knee_locks(walker: BuiltWalker, q2: float) -> None:
     """Both knees locked at heel strike; the trailing foot lifts (checked by complementarity)."""
-    hand = Hand(walker.params)
-    R = walker.params["R"]
+    hand = Hand(walker.parameters)
+    R = walker.parameters["R"]
     # straight legs, symmetric: the swing foot touches the ground ahead (q4 = -2 q2)
     q = np.array([0.0, R, q2, 0.0, -2.0 * q2, 0.0])
     assert walker.foot_clearance(q, "left") == pytest.approx(0.0, abs=1e-14)

@@ -110,7 +110,7 @@ def test_kneed_map_grids_agree_and_large_feet_have_their_gaits() -> None:
 
 def test_model_map_refuses_parameter_values_the_walker_rejects() -> None:
     kneed = load_phased_walker("kneed")
-    limit = kneed.params["a1"] + kneed.params["b1"]
+    limit = kneed.parameters["a1"] + kneed.parameters["b1"]
     with pytest.raises(ValueError, match=r"R = 0\.6 is not admitted"):
         model_gait_map(kneed, "R", [0.3, limit + 0.1], np.radians([3.0]))
 
@@ -153,7 +153,7 @@ def test_map_command_default_kneed_radii_stop_at_the_constraint(
     main(["map", "--model", "kneed", "--out", str(tmp_path / "m")])
     values, walker = seen["values"], seen["walker"]
     assert seen["parameter"] == "R" and values.size == 7 and values[0] == 0.0
-    assert values[-1] == pytest.approx(walker.params["a1"] + walker.params["b1"], abs=1e-9)
+    assert values[-1] == pytest.approx(walker.parameters["a1"] + walker.parameters["b1"], abs=1e-9)
     for v in values:
         walker.replace(R=float(v))  # admitted: no ValueError
 

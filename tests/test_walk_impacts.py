@@ -233,7 +233,7 @@ def test_model_strobe_is_the_walker_s_own_geometry(
     frames = 6
     s0 = model_strobe_table(kneed, walk, 0, frames=frames)
     s1 = model_strobe_table(kneed, walk, 1, frames=frames)
-    p = kneed.params
+    p = kneed.parameters
     R = p["R"]
     lengths = {"stance_shank": p["a1"] + p["b1"], "swing_shank": p["a1"] + p["b1"],
                "stance_thigh": p["a2"] + p["b2"], "swing_thigh": p["a2"] + p["b2"]}

@@ -512,7 +512,7 @@ def model_basin_of_attraction(
     xb = np.linspace(b0, b1, n2)
     xn, yn = names[ia], names[ib]
     func = functools.partial(
-        _model_basin_chunk, description=w.description, params=dict(w.params),
+        _model_basin_chunk, description=w.description, params=dict(w.parameters),
         slope=float(slope), zstar=tuple(map(float, zstar)), axes=(ia, ib), steps=int(steps),
         tol=float(tol), rtol=float(rtol), atol=float(atol), backend=backend, parallel=parallel,
     )
@@ -541,7 +541,7 @@ def model_basin_of_attraction(
         attrs[f"fixed_point_{name}"] = float(zstar[i])
         attrs[f"fixed_point_{name}_units"] = section_unit(name).replace("/s", " s-1")
     units = parameter_units(w.description)
-    for name, value in w.params.items():
+    for name, value in w.parameters.items():
         attrs[f"param_{name}"] = float(np.asarray(value))
         if name in units:
             attrs[f"param_{name}_units"] = units[name]

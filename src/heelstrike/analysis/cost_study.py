@@ -319,7 +319,7 @@ def cost_study(
             model=str(model.description.name), backend=backend,
             total_mass=float(scale.total_mass), gravity=float(scale.gravity),
             leg_length=float(scale.leg_length),
-            **{f"param_{k}": float(v) for k, v in sorted(model.params.items()) if k != "R"},
+            **{f"param_{k}": float(v) for k, v in sorted(model.parameters.items()) if k != "R"},
         )
     return ds
 
@@ -345,9 +345,9 @@ def _check_model(
         raise ValueError("actuation_options set the hip laws, not the push-off (a posture "
                          "law's gains are declared in the walker file)")
     check_backend_name(backend)
-    if "R" not in model.params:
+    if "R" not in model.parameters:
         raise ValueError(f"model {name!r} has no foot radius parameter 'R' (its parameters: "
-                         f"{', '.join(sorted(model.params))})")
+                         f"{', '.join(sorted(model.parameters))})")
     leg = float(model.scale.leg_length)
     for r in radii:
         if not 0.0 <= float(r) <= leg:

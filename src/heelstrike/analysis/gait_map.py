@@ -713,8 +713,8 @@ def model_gait_map(
     from heelstrike.dynamics.phased import PhasedWalker
 
     w0 = PhasedWalker.from_built(walker)
-    if parameter not in w0.params:
-        raise ValueError(f"unknown parameter {parameter!r}; known: {sorted(w0.params)}")
+    if parameter not in w0.parameters:
+        raise ValueError(f"unknown parameter {parameter!r}; known: {sorted(w0.parameters)}")
     P = np.asarray(values, dtype=float).ravel()
     S = np.asarray(slopes, dtype=float).ravel()
     if P.size < 1 or S.size < 1:
@@ -737,7 +737,7 @@ def model_gait_map(
     # (the range only, not the grid), nearest to s_a first
     n_fb = max(2, int(np.ceil((S[-1] - S[0]) / np.deg2rad(1.0))) + 1)
     fallback = sorted(np.linspace(S[0], S[-1], n_fb), key=lambda s: abs(s - s_a))
-    base = float(w0.params[parameter])
+    base = float(w0.parameters[parameter])
     h_param = PARAMETER_STEP * max(1.0, abs(base), float(np.max(np.abs(P))))
 
     def gait_of(w: PhasedWalker, slope: float, guess: FloatArray | None,
@@ -853,7 +853,7 @@ def model_gait_map(
     _add_derived(ds)
     ds.attrs.update({"model": w0.description.name, "parameter": parameter, "backend": backend,
                      "anchor_slope": s_a}
-                    | {f"param_{k}": float(np.asarray(v)) for k, v in w0.params.items()
+                    | {f"param_{k}": float(np.asarray(v)) for k, v in w0.parameters.items()
                        if k != parameter})
     return GaitMap(dataset=ds)
 

@@ -382,7 +382,7 @@ def _follow_reference(
     ref_values = w.description.default_params
     changed = {
         k: (np.asarray(ref_values[k], dtype=float), np.asarray(v, dtype=float))
-        for k, v in w.params.items()
+        for k, v in w.parameters.items()
         if not np.array_equal(np.asarray(ref_values[k], dtype=float), np.asarray(v, dtype=float))
     }
     s0 = REFERENCE_SLOPE
@@ -713,9 +713,9 @@ def impact_map(
     if xn == yn:
         raise ValueError(f"x and y must differ, both are {xn!r}")
     for name in (xn, yn):
-        if name != ANGLE and name not in walker.params:
+        if name != ANGLE and name not in walker.parameters:
             raise ValueError(
-                f"unknown parameter {name!r}; known: {sorted(walker.params)} or {ANGLE!r}"
+                f"unknown parameter {name!r}; known: {sorted(walker.parameters)} or {ANGLE!r}"
             )
     xa, ya = np.asarray(xv, dtype=float), np.asarray(yv, dtype=float)
     shape = (ya.size, xa.size)

@@ -1722,7 +1722,7 @@ def declared_posture_law(walker: Any) -> Any:
             f"{[law.joint for law in laws]}: only one law, on a joint named 'torso', is supported"
         )
     law = laws[0]
-    vals = walker.params
+    vals = walker.parameters
 
     def ev(v: Any, key: str) -> float:
         return float(np.asarray(evaluate_expression(v, vals, path=f"control.{law.name}.{key}")))
@@ -2124,7 +2124,7 @@ def powered_gaits(
     family = actuation_family(actuation, **opts)
     gaits, err = _fresh_gaits(solve, float(radius), _seed_walker(base, model, float(radius)),
                               family, speed, step_length, kwargs)
-    if family.name == "pushoff" and (model is None or "R" in model.params):
+    if family.name == "pushoff" and (model is None or "R" in model.parameters):
         gaits += _gaits_from_farther_radius(solve, base, model, family, float(radius), speed,
                                             step_length, kwargs)
     if not gaits:
@@ -2270,7 +2270,7 @@ def _seed_walker(base: CompassGait, model: Any | None, r: float) -> Any:
 def _at_radius(model: Any, r: float) -> Any:
     """The described walker with foot radius parameter ``R = r`` (m); a walker file without
     ``R`` (:func:`powered_gaits` of a walker as given) is returned unchanged."""
-    return model.replace(R=r) if "R" in model.params else model
+    return model.replace(R=r) if "R" in model.parameters else model
 
 
 def _fresh_start(w: Any, q3: float, w3: float, w4: float, p0: float) -> FloatArray:

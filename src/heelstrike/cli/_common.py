@@ -229,7 +229,7 @@ def model_from_args(args: argparse.Namespace) -> Any:
         raise CliError(f"--param {unknown[0]}: model {description.name!r} has no parameter "
                        f"{unknown[0]!r} (its parameters: {', '.join(names)})")
     walker = PhasedWalker(description)
-    known = walker.params
+    known = walker.parameters
     by_option = compass_params()
     for dest in sorted(explicit_options(args) & set(by_option)):
         name, option = by_option[dest], "--" + dest.replace("_", "-")

@@ -98,7 +98,7 @@ def _run_gait_model(args: argparse.Namespace) -> int:
         reference = abs(float(args.slope) - REFERENCE_SLOPE) <= 1e-12 and all(
             np.array_equal(np.asarray(v, dtype=float),
                            np.asarray(walker.description.default_params[k], dtype=float))
-            for k, v in walker.params.items())
+            for k, v in walker.parameters.items())
         followed = ("" if reference else
                     f", nor by following the walker file's own parameters' stable gait at "
                     f"{math.degrees(REFERENCE_SLOPE):g} deg, if it has one, to these "
@@ -658,17 +658,17 @@ def _run_map_model(args: argparse.Namespace) -> int:
     option = "--x" if args.x is not None else "--radius"
     if args.x is not None:
         name, x0, x1, nx = args.x
-    elif "R" in walker.params:
+    elif "R" in walker.parameters:
         # the default range stops where the walker's constraints end (kneed: R <= a1 + b1)
         name, (x0, x1, nx) = "R", args.radius or (
             0.0, walker.largest_admissible("R", 0.6), 7)
     else:
         raise CliError(f"model {walker.description.name!r} has no parameter 'R': give the swept "
                        f"parameter with --x NAME:START:STOP:COUNT (its parameters: "
-                       f"{', '.join(sorted(walker.params))})")
-    if name not in walker.params:
+                       f"{', '.join(sorted(walker.parameters))})")
+    if name not in walker.parameters:
         raise CliError(f"unknown parameter {name!r} of model {walker.description.name!r} (its "
-                       f"parameters: {', '.join(sorted(walker.params))})")
+                       f"parameters: {', '.join(sorted(walker.parameters))})")
     slopes = _map_slopes(args)
     values = np.linspace(x0, x1, nx or 7)
     for v in values:  # refuse values the walker's constraints reject (never "no gait")
@@ -676,7 +676,7 @@ def _run_map_model(args: argparse.Namespace) -> int:
             walker.replace(**{name: float(v)})
         except ValueError as exc:
             hint = ""
-            if v > walker.params[name]:
+            if v > walker.parameters[name]:
                 hint = f"; the largest admitted {name} is {walker.largest_admissible(name, v):.6g}"
             raise CliError(f"{option}: {name} = {v:g} is not admitted by model "
                            f"{walker.description.name!r}: {exc}{hint}") from None

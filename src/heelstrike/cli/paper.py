@@ -341,10 +341,10 @@ def _run_impact_map(args: argparse.Namespace) -> int:
             if not np.all((values > 0) & (values < math.pi / 2)):
                 raise CliError(f"{option}: the impact angle must satisfy 0 < angle < 90deg")
             continue
-        if name not in walker.params:
+        if name not in walker.parameters:
             raise CliError(f"{option}: {name!r} is not a parameter of model "
                            f"{walker.description.name!r} (its parameters: "
-                           f"{', '.join(sorted(walker.params))}; or {ANGLE!r})")
+                           f"{', '.join(sorted(walker.parameters))}; or {ANGLE!r})")
         for v in values:
             try:
                 walker.replace(**{name: float(v)})

@@ -321,9 +321,9 @@ def _run_study(args: argparse.Namespace) -> int:
             raise CliError("--param R=... is swept by --radius START:STOP:COUNT: give it there")
         model = model_from_args(args)
         refuse_model_actuation(model, args.actuation or ["pushoff"])
-        if "R" not in model.params:
+        if "R" not in model.parameters:
             raise CliError(f"model {model.description.name!r} has no foot radius parameter 'R' "
-                           f"(its parameters: {', '.join(sorted(model.params))})")
+                           f"(its parameters: {', '.join(sorted(model.parameters))})")
         walker = None
         leg_length = float(model.scale.leg_length)
     if args.radii is None:  # the walker's own range (R = l is McGeer's wheel: stop short)

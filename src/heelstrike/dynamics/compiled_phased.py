@@ -228,8 +228,8 @@ def _same_walker(law_walker: Any, walker: BuiltWalker) -> bool:
     names = walker.description.param_names
     return bool(
         described.model.key == walker.model.key  # the same structure (its code's key)
-        and all(np.array_equal(np.asarray(described.params[k], dtype=float),
-                               np.asarray(walker.params[k], dtype=float)) for k in names)
+        and all(np.array_equal(np.asarray(described.parameters[k], dtype=float),
+                               np.asarray(walker.parameters[k], dtype=float)) for k in names)
     )
 
 
@@ -318,7 +318,7 @@ def _configuration(
 ) -> tuple[FloatArray, FloatArray]:
     """The kernel's parameter values ``p`` and float configuration ``cfg`` (``_C_*``)."""
     walker.check_heel_strike_detectable()  # the kernel's guard is the swing foot's clearance
-    values = [np.asarray(walker.params[k], dtype=float) for k in walker.description.param_names]
+    values = [np.asarray(walker.parameters[k], dtype=float) for k in walker.description.param_names]
     if any(v.ndim != 0 for v in values):
         raise ValueError("the compiled backend needs scalar parameter values (one walker)")
     law, tj, tang, kp, kd, umax, gain, eref = _joint_law(walker, torque, slope)

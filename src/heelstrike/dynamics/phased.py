@@ -85,11 +85,12 @@ class PhasedWalker(BuiltWalker):
         """
         if walker.description is not None and walker.has_poincare_section:
             return cast(PhasedWalker, walker)
-        return cls(walker.description, **walker.params)
+        values: dict[str, Any] = dict(walker.parameters)
+        return cls(walker.description, **values)
 
     def replace(self, **params: ArrayLike) -> PhasedWalker:
         """A copy with some parameter values changed (no re-derivation)."""
-        merged: dict[str, Any] = dict(self.params)
+        merged: dict[str, Any] = dict(self.parameters)
         merged.update(params)
         return PhasedWalker(self.description, **merged)
 

@@ -359,11 +359,6 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         return self._description
 
     @property
-    def params(self) -> dict[str, Any]:
-        """Current parameter values (a copy; see :attr:`parameters`)."""
-        return dict(self._values)
-
-    @property
     def parameters(self) -> Mapping[str, ParameterValue]:
         """The named parameter vector (read-only), in the description's parameter order."""
         return MappingProxyType({k: self._values[k] for k in self.description.param_names})

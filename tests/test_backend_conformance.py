@@ -62,6 +62,10 @@ CASES = {
         "torso", TORSO_GAIT, "completed",
         options=(("torque", "torso_pd"), ("push_off", PushOff(impulse=2.0))),
     ),
+    # the push-off holds the locked knees (QA sweep 11: both backends applied it with the
+    # knees free)
+    "kneed-push-off": Case("kneed", KNEED_GAIT, "completed", slope=KNEED_SLOPE,
+                           options=(("push_off", PushOff(impulse=0.3)),)),
     "kneed-falls-backward": Case("kneed", [-0.26, 0.5, -1.0], "fell_backward",
                                  slope=KNEED_SLOPE),
     # normal force < 0 at the start: contact is lost (CompassGait's simulate says so too; this

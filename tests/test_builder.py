@@ -460,3 +460,28 @@ def test_shipped_walkers_load() -> None:
         assert M.shape == (n, n)
         np.linalg.cholesky(M)  # positive definite in flight
         assert w.description.name == name
+
+
+@pytest.mark.parametrize(("change", "name"), [({"b1": 0.0}, "b1"), ({"b2": 0.0}, "b2")])
+def test_kneed_refuses_a_massless_degree_of_freedom(change: dict[str, float], name: str,
+                                                    capsys: pytest.CaptureFixture[str]) -> None:
+    """QA sweep 11: ``--param b1=0`` (a shank COM at the knee) or ``b2=0`` (a thigh COM at the
+    hip), with the file's point-mass segments (It = Is = 0), passed the file's constraints and
+    ended in "division by zero": the mass matrix is singular (a joint moves no mass). The
+    file's constraints now refuse them, naming the parameter; with inertia they are fine."""
+    from heelstrike.cli import main
+
+    kneed = load_walker("kneed")
+    with pytest.raises(ModelDescriptionError, match=rf"violated \(.*{name}=0"):
+        kneed.replace(**change)
+    # the singularity is real: M's smallest eigenvalue vanishes with the COM offset
+    q = np.zeros(kneed.n_coordinates)  # straight legs, knees at their lock angle 0
+    near = kneed.replace(**{name: 1e-4})
+    lam = np.linalg.eigvalsh(near.mass_matrix(q))
+    assert lam[0] < 1e-7 * lam[-1]
+    # with inertia the same offset is a regular walker (positive definite M)
+    held = kneed.replace(**change, Is=1e-3, It=1e-3)
+    assert np.linalg.eigvalsh(held.mass_matrix(q))[0] > 1e-5
+    assert main(["gait", "--model", "kneed", "--param", f"{name}=0"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and f"{name}=0" in err and "division" not in err

@@ -91,7 +91,7 @@ def test_level_gait_energy_book_closes(walker: PhasedWalker, gait: PoweredGait) 
     rec = walk.impacts[0]
     q0, qd0 = walker.section_to_state(g.fixed_point)
     E_start = float(mechanical_energy(walker, q0, qd0))
-    dq, _ = push_off_velocity_change(walker, rec.q, g.parameter)
+    dq, _ = push_off_velocity_change(walker, rec.q, g.parameter, walk.events[-1].lock_rows)
     qd_before_push = rec.q_dot_minus - dq
     M = walker.mass_matrix(rec.q)
     W_push = float(kinetic_energy(M, rec.q_dot_minus) - kinetic_energy(M, qd_before_push))
@@ -119,6 +119,45 @@ def test_level_gait_multipliers_match_reference_map(walker: PhasedWalker,
     mult = np.sort(np.abs(np.linalg.eigvals(P.jacobian(gait.fixed_point, 1e-5))))[::-1]
     assert np.allclose(mult, np.abs(gait.multipliers), atol=1e-3)
     assert gait.stable == bool(np.all(mult < 1.0))
+
+
+def test_push_off_holds_the_locked_knees(walker: PhasedWalker, gait: PoweredGait) -> None:
+    """Both knees are locked when the trailing foot pushes off, and hold through the impulse
+    (QA sweep 11: it was applied with the knees free, so the stance knee jumped to 85 rad/s,
+    the heel strike took that motion back, and the books counted 2.54993 J of push-off work
+    per step for this gait: the same gait, 4.4 times its cost). Checked against the impulse
+    problem solved here as one linear system (Lagrange multipliers for the locks)."""
+    walk = _reference_step(walker, gait)
+    heel = walk.events[-1]
+    assert heel.kind == "heel_strike"
+    q, L = heel.q, heel.lock_rows
+    assert L.shape[0] == 2  # both knees locked at heel strike
+    n, k = walker.n_coordinates, L.shape[0]
+    M = walker.mass_matrix(q)
+    f = walker.contact_jacobian(q, "right").T @ (
+        gait.parameter * np.array([-np.sin(q[2]), np.cos(q[2])]))
+    # M dq = f + L^T lam, L dq = 0
+    kkt = np.block([[M, -L.T], [L, np.zeros((k, k))]])
+    sol = np.linalg.solve(kkt, np.concatenate([f, np.zeros(k)]))
+    dq_ref, lam = sol[:n], sol[n:]
+    dq, f_got = push_off_velocity_change(walker, q, gait.parameter, L)
+    np.testing.assert_allclose(f_got, f, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(dq, dq_ref, rtol=1e-10, atol=1e-10)
+    # the simulated walk applied exactly this jump: the knees are at rest before the heel
+    # strike, after the push-off as before it
+    qd_before = heel.q_dot_minus - dq
+    np.testing.assert_allclose(L @ heel.q_dot_minus, 0.0, atol=1e-9)
+    np.testing.assert_allclose(L @ qd_before, 0.0, atol=1e-9)
+    w_push = float(kinetic_energy(M, heel.q_dot_minus) - kinetic_energy(M, qd_before))
+    # with the knees free the same impulse does more work, by exactly the kinetic energy of
+    # the locks' impulse, 1/2 |M^-1 L^T lam|_M^2 (the pre-impact knees are at rest)
+    free, _ = push_off_velocity_change(walker, q, gait.parameter)
+    w_free = float(kinetic_energy(M, qd_before + free) - kinetic_energy(M, qd_before))
+    x = np.linalg.solve(M, L.T @ lam)
+    assert w_free - w_push == pytest.approx(0.5 * float(x @ M @ x), rel=1e-8)
+    assert abs(gait.push_off_work - w_push) < 1e-8
+    # QA sweep 11's own model (sympy/scipy, no heelstrike code) of this gait: 0.58312 J
+    assert gait.push_off_work == pytest.approx(0.58312, abs=2e-5)
 
 
 @pytest.mark.slow

@@ -279,7 +279,7 @@ def test_kneed_default_energy_book_from_states() -> None:
     assert declared_posture_law(pw) is None
     walk = _reference_walk(pw, gait.fixed_point, gait.parameter)
     rec = walk.impacts[0]
-    dq, _ = push_off_velocity_change(pw, rec.q, gait.parameter)
+    dq, _ = push_off_velocity_change(pw, rec.q, gait.parameter, walk.events[-1].lock_rows)
     M = pw.mass_matrix(rec.q)
     w_push = float(kinetic_energy(M, rec.q_dot_minus) - kinetic_energy(M, rec.q_dot_minus - dq))
     kinds = [e.kind for e in walk.events]

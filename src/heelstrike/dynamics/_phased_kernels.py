@@ -781,13 +781,23 @@ def _walk_py(
         con(q, qd, p, Ac, rate, cc)
         push_work = 0.0
         if not math.isnan(cfg[_C_PUSH]):
-            # push-off impulse p e(q2) at the trailing contact: M dq_dot = A_R^T p e(q2)
+            # push-off impulse p e(q2) at the trailing contact, the locked joints held:
+            # M dq_dot = A_R^T p e(q2) + L^T lambda, L dq_dot = 0, i.e. dq_dot = P_a M^-1 f
+            # (heelstrike.dynamics.actuation.push_off_velocity_change)
             ex = -cfg[_C_PUSH] * math.sin(q[2])
             ey = cfg[_C_PUSH] * math.cos(q[2])
             dq = np.empty((n, 1))
             for i in range(n):
                 dq[i, 0] = Ac[0, 0, i] * ex + Ac[0, 1, i] * ey
             _gauss(M.copy(), dq, n, 1)
+            if nl > 0:
+                lock_rows = np.zeros((nl, n))
+                for c in range(nl):
+                    lock_rows[c, all_locks[c]] = 1.0
+                free_dq = dq[:, 0].copy()
+                _impact(M, lock_rows, nl, free_dq, v_c, lam)
+                for i in range(n):
+                    dq[i, 0] = free_dq[i] - v_c[i]
             T0 = _quad(M, qd)
             qd = qd + dq[:, 0]
             push_work = _quad(M, qd) - T0

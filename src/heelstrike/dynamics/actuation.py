@@ -156,16 +156,18 @@ def _leg_direction(theta: FloatArray) -> FloatArray:
 
 
 def push_off_velocity_change(
-    walker: PlanarWalker, q: ArrayLike, impulse: ArrayLike
+    walker: PlanarWalker, q: ArrayLike, impulse: ArrayLike, locks: ArrayLike | None = None
 ) -> tuple[FloatArray, FloatArray]:
     """Velocity jump caused by a push-off impulse at the trailing ("right") foot.
 
     The ground pushes the trailing foot's contact point with the impulse ``p e(q3)`` (N s),
     directed along the trailing leg from the foot towards the hip. Its generalized impulse is
-    ``f = A_R(q)^T p e(q3)`` (eq. 2 with the trailing foot's contact Jacobian ``A_R``) and,
-    since no constraint is active during the push-off (the leading foot has not landed and the
-    trailing foot is free to leave the ground), the impulse-momentum equations are
-    ``M(q) dq_dot = f``.
+    ``f = A_R(q)^T p e(q3)`` (eq. 2 with the trailing foot's contact Jacobian ``A_R``). No
+    ground contact is active during the push-off (the leading foot has not landed and the
+    trailing foot is free to leave the ground); the walker's locked joints (a kneed walker's
+    knees) are, and hold with impulses ``lambda`` of their own:
+    ``M(q) dq_dot = f + L^T lambda``, ``L dq_dot = 0``, i.e. ``dq_dot = P_a M^-1 f`` with the
+    admissible projector of the lock rows ``L`` (eq. 11). Without locks ``M dq_dot = f``.
 
     Parameters
     ----------
@@ -175,13 +177,16 @@ def push_off_velocity_change(
         Configuration at push-off (that of heel strike).
     impulse : array_like, shape (...)
         Magnitude ``p`` (N s); positive pushes the walker away from the ground.
+    locks : array_like, shape (k, n), optional
+        Rows ``L`` of the joints locked at the push-off (rows of the identity; the heel
+        strike's lock rows). None or ``k = 0``: no joint is locked.
 
     Returns
     -------
     dq_dot : ndarray, shape (..., n)
-        Velocity jump ``M^-1 f``.
+        Velocity jump ``P_a M^-1 f`` (``M^-1 f`` without locks).
     f : ndarray, shape (..., n)
-        Generalized impulse ``A_R^T p e(q3)``.
+        Generalized impulse of the ground ``A_R^T p e(q3)`` (the locks' impulses not included).
     """
     q_ = np.asarray(q, dtype=float)
     p = np.asarray(impulse, dtype=float)
@@ -191,8 +196,14 @@ def push_off_velocity_change(
     M = walker.mass_matrix(q_)
     shape = np.broadcast_shapes(M.shape[:-1], f.shape)
     Mb = np.broadcast_to(M, (*shape, shape[-1]))
-    dq = np.linalg.solve(Mb, np.broadcast_to(f, shape)[..., None])
-    return np.asarray(dq[..., 0]), np.asarray(f)
+    dq = np.asarray(np.linalg.solve(Mb, np.broadcast_to(f, shape)[..., None])[..., 0])
+    L = None if locks is None else np.asarray(locks, dtype=float)
+    if L is not None and L.shape[-2] > 0:
+        from heelstrike.core.impact import impact
+
+        dq = np.asarray(impact(Mb, np.broadcast_to(L, (*shape[:-1], *L.shape[-2:])), dq)
+                        .velocity_post)
+    return dq, np.asarray(f)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -217,16 +228,19 @@ class PushOff:
         object.__setattr__(self, "impulse", p)
 
     def __call__(
-        self, walker: PlanarWalker, q: FloatArray, q_dot: FloatArray
+        self, walker: PlanarWalker, q: FloatArray, q_dot: FloatArray,
+        locks: FloatArray | None = None,
     ) -> tuple[FloatArray, float]:
         """Return ``(q_dot_after, work)``: velocities after the push-off and its work (J).
 
-        The work is the kinetic-energy change ``T(q_dot+) - T(q_dot-)`` (the configuration does
-        not change during the impulse, so neither does ``V``).
+        ``locks``: rows of the joints locked at the push-off (see
+        :func:`push_off_velocity_change`). The work is the kinetic-energy change
+        ``T(q_dot+) - T(q_dot-)`` (the configuration does not change during the impulse, so
+        neither does ``V``; locked joints do no work).
         """
         q_ = np.asarray(q, dtype=float)
         qd = np.asarray(q_dot, dtype=float)
-        dq, _ = push_off_velocity_change(walker, q_, self.impulse)
+        dq, _ = push_off_velocity_change(walker, q_, self.impulse, locks)
         after = qd + dq
         M = walker.mass_matrix(q_)
         work = float(kinetic_energy(M, after) - kinetic_energy(M, qd))

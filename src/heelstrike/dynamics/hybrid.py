@@ -68,9 +68,11 @@ __all__ = [
 
 ImpactKind = Literal["knee_strike", "heel_strike"]
 
-#: An impulsive actuation applied just before heel strike: ``(walker, q, q_dot) ->
-#: (q_dot_after, work)``; the work (J) is what the actuator does on the walker.
-PushOff = Callable[[PlanarWalker, FloatArray, FloatArray], tuple[FloatArray, float]]
+#: An impulsive actuation applied just before heel strike: ``(walker, q, q_dot, locks) ->
+#: (q_dot_after, work)``, ``locks`` the rows (k, n) of the joints locked then (the locks hold
+#: through the impulse); the work (J) is what the actuator does on the walker.
+PushOff = Callable[[PlanarWalker, FloatArray, FloatArray, FloatArray],
+                   tuple[FloatArray, float]]
 
 
 class WalkStatus(StrEnum):
@@ -707,7 +709,8 @@ def simulate(
     torque : TorqueLaw, optional
         Actuator law in single support ``(time since the step's start, q, q_dot) -> u`` (N m).
     push_off : PushOff, optional
-        Impulsive actuation applied just before each heel strike.
+        Impulsive actuation applied just before each heel strike, the schedule's locked
+        joints held (e.g. :class:`~heelstrike.dynamics.actuation.PushOff`).
     restitution : float
         Restitution of the heel strike's constrained velocity (0: the paper's inert impact);
         only with the ``"lift_rule"`` trailing-foot rule.
@@ -804,7 +807,7 @@ def simulate(
         # -- heel strike: the leading foot lands, the trailing foot by the schedule's rule -----
         push_work = 0.0
         if push_off is not None:
-            qd_p, pw = push_off(walker, q, qd)
+            qd_p, pw = push_off(walker, q, qd, A_lock)
             qd, push_work = np.asarray(qd_p, dtype=float), float(pw)
             work += push_work
         mode: str

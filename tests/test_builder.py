@@ -485,3 +485,20 @@ def test_kneed_refuses_a_massless_degree_of_freedom(change: dict[str, float], na
     assert main(["gait", "--model", "kneed", "--param", f"{name}=0"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and f"{name}=0" in err and "division" not in err
+
+
+@pytest.mark.parametrize(("param", "said"), [
+    ("mH=-1", "mH=-1 kg: point_mass[0].mass: must be > 0"),
+    ("It=-1", "It=-1 kg m^2: link[1].inertia: must be >= 0"),
+    ("a1=-0.1", "a1=-0.1 m: constraints[0]: '0 <= a1' is violated"),
+])
+def test_cli_param_errors_name_the_value_and_its_unit(param: str, said: str,
+                                                      capsys: pytest.CaptureFixture[str]) -> None:
+    """QA sweep 11: a refused ``--param`` value was reported by the file's element alone
+    (``point_mass[0].mass: must be > 0`` for ``--param mH=-1``)."""
+    from heelstrike.cli import main
+
+    assert main(["gait", "--model", "kneed", "--param", param]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0
+    assert f"model 'kneed' with {said}" in err

@@ -242,7 +242,17 @@ def model_from_args(args: argparse.Namespace) -> Any:
         if name in params:
             raise CliError(f"{option} and --param {name}=... both set {name!r}: give it once")
         params[name] = float(getattr(args, dest))
-    return walker.replace(**params) if params else walker
+    if not params:
+        return walker
+    from heelstrike.models.description import ModelDescriptionError, parameter_units
+
+    try:
+        return walker.replace(**params)
+    except ModelDescriptionError as exc:  # said in the file's terms: say which values (QA 11)
+        units = parameter_units(walker.description)
+        given = ", ".join(f"{k}={v:g}" + (f" {units[k]}" if units.get(k, "1") != "1" else "")
+                          for k, v in params.items())
+        raise CliError(f"model {walker.description.name!r} with {given}: {exc}") from exc
 
 
 def parse_floats(text: str, option: str, n: int | None = None) -> list[float]:

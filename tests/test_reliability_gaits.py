@@ -157,6 +157,8 @@ def test_unreachable_speed_fails_at_once_with_the_range(capsys: Capture) -> None
     assert captured.out == ""
     err = captured.err.strip().splitlines()
     assert len(err) == 1 and "reachable range" in err[0]
+    # the target is said with its unit (QA sweep 11: "with speed 1.3 (the walker's ...)")
+    assert "with speed 100 m/s at R = 0 m" in err[0]
 
 
 def test_powered_search_is_bounded_in_time() -> None:

@@ -305,3 +305,31 @@ def test_model_strobe_torso_belongs_to_neither_leg() -> None:
     assert list(legs["stance_leg"]) == [0] and list(legs["swing_leg"]) == [1]
     with pytest.raises(ValueError, match="frames must be >= 2"):
         model_strobe_table(torso, walk, 0, frames=1)
+
+
+@pytest.mark.parametrize("backend", ["compiled", "scipy"])
+def test_model_tables_list_each_sample_once(
+    kneed: PhasedWalker, kneed_start: tuple[np.ndarray, np.ndarray], backend: str
+) -> None:
+    """QA sweep 11: ``energy.csv`` and ``phase_portrait.csv`` of ``walk --model kneed`` held one
+    fully duplicated row per step (the swing knee's unlocking ends one integration segment and
+    starts the next at the same state). Each sample is listed once; an impact's two rows (the
+    same time, steps k and k + 1) are both kept."""
+    from heelstrike.analysis.walk_tables import model_phase_portrait_table, walk_energy_table
+
+    walk: Any = simulate(kneed, *kneed_start, backend=backend, slope=SLOPE, steps=2,
+                         rtol=1e-10, atol=1e-10)
+    raw = np.column_stack([walk.t, walk.step, walk.q, walk.q_dot])
+    repeats = int(np.sum(np.all(raw[1:] == raw[:-1], axis=1)))
+    for table in (walk_energy_table(kneed, walk), model_phase_portrait_table(kneed, walk)):
+        assert not table.duplicated().any()
+        assert len(table) == len(walk.t) - repeats
+        # the heel strike's two rows: one time, two steps
+        at = table[table["t_s"] == walk.impacts[0].time]
+        assert list(at["step"]) == [0, 1]
+    energy = walk_energy_table(kneed, walk)
+    # passive walk: within a step the energy changes only by the knee strike's loss
+    for k, rows in energy.groupby("step"):
+        knee = sum(e.kinetic_energy_constrained for e in walk.events
+                   if e.kind == "knee_strike" and e.step == k)
+        assert abs(np.ptp(rows["total_J"]) - knee) < 1e-8

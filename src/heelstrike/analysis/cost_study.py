@@ -74,7 +74,7 @@ STUDY_BYTES_PER_POINT = 4096
 
 #: Gait quantities stored per (actuation, radius, target) and their units.
 GAIT_VARIABLES: dict[str, tuple[str, str]] = {
-    "cost_of_transport": ("1", "W_act / (m_total g L_S)"),
+    "cost_of_transport": ("1", "W_act / (m_total g L_S), W_act the net actuator work per step"),
     "eta": ("J/m", "collision loss per metre T_c / L_S (eq. 16)"),
     "actuator_work": ("J", "actuator work per step"),
     "push_off_work": ("J", "work of the push-off impulse per step"),

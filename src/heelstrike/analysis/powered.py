@@ -8,7 +8,8 @@ theorem between two successive post-impact instants (eq. 14),
 
 and on a periodic level gait ``Delta T = Delta U = 0`` so ``W_act = T_c``. The loss per metre
 is ``eta = T_c / L_S`` (eq. 16) and the (mechanical) cost of transport
-``W_act / (m_total g L_S)``.
+``W_act / (m_total g L_S)``, with ``W_act`` the *net* actuator work (a law's negative work, e.g.
+a torso law braking, counts against its positive work; on a periodic level gait it is ``T_c``).
 
 A gait is found by Newton's method on the Poincare map (section just after heel strike,
 ``z = (q3, q3_dot, q4_dot)`` for the compass gait) *augmented* with the actuation parameter
@@ -469,7 +470,7 @@ class PoweredGait(ResultDictMixin):
     energy_balance_error : float
         ``W_act - T_c - energy_change`` (J): the integration error of the books.
     cost_of_transport : float
-        ``W_act / (m_total g L_S)`` (dimensionless).
+        ``W_act / (m_total g L_S)`` (dimensionless), ``W_act`` the net actuator work.
     eta : float
         ``T_c / L_S`` (J/m), eq. (16).
     multipliers : ndarray of complex, shape (d,)

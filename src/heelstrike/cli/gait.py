@@ -482,11 +482,12 @@ def add_basin(sub: Any) -> None:
                    help="N_Q3xN_Q3DOT grid points (default 400x400; 100x100 with --model)")
     p.add_argument("--q3-range", type=lambda t: parse_range(t, parse_angle),
                    default=None, help="Q3MIN:Q3MAX post-impact stance angles (default "
-                   "-0.5:-0.05 rad; with --model the stance angle, default -0.25:+0.2 rad about "
-                   "the fixed point); write --q3-range=-0.5:-0.05")
+                   "-0.5:-0.05 rad; with --model the stance angle, by default the fixed point's "
+                   "-0.25 to +0.2 rad, a range given is absolute); write --q3-range=-0.5:-0.05")
     p.add_argument("--q3dot-range", type=parse_range, default=None,
                    help="MIN:MAX post-impact stance velocities in rad/s (default 0.3:2.3; with "
-                   "--model -0.9:+1.1 about the fixed point)")
+                   "--model by default the fixed point's -0.9 to +1.1 rad/s, a range given is "
+                   "absolute)")
     p.add_argument("--steps", type=positive_int, default=BASIN_STEPS,
                    help=f"largest number of steps per initial state (default {BASIN_STEPS})")
     p.add_argument("--tol", type=float, default=BASIN_TOLERANCE,
@@ -621,8 +622,8 @@ def add_map(sub: Any) -> None:
                        "continuation, minutes)", "compiled")
     p.add_argument("--radius", type=parse_range, default=None,
                    help="START:STOP[:COUNT] foot radii in m (default 0:0.6:7; with --model "
-                   "the walker's parameter R, the default stopping at the largest R the walker "
-                   "admits)")
+                   "the walker's parameter R, the default 7 radii from 0 to 0.6 m or to the "
+                   "largest R the walker admits if that is smaller)")
     p.add_argument("--x", type=parse_sweep, default=None, metavar="NAME:START:STOP:COUNT",
                    help="with --model: the swept walker parameter instead of --radius, e.g. "
                    "R:0:0.2:5 (SI units)")

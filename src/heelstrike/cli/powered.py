@@ -165,7 +165,8 @@ def _run_powered(args: argparse.Namespace) -> int:
                 + ("" if backend == "compiled" else " or use --backend compiled, much faster")
                 if "(time limit" in str(exc) else "")
         raise CliError(
-            f"no {args.actuation} gait found with {target.replace('_', ' ')} {value:g}"
+            f"no {args.actuation} gait found with {target.replace('_', ' ')} {value:g} "
+            f"{'m/s' if target == 'speed' else 'm'}"
             f"{declared_note} at R = {radius:g} m: {exc}{hint}"
         ) from exc
     gait = preferred_gait(gaits)
@@ -216,7 +217,7 @@ def _run_powered(args: argparse.Namespace) -> int:
         print(f"  note: the books close to {gap:.1e} of the work only (change of T + V and "
               "imbalance): the gait is resolved no better than that; tighter tolerances "
               "(find_powered_gait's tol, rtol, atol) would resolve it further")
-    print(f"  cost of transport {gait.cost_of_transport:10.6g}")
+    print(f"  cost of transport {gait.cost_of_transport:10.6g} (net actuator work / (m g L))")
     print(f"  eta             {gait.eta:10.6g} J/m")
     if others:
         which = ("this is the stable one needing the least actuator work" if gait.stable else

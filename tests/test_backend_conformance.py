@@ -41,6 +41,11 @@ COMPASS_SLOPE = 0.05
 COMPASS_GAIT = [-0.26682122, 1.08394013, -0.68587173]
 TORSO_GAIT = [-0.1180757, 0.1118158, 0.5531974, -0.0140899, -0.6214368]
 
+#: A basin cell (QA sweep 11, #4) whose swing foot touches the ground level with the stance
+#: foot at t = 1.3567 s, and its slope (3 deg).
+LEVEL_TOUCH = [-0.42363789742445795, 1.3893823673283179, -1.142173850332489]
+LEVEL_SLOPE = 0.05235987755982988
+
 #: Backends under test besides the reference (name -> simulator with simulate_phased's API).
 BACKENDS: dict[str, Callable[..., PhasedWalkResult]] = {"compiled": simulate_phased_compiled}
 
@@ -75,6 +80,9 @@ CASES = {
                                        slope=COMPASS_SLOPE),
     "kneed-trailing-foot-stays": Case("kneed", [-0.4, 1.871, -2.0], "trailing_foot_stays",
                                       slope=KNEED_SLOPE),
+    # the swing foot swings back and touches the ground level with the stance foot (legs
+    # parallel): no heel strike; the compiled kernel took it as a zero-length step (QA sweep 11)
+    "kneed-swing-foot-level": Case("kneed", LEVEL_TOUCH, "lost_contact", slope=LEVEL_SLOPE),
     "torso-passive-falls": Case("torso", TORSO_GAIT, "fell_backward", steps=2),
     "kneed-time-bound": Case("kneed", KNEED_GAIT, "no_heel_strike", slope=KNEED_SLOPE,
                              options=(("max_step_duration", 0.3),)),
@@ -355,3 +363,67 @@ def test_numba_source_cache_round_trip_and_tampering(
         rebuilt = cg.build_numba(desc)
     assert not rebuilt.from_cache
     assert "import" not in first.path.read_text()
+
+
+@pytest.mark.slow
+def test_a_touch_level_with_the_stance_foot_is_no_heel_strike(
+    walkers: dict[str, PhasedWalker]
+) -> None:
+    """QA sweep 11, #4: the compiled walk stops its heel-strike search where the swing foot
+    touches the ground level with the stance foot (an event, so a sample there), takes no step
+    and goes on to lose contact at the reference's time."""
+    w = walkers["kneed"]
+    q, qd = w.section_to_state(np.asarray(LEVEL_TOUCH))
+    got = simulate_phased_compiled(w, q, qd, slope=LEVEL_SLOPE, steps=3, rtol=1e-11, atol=1e-11)
+    assert got.status.value == "lost_contact" and got.n_steps == 0
+    assert [e.kind for e in got.events] == ["knee_strike"]
+    ahead = np.array([w.swing_foot_ahead(x) for x in got.q])
+    clearance = np.asarray(w.foot_clearance(got.q, "left"))
+    touch = np.flatnonzero((np.abs(ahead) < 1e-9) & (np.abs(clearance) < 1e-9))
+    assert touch.size > 0 and abs(got.t[touch[0]] - 1.35675) < 1e-4
+    assert w.strike_not_ahead(got.q[touch[0]], got.q_dot[touch[0]])
+    # at the gait's heel strike the swing foot is a step ahead
+    g = simulate_phased_compiled(w, *w.section_to_state(np.asarray(KNEED_GAIT)),
+                                 slope=KNEED_SLOPE, steps=1)
+    assert not w.strike_not_ahead(g.impacts[0].q, g.impacts[0].q_dot_minus)
+    assert w.swing_foot_ahead(g.impacts[0].q) == pytest.approx(g.impacts[0].step_length, rel=0.2)
+
+
+#: Two more cells of that basin slice: in the first the scipy reference at rtol 1e-8 meets the
+#: legs-parallel touch itself (1 of the 5 cells QA sweep 11 saw differ), in the second it misses
+#: a near-grazing heel strike that tighter tolerances and the compiled kernel find.
+LEVEL_AT_SCIPY = [-0.30521684479287897, 0.9893823673283177, -1.142173850332489]
+GRAZING = [-0.3762694763718264, 1.2560490339949846, -1.142173850332489]
+
+
+@pytest.mark.slow
+def test_reference_rejects_a_level_touch_and_agrees_when_tight(
+    walkers: dict[str, PhasedWalker], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The scipy reference takes no heel strike with the swing foot level with the stance foot
+    (``Stage.reject``); at rtol 1e-11 it takes the same steps as the compiled kernel at the
+    basin's rtol 1e-8, in both cells (the basin's scipy/compiled step counts differ in cells
+    like these only because the reference at 1e-8 misses grazing strikes)."""
+    from heelstrike.models.builder import BuiltWalker
+
+    w = walkers["kneed"]
+    seen: list[tuple[bool, float]] = []
+    original = BuiltWalker.strike_not_ahead
+
+    def spy(self: BuiltWalker, q: np.ndarray, qd: np.ndarray) -> bool:
+        seen.append((original(self, q, qd), self.swing_foot_ahead(q)))
+        return original(self, q, qd)
+
+    monkeypatch.setattr(BuiltWalker, "strike_not_ahead", spy)
+    q, qd = w.section_to_state(np.asarray(LEVEL_AT_SCIPY))
+    loose = simulate_phased(w, q, qd, slope=LEVEL_SLOPE, steps=60, rtol=1e-8, atol=1e-9)
+    assert any(rejected and abs(ahead) < 1e-9 for rejected, ahead in seen)
+    assert all(w.swing_foot_ahead(e.q) > 0.01 for e in loose.events if e.kind == "heel_strike")
+    for z in (LEVEL_AT_SCIPY, GRAZING):
+        q, qd = w.section_to_state(np.asarray(z))
+        ref = simulate_phased(w, q, qd, slope=LEVEL_SLOPE, steps=60, rtol=1e-11, atol=1e-11)
+        got = simulate_phased_compiled(w, q, qd, slope=LEVEL_SLOPE, steps=60, rtol=1e-8,
+                                       atol=1e-9)
+        assert ref.status.value == got.status.value == "lost_contact"
+        assert ref.n_steps == got.n_steps == 1
+        assert abs(got.t[-1] - ref.t[-1]) < 1e-6

@@ -19,6 +19,14 @@ SLOPE3 = np.deg2rad(3.0)
 Z3 = np.array([-0.27102868, 1.09238359, -0.71500964])
 
 
+def _sinks(walker, z, dt=1e-6):
+    """Whether the trailing foot of section point ``z`` is on the ground and moving into it,
+    from its clearance along the state's velocity (a finite difference, no Jacobian)."""
+    q, qd = walker.section_to_state(z)
+    on_ground = abs(float(walker.foot_clearance(q, "left"))) < 1e-9
+    return on_ground and float(walker.foot_clearance(q + dt * qd, "left")) < -1e-9 * dt
+
+
 @pytest.fixture(scope="module")
 def basin():
     return basin_of_attraction(
@@ -37,8 +45,12 @@ def test_basin_dataset_and_classification(basin, tmp_path):
     assert sum(basin.fractions().values()) == pytest.approx(1.0)
     # the grid point nearest the fixed point converges; slow launches fall backward
     assert int(ds["outcome"].sel(q3=Z3[0], q3_dot=Z3[1], method="nearest")) == 0
-    slow = int(ds["outcome"].sel(q3=-0.5, q3_dot=0.3, method="nearest"))
+    slow = int(ds["outcome"].sel(q3=-0.5, q3_dot=0.4, method="nearest"))
     assert OUTCOMES[slow] == "fell_backward"
+    # slower still, the trailing foot starts moving into the ground: not a post-impact state
+    slowest = int(ds["outcome"].sel(q3=-0.5, q3_dot=0.3, method="nearest"))
+    assert OUTCOMES[slowest] == "inadmissible_start"
+    assert _sinks(CompassGait(), np.array([-0.5, 0.3, Z3[2]]))
     png, nc = write_basin(basin, tmp_path)
     assert png.stat().st_size > 10_000
     back = xr.open_dataset(nc)
@@ -61,7 +73,10 @@ def test_basin_outcomes_agree_with_reference_simulation(basin):
         q, qd = walker.section_to_state(z)
         name = OUTCOMES[codes[i, j]]
         steps = int(ds["steps"].values[i, j])
-        if name == "converged":
+        assert _sinks(walker, z) == (name == "inadmissible_start")
+        if name == "inadmissible_start":
+            assert steps == 0
+        elif name == "converged":
             res = simulate(walker, q, qd, slope=SLOPE3, steps=steps, rtol=1e-9, atol=1e-9)
             assert res.ok
             zf = walker.state_to_section(res.final_q, res.final_q_dot)
@@ -145,3 +160,27 @@ def test_every_walk_status_has_its_own_basin_outcome() -> None:
     assert [OUTCOMES[k] for k in out] == [s.value for s in others] + ["converged",
                                                                         "keeps_walking"]
     assert set(gait_plots._COLOURS) == set(OUTCOMES)
+
+
+@pytest.mark.parametrize("model", ["compass", "kneed", "torso"])
+def test_trailing_foot_presses_is_the_sign_of_the_clearance_rate(model):
+    """``trailing_foot_presses`` (batched) agrees point by point with a finite difference of the
+    trailing foot's clearance on random post-impact section points, and never holds at a
+    gait's own post-heel-strike state (the heel strike lifted that foot)."""
+    from heelstrike.analysis.model_gaits import find_model_gait
+    from heelstrike.dynamics.compiled_phased import section_states
+    from heelstrike.dynamics.phased import PhasedWalker
+    from heelstrike.models.builder import load_walker
+
+    walker = PhasedWalker.from_built(load_walker(model))
+    z = np.asarray(find_model_gait(walker, slope=SLOPE3).cycle.fixed_point)
+    q, qd = walker.section_to_state(z)
+    assert not walker.trailing_foot_presses(q, qd)
+    assert float(walker.foot_clearance(q + 1e-6 * qd, "left")) > 0.0
+    rng = np.random.default_rng(1)
+    Z = z + rng.uniform(-1.0, 1.0, (40, z.size)) * np.where(np.arange(z.size) < 1, 0.2, 1.5)
+    Q, QD = section_states(walker, Z)
+    flags = walker.trailing_foot_presses(Q, QD)
+    assert flags.shape == (40,) and 0 < flags.sum() < 40  # both kinds are sampled
+    for k in range(40):
+        assert flags[k] == _sinks(walker, Z[k])

@@ -123,18 +123,60 @@ def test_model_basin_fixed_point_converges_far_point_falls(
     out = ds["outcome"].values
     assert OUTCOMES[out[1, 1]] == "converged"  # the fixed point itself
     assert ds["steps"].values[1, 1] == 1
-    assert OUTCOMES[out[2, 0]] in ("fell_forward", "fell_backward", "lost_contact",
+    assert OUTCOMES[out[2, 2]] in ("fell_forward", "fell_backward", "lost_contact",
                                    "trailing_foot_stays")  # far off: a fall
+    # 0.9 rad/s slower, the trailing foot starts moving into the ground (QA11 #5)
+    assert [OUTCOMES[c] for c in out[:, 0]] == ["inadmissible_start"] * 3
     # every grid point's fate is the single walker's
     for i, a in enumerate(ds["stance_shank"].values):
         for j, b in enumerate(ds["stance_shank_dot"].values):
             q, qd = kneed.section_to_state([a, b, z[2]])
             walks = OUTCOMES[out[i, j]] in ("converged", "keeps_walking")
             taken = int(ds["steps"].values[i, j])
+            assert _sinks(kneed, q, qd) == (OUTCOMES[out[i, j]] == "inadmissible_start")
+            if OUTCOMES[out[i, j]] == "inadmissible_start":
+                assert taken == 0
+                continue
             one = simulate_phased_compiled(kneed, q, qd, slope=SLOPE, rtol=1e-8, atol=1e-9,
                                            steps=taken if walks else taken + 1)
             assert one.status.value == ("completed" if walks else OUTCOMES[out[i, j]])
             assert one.n_steps == taken
+
+
+def _sinks(walker: PhasedWalker, q: np.ndarray, qd: np.ndarray, dt: float = 1e-6) -> bool:
+    """Whether the trailing foot of a start is on the ground and moving into it, from its
+    clearance along the state's velocity (a finite difference, no contact Jacobian)."""
+    on_ground = abs(float(walker.foot_clearance(q, "left"))) < 1e-9
+    return on_ground and float(walker.foot_clearance(q + dt * qd, "left")) < -1e-9 * dt
+
+
+@pytest.mark.slow
+def test_model_basin_flags_starts_whose_trailing_foot_sinks(
+    kneed: PhasedWalker, kneed_gait: ModelGait
+) -> None:
+    """QA11 #5: on the default 20x16 slice, the two slowest stance-rate columns (40 cells) start
+    with the trailing foot moving into the ground (QA11's own check counted 40): they are
+    ``inadmissible_start``, not walked, on both backends; no other cell is."""
+    z = np.asarray(kneed_gait.cycle.fixed_point)
+    ranges = ((z[0] - 0.25, z[0] + 0.2), (z[1] - 0.9, z[1] + 1.1))  # the documented default
+    compiled = model_basin_of_attraction(kneed, SLOPE, grid=(20, 16), steps=3, fixed_point=z)
+    ds = compiled.dataset
+    np.testing.assert_allclose(ds["stance_shank"].values[[0, -1]], ranges[0], rtol=1e-12)
+    np.testing.assert_allclose(ds["stance_shank_dot"].values[[0, -1]], ranges[1], rtol=1e-12)
+    out = ds["outcome"].values
+    flagged = out == OUTCOMES.index("inadmissible_start")
+    sinks = np.array([[_sinks(kneed, *kneed.section_to_state([a, b, z[2]]))
+                       for b in ds["stance_shank_dot"].values]
+                      for a in ds["stance_shank"].values])
+    np.testing.assert_array_equal(flagged, sinks)
+    assert int(flagged.sum()) == 40 and flagged[:, :2].all()
+    assert np.all(ds["steps"].values[flagged] == 0)
+    assert compiled.fractions()["inadmissible_start"] == pytest.approx(40 / 320)
+    # the scipy reference flags the same starts (on a thin slice through them)
+    ref = model_basin_of_attraction(kneed, SLOPE, grid=(20, 2), steps=1, fixed_point=z,
+                                    ranges=(ranges[0], (ranges[1][0], ranges[1][0] + 2.0 / 15)),
+                                    backend="scipy")
+    np.testing.assert_array_equal(ref.dataset["outcome"].values, out[:, :2])
 
 
 def test_basin_command_with_model(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

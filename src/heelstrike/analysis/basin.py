@@ -7,7 +7,10 @@ the stance angular velocity ``q3_dot`` (rad/s), with the swing velocity held at 
 value ``q4_dot = q4_dot*``. (Schwab & Wisse's simplest walker has a 2-D section; the compass gait's
 is 3-D, so a slice is shown.)
 
-**Classification.** Every grid point is walked with
+**Classification.** A grid point whose trailing foot is on the ground and moving into it
+(:meth:`~heelstrike.models.base.PlanarWalker.trailing_foot_presses`) is the state after no heel
+strike: it is not walked, its outcome is ``inadmissible_start``. Every other grid point is walked
+with
 :func:`~heelstrike.dynamics.compiled.ensemble_walk` for up to ``steps`` steps. It *converges* when
 its post-impact state comes within ``tol`` (Euclidean norm in section coordinates) of ``z*`` within
 those steps (the walk is stopped there); it *keeps walking* if it completes every step without
@@ -79,7 +82,14 @@ OUTCOMES: tuple[str, ...] = (
     "slipped",
     "no_consistent_assignment",
     "no_leg_swap",
+    "inadmissible_start",
 )
+
+#: Status code (none of :class:`~heelstrike.dynamics.hybrid.WalkStatus`'s) of an initial state
+#: that is not walked: its trailing foot is on the ground and moving into it
+#: (:meth:`~heelstrike.models.base.PlanarWalker.trailing_foot_presses`), so it is the state
+#: after no heel strike; its outcome is ``inadmissible_start`` (QA11 #5).
+_INADMISSIBLE_START = -1
 
 #: Default window of the slice: ``q3`` (rad) and ``q3_dot`` (rad/s) ranges.
 DEFAULT_RANGES: tuple[tuple[float, float], tuple[float, float]] = ((-0.5, -0.05), (0.3, 2.3))
@@ -239,20 +249,31 @@ def _make_basin(
 def _walk_chunk(
     a: FloatArray, b: FloatArray, zstar: tuple[float, ...], axes: tuple[int, int],
     walk: Callable[[FloatArray], tuple[ArrayLike, ArrayLike, ArrayLike]],
+    walker: PlanarWalker, states: Callable[[FloatArray], tuple[FloatArray, FloatArray]],
 ) -> dict[str, NDArray[np.generic]]:
     """Sweep-function body: ``walk`` the section points ``zstar`` with coordinates ``axes`` set
     to the chunk's broadcast ``(a, b)`` grid (``walk(Z)``, ``Z`` of shape ``(n, d)``, returns
     the status codes, heel strikes taken and final section points); returns ``status`` and
-    ``steps`` (int64, shape ``(n_a, n_b)``) and ``z`` (shape ``(n_a, n_b, d)``)."""
+    ``steps`` (int64, shape ``(n_a, n_b)``) and ``z`` (shape ``(n_a, n_b, d)``).
+
+    Points whose state (``states(Z)``: ``(q, q_dot)``, each ``(n, n_q)``) has the ``walker``'s
+    trailing foot pressing into the ground are not walked: status ``_INADMISSIBLE_START``,
+    no steps, final point the start."""
     A, B = np.broadcast_arrays(np.asarray(a, dtype=float), np.asarray(b, dtype=float))
     Z = np.tile(np.asarray(zstar), (A.size, 1))
     Z[:, axes[0]] = A.ravel()
     Z[:, axes[1]] = B.ravel()
-    status, taken, zf = walk(Z)
+    inadmissible = walker.trailing_foot_presses(*states(Z))
+    status = np.full(A.size, _INADMISSIBLE_START, dtype=np.int64)
+    taken = np.zeros(A.size, dtype=np.int64)
+    zf = Z.copy()
+    if not np.all(inadmissible):
+        ok = ~inadmissible
+        status[ok], taken[ok], zf[ok] = walk(Z[ok])
     return {
-        "status": np.asarray(status, dtype=np.int64).reshape(A.shape),
-        "steps": np.asarray(taken, dtype=np.int64).reshape(A.shape),
-        "z": np.asarray(zf, dtype=float).reshape(*A.shape, len(zstar)),
+        "status": status.reshape(A.shape),
+        "steps": taken.reshape(A.shape),
+        "z": zf.reshape(*A.shape, len(zstar)),
     }
 
 
@@ -381,6 +402,7 @@ def _classify(status: NDArray[np.int64], dist: FloatArray, tol: float) -> NDArra
     for st in WalkStatus:
         if st is not WalkStatus.COMPLETED:  # every status has its outcome (a test checks)
             outcome[status == st.code] = OUTCOMES.index(st.value)
+    outcome[status == _INADMISSIBLE_START] = OUTCOMES.index("inadmissible_start")
     outcome[completed] = OUTCOMES.index("keeps_walking")
     outcome[completed & (dist < tol)] = OUTCOMES.index("converged")
     return outcome
@@ -411,7 +433,7 @@ def _basin_chunk(
                             stop_near=(np.asarray(zstar), tol), parallel=parallel)
         return res.status, res.steps, res.z
 
-    return _walk_chunk(q3, q3_dot, zstar, (0, 1), walk)
+    return _walk_chunk(q3, q3_dot, zstar, (0, 1), walk, walker, walker.section_to_state)
 
 
 # -- described walkers (TOML models) -------------------------------------------------------------
@@ -587,7 +609,9 @@ def _model_basin_chunk(
                                    stop_near=(np.asarray(zstar), tol), parallel=parallel)
         return res.status, res.steps, res.z
 
-    return _walk_chunk(a, b, zstar, axes, walk)
+    from heelstrike.dynamics.compiled_phased import section_states
+
+    return _walk_chunk(a, b, zstar, axes, walk, w, functools.partial(section_states, w))
 
 
 def _walk_points_scipy(

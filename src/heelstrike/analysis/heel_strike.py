@@ -24,7 +24,7 @@ from heelstrike._results import ResultDictMixin
 from heelstrike._typing import BoolArray, FloatArray
 from heelstrike.core._scalars import python_scalars
 from heelstrike.core.impact import ImpactResult, impact
-from heelstrike.models._contact import LIFT_TOLERANCE, trailing_foot_lifts
+from heelstrike.models._contact import CONTACT_TOLERANCE, LIFT_TOLERANCE, trailing_foot_lifts
 from heelstrike.models.base import Foot, PlanarWalker, check_backend_name, is_mcgeer_wheel
 from heelstrike.models.compass import CompassGait, heel_strike_state
 
@@ -42,12 +42,6 @@ __all__ = [
     "symmetric_step_length",
     "trailing_foot_lifts",
 ]
-
-#: Largest foot clearance accepted in a heel-strike state, relative to the leg length: at a heel
-#: strike both feet touch the ground (``|clearance| <= CONTACT_TOLERANCE * l``; 1 um for a
-#: 1 m leg, loose enough for a state copied with six decimals).
-CONTACT_TOLERANCE = 1e-6
-
 
 class NotAHeelStrikeError(ValueError):
     """A configuration given as a heel strike does not have both feet on the ground."""

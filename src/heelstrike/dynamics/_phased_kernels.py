@@ -75,6 +75,7 @@ from heelstrike.dynamics.compiled_phased import (
     SLIPPED,
 )
 from heelstrike.models._codegen_numba import NumbaModel, signatures
+from heelstrike.models._contact import CONTACT_TOLERANCE
 
 _SIGNATURES = signatures()
 _DYN_T = nbt.FunctionType(_SIGNATURES["dynamics"])
@@ -757,13 +758,16 @@ def _walk_py(
         # -- locked swing -------------------------------------------------------------------
         if ended < 0:
             free = free_lock
-            for want in (_EV_ARMED, _EV_STRIKE):
+            want, rearming = _EV_ARMED, False
+            while True:
                 qref = q.copy()
                 y = np.empty(2 * free.shape[0] + 1)
                 _pack(q, qd, free, work, y)
-                if want == _EV_ARMED and _event_value(_EV_ARMED, dyn, con, p, cfg, free, qref,
-                                                      none_idx, lockv, y, ew) > 0.0:
+                if want == _EV_ARMED and not rearming and _event_value(
+                        _EV_ARMED, dyn, con, p, cfg, free, qref, none_idx, lockv, y, ew) > 0.0:
+                    want = _EV_STRIKE
                     continue
+                rearming = False
                 kinds, dirs = _kinds(want, friction)
                 ev, t, S, ns = _segment(dyn, con, p, cfg, free, qref, none_idx, lockv, y, t,
                                         t_limit, kinds, dirs, rtol, atol, max_step, S, ns,
@@ -773,6 +777,15 @@ def _walk_py(
                 ended = _outcome(ev, want)
                 if ended >= 0:
                     break
+                if want == _EV_ARMED:
+                    want = _EV_STRIKE
+                    continue
+                # a heel strike only with the swing foot ahead (BuiltWalker.strike_not_ahead);
+                # level with or behind the stance foot, arm the strike anew (QA sweep 11, #4)
+                con(q, qd, p, Ac, rate, cc)
+                if cc[0, 0] - cc[1, 0] > CONTACT_TOLERANCE * (cfg[_C_LEG] - cfg[_C_RSW]):
+                    break
+                want, rearming = _EV_ARMED, True
         if ended >= 0:
             status = ended
             break

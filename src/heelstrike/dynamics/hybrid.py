@@ -767,9 +767,13 @@ def simulate(
         for phase in schedule.phases:
             sup = SingleSupport(walker=walker, slope=slope, torque=law, locked=phase.locked)
             m = len(sup.free_coordinates)
-            for stage in phase.stages:
-                if stage.skip is not None and stage.skip(q, qd):
+            i_stage, rearming = 0, False
+            while i_stage < len(phase.stages):
+                stage = phase.stages[i_stage]
+                i_stage += 1
+                if stage.skip is not None and not rearming and stage.skip(q, qd):
                     continue
+                rearming = False
                 q_ref = q.copy()
                 x0 = np.concatenate((sup.pack(q, qd), [work]))
                 raw = integrate_segment(sup, q_ref, x0, t, t_limit,
@@ -788,6 +792,8 @@ def simulate(
                 ended = _segment_outcome(raw, stage.until.name)
                 if ended is not None:
                     break
+                if stage.reject is not None and stage.reject(q, qd):
+                    i_stage, rearming = 0, True  # not the planned event: arm the guard anew
             if ended is not None or phase.reset == "heel_strike":
                 break
             # -- knee strike: inert impact, stance foot rolling, the strike joints lock --------

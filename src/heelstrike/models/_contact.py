@@ -19,10 +19,12 @@ from numpy.typing import ArrayLike, NDArray
 from heelstrike._typing import BoolArray
 
 __all__ = [
+    "CONTACT_TOLERANCE",
     "LIFT_TOLERANCE",
     "grazes",
     "lift_velocity_scale",
     "lifts",
+    "presses",
     "step_length",
     "trailing_foot_lifts",
 ]
@@ -32,6 +34,11 @@ __all__ = [
 #: ``l (|q3_dot-| + |q4_dot-|)`` for the paper's walker). It absorbs round-off, so that McGeer's
 #: wheel (``R = l``, where ``q2_dot+ = 0`` exactly) is reported as not lifting.
 LIFT_TOLERANCE = 1e-9
+
+#: Largest foot clearance of a foot said to touch the ground, relative to the leg length
+#: (``|clearance| <= CONTACT_TOLERANCE * l``; 1 um for a 1 m leg, loose enough for a state
+#: copied with six decimals): both feet at a heel strike, the trailing foot at a step's start.
+CONTACT_TOLERANCE = 1e-6
 
 
 def lifts(normal_velocity: float, velocity_scale: float) -> bool:
@@ -61,6 +68,22 @@ def grazes(normal_velocity: float, velocity_scale: float) -> bool:
         Size of the pre-impact velocities (m/s), :func:`lift_velocity_scale`.
     """
     return abs(normal_velocity) <= LIFT_TOLERANCE * velocity_scale
+
+
+def presses(normal_velocity: float, velocity_scale: float) -> bool:
+    """The foot moves into the ground: ``v_n < -LIFT_TOLERANCE * scale`` (numba-compilable).
+
+    Neither :func:`lifts` nor :func:`grazes`. A state just after a heel strike never has its
+    trailing foot (on the ground) pressing: the heel strike would not have lifted it.
+
+    Parameters
+    ----------
+    normal_velocity : float
+        Normal (upward) velocity of the foot's contact point (m/s).
+    velocity_scale : float
+        Size of the velocities (m/s), :func:`lift_velocity_scale`.
+    """
+    return normal_velocity < -LIFT_TOLERANCE * velocity_scale
 
 
 def lift_velocity_scale(leg_length: float, joint_rates: NDArray[np.float64]) -> float:

@@ -40,6 +40,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._typing import FloatArray
+from heelstrike.models import _contact
 from heelstrike.models._contact import step_length as _step_length
 from heelstrike.models.schedule import (
     Guard,
@@ -328,6 +329,34 @@ class PlanarWalker(ABC):
         x_start = np.asarray(self.contact_point(q_start, "right")[..., 0], dtype=float)
         x_impact = np.asarray(self.contact_point(q_impact, "left")[..., 0], dtype=float)
         return np.asarray(_step_length(x_start, x_impact))  # type: ignore[arg-type]
+
+    def trailing_foot_presses(self, q: ArrayLike, q_dot: ArrayLike) -> NDArray[np.bool_]:
+        """Whether the trailing foot of a step's start is on the ground and moving into it.
+
+        A state just after a heel strike (the start of a step) has its trailing ("left") foot
+        on the ground, ``|clearance| <= CONTACT_TOLERANCE l``, and lifting, or grazing for
+        McGeer's wheel (:mod:`heelstrike.models._contact`). A start for which this returns True
+        is the state after no heel strike: the foot would sink into the ground.
+
+        Parameters
+        ----------
+        q, q_dot : array_like, shape (..., n)
+            States with the stance foot labelled "right" (rad, m; rad/s, m/s).
+
+        Returns
+        -------
+        ndarray of bool, shape (...)
+            Trailing foot touching the ground with normal velocity
+            ``v_n < -LIFT_TOLERANCE l sum_j |q_j_dot|``
+            (:func:`~heelstrike.models._contact.presses`).
+        """
+        q_, qd = np.asarray(q, dtype=float), np.asarray(q_dot, dtype=float)
+        leg = float(np.asarray(self.scale.leg_length))
+        touching = np.abs(self.foot_clearance(q_, "left")) <= _contact.CONTACT_TOLERANCE * leg
+        normal_velocity = np.einsum("...j,...j->...", self.contact_jacobian(q_, "left")[..., 1, :],
+                                    qd)
+        scale = leg * np.sum(np.abs(qd[..., 2:]), axis=-1)
+        return np.asarray(touching & _contact.presses(normal_velocity, scale))
 
     @property
     def has_poincare_section(self) -> bool:

@@ -47,6 +47,7 @@ from numpy.typing import ArrayLike
 
 from heelstrike._typing import FloatArray
 from heelstrike._version import __version__
+from heelstrike.models._contact import CONTACT_TOLERANCE
 from heelstrike.models._generated import (
     CacheWarning,
     IdentityCache,
@@ -690,9 +691,11 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         impact with ``A = [A_R; lock rows]``). *Locked swing*: every lock held; first until the
         heel strike is *armed* (stance angle > 0, swing foot ahead of the stance foot and above
         the ground; skipped if armed at its start), then until the swing foot's clearance falls
-        through zero. This excludes the mid-stance scuffing root of the clearance (during the
-        knee swing, ground penetration of the swing foot is ignored too); for the compass gait
-        it is the same event as :meth:`heelstrike.models.CompassGait.heel_strike_function`.
+        through zero with the foot ahead of the stance foot (a touch level with it or behind it
+        is no heel strike: :meth:`strike_not_ahead`, and the strike is armed anew). This
+        excludes the mid-stance scuffing root of the clearance (during the knee swing, ground
+        penetration of the swing foot is ignored too); for the compass gait it is the same
+        event as :meth:`heelstrike.models.CompassGait.heel_strike_function`.
         Every stage can end in a fall: forward (stance angle reaching ``pi/2``) or backward
         (the stance leg stopping before the vertical, or rolling back through it). The heel
         strike decides the trailing foot by complementarity.
@@ -724,8 +727,8 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
             return float(min(q[j] - angle[j] for j in swing_locks))
 
         def armed(q: FloatArray, qd: FloatArray) -> float:
-            ahead = float(self.contact_point(q, "right")[0] - self.contact_point(q, "left")[0])
-            return float(min(q[2], ahead, float(self.foot_clearance(q, "left"))))
+            clearance = float(self.foot_clearance(q, "left"))
+            return float(min(q[2], self.swing_foot_ahead(q), clearance))
 
         threshold = float(knee_flex_threshold)
         phases: list[Phase] = []
@@ -745,11 +748,26 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
             stages=(
                 Stage(until=Guard(name="armed", function=armed, direction=1), failures=falls,
                       skip=lambda q, qd: armed(q, qd) > 0.0),
-                Stage(until=strike, failures=falls),
+                Stage(until=strike, failures=falls, reject=self.strike_not_ahead),
             ),
         ))
         return StepSchedule(phases=tuple(phases), lock_angles=tuple(angle.items()),
                             trailing_foot="complementarity")
+
+    def swing_foot_ahead(self, q: ArrayLike) -> float:
+        """How far (m) the swing ("left") foot's contact point is ahead of the stance foot's,
+        along the walking direction ``-x``."""
+        return float(self.contact_point(q, "right")[0] - self.contact_point(q, "left")[0])
+
+    def strike_not_ahead(self, q: ArrayLike, q_dot: ArrayLike) -> bool:
+        """Whether a swing foot touching the ground at ``q`` is no heel strike: it is not ahead
+        of the stance foot by more than ``CONTACT_TOLERANCE (l - R)`` (legs parallel, or the
+        foot arriving from behind: a step of zero or negative length; QA sweep 11, #4). ``R``
+        is the swing foot's radius: the feet's contact points at a heel strike are
+        ``~2 (l - R) sin q3`` apart, which vanishes towards McGeer's wheel (``R = l``). The
+        compiled kernels test the same (``_phased_kernels``)."""
+        span = float(self.scale.leg_length) - float(np.asarray(self.foot_radii[1]))
+        return self.swing_foot_ahead(q) <= CONTACT_TOLERANCE * span
 
     def joint_index(self, name: str) -> int:
         """Coordinate index of a coordinate/joint name."""

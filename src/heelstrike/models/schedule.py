@@ -12,7 +12,8 @@ loop that runs any schedule; the walker only declares it
   heel strike by the projector with the striking foot's Jacobian (eq. 13) and the lift test;
 - a described walker: a knee-swing phase (stance knee locked) ending in a knee strike when it has
   lockable joints, then a locked-swing phase "until armed" and "until the swing foot's clearance
-  falls through zero", heel strike with the trailing foot as a complementarity candidate
+  falls through zero" (a touch with the swing foot not ahead of the stance foot is rejected and
+  the strike armed anew), heel strike with the trailing foot as a complementarity candidate
   (:func:`heelstrike.core.complementarity.resolve_impact`).
 
 Guards are functions of the configuration and velocities ``(q, q_dot)``, each shape (n,); a
@@ -83,11 +84,17 @@ class Stage:
     skip : callable or None
         ``skip(q, q_dot) -> bool`` at the stage's start: True if the stage is already past
         (e.g. the stance leg already beyond the vertical).
+    reject : callable or None
+        ``reject(q, q_dot) -> bool`` when ``until`` fires: True if that crossing is not the
+        planned event (a swing foot touching the ground level with or behind the stance foot
+        is no heel strike). The phase then starts again at its first stage, whose ``skip`` is
+        not consulted, so the guard must be armed anew.
     """
 
     until: Guard
     failures: tuple[Guard, ...] = ()
     skip: Callable[[FloatArray, FloatArray], bool] | None = None
+    reject: Callable[[FloatArray, FloatArray], bool] | None = None
 
 
 @dataclass(frozen=True, kw_only=True)

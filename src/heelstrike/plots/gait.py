@@ -309,7 +309,11 @@ _COLOURS = {
     "slipped": "#8c510a",
     "no_consistent_assignment": "#f781bf",
     "no_leg_swap": "#636363",
+    "inadmissible_start": "#ffffbf",
 }
+
+#: Legend text of the basin outcomes whose name alone does not say it (the others: the name).
+_LABELS = {"inadmissible_start": "inadmissible start: trailing foot sinks"}
 
 
 def basin_figure(basin: Basin) -> Figure:
@@ -343,7 +347,8 @@ def basin_figure(basin: Basin) -> Figure:
             ls="none", label="fixed point")
     fr = basin.fractions()
     handles = [
-        Patch(color=_COLOURS[name], label=f"{name.replace('_', ' ')} ({100 * fr[name]:.1f} %)")
+        Patch(color=_COLOURS[name],
+              label=f"{_LABELS.get(name, name.replace('_', ' '))} ({100 * fr[name]:.1f} %)")
         for name in OUTCOMES
         if fr[name] > 0
     ]

@@ -427,3 +427,26 @@ def test_reference_rejects_a_level_touch_and_agrees_when_tight(
         assert ref.status.value == got.status.value == "lost_contact"
         assert ref.n_steps == got.n_steps == 1
         assert abs(got.t[-1] - ref.t[-1]) < 1e-6
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("backend", ["scipy", *sorted(BACKENDS)])
+@pytest.mark.parametrize("case_name", ["kneed-gait", "compass-gait", "torso-powered-gait"])
+def test_each_state_is_sampled_once(
+    backend: str, case_name: str, walkers: dict[str, PhasedWalker]
+) -> None:
+    """A stage boundary inside a phase (the swing knee flexed past its threshold, the heel
+    strike armed) does not repeat the sample where the stage began (QA sweep 11's duplicated
+    CSV rows came from there): consecutive samples differ, except the two sides of an impact,
+    which differ in velocity."""
+    case = CASES[case_name]
+    w = walkers[case.walker]
+    walk = _run(simulate_phased if backend == "scipy" else BACKENDS[backend], w, case)
+    same = ((walk.t[1:] == walk.t[:-1]) & (walk.step[1:] == walk.step[:-1])
+            & np.all(walk.q[1:] == walk.q[:-1], axis=-1)
+            & np.all(walk.q_dot[1:] == walk.q_dot[:-1], axis=-1))
+    assert not same.any(), walk.t[1:][same]
+    # every stage boundary is still there: the samples at the impacts and at the arming
+    assert len(walk.t) > 3 * case.steps
+    for e in walk.events:
+        assert np.any(np.isclose(walk.t, e.time, rtol=0.0, atol=1e-12))

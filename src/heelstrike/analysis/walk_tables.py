@@ -45,22 +45,6 @@ def _check_walk(walk: WalkResult, step: int | None = None) -> None:
         raise ValueError(f"the walk has no samples in step {step} (steps 0..{walk.step.max()})")
 
 
-def _distinct_samples(walk: WalkResult) -> NDArray[np.bool_]:
-    """Mask of the samples that are not exact repeats of the sample before, shape (N,).
-
-    A phase boundary inside a step (a described walker's swing knee unlocking) ends one
-    integration segment and starts the next at the same state: the tables list it once (QA
-    sweep 11). The two samples of an impact differ (step, velocities) and are both kept.
-    """
-    keep = np.ones(len(walk.t), dtype=bool)
-    keep[1:] = ~(
-        (walk.t[1:] == walk.t[:-1]) & (walk.step[1:] == walk.step[:-1])
-        & np.all(walk.q[1:] == walk.q[:-1], axis=-1)
-        & np.all(walk.q_dot[1:] == walk.q_dot[:-1], axis=-1)
-    )
-    return keep
-
-
 def walk_energy_table(walker: PlanarWalker, walk: WalkResult) -> pd.DataFrame:
     """Kinetic, potential and total mechanical energy at every sample of a walk.
 
@@ -82,12 +66,11 @@ def walk_energy_table(walker: PlanarWalker, walk: WalkResult) -> pd.DataFrame:
         impact) and the first of the next (just after it, legs relabelled).
     """
     _check_walk(walk)
-    k = _distinct_samples(walk)
-    q, qd = walk.q[k], walk.q_dot[k]
+    q, qd = walk.q, walk.q_dot
     T = np.asarray(walker.kinetic_energy(q, qd), dtype=float)
     U = np.asarray(walker.potential_energy(q, walk.slope), dtype=float)
     return pd.DataFrame(
-        {"t_s": walk.t[k], "step": walk.step[k], "kinetic_J": T, "potential_J": U,
+        {"t_s": walk.t, "step": walk.step, "kinetic_J": T, "potential_J": U,
          "total_J": T + U}
     )
 
@@ -303,12 +286,11 @@ def model_phase_portrait_table(walker: Any, walk: WalkResult) -> pd.DataFrame:
     """
     _check_walk(walk)
     swing = walker.description.links[walker.joint_index("hip") - 2].name
-    k = _distinct_samples(walk)
-    q, qd = walk.q[k], walk.q_dot[k]
+    q, qd = walk.q, walk.q_dot
     return pd.DataFrame(
         {
-            "t_s": walk.t[k],
-            "step": walk.step[k],
+            "t_s": walk.t,
+            "step": walk.step,
             "q3_rad": q[:, 2],
             "q3_dot_rad_s": qd[:, 2],
             "swing_rad": walker.link_angles(q)[swing],

@@ -473,6 +473,15 @@ def _push(
 
 
 @njit(cache=True, nogil=True)
+def _same_row(S: FloatArray, i: int, j: int) -> bool:
+    """Whether sample rows ``i`` and ``j`` of ``S`` are equal in every column."""
+    for c in range(S.shape[1]):
+        if S[i, c] != S[j, c]:
+            return False
+    return True
+
+
+@njit(cache=True, nogil=True)
 def _segment(
     dyn: Any, con: Any, p: FloatArray, cfg: FloatArray, free: IntArray, qref: FloatArray,
     swing_idx: IntArray, lockv: FloatArray, y: FloatArray, t: float, t_limit: float,
@@ -490,6 +499,8 @@ def _segment(
     R = cfg[_C_RST]
     n_ev = kinds.shape[0]
     S, ns = _push(S, ns, t, y, free, qref, R, step, leg, phase)
+    if ns > 1 and _same_row(S, ns - 1, ns - 2):
+        ns -= 1  # the previous segment ended here (same step, phase, state): list it once
     if t_limit <= t:
         return _EV_NONE, t, S, ns
     qo = np.empty(n)

@@ -780,13 +780,19 @@ def simulate(
                                         _events(sup, q_ref, stage, friction), rtol, atol,
                                         max_step)
                 qs, qds = sup.unpack(raw.x[:, : 2 * m], q_ref)
-                t_s.append(raw.t)
-                q_s.append(qs)
-                qd_s.append(qds)
-                w_s.append(raw.x[:, -1])
-                leg_s.append(np.full(len(raw.t), stance))
-                step_s.append(np.full(len(raw.t), k))
-                phase_s.append(np.full(len(raw.t), phase.name))
+                # a stage that starts where the previous one ended (same step and phase, no
+                # impact between) does not repeat its start sample: each state is listed once
+                first = int(bool(step_s) and step_s[-1].size > 0 and step_s[-1][-1] == k
+                            and phase_s[-1][-1] == phase.name and t_s[-1][-1] == raw.t[0]
+                            and np.array_equal(q_s[-1][-1], qs[0])
+                            and np.array_equal(qd_s[-1][-1], qds[0]))
+                t_s.append(raw.t[first:])
+                q_s.append(qs[first:])
+                qd_s.append(qds[first:])
+                w_s.append(raw.x[first:, -1])
+                leg_s.append(np.full(len(raw.t) - first, stance))
+                step_s.append(np.full(len(raw.t) - first, k))
+                phase_s.append(np.full(len(raw.t) - first, phase.name))
                 t, q, qd = float(raw.t[-1]), qs[-1].copy(), qds[-1].copy()
                 work = float(raw.x[-1, -1])
                 ended = _segment_outcome(raw, stage.until.name)

@@ -407,3 +407,35 @@ def test_impact_model_says_when_the_ground_holds_the_trailing_foot(capsys, tmp_p
     k = json.loads(capsys.readouterr().out)
     assert k["trailing_foot_held"] is True
     assert k["units"]["impulse"] == ["N s", "N s", "N m s", "N m s", "N s"]
+
+
+def test_a_copy_with_the_shipped_name_is_noted(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """QA sweep 11: a copy of kneed.toml with changed values is still named 'kneed' and its
+    outputs read as the shipped walker's; the command says so. An unchanged copy, a renamed
+    copy and the shipped name itself get no note."""
+    from importlib.resources import files
+
+    text = (files("heelstrike") / "walkers" / "kneed.toml").read_text()
+    assert '\nmH = ' in text
+    head, _, tail = text.partition("\nmH = ")
+    changed = head + "\nmH = 2.0" + tail[tail.index("\n"):]
+    cases = {
+        "changed.toml": (changed, True),
+        "same.toml": (text, False),
+        "renamed.toml": (changed.replace('name = "kneed"', 'name = "my_kneed"', 1), False),
+    }
+    for fname, (body, noted) in cases.items():
+        path = tmp_path / fname
+        path.write_text(body)
+        assert main(["impact", "--model", str(path), "--angle", "15deg", "--json"]) == 0
+        err = capsys.readouterr().err
+        assert ("is named 'kneed' like the shipped walker but differs" in err) == noted, fname
+    assert main(["impact", "--model", "kneed", "--angle", "15deg", "--json"]) == 0
+    assert "like the shipped walker" not in capsys.readouterr().err
+    # a command that fails still says one line: its error (the note is news of a result)
+    argv = ["gait", "--model", str(tmp_path / "changed.toml"), "--slope", "0deg"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("heelstrike: error:")

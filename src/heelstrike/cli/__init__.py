@@ -33,6 +33,7 @@ from heelstrike.cli import gait, paper, powered, robot
 from heelstrike.cli._common import (
     CliError,
     Parser,
+    ShippedNameWarning,
     parse_angle,
     parse_range,
     warnings_as_notes,
@@ -81,7 +82,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         args = parser.parse_args(argv)
         from heelstrike.analysis.newton import SearchTimeLimitWarning
 
-        with warnings_as_notes(SearchTimeLimitWarning):  # a cut search is news, said as such
+        # a cut search and a file named like a shipped walker are news, said as such
+        with warnings_as_notes(SearchTimeLimitWarning, ShippedNameWarning):
             status = int(args.func(args))
     except CliError as exc:
         return fail(one_line(exc))

@@ -200,6 +200,22 @@ def add_backend_option(
     p.add_argument("--backend", choices=sorted(BACKEND_NAMES), default=default, help=help)
 
 
+def _note_borrowed_name(model: str, description: Any) -> None:
+    """Warn (:class:`ShippedNameWarning`, a note of the command) when a walker file carries a
+    shipped walker's ``name`` but describes a different walker (a copy with changed values):
+    outputs and figures are labelled by that name, so they would read as the shipped walker's
+    (QA sweep 11)."""
+    from heelstrike.models.builder import shipped_walkers, walker_description
+
+    if model in shipped_walkers() or description.name not in shipped_walkers():
+        return
+    if description != walker_description(description.name):
+        warnings.warn(ShippedNameWarning(
+            f"{model} is named {description.name!r} like the shipped walker but differs from "
+            f"it; outputs are labelled {description.name!r}: give the file its own "
+            'name = "..." to tell them apart'), stacklevel=2)
+
+
 def model_from_args(args: argparse.Namespace) -> Any:
     from heelstrike.dynamics.phased import PhasedWalker
     from heelstrike.models.builder import walker_description
@@ -223,6 +239,7 @@ def model_from_args(args: argparse.Namespace) -> Any:
         description = walker_description(model)
     except OSError as exc:
         raise CliError(f"cannot read model {model!r}: {exc.strerror or exc}") from exc
+    _note_borrowed_name(model, description)
     names = sorted(name for name, _ in description.params)
     unknown = sorted(set(params) - set(names))
     if unknown:  # before the derivation, which takes seconds on a cold cache (QA sweep 9)
@@ -307,13 +324,17 @@ def add_store_option(p: argparse.ArgumentParser) -> None:
 
 @contextlib.contextmanager
 def warnings_as_notes(*categories: type[Warning]) -> Iterator[None]:
-    """Within the block, warnings of ``categories`` print as ``heelstrike: note: ...`` on
-    stderr (news for the user, not a Python warning with a source line); others as before."""
+    """Within the block, warnings of ``categories`` become ``heelstrike: note: ...`` lines on
+    stderr (news for the user, not a Python warning with a source line); others as before.
+
+    The notes are printed when the block ends normally: a command that fails prints its one
+    error line only."""
     show = warnings.showwarning
+    notes: list[str] = []
 
     def note(message: Any, category: Any, *args: Any, **kwargs: Any) -> None:
         if isinstance(category, type) and issubclass(category, categories):
-            print(f"heelstrike: note: {message}", file=sys.stderr)
+            notes.append(f"heelstrike: note: {message}")
         else:
             show(message, category, *args, **kwargs)
 
@@ -322,6 +343,12 @@ def warnings_as_notes(*categories: type[Warning]) -> Iterator[None]:
         yield
     finally:
         warnings.showwarning = show
+    for line in notes:  # reached only when the block ended normally
+        print(line, file=sys.stderr)
+
+
+class ShippedNameWarning(UserWarning):
+    """A walker file carries a shipped walker's ``name`` but describes another walker."""
 
 
 def run_with_store(store: str | None, compute: Callable[[], Any], out: str | None = None) -> Any:

@@ -184,3 +184,33 @@ def test_trailing_foot_presses_is_the_sign_of_the_clearance_rate(model):
     assert flags.shape == (40,) and 0 < flags.sum() < 40  # both kinds are sampled
     for k in range(40):
         assert flags[k] == _sinks(walker, Z[k])
+
+
+def test_default_window_holds_the_fixed_point_of_large_feet(tmp_path, capsys):
+    """R = 0.5 m at 3 deg walks with q3 = -0.547 rad, outside the old fixed default window
+    (-0.5..-0.05 rad): its basin figure drew the fixed point off the image. The default window
+    is widened to keep the fixed point 0.1 rad and 0.3 rad/s inside; R = 0's is unchanged, and
+    an axis the user gives is used as given."""
+    from heelstrike.analysis.basin import DEFAULT_RANGES, default_ranges
+
+    assert default_ranges(Z3) == DEFAULT_RANGES
+    b = basin_of_attraction(CompassGait(foot_radius=0.5), SLOPE3, grid=(6, 4), steps=3)
+    z = b.fixed_point
+    q3, rate = b.dataset["q3"].values, b.dataset["q3_dot"].values
+    assert z[0] < DEFAULT_RANGES[0][0]  # the hard case: outside the old window
+    assert q3[0] == pytest.approx(z[0] - 0.1) and q3[-1] == DEFAULT_RANGES[0][1]
+    assert (rate[0], rate[-1]) == DEFAULT_RANGES[1]
+    assert q3[0] < z[0] < q3[-1] and rate[0] < z[1] < rate[-1]
+    mine = basin_of_attraction(CompassGait(foot_radius=0.5), SLOPE3, grid=(3, 3), steps=3,
+                               ranges=(None, (1.0, 2.0)), fixed_point=z)
+    assert mine.dataset["q3"].values[0] == pytest.approx(z[0] - 0.1)
+    assert tuple(mine.dataset["q3_dot"].values[[0, -1]]) == (1.0, 2.0)
+    with pytest.raises(ValueError, match="increasing"):
+        basin_of_attraction(CompassGait(), SLOPE3, grid=(2, 2), ranges=((0.1, -0.1), None),
+                            fixed_point=Z3)
+    out = tmp_path / "b"
+    assert main(["basin", "--radius", "0.5", "--grid", "6x4", "--steps", "3", "--out",
+                 str(out), "--json"]) == 0
+    capsys.readouterr()
+    back = xr.open_dataset(out / "basin.nc")
+    assert float(back["q3"][0]) == pytest.approx(z[0] - 0.1, abs=1e-6)

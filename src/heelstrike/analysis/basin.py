@@ -61,6 +61,7 @@ __all__ = [
     "available_memory",
     "basin_memory_estimate",
     "basin_of_attraction",
+    "default_ranges",
     "model_basin_of_attraction",
     "model_slice_axes",
 ]
@@ -91,8 +92,23 @@ OUTCOMES: tuple[str, ...] = (
 #: after no heel strike; its outcome is ``inadmissible_start`` (QA11 #5).
 _INADMISSIBLE_START = -1
 
-#: Default window of the slice: ``q3`` (rad) and ``q3_dot`` (rad/s) ranges.
+#: Default window of the slice: ``q3`` (rad) and ``q3_dot`` (rad/s) ranges (widened where
+#: needed to hold the fixed point with :data:`DEFAULT_MARGINS` to spare).
 DEFAULT_RANGES: tuple[tuple[float, float], tuple[float, float]] = ((-0.5, -0.05), (0.3, 2.3))
+
+#: Least distance (rad, rad/s) from the fixed point to the edges of the default window.
+DEFAULT_MARGINS: tuple[float, float] = (0.1, 0.3)
+
+
+def default_ranges(fixed_point: ArrayLike) -> tuple[tuple[float, float], tuple[float, float]]:
+    """The compass basin's default window: :data:`DEFAULT_RANGES`, each edge moved out as far
+    as needed to keep the fixed point ``(q3, q3_dot, ...)`` :data:`DEFAULT_MARGINS` inside it
+    (large feet walk with ``|q3| > 0.5`` rad: ``R = 0.5 m`` at 3 deg has ``q3 = -0.547``)."""
+    z = np.asarray(fixed_point, dtype=float)
+    return tuple(  # type: ignore[return-value]
+        (min(lo, float(z[i]) - m), max(hi, float(z[i]) + m))
+        for i, ((lo, hi), m) in enumerate(zip(DEFAULT_RANGES, DEFAULT_MARGINS, strict=True))
+    )
 
 
 #: Memory (bytes) a basin needs per grid point, an upper estimate: the initial states, final
@@ -281,7 +297,7 @@ def basin_of_attraction(
     walker: CompassGait,
     slope: float,
     grid: tuple[int, int] = (400, 400),
-    ranges: tuple[tuple[float, float], tuple[float, float]] = DEFAULT_RANGES,
+    ranges: tuple[tuple[float, float] | None, tuple[float, float] | None] | None = None,
     steps: int = BASIN_STEPS,
     *,
     tol: float = BASIN_TOLERANCE,
@@ -304,8 +320,10 @@ def basin_of_attraction(
         Slope (rad).
     grid : (int, int)
         Number of ``q3`` and ``q3_dot`` values.
-    ranges : ((float, float), (float, float))
-        ``(q3_min, q3_max)`` (rad) and ``(q3_dot_min, q3_dot_max)`` (rad/s), inclusive.
+    ranges : ((float, float), (float, float)), optional
+        ``(q3_min, q3_max)`` (rad) and ``(q3_dot_min, q3_dot_max)`` (rad/s), inclusive;
+        default (or for an axis given as None) :func:`default_ranges`
+        (:data:`DEFAULT_RANGES`, widened to hold the fixed point).
     steps : int
         Largest number of steps walked from every initial state.
     tol : float
@@ -344,8 +362,8 @@ def basin_of_attraction(
     """
     check_backend_name(backend)
     n3, nd = _check_grid(grid, steps)
-    (a0, a1), (b0, b1) = ranges
-    if not (a0 < a1 and b0 < b1):
+    given = (None, None) if ranges is None else ranges
+    if any(r is not None and not r[0] < r[1] for r in given):
         raise ValueError(f"ranges must be increasing (min < max), got {ranges}")
     gait = None
     if fixed_point is None:
@@ -353,6 +371,8 @@ def basin_of_attraction(
         zstar = gait.fixed_point
     else:
         zstar = np.asarray(fixed_point, dtype=float).reshape(3)
+    (a0, a1), (b0, b1) = (r if r is not None else d
+                          for r, d in zip(given, default_ranges(zstar), strict=True))
     q3 = np.linspace(a0, a1, n3)
     q3d = np.linspace(b0, b1, nd)
     func = functools.partial(

@@ -482,10 +482,12 @@ def add_basin(sub: Any) -> None:
                    help="N_Q3xN_Q3DOT grid points (default 400x400; 100x100 with --model)")
     p.add_argument("--q3-range", type=lambda t: parse_range(t, parse_angle),
                    default=None, help="Q3MIN:Q3MAX post-impact stance angles (default "
-                   "-0.5:-0.05 rad; with --model the stance angle, by default the fixed point's "
+                   "-0.5:-0.05 rad, widened to keep the fixed point 0.1 rad inside; with "
+                   "--model the stance angle, by default the fixed point's "
                    "-0.25 to +0.2 rad, a range given is absolute); write --q3-range=-0.5:-0.05")
     p.add_argument("--q3dot-range", type=parse_range, default=None,
-                   help="MIN:MAX post-impact stance velocities in rad/s (default 0.3:2.3; with "
+                   help="MIN:MAX post-impact stance velocities in rad/s (default 0.3:2.3, widened "
+                   "to keep the fixed point 0.3 rad/s inside; with "
                    "--model by default the fixed point's -0.9 to +1.1 rad/s, a range given is "
                    "absolute)")
     p.add_argument("--steps", type=positive_int, default=BASIN_STEPS,
@@ -589,13 +591,15 @@ def _run_basin(args: argparse.Namespace) -> int:
     if args.model is not None:
         return _run_basin_model(args)
     walker = walker_from_args(args)
-    a0, a1, _ = args.q3_range or (-0.5, -0.05, None)
-    b0, b1, _ = args.q3dot_range or (0.3, 2.3, None)
-    grid = args.grid or (400, 400)
-    if not (a0 < a1 and b0 < b1):
+    # an axis not given: the default window, widened to hold the fixed point
+    q3_range, rate_range = (None if r is None else (float(r[0]), float(r[1]))
+                            for r in (args.q3_range, args.q3dot_range))
+    ranges = (q3_range, rate_range)
+    if any(r is not None and not r[0] < r[1] for r in ranges):
         raise CliError("--q3-range and --q3dot-range need MIN < MAX")
+    grid = args.grid or (400, 400)
     basin = _basin(args, lambda: basin_of_attraction(
-        walker, args.slope, grid=grid, ranges=((a0, a1), (b0, b1)), steps=args.steps,
+        walker, args.slope, grid=grid, ranges=ranges, steps=args.steps,
         tol=args.tol, progress=sys.stderr.isatty(), store=args.store,
         backend=args.backend,
     ))

@@ -43,7 +43,7 @@ from typing import Any
 _PUBLIC: dict[str, tuple[str, ...]] = {
     "basin": (
         "BYTES_PER_POINT", "OUTCOMES", "Basin", "available_memory", "basin_memory_estimate",
-        "basin_of_attraction", "model_basin_of_attraction", "model_slice_axes",
+        "basin_of_attraction", "default_ranges", "model_basin_of_attraction", "model_slice_axes",
     ),
     "cost_study": (
         "BRANCH_NOTE", "GAIT_VARIABLES", "STUDY_BYTES_PER_POINT", "check_study_memory", "paper_eta",

@@ -341,35 +341,39 @@ def _rhs(
 
 @njit(cache=True, nogil=True)
 def _event_work(n: int) -> Any:
-    """Work space of :func:`_event_value`: ``(q, qd, M, h, A, rate, c, X, W, b)``."""
+    """Work space of :func:`_event_value`: ``(q, qd, M, h, A, rate, c, dx, Mr, Fr, W, b)``."""
     return (np.empty(n), np.empty(n), np.empty((n, n)), np.empty(n), np.empty((2, 2, n)),
-            np.empty((2, 2)), np.empty((2, 2)), np.empty((n, 3)), np.empty((2, 2)),
-            np.empty((2, 1)))
+            np.empty((2, 2)), np.empty((2, 2)), np.empty(2 * n + 1), np.empty((n, n)),
+            np.empty((n, 1)), np.empty((2, 2)), np.empty((2, 1)))
 
 
 @njit(cache=True, nogil=True)
 def _reaction(
-    dyn: Any, con: Any, p: FloatArray, cfg: FloatArray, q: FloatArray, qd: FloatArray, ew: Any,
+    dyn: Any, con: Any, p: FloatArray, cfg: FloatArray, free: IntArray, qref: FloatArray,
+    x: FloatArray, ew: Any,
 ) -> tuple[float, float]:
-    """Ground force on the stance foot ``(A M^-1 A^T)^-1 A M^-1 (h - B u)`` (N)."""
-    n = q.shape[0]
-    M, h, A, rate, c, X, W, b = ew[2], ew[3], ew[4], ew[5], ew[6], ew[7], ew[8], ew[9]
-    _forces(dyn, p, cfg, q, qd, M, h)
+    """Ground force on the stance foot ``(tangential, normal)`` (N) at the reduced state ``x``.
+
+    The base rows of ``M q_ddot + h - B u = A^T lambda + E^T mu``, as
+    :meth:`heelstrike.dynamics.single_support.SingleSupport.ground_reaction`:
+    ``A[:, :2]^T lambda = (M q_ddot + h - B u)[:2]`` with the single-support accelerations
+    ``q_ddot = J theta_ddot`` of :func:`_rhs`, so that the holding torques ``mu`` of the locked
+    joints are part of the balance.
+    """
+    q, qd, M, h, A, rate, c = ew[0], ew[1], ew[2], ew[3], ew[4], ew[5], ew[6]
+    dx, Mr, Fr, W, b = ew[7], ew[8], ew[9], ew[10], ew[11]
+    _rhs(dyn, p, cfg, free, qref, x, dx, q, qd, M, h, Mr, Fr)  # h is h - B u here
+    m = free.shape[0]
+    R = cfg[_C_RST]
+    for r in range(2):  # (M q_ddot + h - B u)[r]: q_ddot[0] = -R theta_dd[0], q_ddot[1] = 0
+        s = h[r] - R * M[r, 0] * dx[m]
+        for a in range(m):
+            s += M[r, free[a]] * dx[m + a]
+        b[r, 0] = s
     con(q, qd, p, A, rate, c)
-    for i in range(n):
-        X[i, 0] = A[0, 0, i]
-        X[i, 1] = A[0, 1, i]
-        X[i, 2] = h[i]
-    _gauss(M, X, n, 3)
     for r in range(2):
-        for j in range(3):
-            s = 0.0
-            for i in range(n):
-                s += A[0, r, i] * X[i, j]
-            if j < 2:
-                W[r, j] = s
-            else:
-                b[r, 0] = s
+        for j in range(2):
+            W[r, j] = A[0, j, r]
     _gauss(W, b, 2, 1)
     return b[0, 0], b[1, 0]
 
@@ -399,7 +403,7 @@ def _event_value(
         if kind == _EV_STRIKE:
             return -clearance
         return min(x[0], min(c[0, 0] - c[1, 0], clearance))
-    lam_t, lam_n = _reaction(dyn, con, p, cfg, q, qd, ew)
+    lam_t, lam_n = _reaction(dyn, con, p, cfg, free, qref, x, ew)
     if kind == _EV_LOST:
         return lam_n
     return cfg[_C_MU] * lam_n - abs(lam_t)
@@ -515,7 +519,8 @@ def _segment(
     wo = np.empty((5, d))
     go = np.empty((2, n_ev))
     ew = (_borrow(ewo[0]), _borrow(ewo[1]), _borrow(ewo[2]), _borrow(ewo[3]), _borrow(ewo[4]),
-          _borrow(ewo[5]), _borrow(ewo[6]), _borrow(ewo[7]), _borrow(ewo[8]), _borrow(ewo[9]))
+          _borrow(ewo[5]), _borrow(ewo[6]), _borrow(ewo[7]), _borrow(ewo[8]), _borrow(ewo[9]),
+          _borrow(ewo[10]), _borrow(ewo[11]))
     # the owners stay referenced (``keep``) while the borrowed views are in use
     keep = (qo, qdo, Mo, hvo, Mro, Fro, ewo, ko, ktryo, wo, go)
     return _integrate(

@@ -9,8 +9,12 @@ therefore parametrise single support with a *constant* basis ``J`` of the null s
 .. math:: J^T M(q) J \\, \\ddot\\theta = J^T (B u - h(q, \\dot q)),
 
 the same ``M`` and ``h`` as the impact and flight models (one source of truth). The contact force
-follows from the constrained form ``M q_ddot + h = B u + A^T lambda``:
-``lambda = (A M^-1 A^T)^-1 A M^-1 (h - B u)`` (tangential, normal) in N.
+``lambda`` (tangential, normal, N) follows from the constrained form
+``M q_ddot + h = B u + A_R^T lambda + E^T mu`` (``E``: the rows of the locked joints, ``mu``
+their holding torques): the locked joints act on no base coordinate and ``A_R``'s first two
+columns are the identity, so the base rows give ``lambda = (M q_ddot + h - B u)[:2]``, Newton's
+law for the whole walker (rate of its linear momentum less its weight), with the single-support
+accelerations ``q_ddot = J theta_ddot``.
 """
 
 from __future__ import annotations
@@ -170,19 +174,25 @@ class SingleSupport:
     def ground_reaction(self, t: float, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
         """Contact force on the stance foot ``lambda = (tangential, normal)`` (N), (..., 2).
 
-        From ``M q_ddot + h = B u + A^T lambda`` with ``A q_ddot = 0`` (``A_dot = 0`` for the
-        rolling stance foot): ``lambda = (A M^-1 A^T)^-1 A M^-1 (h - B u)``.
+        The base rows of ``M q_ddot + h = B u + A^T lambda + E^T mu``:
+        ``lambda = (M q_ddot + h - B u)[:2]`` with the single-support accelerations
+        ``q_ddot = J theta_ddot`` (see the module docstring). The holding torques ``mu`` of the
+        locked joints (a locked knee) are part of the balance: the unlocked formula
+        ``(A M^-1 A^T)^-1 A M^-1 (h - B u)`` would let those joints accelerate.
         """
         q_, qd = np.asarray(q, dtype=float), np.asarray(q_dot, dtype=float)
-        M, rhs = self.walker.dynamics_terms(q_, qd, self.slope)
-        A = self.walker.contact_jacobian(q_, "right")
+        M, f = self.walker.dynamics_terms(q_, qd, self.slope)
         if self.torque is not None:
-            rhs = rhs - self.generalized_actuation(t, q_, qd)
-        X = np.linalg.solve(M, np.concatenate((np.swapaxes(A, -1, -2), rhs[..., None]), axis=-1))
-        W = A @ X[..., :2]
-        if W.ndim == 2:  # one state: the 2x2 system in closed form (an event function's case)
-            return solve_small(W, (A @ X[:, 2:])[:, 0])
-        return np.asarray(np.linalg.solve(W, (A @ X[..., 2:])[..., :])[..., 0])
+            f = f - self.generalized_actuation(t, q_, qd)
+        J = self._basis
+        if q_.ndim == 1:  # one state (an event function's case): the small solve in closed form
+            Mr = (self._reduce @ M.reshape(-1)).reshape(J.shape[1], J.shape[1])
+            q_dd = J @ solve_small(Mr, -(self._basis_t @ f))
+            return np.asarray(M[:2] @ q_dd + f[:2])
+        Mr = np.einsum("ai,...ij,jb->...ab", J.T, M, J)
+        theta_dd = np.linalg.solve(Mr, -np.einsum("ai,...i->...a", J.T, f)[..., None])[..., 0]
+        q_dd = np.einsum("ij,...j->...i", J, theta_dd)
+        return np.asarray(np.einsum("...ij,...j->...i", M[..., :2, :], q_dd) + f[..., :2])
 
     def actuator_power(self, t: float, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
         """Mechanical power of the actuators ``(B u) . q_dot`` (W), shape (...)."""

@@ -165,7 +165,7 @@ def test_outputs_names_replace_the_old_plot_writers() -> None:
         # the bifurcation writers that computed the diagram themselves are gone (issue 9: the
         # CLI computes, outputs writes): write_bifurcation_files is the one writer
         "gait": ("write_basin", "write_bifurcation_files", "write_gait_map",
-                 "write_model_walk_figures", "write_walk_figures", "COMPASS_ONLY_WALK_FIGURES"),
+                 "write_model_walk_figures", "write_walk_figures"),
         "models": ("write_impact_map",),
         "paper": ("reproduce_paper",),
         "powered": ("write_cost_figures",),

@@ -12,8 +12,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from heelstrike.analysis.walk_tables import step_table
 from heelstrike.dynamics.compiled_phased import simulate_phased_compiled
-from heelstrike.dynamics.phased import PhasedWalker, load_phased_walker, simulate_phased
+from heelstrike.dynamics.hybrid import ground_reaction
+from heelstrike.dynamics.phased import (
+    PhasedWalker,
+    PhasedWalkResult,
+    load_phased_walker,
+    simulate_phased,
+)
 from heelstrike.dynamics.single_support import SingleSupport
 from heelstrike.models.base import gravity_vector
 
@@ -33,6 +40,19 @@ def _unlocked_reaction(w: PhasedWalker, q: np.ndarray, qd: np.ndarray, slope: fl
     return np.linalg.solve(A @ X[:, :2], A @ X[:, 2])
 
 
+def _newtons_law(w: PhasedWalker, walk: PhasedWalkResult, phase: str
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """The samples of ``phase`` in the walk's first step and ``dP/dt - m g`` at each (N), by
+    central differences of the momentum ``P = (M q_dot)[:2]``."""
+    idx = np.flatnonzero((walk.phase == phase) & (walk.step == 0))
+    assert idx.size > 40 and np.all(np.diff(idx) == 1)  # one run of samples per phase
+    assert np.all(np.diff(walk.t[idx]) > 0)
+    momentum = np.einsum("...ij,...j->...i", w.mass_matrix(walk.q[idx]), walk.q_dot[idx])[:, :2]
+    scale = w.scale
+    weight = float(scale.total_mass) * gravity_vector(float(scale.gravity), KNEED_SLOPE)
+    return idx, np.gradient(momentum, walk.t[idx], axis=0) - weight
+
+
 def test_ground_reaction_is_newtons_law_with_the_knees_held(kneed: PhasedWalker) -> None:
     """``lambda = dP/dt - m g`` by central differences along a walk sampled every 1 ms, in both
     phases of the step (stance knee held; both knees held), to 2e-3 N of a 15.7 N weight; the
@@ -44,18 +64,9 @@ def test_ground_reaction_is_newtons_law_with_the_knees_held(kneed: PhasedWalker)
     assert walk.status.value == "completed"
     locks = {phase.name: phase.locked for phase in w.step_schedule().phases}
     assert set(np.unique(walk.phase)) == set(locks)
-    M = w.mass_matrix(walk.q)
-    momentum = np.einsum("...ij,...j->...i", M, walk.q_dot)[:, :2]
-    scale = w.scale
-    weight = float(scale.total_mass) * gravity_vector(float(scale.gravity), KNEED_SLOPE)
     worst_unlocked = 0.0
     for name, locked in locks.items():
-        idx = np.flatnonzero((walk.phase == name) & (walk.step == 0))
-        assert idx.size > 40 and np.all(np.diff(idx) == 1)  # one run of samples per phase
-        t = walk.t[idx]
-        keep = np.diff(t, prepend=-1.0) > 0  # a repeated time (none expected) would divide by 0
-        idx, t = idx[keep], t[keep]
-        newton = np.gradient(momentum[idx], t, axis=0) - weight
+        idx, newton = _newtons_law(w, walk, name)
         inner = slice(3, -3)  # away from the impacts that bound the phase
         support = SingleSupport(walker=w, slope=KNEED_SLOPE, locked=locked)
         got = support.ground_reaction(0.0, walk.q[idx], walk.q_dot[idx])
@@ -128,3 +139,23 @@ def test_both_backends_slip_where_the_held_knee_force_leaves_the_cone(
         assert mu * lam[1] - abs(lam[0]) == pytest.approx(0.0, abs=1e-7)
         ends.append(res.t[-1])
     assert ends[0] == pytest.approx(ends[1], abs=1e-8)
+
+
+def test_walk_ground_reaction_and_step_table_hold_each_phase_locks(kneed: PhasedWalker) -> None:
+    """:func:`~heelstrike.dynamics.hybrid.ground_reaction` over a walk, and the step table (the
+    ``walk --model`` step figure's data) built on it, take each sample's locks from its phase:
+    Newton's law over the whole first step, both phases."""
+    w = kneed
+    q, qd = w.section_to_state(np.asarray(KNEED_GAIT))
+    walk = simulate_phased(w, q, qd, slope=KNEED_SLOPE, steps=2, rtol=1e-12, atol=1e-12,
+                           max_step=1e-3)
+    gr = ground_reaction(w, walk)
+    step = step_table(w, walk, 0)
+    first = np.flatnonzero(walk.step == 0)
+    np.testing.assert_array_equal(step["normal_N"], gr.normal[first])
+    np.testing.assert_allclose(step["swing_rad"], walk.q[first, 2] + walk.q[first, 4]
+                               + walk.q[first, 3], atol=1e-15)  # shank + knee + hip: thigh
+    for name in ("knee_swing", "locked_swing"):
+        idx, newton = _newtons_law(w, walk, name)
+        got = np.stack((gr.tangential[idx], gr.normal[idx]), axis=1)
+        np.testing.assert_allclose(got[3:-3], newton[3:-3], atol=2e-3, err_msg=name)

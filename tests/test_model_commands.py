@@ -216,9 +216,20 @@ def test_walk_command_with_model(tmp_path: Path, capsys: pytest.CaptureFixture[s
                  str(tmp_path)]) == 0
     out, err = capsys.readouterr()
     assert "2 steps, status: completed" in out
-    assert "the step figure is drawn for the compass gait only" in err
-    for name in ("walk.gif", "strobe.png", "phase_portrait.png", "energy.png"):
+    assert "not written" not in err  # every walk figure is drawn for a described walker
+    for name in ("walk.gif", "strobe.png", "phase_portrait.png", "step.png", "energy.png"):
         assert (tmp_path / name).stat().st_size > 0
+    # the first step's angles start on the gait; the stance foot is pressed and holds
+    step = pd.read_csv(tmp_path / "step.csv")
+    assert list(step.columns) == [
+        "t_s", "stance_shank_rad", "stance_knee_rad", "hip_rad", "swing_knee_rad", "swing_rad",
+        "stance_shank_dot_rad_s", "stance_knee_dot_rad_s", "hip_dot_rad_s",
+        "swing_knee_dot_rad_s", "tangential_N", "normal_N", "required_friction"]
+    assert step["t_s"].iloc[0] == 0.0
+    assert step["stance_shank_rad"].iloc[0] == pytest.approx(
+        kneed_gait.cycle.fixed_point[0], abs=1e-9)
+    assert np.all(step["stance_knee_rad"] == 0.0)  # locked through the step
+    assert np.all(step["normal_N"] > 0) and np.all(step["required_friction"] < 1.0)
     # starts on the gait, and every heel strike drops the energy by its T_c
     portrait = pd.read_csv(tmp_path / "phase_portrait.csv")
     z = kneed_gait.cycle.fixed_point

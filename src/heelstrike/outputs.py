@@ -34,7 +34,6 @@ if TYPE_CHECKING:
     from heelstrike.models.compass import CompassGait
 
 __all__ = [
-    "COMPASS_ONLY_WALK_FIGURES",
     "bifurcation_gap_note",
     "bifurcation_title",
     "reproduce_paper",
@@ -49,11 +48,6 @@ __all__ = [
     "write_powered_energy",
     "write_walk_figures",
 ]
-
-#: Walk figures drawn for the compass gait only (:func:`write_walk_figures`), not for described
-#: walkers: the step figure uses the compass gait's two-link coordinates (``q3``, ``q4``).
-COMPASS_ONLY_WALK_FIGURES: tuple[str, ...] = ("step",)
-
 
 def _directory(out_dir: str | Path) -> Path:
     out = Path(out_dir)
@@ -337,7 +331,9 @@ def write_walk_figures(walker: CompassGait, walk: WalkResult, out_dir: str | Pat
                                  title=f"compass gait, {what}: one step, strobed"), strobe),
         "phase_portrait": (phase_portrait_figure(
             portrait, title=f"compass gait, {what}: phase portrait"), portrait),
-        "step": (step_figure(step, title=f"compass gait, {what}: one step"), step),
+        "step": (step_figure(step, title=f"compass gait, {what}: one step",
+                             labels={"q3_rad": "stance leg $q_3$", "q4_rad": "hip angle $q_4$",
+                                     "swing_rad": "swing leg $q_3 + q_4$"}), step),
         "energy": (energy_figure(energy, impacts, title=f"compass gait, {what}: energy"),
                    energy),
     }
@@ -349,12 +345,13 @@ def write_model_walk_figures(walker: Any, walk: WalkResult, out_dir: str | Path)
 
     Files: ``strobe.png/.csv`` (stick figures of the walker's own links over the first step,
     :func:`~heelstrike.analysis.walk_tables.model_strobe_table`), ``phase_portrait.png/.csv``
-    (:func:`~heelstrike.analysis.walk_tables.model_phase_portrait_table`), ``energy.png/.csv``
+    (:func:`~heelstrike.analysis.walk_tables.model_phase_portrait_table`), ``step.png/.csv``
+    (the walker's angles and the stance foot's ground reaction over the first step, its locked
+    joints held: :func:`~heelstrike.analysis.walk_tables.step_table`), ``energy.png/.csv``
     (:func:`~heelstrike.analysis.walk_tables.walk_energy_table`: every impact, knee strikes
     included, drops the total; the figure marks heel and knee strikes apart) and
     ``impacts.csv`` (:func:`~heelstrike.analysis.walk_tables.walk_impact_table`: every impact
-    in time order, knee strikes included, its ``kind`` in a column). The figures of
-    :data:`COMPASS_ONLY_WALK_FIGURES` are not drawn.
+    in time order, knee strikes included, its ``kind`` in a column).
 
     Returns
     -------
@@ -364,15 +361,22 @@ def write_model_walk_figures(walker: Any, walk: WalkResult, out_dir: str | Path)
     from heelstrike.analysis.walk_tables import (
         model_phase_portrait_table,
         model_strobe_table,
+        step_table,
         walk_energy_table,
         walk_impact_table,
     )
-    from heelstrike.plots.gait import energy_figure, model_strobe_figure, phase_portrait_figure
+    from heelstrike.plots.gait import (
+        energy_figure,
+        model_strobe_figure,
+        phase_portrait_figure,
+        step_figure,
+    )
 
     out = _directory(out_dir)
     what = f"{walker.description.name}, slope = {np.rad2deg(walk.slope):.2f} deg"
     strobe = model_strobe_table(walker, walk, 0)
     portrait = model_phase_portrait_table(walker, walk)
+    step = step_table(walker, walk, 0)
     energy = walk_energy_table(walker, walk)
     impacts = walk_impact_table(walker, walk)
     swing = walker.description.links[walker.joint_index("hip") - 2].name
@@ -383,6 +387,8 @@ def write_model_walk_figures(walker: Any, walk: WalkResult, out_dir: str | Path)
             portrait, title=f"{what}: phase portrait",
             labels=(f"stance ({walker.coordinate_names[2]})", f"swing ({swing}, absolute)")),
             portrait),
+        "step": (step_figure(step, title=f"{what}: one step",
+                             labels={"swing_rad": f"swing leg ({swing}, absolute)"}), step),
         "energy": (energy_figure(energy, impacts, title=f"{what}: energy"), energy),
     }
     return _write_figures_and_tables(out, figures, impacts)

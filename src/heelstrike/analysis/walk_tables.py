@@ -160,12 +160,13 @@ def _impacts(walk: WalkResult) -> list[tuple[ImpactKind, int, float, float, floa
     return sorted(out, key=lambda row: row[2])  # stable: simultaneous impacts keep their order
 
 
-def step_table(walker: CompassGait, walk: WalkResult, step: int = 0) -> pd.DataFrame:
+def step_table(walker: PlanarWalker, walk: WalkResult, step: int = 0) -> pd.DataFrame:
     """Joint angles, rates and the stance foot's ground reaction over one step of a walk.
 
     Parameters
     ----------
-    walker : CompassGait
+    walker : PlanarWalker
+        The compass gait or a described walker.
     walk : WalkResult
         A passive walk.
     step : int
@@ -174,32 +175,29 @@ def step_table(walker: CompassGait, walk: WalkResult, step: int = 0) -> pd.DataF
     Returns
     -------
     pandas.DataFrame
-        One row per sample of the step: ``t_s`` (time since the step began, s), ``q3_rad``
-        (stance leg from the vertical), ``q4_rad`` (hip angle, swing relative to stance),
-        ``swing_rad`` (swing leg from the vertical, ``q3 + q4``), ``q3_dot_rad_s``,
-        ``q4_dot_rad_s`` (rad/s), ``tangential_N`` and ``normal_N`` (force of the ground on the
-        stance foot along and normal to the slope, N) and ``required_friction`` (``|tangential|
-        / normal``, the smallest Coulomb coefficient that prevents slipping) from
-        :func:`heelstrike.dynamics.hybrid.ground_reaction`.
+        One row per sample of the step: ``t_s`` (time since the step began, s), for every
+        angle coordinate ``q[2:]`` its angle ``<name>_rad`` (the stance link from the slope's
+        normal, then the joints, each relative to its parent link), ``swing_rad`` (the swing
+        leg's absolute angle, :meth:`~heelstrike.models.base.PlanarWalker.swing_leg_angle`),
+        the rates ``<name>_dot_rad_s`` (rad/s), ``tangential_N`` and ``normal_N`` (force of the
+        ground on the stance foot along and normal to the slope, N) and ``required_friction``
+        (``|tangential| / normal``, the smallest Coulomb coefficient that prevents slipping)
+        from :func:`heelstrike.dynamics.hybrid.ground_reaction`. The compass gait's columns are
+        ``q3_rad``, ``q4_rad``, ``swing_rad`` (``q3 + q4``), ``q3_dot_rad_s``, ``q4_dot_rad_s``.
     """
     _check_walk(walk, step)
     sel = walk.step == step
     gr = ground_reaction(walker, walk)
     q, qd = walk.q[sel], walk.q_dot[sel]
     t = walk.t[sel]
-    return pd.DataFrame(
-        {
-            "t_s": t - t[0],
-            "q3_rad": q[:, 2],
-            "q4_rad": q[:, 3],
-            "swing_rad": q[:, 2] + q[:, 3],
-            "q3_dot_rad_s": qd[:, 2],
-            "q4_dot_rad_s": qd[:, 3],
-            "tangential_N": gr.tangential[sel],
-            "normal_N": gr.normal[sel],
-            "required_friction": gr.required_friction[sel],
-        }
-    )
+    names = walker.coordinate_names
+    columns: dict[str, Any] = {"t_s": t - t[0]}
+    columns.update({f"{names[i]}_rad": q[:, i] for i in range(2, len(names))})
+    columns["swing_rad"] = walker.swing_leg_angle(q)
+    columns.update({f"{names[i]}_dot_rad_s": qd[:, i] for i in range(2, len(names))})
+    columns.update({"tangential_N": gr.tangential[sel], "normal_N": gr.normal[sel],
+                    "required_friction": gr.required_friction[sel]})
+    return pd.DataFrame(columns)
 
 
 def phase_portrait_table(walk: WalkResult) -> pd.DataFrame:
@@ -285,7 +283,6 @@ def model_phase_portrait_table(walker: Any, walk: WalkResult) -> pd.DataFrame:
         Its walk (``simulate_phased`` or ``simulate_phased_compiled``).
     """
     _check_walk(walk)
-    swing = walker.description.links[walker.joint_index("hip") - 2].name
     q, qd = walk.q, walk.q_dot
     return pd.DataFrame(
         {
@@ -293,8 +290,8 @@ def model_phase_portrait_table(walker: Any, walk: WalkResult) -> pd.DataFrame:
             "step": walk.step,
             "q3_rad": q[:, 2],
             "q3_dot_rad_s": qd[:, 2],
-            "swing_rad": walker.link_angles(q)[swing],
-            "swing_dot_rad_s": walker.link_angles(qd)[swing],
+            "swing_rad": walker.swing_leg_angle(q),
+            "swing_dot_rad_s": walker.swing_leg_angle(qd),
         }
     )
 

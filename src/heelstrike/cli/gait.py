@@ -208,9 +208,8 @@ def add_walk(sub: Any) -> None:
         description="Simulate the passive walker from its limit cycle (or --guess) and write "
         "an animation (.gif, or .mp4 where ffmpeg exists). With --out DIR, also write figures "
         "and their CSV data into DIR: a stick-figure strobe of one step, the phase portrait, "
-        "joint angles and ground reaction over a step, and the energy over the walk. With "
-        "--model: the animation, strobe, phase portrait, energy and impacts (the step figure "
-        "is drawn for the compass gait only).",
+        "joint angles and ground reaction over a step, the energy over the walk and the "
+        "impacts (with --model: the walker's own links and joints, its locked joints held).",
     )
     add_walker_options(p)
     add_model_options(p)
@@ -249,7 +248,7 @@ def _walk_model(args: argparse.Namespace, out: Any, to_dir: bool) -> int:
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
     from heelstrike.analysis.model_gaits import find_model_gait
     from heelstrike.dynamics import simulate
-    from heelstrike.outputs import COMPASS_ONLY_WALK_FIGURES, write_model_walk_figures
+    from heelstrike.outputs import write_model_walk_figures
     from heelstrike.plots.gait import animate_model_walk
 
     walker = model_from_args(args)
@@ -272,9 +271,6 @@ def _walk_model(args: argparse.Namespace, out: Any, to_dir: bool) -> int:
     print(path)
     if to_dir:
         print_paths(write_model_walk_figures(walker, walk, out))
-        only = COMPASS_ONLY_WALK_FIGURES
-        print(f"heelstrike: the {' and '.join(only)} figure{'s are' if len(only) > 1 else ' is'} "
-              "drawn for the compass gait only (without --model); not written", file=sys.stderr)
     return 0 if walk.ok else 1
 
 

@@ -347,20 +347,28 @@ def ground_reaction(
     """Ground reaction on the stance foot at every sample of a walk.
 
     ``torque`` must be the law the walk was simulated with (None for a passive walk); its time
-    argument is the time since the start of each step.
+    argument is the time since the start of each step. The joints that a sample's phase locks
+    (``walk.phase`` of a :class:`PhasedWalkResult`, the walker's
+    :meth:`~heelstrike.models.base.PlanarWalker.step_schedule`) are held, their torques part of
+    the balance (a kneed walker's knees; see
+    :meth:`~heelstrike.dynamics.single_support.SingleSupport.ground_reaction`).
     """
-    if torque is None:
-        passive = SingleSupport(walker=walker, slope=walk.slope)
-        lam = passive.ground_reaction(0.0, walk.q, walk.q_dot)
-    else:
-        starts = {int(k): float(walk.t[walk.step == k][0]) for k in np.unique(walk.step)}
-        sup = SingleSupport(walker=walker, slope=walk.slope, torque=torque)
-        lam = np.array(
-            [
-                sup.ground_reaction(float(t) - starts[int(k)], q, qd)
-                for t, k, q, qd in zip(walk.t, walk.step, walk.q, walk.q_dot, strict=True)
-            ]
-        ).reshape(-1, 2)
+    locks = {phase.name: phase.locked for phase in walker.step_schedule().phases}
+    n = walk.t.size
+    names = walk.phase if isinstance(walk, PhasedWalkResult) and len(walk.phase) == n \
+        else np.full(n, "")
+    lam = np.empty((n, 2))
+    starts = {int(k): float(walk.t[walk.step == k][0]) for k in np.unique(walk.step)}
+    for name in np.unique(names):
+        sel = np.flatnonzero(names == name)
+        sup = SingleSupport(walker=walker, slope=walk.slope, torque=torque,
+                            locked=locks.get(str(name), ()))
+        if torque is None:
+            lam[sel] = sup.ground_reaction(0.0, walk.q[sel], walk.q_dot[sel])
+            continue
+        for i in sel:
+            lam[i] = sup.ground_reaction(float(walk.t[i]) - starts[int(walk.step[i])],
+                                         walk.q[i], walk.q_dot[i])
     with np.errstate(divide="ignore", invalid="ignore"):
         mu = np.where(lam[:, 1] > 0, np.abs(lam[:, 0]) / lam[:, 1], np.inf)
     return GroundReaction(

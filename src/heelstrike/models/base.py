@@ -330,6 +330,24 @@ class PlanarWalker(ABC):
         x_impact = np.asarray(self.contact_point(q_impact, "left")[..., 0], dtype=float)
         return np.asarray(_step_length(x_start, x_impact))  # type: ignore[arg-type]
 
+    def swing_leg_angle(self, q: ArrayLike) -> FloatArray:
+        """Absolute angle (rad) of the link hanging from the hip: the swing leg (or thigh).
+
+        Measured as the stance angle ``q[2]``; linear in ``q``, so the same map of ``q_dot``
+        gives its rate. Here the compass gait's ``q3 + q4`` (the hip angle is relative to the
+        stance leg); a described walker adds up its chain of links.
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+
+        Returns
+        -------
+        ndarray, shape (...)
+        """
+        q_ = np.asarray(q, dtype=float)
+        return np.asarray(q_[..., 2] + q_[..., self.hip_joint])
+
     def trailing_foot_presses(self, q: ArrayLike, q_dot: ArrayLike) -> NDArray[np.bool_]:
         """Whether the trailing foot of a step's start is on the ground and moving into it.
 

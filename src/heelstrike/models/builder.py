@@ -784,6 +784,11 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         """Point-name pairs to draw as line segments (one per link)."""
         return tuple((f"{lk.name}.proximal", f"{lk.name}.distal") for lk in self.description.links)
 
+    def swing_leg_angle(self, q: ArrayLike) -> FloatArray:
+        """Absolute angle (rad) of the link hanging from the hip joint (see
+        :meth:`~heelstrike.models.base.PlanarWalker.swing_leg_angle`), shape (...)."""
+        return self.link_angles(q)[self.description.links[self.hip_joint - 2].name]
+
     def link_angles(self, q: ArrayLike) -> dict[str, FloatArray]:
         """Absolute angle (rad) of every link, shape (...)."""
         q_ = _arr(q, self._n, "q")

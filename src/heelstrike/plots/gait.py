@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import shutil
 import sys
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -585,7 +586,12 @@ def phase_portrait_figure(
     return fig
 
 
-def step_figure(step: Any, *, title: str = "") -> Figure:
+#: Colours of the joint angles after the stance and swing legs in :func:`step_figure`.
+_JOINT_COLOURS = ("tab:green", "tab:purple", "tab:brown", "tab:olive", "tab:cyan", "tab:pink")
+
+
+def step_figure(step: Any, *, title: str = "", labels: Mapping[str, str] | None = None
+                ) -> Figure:
     """Joint angles and the ground reaction over one step (three panels).
 
     Parameters
@@ -594,20 +600,31 @@ def step_figure(step: Any, *, title: str = "") -> Figure:
         From :func:`~heelstrike.analysis.walk_tables.step_table`.
     title : str
         Figure title.
+    labels : mapping of str to str, optional
+        Legend label of an angle column (e.g. ``{"q3_rad": "stance leg $q_3$"}``); by default
+        the coordinate's name.
 
     Returns
     -------
     matplotlib.figure.Figure
-        Top: ``q3``, ``q4`` and the swing leg's angle (deg); middle: normal and tangential
-        ground force on the stance foot (N); bottom: the friction coefficient the step needs.
+        Top: the stance link's angle (the first ``*_rad`` column), the swing leg's absolute
+        angle (``swing_rad``, dashed) and the other joint angles (deg); middle: normal and
+        tangential ground force on the stance foot (N); bottom: the friction coefficient the
+        step needs.
     """
+    names = dict(labels or {})
+    angles = [c for c in step.columns if c.endswith("_rad") and c != "swing_rad"]
     fig = _new_figure(7.0, 7.0, dpi=110)
     ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True)
     t = step["t_s"]
-    ax1.plot(t, np.rad2deg(step["q3_rad"]), color="tab:blue", label="stance leg $q_3$")
+    stance = angles[0]
+    ax1.plot(t, np.rad2deg(step[stance]), color="tab:blue",
+             label=names.get(stance, f"{stance[:-4]} (stance link)"))
     ax1.plot(t, np.rad2deg(step["swing_rad"]), color="tab:red", ls="--",
-             label="swing leg $q_3 + q_4$")
-    ax1.plot(t, np.rad2deg(step["q4_rad"]), color="tab:green", label="hip angle $q_4$")
+             label=names.get("swing_rad", "swing leg (absolute)"))
+    for k, col in enumerate(angles[1:]):
+        ax1.plot(t, np.rad2deg(step[col]), color=_JOINT_COLOURS[k % len(_JOINT_COLOURS)],
+                 label=names.get(col, f"{col[:-4]} (joint, relative)"))
     ax1.set_ylabel("angle (deg)")
     ax1.legend(loc="best", fontsize=8)
     ax2.plot(t, step["normal_N"], color="k", label="normal")

@@ -185,8 +185,8 @@ def test_walk_model_cli_writes_every_impact_and_shows_progress(
     assert out.splitlines() == [
         "2 steps, status: completed (all requested steps were taken)",
         *(str(tmp_path / n) for n in ("walk.gif", "strobe.png", "strobe.csv",
-                                      "phase_portrait.png", "phase_portrait.csv", "energy.png",
-                                      "energy.csv", "impacts.csv")),
+                                      "phase_portrait.png", "phase_portrait.csv", "step.png",
+                                      "step.csv", "energy.png", "energy.csv", "impacts.csv")),
     ]
     imp = pd.read_csv(tmp_path / "impacts.csv")
     energy = pd.read_csv(tmp_path / "energy.csv")

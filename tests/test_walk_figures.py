@@ -204,3 +204,52 @@ def test_bifurcation_figure_shades_the_slopes_where_the_walker_falls():
     spans = sorted((round(float(p.get_x()), 6), round(float(p.get_x() + p.get_width()), 6))
                    for p in fig.axes[0].patches)
     assert spans == [(5.25, 5.75), (5.75, 6.0)]
+
+
+def test_animation_frames_follow_the_walk_on_a_uniform_clock() -> None:
+    """The animation's frames (``walk_frames``, ``model_walk_frames``): one per tick of the
+    frame clock, each the sample at or just after its tick; the compass gait's stance foot rolls
+    (its centre R above the slope) and its legs keep their length; every link of the kneed
+    walker keeps its length from frame to frame."""
+    from heelstrike.analysis.model_gaits import find_model_gait
+    from heelstrike.analysis.walk_tables import model_walk_frames, resample_walk, walk_frames
+    from heelstrike.dynamics.phased import load_phased_walker, simulate_phased
+
+    w = CompassGait(foot_radius=0.3)
+    walk = PoincareMap(walker=w, slope=SLOPE, rtol=1e-9, atol=1e-9, max_step=0.02).walk(
+        [-0.386284, 1.419327, -0.967944], 2)
+    fps = 12.0
+    times, idx = resample_walk(walk, fps)
+    np.testing.assert_allclose(np.diff(times), 1.0 / fps, rtol=1e-9)
+    inside = times <= walk.t[-1]  # the last tick may pass the walk's end by half a frame
+    assert np.all(walk.t[idx[inside]] >= times[inside]) and np.all(np.diff(idx) >= 0)
+    assert np.all(idx[~inside] == walk.t.size - 1) and np.sum(~inside) <= 1
+    # the sample at or after each tick is the first such: the one before lies before the tick
+    assert np.all(walk.t[np.maximum(idx[inside] - 1, 0)] <= times[inside])
+    frames = walk_frames(w, walk, fps)
+    assert len(frames) == times.size
+    np.testing.assert_array_equal(frames["t_s"], walk.t[idx])
+    np.testing.assert_array_equal(frames["step"], walk.step[idx])
+    height = (frames["stance_foot_y_m"] - frames["stance_foot_x_m"] * np.tan(SLOPE)) * np.cos(SLOPE)
+    np.testing.assert_allclose(height, 0.3, atol=1e-9)
+    for side in ("stance", "swing"):
+        leg = np.hypot(frames["hip_x_m"] - frames[f"{side}_foot_x_m"],
+                       frames["hip_y_m"] - frames[f"{side}_foot_y_m"])
+        np.testing.assert_allclose(leg, 1.0 - 0.3, atol=1e-12)
+    with pytest.raises(ValueError, match="fps"):
+        walk_frames(w, walk, 0.0)
+
+    kneed = load_phased_walker("kneed")
+    gait = find_model_gait(kneed, slope=SLOPE).cycle
+    q, qd = kneed.section_to_state(gait.fixed_point)
+    mwalk = simulate_phased(kneed, q, qd, slope=SLOPE, steps=1, max_step=0.02)
+    mframes = model_walk_frames(kneed, mwalk, fps)
+    _, midx = resample_walk(mwalk, fps)
+    assert mframes["frame"].nunique() == midx.size
+    links = mframes[mframes["element"] == "link"]
+    for _, one in links.groupby("name"):
+        length = np.hypot(one["x1_m"] - one["x0_m"], one["y1_m"] - one["y0_m"])
+        np.testing.assert_allclose(length, length.iloc[0], rtol=1e-12)
+    firsts = mframes.groupby("frame").first()
+    np.testing.assert_array_equal(firsts["t_s"], mwalk.t[midx])
+    np.testing.assert_array_equal(firsts["step"], mwalk.step[midx])

@@ -90,8 +90,9 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "SweepStoreMismatchError", "SweepStoreRepairWarning", "sweep_progress",
     ),
     "walk_tables": (
-        "WalkResult", "model_phase_portrait_table", "model_strobe_table", "phase_portrait_table",
-        "step_table", "strobe_table", "walk_energy_table", "walk_impact_table",
+        "WalkResult", "model_phase_portrait_table", "model_strobe_table", "model_walk_frames",
+        "phase_portrait_table", "resample_walk", "step_table", "strobe_table",
+        "walk_energy_table", "walk_frames", "walk_impact_table",
     ),
 }
 _SUBMODULE = {name: module for module, names in _PUBLIC.items() for name in names}

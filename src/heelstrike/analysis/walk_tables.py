@@ -16,6 +16,7 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from heelstrike._frames import slope_to_world
+from heelstrike._typing import FloatArray
 from heelstrike.dynamics.hybrid import (
     ImpactKind,
     PhasedWalkResult,
@@ -29,10 +30,13 @@ __all__ = [
     "WalkResult",
     "model_phase_portrait_table",
     "model_strobe_table",
+    "model_walk_frames",
     "phase_portrait_table",
+    "resample_walk",
     "step_table",
     "strobe_table",
     "walk_energy_table",
+    "walk_frames",
     "walk_impact_table",
 ]
 
@@ -250,6 +254,13 @@ def strobe_table(
         leg stands: 0 or 1). The last frame is the instant of heel strike.
     """
     pick, t0 = _strobe_samples(walk, step, frames)
+    return _compass_positions(walker, walk, pick, t0)
+
+
+def _compass_positions(
+    walker: CompassGait, walk: WalkResult, pick: NDArray[np.int_], t0: float
+) -> pd.DataFrame:
+    """:func:`strobe_table`'s columns at the samples ``pick``, ``t_s`` counted from ``t0``."""
     q = walk.q[pick]
     pos = walker.positions(q)
     hip = slope_to_world(pos.hip, walk.slope)
@@ -261,10 +272,52 @@ def strobe_table(
             "hip_x_m": hip[:, 0], "hip_y_m": hip[:, 1],
             "stance_foot_x_m": st[:, 0], "stance_foot_y_m": st[:, 1],
             "swing_foot_x_m": sw[:, 0], "swing_foot_y_m": sw[:, 1],
-            "stance_rad": q[:, 2], "swing_rad": q[:, 2] + q[:, 3],
+            "stance_rad": q[:, 2], "swing_rad": walker.swing_leg_angle(q),
             "stance_leg": walk.stance_leg[pick],
         }
     )
+
+
+def resample_walk(walk: WalkResult, fps: float) -> tuple[FloatArray, NDArray[np.int_]]:
+    """Indices of ``walk`` samples nearest to a uniform frame clock at ``fps`` frames/s.
+
+    Returns
+    -------
+    times : ndarray, shape (F,)
+        The clock's ticks (s), from the walk's first sample to its last.
+    indices : ndarray of int, shape (F,)
+        The first sample at or after each tick (the last sample for a last tick past the
+        walk's end, by less than half a frame).
+    """
+    if walk.t.size == 0:
+        raise ValueError("the walk has no samples")
+    if not (np.isfinite(fps) and fps > 0):
+        raise ValueError(f"fps must be a positive number of frames per second, got {fps}")
+    times = np.arange(walk.t[0], walk.t[-1] + 0.5 / fps, 1.0 / fps)
+    return times, np.clip(np.searchsorted(walk.t, times), 0, walk.t.size - 1)
+
+
+def walk_frames(walker: CompassGait, walk: WalkResult, fps: float = 30.0) -> pd.DataFrame:
+    """The compass gait's positions at the frames of an animation of its walk.
+
+    Parameters
+    ----------
+    walker : CompassGait
+    walk : WalkResult
+    fps : float
+        Frames per second of walk time; each frame shows the first sample at or after its tick
+        (:func:`resample_walk`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per frame: :func:`strobe_table`'s columns, ``t_s`` the sample's time in the
+        walk (s), and ``step`` (0-based).
+    """
+    _, pick = resample_walk(walk, fps)
+    table = _compass_positions(walker, walk, pick, 0.0)
+    table.insert(1, "step", walk.step[pick])
+    return table
 
 
 def model_phase_portrait_table(walker: Any, walk: WalkResult) -> pd.DataFrame:
@@ -341,6 +394,37 @@ def model_strobe_table(
         to ``(x1, y1)``).
     """
     pick, t0 = _strobe_samples(walk, step, frames)
+    return _model_elements(walker, walk, pick, t0)
+
+
+def model_walk_frames(walker: Any, walk: WalkResult, fps: float = 30.0) -> pd.DataFrame:
+    """A described walker's links, feet and point masses at the frames of an animation.
+
+    Parameters
+    ----------
+    walker : BuiltWalker
+        With a joint named ``hip``.
+    walk : WalkResult
+        Its walk.
+    fps : float
+        Frames per second of walk time (:func:`resample_walk`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        :func:`model_strobe_table`'s rows and columns, one frame per tick, ``t_s`` the sample's
+        time in the walk (s), and ``step`` (0-based) after ``t_s``.
+    """
+    _, pick = resample_walk(walk, fps)
+    table = _model_elements(walker, walk, pick, 0.0)
+    table.insert(2, "step", walk.step[pick][table["frame"].to_numpy()])
+    return table
+
+
+def _model_elements(
+    walker: Any, walk: WalkResult, pick: NDArray[np.int_], t0: float
+) -> pd.DataFrame:
+    """:func:`model_strobe_table`'s rows at the samples ``pick``, ``t_s`` counted from ``t0``."""
     pos = {k: slope_to_world(np.asarray(v), walk.slope)
            for k, v in walker.positions(walk.q[pick]).items()}
     desc = walker.description

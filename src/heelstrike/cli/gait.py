@@ -247,6 +247,7 @@ def _walk_model(args: argparse.Namespace, out: Any, to_dir: bool) -> int:
     """``walk --model``: the walk from the gait (or --guess), animation and figures."""
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
     from heelstrike.analysis.model_gaits import find_model_gait
+    from heelstrike.analysis.walk_tables import model_walk_frames
     from heelstrike.dynamics import simulate
     from heelstrike.outputs import write_model_walk_figures
     from heelstrike.plots.gait import animate_model_walk
@@ -265,8 +266,10 @@ def _walk_model(args: argparse.Namespace, out: Any, to_dir: bool) -> int:
     q, qd = walker.section_to_state(z)
     walk = simulate(walker, q, qd, backend=backend, slope=args.slope, steps=args.steps,
                     rtol=1e-9, atol=1e-9, max_step=0.5 / args.fps)
-    path = animate_model_walk(walker, walk, out / "walk.gif" if to_dir else out, fps=args.fps,
-                              progress=True)
+    path = animate_model_walk(
+        model_walk_frames(walker, walk, args.fps), out / "walk.gif" if to_dir else out,
+        slope=walk.slope, fps=args.fps, progress=True,
+        title=f"{walker.description.name}, slope = {math.degrees(walk.slope):.2f} deg")
     print(f"{walk.n_steps} steps, status: {walk.status.value} ({walk.message})")
     print(path)
     if to_dir:
@@ -278,6 +281,7 @@ def _run_walk(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from heelstrike.analysis.limit_cycle import GaitNotFoundError, PoincareMap, find_limit_cycle
+    from heelstrike.analysis.walk_tables import walk_frames
     from heelstrike.dynamics.backends import simulator
     from heelstrike.outputs import write_walk_figures
     from heelstrike.plots.gait import animate_walk
@@ -314,7 +318,10 @@ def _run_walk(args: argparse.Namespace) -> int:
     walk = PoincareMap(walker=walker, slope=args.slope, rtol=1e-9, atol=1e-9,
                        max_step=0.5 / args.fps,
                        simulator=simulator(walker, backend)).walk(z, args.steps)
-    path = animate_walk(walker, walk, out / "walk.gif" if to_dir else out, fps=args.fps,
+    R = float(walker.foot_radius)
+    title = f"compass gait, R = {R:g} m, slope = {math.degrees(walk.slope):.2f} deg"
+    path = animate_walk(walk_frames(walker, walk, args.fps), out / "walk.gif" if to_dir else out,
+                        foot_radius=R, slope=walk.slope, title=title, fps=args.fps,
                         progress=True)
     print(f"{walk.n_steps} steps, status: {walk.status.value} ({walk.message})")
     print(path)

@@ -28,7 +28,6 @@ from heelstrike._typing import BoolArray, FloatArray
 from heelstrike.analysis.basin import OUTCOMES, Basin
 from heelstrike.analysis.gait_map import GaitMap
 from heelstrike.analysis.limit_cycle import BifurcationDiagram, Continuation
-from heelstrike.analysis.walk_tables import WalkResult
 from heelstrike.models.compass import CompassGait
 from heelstrike.plots import _new_figure
 
@@ -43,24 +42,11 @@ __all__ = [
     "model_diagram",
     "model_strobe_figure",
     "phase_portrait_figure",
-    "resample_walk",
     "step_figure",
     "strobe_figure",
 ]
 
 LEG_COLOURS = ("tab:blue", "tab:red")
-
-
-def resample_walk(walk: WalkResult, fps: float) -> tuple[NDArray[np.float64], NDArray[np.int_]]:
-    """Indices of ``walk`` samples nearest to a uniform frame clock at ``fps`` frames/s.
-
-    Returns ``(times, indices)``.
-    """
-    if walk.t.size == 0:
-        raise ValueError("the walk has no samples")
-    times = np.arange(walk.t[0], walk.t[-1] + 0.5 / fps, 1.0 / fps)
-    idx = np.clip(np.searchsorted(walk.t, times), 0, walk.t.size - 1)
-    return times, idx
 
 
 def _walk_scene(
@@ -69,6 +55,7 @@ def _walk_scene(
     """Axes of an animation: equal aspect, the slope drawn from ``xmin`` to ``xmax`` (m), room
     ``margins`` (m) below the ground and above ``ytop``."""
     fig = _new_figure(7, 3.6, dpi=90, layout=None)
+    fig.subplots_adjust(bottom=0.16, top=0.9)  # room for the x label and the title
     ax = fig.add_subplot()
     ax.set_aspect("equal")
     ax.set_xlim(xmin, xmax)
@@ -138,8 +125,8 @@ def _save_animation(
 
 
 def animate_walk(
-    walker: CompassGait, walk: WalkResult, path: str | Path, *, fps: float = 30.0,
-    progress: bool = False,
+    frames: Any, path: str | Path, *, foot_radius: float, slope: float, title: str = "",
+    fps: float = 30.0, progress: bool = False,
 ) -> Path:
     """Animate a compass-gait walk to a GIF (or MP4 where ffmpeg exists).
 
@@ -147,48 +134,54 @@ def animate_walk(
     mass, and a step counter. The file type follows the suffix of ``path``. With ``progress``,
     a progress bar on stderr counts the frames rendered (shown after 2 s).
 
+    Parameters
+    ----------
+    frames : pandas.DataFrame
+        From :func:`~heelstrike.analysis.walk_tables.walk_frames`, one row per frame.
+    path : path
+        Output file, ``.gif`` or ``.mp4``.
+    foot_radius : float
+        Radius of the feet (m).
+    slope : float
+        Ground slope (rad).
+    title : str
+        Figure title.
+    fps : float
+        Frames per second of the file (the rate ``frames`` was sampled at).
+    progress : bool
+        Count the frames rendered in a progress bar on stderr (shown after 2 s).
+
     Returns
     -------
     Path
         The written file.
     """
     out = _animation_file(path)
-    times, idx = resample_walk(walk, fps)
-    R = float(walker.foot_radius)
-    pos = walker.positions(walk.q)
-    slope = walk.slope
-    hip = _to_world(pos.hip, slope)
-    xmin, xmax = float(hip[:, 0].min()) - 1.0, float(hip[:, 0].max()) + 1.0
-
-    fig, ax = _walk_scene(
-        xmin, xmax, float(hip[:, 1].max()), slope, (0.2, 0.4),
-        f"compass gait, R = {R:g} m, slope = {np.rad2deg(slope):.2f} deg",
-    )
+    R = float(foot_radius)
+    hip_x, hip_y = frames["hip_x_m"].to_numpy(), frames["hip_y_m"].to_numpy()
+    fig, ax = _walk_scene(float(hip_x.min()) - 1.0, float(hip_x.max()) + 1.0,
+                          float(hip_y.max()), slope, (0.2, 0.4), title)
     legs = [ax.plot([], [], lw=3, color=c, solid_capstyle="round")[0] for c in LEG_COLOURS]
     feet = [ax.plot([], [], lw=2, color=c)[0] for c in LEG_COLOURS]
     (hip_dot,) = ax.plot([], [], "o", color="k", ms=10)
     label = ax.text(0.02, 0.92, "", transform=ax.transAxes)
+    rows = frames.to_dict("records")
 
     def draw(frame: int) -> list[Artist]:
-        i = int(idx[frame])
-        q = walk.q[i]
-        stance = int(walk.stance_leg[i])
-        centres = (pos.right_foot_centre[i], pos.left_foot_centre[i])
-        angles = (q[2], q[2] + q[3])
-        H = pos.hip[i]
-        for role, (c, ang) in enumerate(zip(centres, angles, strict=True)):
+        row = rows[frame]
+        stance = int(row["stance_leg"])
+        H = np.array([row["hip_x_m"], row["hip_y_m"]])
+        for role, side in enumerate(("stance", "swing")):
             leg = stance if role == 0 else 1 - stance
-            arc = _foot_arc(c, float(ang), R)
-            line = _to_world(np.vstack((H, c)), slope)
-            legs[leg].set_data(line[:, 0], line[:, 1])
-            arc_w = _to_world(arc, slope)
-            feet[leg].set_data(arc_w[:, 0], arc_w[:, 1])
-        hw = _to_world(H, slope)
-        hip_dot.set_data([hw[0]], [hw[1]])
-        label.set_text(f"step {int(walk.step[i]) + 1}   t = {walk.t[i]:.2f} s")
+            c = np.array([row[f"{side}_foot_x_m"], row[f"{side}_foot_y_m"]])
+            legs[leg].set_data([H[0], c[0]], [H[1], c[1]])
+            arc = c + _to_world(_foot_arc(np.zeros(2), float(row[f"{side}_rad"]), R), slope)
+            feet[leg].set_data(arc[:, 0], arc[:, 1])
+        hip_dot.set_data([H[0]], [H[1]])
+        label.set_text(f"step {int(row['step']) + 1}   t = {row['t_s']:.2f} s")
         return [*legs, *feet, hip_dot, label]
 
-    return _save_animation(fig, draw, len(times), fps, out, progress)
+    return _save_animation(fig, draw, len(rows), fps, out, progress)
 
 
 def _branch_piece(
@@ -834,7 +827,7 @@ def model_diagram(
 
 
 # -- walks of described walkers (TOML models) ----------------------------------------------------
-def animate_model_walk(walker: Any, walk: WalkResult, path: str | Path, *,
+def animate_model_walk(frames: Any, path: str | Path, *, slope: float, title: str = "",
                        fps: float = 30.0, progress: bool = False) -> Path:
     """Animate a described walker's walk to a GIF (or MP4 where ffmpeg exists).
 
@@ -843,14 +836,11 @@ def animate_model_walk(walker: Any, walk: WalkResult, path: str | Path, *,
 
     Parameters
     ----------
-    walker : BuiltWalker
-    walk : WalkResult
-    path : path
-        Output file, ``.gif`` or ``.mp4``.
-    fps : float
-        Frames per second.
-    progress : bool
-        Count the frames rendered in a progress bar on stderr (shown after 2 s).
+    frames : pandas.DataFrame
+        From :func:`~heelstrike.analysis.walk_tables.model_walk_frames`: rows of links, feet
+        and point masses per frame.
+    path, slope, title, fps, progress
+        As :func:`animate_walk`.
 
     Returns
     -------
@@ -858,41 +848,35 @@ def animate_model_walk(walker: Any, walk: WalkResult, path: str | Path, *,
         The written file.
     """
     out = _animation_file(path)
-    times, idx = resample_walk(walk, fps)
-    desc = walker.description
-    pos = walker.positions(walk.q)
-    R = [float(np.asarray(r)) for r in walker.foot_radii]
-    slope = walk.slope
-    masses = [f"{pm.name}" for pm in desc.point_masses if f"{pm.name}" in pos]
-    every = np.concatenate([_to_world(v, slope) for v in pos.values()])
-    xmin, xmax = float(every[:, 0].min()) - 0.3, float(every[:, 0].max()) + 0.3
-    fig, ax = _walk_scene(
-        xmin, xmax, float(every[:, 1].max()), slope, (0.1, 0.2),
-        f"{desc.name}, slope = {np.rad2deg(slope):.2f} deg",
-    )
-    stance_side = {lk.name for lk in desc.links if lk.name.startswith("stance")}
+    xs = frames[["x0_m", "x1_m"]].to_numpy()
+    ys = frames[["y0_m", "y1_m"]].to_numpy()
+    fig, ax = _walk_scene(float(xs.min()) - 0.3, float(xs.max()) + 0.3, float(ys.max()), slope,
+                          (0.1, 0.2), title)
+    by_frame = [f for _, f in frames.groupby("frame", sort=True)]
+    first = by_frame[0]
+    link_names = list(first.loc[first["element"] == "link", "name"])
     links = [ax.plot([], [], lw=3, solid_capstyle="round",
-                     color=LEG_COLOURS[0] if lk.name in stance_side else LEG_COLOURS[1])[0]
-             for lk in desc.links]
+                     color=LEG_COLOURS[0] if name.startswith("stance") else LEG_COLOURS[1])[0]
+             for name in link_names]
     feet = [ax.plot([], [], lw=2, color=c)[0] for c in LEG_COLOURS]
     (dots,) = ax.plot([], [], "o", color="k", ms=8)
     label = ax.text(0.02, 0.92, "", transform=ax.transAxes)
     arc = np.linspace(-0.8, 0.8, 25) - 0.5 * np.pi  # about straight down in the slope frame
+    arc_unit = _to_world(np.column_stack((np.cos(arc), np.sin(arc))), slope)
 
     def draw(frame: int) -> list[Artist]:
-        i = int(idx[frame])
-        for line, (a, b) in zip(links, walker.segments, strict=True):
-            seg = _to_world(np.vstack((pos[a][i], pos[b][i])), slope)
-            line.set_data(seg[:, 0], seg[:, 1])
-        for k, (foot, r) in enumerate(zip(("stance_foot", "swing_foot"), R, strict=True)):
-            c = pos[f"{foot}.centre"][i]
-            pts = _to_world(np.column_stack((c[0] + r * np.cos(arc), c[1] + r * np.sin(arc))),
-                            slope)
-            feet[k].set_data(pts[:, 0], pts[:, 1])
-        if masses:
-            m = _to_world(np.vstack([pos[n][i] for n in masses]), slope)
-            dots.set_data(m[:, 0], m[:, 1])
-        label.set_text(f"step {int(walk.step[i]) + 1}   t = {walk.t[i]:.2f} s")
+        f = by_frame[frame]
+        kind = f["element"].to_numpy()
+        x0, y0 = f["x0_m"].to_numpy(), f["y0_m"].to_numpy()
+        x1, y1 = f["x1_m"].to_numpy(), f["y1_m"].to_numpy()
+        for line, k in zip(links, np.flatnonzero(kind == "link"), strict=True):
+            line.set_data([x0[k], x1[k]], [y0[k], y1[k]])
+        for line, k in zip(feet, np.flatnonzero(kind == "foot"), strict=True):
+            r = float(f["radius_m"].iloc[k])
+            line.set_data(x0[k] + r * arc_unit[:, 0], y0[k] + r * arc_unit[:, 1])
+        m = kind == "mass"
+        dots.set_data(x0[m], y0[m])
+        label.set_text(f"step {int(f['step'].iloc[0]) + 1}   t = {f['t_s'].iloc[0]:.2f} s")
         return [*links, *feet, dots, label]
 
-    return _save_animation(fig, draw, len(times), fps, out, progress)
+    return _save_animation(fig, draw, len(by_frame), fps, out, progress)

@@ -159,3 +159,18 @@ def test_walk_ground_reaction_and_step_table_hold_each_phase_locks(kneed: Phased
         idx, newton = _newtons_law(w, walk, name)
         got = np.stack((gr.tangential[idx], gr.normal[idx]), axis=1)
         np.testing.assert_allclose(got[3:-3], newton[3:-3], atol=2e-3, err_msg=name)
+
+
+def test_walk_ground_reaction_refuses_a_walk_of_unknown_phases(kneed: PhasedWalker) -> None:
+    """A walk whose phase labels are not the walker's phases (here: the labels dropped) has
+    unknown locked joints: the ground force is refused, not computed with the knees free."""
+    import dataclasses
+
+    q, qd = kneed.section_to_state(np.asarray(KNEED_GAIT))
+    walk = simulate_phased(kneed, q, qd, slope=KNEED_SLOPE, steps=1)
+    unlabelled = dataclasses.replace(walk, phase=np.full(walk.t.size, ""))
+    with pytest.raises(ValueError, match="which joints it holds is unknown"):
+        ground_reaction(kneed, unlabelled)
+    renamed = dataclasses.replace(walk, phase=np.full(walk.t.size, "swing"))
+    with pytest.raises(ValueError, match="'swing' is none of the walker's phases"):
+        ground_reaction(kneed, renamed)

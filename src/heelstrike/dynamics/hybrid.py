@@ -361,8 +361,14 @@ def ground_reaction(
     starts = {int(k): float(walk.t[walk.step == k][0]) for k in np.unique(walk.step)}
     for name in np.unique(names):
         sel = np.flatnonzero(names == name)
-        sup = SingleSupport(walker=walker, slope=walk.slope, torque=torque,
-                            locked=locks.get(str(name), ()))
+        if str(name) in locks:
+            locked = locks[str(name)]
+        elif name == "" and not any(locks.values()):
+            locked = ()  # a walk without phase labels (the compass kernel's), nothing locked
+        else:
+            raise ValueError(f"the walk's phase {str(name)!r} is none of the walker's phases "
+                             f"{sorted(locks)}: which joints it holds is unknown")
+        sup = SingleSupport(walker=walker, slope=walk.slope, torque=torque, locked=locked)
         if torque is None:
             lam[sel] = sup.ground_reaction(0.0, walk.q[sel], walk.q_dot[sel])
             continue

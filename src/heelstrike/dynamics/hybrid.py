@@ -358,7 +358,8 @@ def ground_reaction(
     names = walk.phase if isinstance(walk, PhasedWalkResult) and len(walk.phase) == n \
         else np.full(n, "")
     lam = np.empty((n, 2))
-    starts = {int(k): float(walk.t[walk.step == k][0]) for k in np.unique(walk.step)}
+    if torque is not None:  # the law's clock: time since the start of each step
+        starts = {int(k): float(walk.t[walk.step == k][0]) for k in np.unique(walk.step)}
     for name in np.unique(names):
         sel = np.flatnonzero(names == name)
         if str(name) in locks:

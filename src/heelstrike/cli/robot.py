@@ -67,6 +67,12 @@ def _one_joint_units(kind: str, nq: int, nv: int) -> tuple[list[str], list[str]]
     return (["rad"] if nq == nv == 1 else ["1"]) * nq, ["rad/s"] * nv
 
 
+def _joules(value: float) -> str:
+    """An energy (J) with 6 decimals, or in exponent form outside 1e-6..1e7 J (where fixed
+    decimals would print zeros or hundreds of digits)."""
+    return f"{value:.6f}" if value == 0.0 or 1e-6 <= abs(value) < 1e7 else f"{value:.6e}"
+
+
 def add_robot_command(sub: Any) -> None:
     """Register ``heelstrike robot list [--json]``, ``robot info NAME`` and ``robot state NAME``."""
     p = sub.add_parser(
@@ -79,8 +85,15 @@ def add_robot_command(sub: Any) -> None:
     pl = rsub.add_parser("list", help="list shipped robots (name, nq, nv, mass, source)")
     pl.add_argument("--json", action="store_true", help="print one JSON object")
     pl.set_defaults(func=_run_robot_list)
-    pi = rsub.add_parser("info", help="describe one robot: sizes, mass, feet, frames")
-    pi.add_argument("name", help="robot name (see 'heelstrike robot list')")
+    pi = rsub.add_parser(
+        "info", help="describe one robot: sizes, mass, feet, frames",
+        description="Sizes, mass, feet, joints and frames of a shipped robot (NAME) or of your "
+        "own robot file (--urdf FILE or --mjcf FILE): the frame names 'impact --strike/--keep' "
+        "take.")
+    pi.add_argument("name", nargs="?", default=None,
+                    help="robot name (see 'heelstrike robot list')")
+    pi.add_argument("--urdf", default=None, metavar="FILE", help="a URDF robot instead")
+    pi.add_argument("--mjcf", default=None, metavar="FILE", help="an MJCF robot instead")
     pi.add_argument("--json", action="store_true", help="print one JSON object")
     pi.set_defaults(func=_run_robot_info)
     ps = rsub.add_parser(
@@ -122,10 +135,19 @@ def _run_robot_list(args: argparse.Namespace) -> int:
     return 0
 
 
-def _run_robot_info(args: argparse.Namespace) -> int:
-    from heelstrike.robots import load_robot
+def _load(name: str | None, urdf: str | None, mjcf: str | None) -> Any:
+    """The shipped robot ``name``, else the URDF file, else the MJCF file (one is given)."""
+    from heelstrike.robots import load_mjcf, load_robot, load_urdf
 
-    r = load_robot(args.name)
+    if name is not None:
+        return load_robot(name)
+    return load_urdf(urdf) if urdf is not None else load_mjcf(str(mjcf))
+
+
+def _run_robot_info(args: argparse.Namespace) -> int:
+    if sum(v is not None for v in (args.name, args.urdf, args.mjcf)) != 1:
+        raise RobotCliError("give one of NAME, --urdf FILE, --mjcf FILE")
+    r = _load(args.name, args.urdf, args.mjcf)
     model = r.model
     joints = [str(model.names[j]) for j in range(1, model.njoints)]
     frames = [str(f.name) for f in model.frames]
@@ -141,7 +163,8 @@ def _run_robot_info(args: argparse.Namespace) -> int:
         return 0
     print(f"{r.name}: nq={r.nq} nv={r.nv} mass={r.mass:.3f} kg")
     print(f"  source  {r.source}")
-    print(f"  feet    {', '.join(r.feet)} ({r.foot_contact} contact)")
+    print(f"  feet    {', '.join(r.feet) if any(r.feet) else 'not known (a robot file)'}"
+          f"{f' ({r.foot_contact} contact)' if any(r.feet) else ''}")
     print(f"  joints  {len(joints)} (root: {joints[0]}, free flyer)")
     print(f"  frames  {len(frames)}:")
     print(textwrap.fill(", ".join(frames), width=96, initial_indent="    ",
@@ -336,7 +359,7 @@ def run_robot_impact(args: argparse.Namespace) -> int:
     import numpy as np
 
     from heelstrike.cli._render import require_finite
-    from heelstrike.robots import load_mjcf, load_robot, load_urdf, parse_contact, robot_impact
+    from heelstrike.robots import parse_contact, robot_impact
     from heelstrike.robots.contacts import GROUND_GAP_TOLERANCE, contact_heights
 
     given = [k for k in ("robot", "urdf", "mjcf") if getattr(args, k, None) is not None]
@@ -355,12 +378,7 @@ def run_robot_impact(args: argparse.Namespace) -> int:
                             "give a --strike or drop them")
     strike = [parse_contact(s) for s in (args.strike or [])]
     keep = [parse_contact(s) for s in (args.keep or [])]
-    if args.robot is not None:
-        robot = load_robot(args.robot)
-    elif args.urdf is not None:
-        robot = load_urdf(args.urdf)
-    else:
-        robot = load_mjcf(args.mjcf)
+    robot = _load(args.robot, args.urdf, args.mjcf)
     for c in (*strike, *keep):
         robot.frame_id(c.frame)
     q, v = _read_state(args.state, robot.nq, robot.nv)
@@ -425,10 +443,11 @@ def run_robot_impact(args: argparse.Namespace) -> int:
     extra_shown = abs(extra) > 1e-9 * max(d["T"], 1e-300)  # beyond round-off
     for key in ("T", "T_c", "T_a", "T_plus", "energy_lost", "loss_beyond_T_c"):
         value = d[key] if key != "loss_beyond_T_c" or extra_shown else 0.0
-        print(f"  {key:<15} {value:12.6f} J")
+        print(f"  {key:<15} {_joules(value):>12} J")
     for c in d["contacts"]:
         print(f"  {c['role']:<6} {c['frame']:<24} {c['type']:<5} {c['mode']:<8} "
-              f"T_c normal {c['T_c_normal']:.6f} J, tangential {c['T_c_tangential']:.6f} J")
+              f"T_c normal {_joules(c['T_c_normal'])} J, "
+              f"tangential {_joules(c['T_c_tangential'])} J")
         if c.get("centre_of_pressure") is not None:
             x, y = c["centre_of_pressure"]
             print(f"         centre of pressure ({x:+.4f}, {y:+.4f}) m from the frame origin "

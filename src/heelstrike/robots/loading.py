@@ -84,6 +84,10 @@ class RobotSpec:
     knee_bend : float
         Without SRDF pose: added to the ``*knee*`` joints, and half of it subtracted from the
         ``*hip_pitch*`` and ``*ankle_pitch*`` joints (rad), to stand with bent knees.
+    soles : tuple of (str, str, float)
+        Sole frames the file lacks, added at load: ``(name, parent frame, depth)``, the new
+        frame ``depth`` (m) below its parent along the parent's ``z`` (g1's feet frames are its
+        ankle-roll links, 35 mm above the contact spheres of its soles).
     """
 
     name: str
@@ -93,6 +97,7 @@ class RobotSpec:
     feet: tuple[str, str]
     foot_contact: str = "flat"
     knee_bend: float = 0.0
+    soles: tuple[tuple[str, str, float], ...] = ()
 
 
 SHIPPED_ROBOTS: dict[str, RobotSpec] = {
@@ -110,8 +115,11 @@ SHIPPED_ROBOTS: dict[str, RobotSpec] = {
             urdf="g1_description/urdf/g1_29dof_rev_1_0.urdf",
             srdf=None,
             pose=None,
-            feet=("left_ankle_roll_link", "right_ankle_roll_link"),
+            feet=("left_sole", "right_sole"),
             knee_bend=0.6,
+            # the soles' contact spheres: centres 30 mm below the ankle-roll frame, radius 5 mm
+            soles=(("left_sole", "left_ankle_roll_link", 0.035),
+                   ("right_sole", "right_ankle_roll_link", 0.035)),
         ),
         RobotSpec(
             name="bolt",
@@ -269,9 +277,20 @@ class Robot:
         return float(_pin().computeTotalMass(self.model))
 
     def frame_id(self, frame: str) -> int:
-        """Index of a frame; raises :class:`RobotError` naming it if absent."""
+        """Index of a frame; raises :class:`RobotError` naming it if absent (with the frames
+        of close names, or, if the robot file names it, why the model has no such frame)."""
         if not self.model.existFrame(frame):
-            raise RobotError(f"unknown frame {frame!r} in robot {self.name!r}")
+            import difflib
+
+            names = [str(f.name) for f in self.model.frames]
+            close = difflib.get_close_matches(frame, names, n=3)
+            hint = f"; did you mean {' or '.join(map(repr, close))}?" if close else ""
+            with contextlib.suppress(OSError):
+                if f'"{frame}"' in Path(self.source).read_text(errors="replace"):
+                    hint = "; the file names it, but Pinocchio's parser dropped it" + (
+                        " (it keeps no site of a root body without <freejoint/>: give that "
+                        "body one)" if self.source.endswith(".xml") else "")
+            raise RobotError(f"unknown frame {frame!r} in robot {self.name!r}{hint}")
         return int(self.model.getFrameId(frame))
 
     @property
@@ -379,26 +398,93 @@ def _strictly_lower(n: int) -> NDArray[np.bool_]:
 
 
 @contextlib.contextmanager
-def _quiet_native_stderr() -> Iterator[None]:
-    """Silence what the C++ parsers print on file descriptor 2 (the error is raised anyway)."""
+def _native_errors() -> Iterator[list[str]]:
+    """Keep what the C++ parsers print on file descriptor 2 off the terminal, and collect its
+    ``Error:`` lines (urdfdom's reasons: a number that does not parse, a parent link not
+    found) into the list yielded, filled when the block ends."""
+    errors: list[str] = []
+    fd = 2  # the C++ libraries write there, whatever Python's sys.stderr is
+    with contextlib.suppress(AttributeError, OSError, ValueError):
+        sys.stderr.flush()
     try:
-        fd = sys.stderr.fileno()
-    except (AttributeError, OSError, ValueError):  # pragma: no cover - no real stderr
-        yield
+        saved = os.dup(fd)
+    except OSError:  # pragma: no cover - no file descriptor 2
+        yield errors
         return
-    sys.stderr.flush()
-    saved = os.dup(fd)
     try:
         with tempfile.TemporaryFile() as sink:
             os.dup2(sink.fileno(), fd)
-            yield
+            try:
+                yield errors
+            finally:
+                os.dup2(saved, fd)
+                sink.seek(0)
+                text = sink.read().decode(errors="replace")
+                errors.extend(ln.split(":", 1)[1].strip() for ln in text.splitlines()
+                              if ln.lstrip().startswith("Error:") and ln.split(":", 1)[1].strip())
     finally:
-        os.dup2(saved, fd)
         os.close(saved)
 
 
 def _has_free_root(model: Any) -> bool:
-    return model.njoints > 1 and model.joints[1].shortname() == "JointModelFreeFlyer"
+    """The model's first joint is a free flyer on the world, and no body is welded to the
+    world (a URDF whose ``floating`` joint is not at its root has its root link there)."""
+    return (model.njoints > 1 and model.joints[1].shortname() == "JointModelFreeFlyer"
+            and float(model.inertias[0].mass) == 0.0)
+
+
+def _check_link_inertials(path: Path) -> None:
+    """Refuse a URDF link with a negative mass or an inertia tensor that is not positive
+    semi-definite, naming it: its body, once Pinocchio has merged the links fixed to one
+    another, may still look physical (the parallel-axis terms of the other links hide it)."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.parse(path).getroot()
+    except (ET.ParseError, OSError):  # pragma: no cover - urdfdom has just read it
+        return
+    keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+    links = []
+    for link in root.iter("link"):
+        mass, inertia = link.find("inertial/mass"), link.find("inertial/inertia")
+        try:
+            m = float(mass.get("value", "")) if mass is not None else 0.0
+            xx, xy, xz, yy, yz, zz = (float(inertia.get(k, "0")) if inertia is not None
+                                      else 0.0 for k in keys)
+        except ValueError:  # pragma: no cover - urdfdom has refused it already
+            continue
+        links.append((str(link.get("name")), m,
+                      np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])))
+    tol = 1e-9 * max((float(np.abs(rot).max()) for *_, rot in links), default=0.0)
+    for name, m, rot in links:
+        if m < 0.0:
+            raise RobotError(f"{path}: link {name!r} has a negative mass, {m:g} kg")
+        low = float(np.linalg.eigvalsh(rot)[0])
+        if low < -tol:
+            raise RobotError(f"{path}: link {name!r} has an inertia tensor that no rigid body "
+                             f"has (a principal moment of {low:.3g} kg m^2)")
+
+
+def _check_inertias(model: Any, source: Path) -> None:
+    """Refuse a body with a negative or non-finite mass, or a rotational inertia about its
+    centre of mass that is not positive semi-definite (no rigid body has it), naming its joint.
+    An eigenvalue below zero by round-off of the robot's largest inertia passes (iCub's
+    bodies of ~1e-18 kg m^2 are at -5e-20)."""
+    bodies = [(str(model.names[j]), float(model.inertias[j].mass),
+               np.array(model.inertias[j].inertia, dtype=float)) for j in range(1, model.njoints)]
+    for name, mass, rot in bodies:
+        if not (math.isfinite(mass) and np.isfinite(rot).all()):
+            raise RobotError(f"{source}: the body moved by joint {name!r} has a non-finite "
+                             "mass or inertia")
+    tol = 1e-9 * max((float(np.abs(rot).max()) for _, _, rot in bodies), default=0.0)
+    for name, mass, rot in bodies:
+        where = f"{source}: the body moved by joint {name!r}"
+        if mass < 0.0:
+            raise RobotError(f"{where} has a negative mass, {mass:g} kg")
+        low = float(np.linalg.eigvalsh(0.5 * (rot + rot.T))[0])
+        if low < -tol:
+            raise RobotError(f"{where} has a rotational inertia about its centre of mass that "
+                             f"no rigid body has (a principal moment of {low:.3g} kg m^2)")
 
 
 def _couplings(path: Path, tags: tuple[str, ...]) -> tuple[str, ...]:
@@ -424,6 +510,12 @@ def _finish(model: Any, name: str, source: Path, q_ref: FloatArray | None,
     pin = _pin()
     if not _has_free_root(model):
         raise RobotError(f"{source}: model has no floating base")
+    for jid in range(2, model.njoints):
+        if model.joints[jid].shortname() == "JointModelFreeFlyer":
+            raise RobotError(
+                f"{source}: joint {str(model.names[jid])!r} is floating but not at the root: "
+                "its child would be a second free body, not part of the robot")
+    _check_inertias(model, source)
     if model.nv <= 6 or pin.computeTotalMass(model) <= 0.0:
         raise RobotError(f"{source}: not a robot (no joints or no mass)")
     q = np.array(pin.neutral(model)) if q_ref is None else np.asarray(q_ref, dtype=float)
@@ -452,12 +544,22 @@ def load_urdf(path: str | Path, *, name: str | None = None) -> Robot:
     pin = _pin()
     p = _checked_path(path, "URDF")
     try:
-        with _quiet_native_stderr():
+        with _native_errors() as errors:
             model = pin.buildModelFromUrdf(str(p))
-            if not _has_free_root(model):  # no root floating joint of its own: one is added
-                model = pin.buildModelFromUrdf(str(p), pin.JointModelFreeFlyer())
     except (RuntimeError, ValueError, OSError) as exc:
-        raise RobotError(f"{p}: not a URDF robot ({_parser_reason(exc)})") from None
+        reason = errors[0] if errors else _parser_reason(exc)
+        raise RobotError(f"{p}: not a URDF robot ({reason[:240]})") from None
+    if errors:  # urdfdom dropped an element it could not read (a link's inertial: a typo)
+        raise RobotError(f"{p}: {'; '.join(dict.fromkeys(errors))[:240]}")
+    _check_link_inertials(p)
+    if model.njoints > 1 and model.parents[1] == 0 and model.joints[1].shortname() in (
+            "JointModelPlanar", "JointModelTranslation"):
+        raise RobotError(
+            f"{p}: the root joint {str(model.names[1])!r} is "
+            f"{model.joints[1].shortname()[len('JointModel'):].lower()}: heelstrike gives "
+            "every robot a floating base itself (remove the world link and that joint)")
+    if not _has_free_root(model):  # no root floating joint of its own: one is added
+        model = pin.buildModelFromUrdf(str(p), pin.JointModelFreeFlyer())
     return _finish(model, name or p.stem, p, None, ignored=_couplings(p, ("mimic",)))
 
 
@@ -472,13 +574,14 @@ def load_mjcf(path: str | Path, *, name: str | None = None) -> Robot:
     pin = _pin()
     p = _checked_path(path, "MJCF")
     try:
-        with _quiet_native_stderr():
+        with _native_errors() as errors:
             model = pin.buildModelFromMJCF(str(p))
             if not _has_free_root(model):  # a fixed root: a free flyer is added
                 model = pin.buildModelFromMJCFAndRootJoint(
                     str(p), pin.JointModelFreeFlyer(), "root_joint")
     except (RuntimeError, ValueError, OSError) as exc:
-        raise RobotError(f"{p}: not an MJCF robot ({_parser_reason(exc)})") from None
+        reason = errors[0] if errors else _parser_reason(exc)
+        raise RobotError(f"{p}: not an MJCF robot ({reason[:240]})") from None
     return _finish(model, name or p.stem, p, None,
                    ignored=_couplings(p, ("equality", "tendon")))
 
@@ -519,6 +622,11 @@ def load_robot(name: str) -> Robot:
     root = robot_data_dir()
     path = root / spec.urdf
     model = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
+    for sole, parent, depth in spec.soles:
+        frame = model.frames[model.getFrameId(parent)]
+        model.addFrame(pin.Frame(sole, frame.parentJoint, model.getFrameId(parent),
+                                 frame.placement * pin.SE3(np.eye(3), np.array([0, 0, -depth])),
+                                 pin.FrameType.OP_FRAME))
     if spec.srdf is not None and spec.pose is not None:
         pin.loadReferenceConfigurations(model, str(root / spec.srdf), False)
         q_ref = np.array(model.referenceConfigurations[spec.pose])

@@ -14,6 +14,7 @@ base moving forward at ``forward_speed`` without sideways or angular velocity (5
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -65,7 +66,7 @@ def gait_configuration(
     """
     pin = _pin()
     if not (np.isfinite(step_length) and step_length >= 0.0):
-        raise RobotError(f"step_length must be >= 0 m, got {step_length!r}")
+        raise RobotError(f"step_length must be finite and >= 0 m, got {step_length!r}")
     lead, trail = _feet(robot, leading)
     model = robot.model
     data = model.createData()
@@ -124,13 +125,19 @@ def gait_velocity(
     Parameters
     ----------
     strike_speed : float
-        Downward speed of the leading sole (m/s), > 0 for an impact.
+        Downward speed of the leading sole (m/s), > 0 for an impact (a negative one makes a
+        rising sole, a state with no impact, which ``heelstrike robot state`` refuses).
     forward_speed : float
         Forward speed of the base (m/s).
     swing_forward_speed : float
         Forward speed of the leading sole (m/s).
     """
     pin = _pin()
+    speeds = {"strike_speed": strike_speed, "forward_speed": forward_speed,
+              "swing_forward_speed": swing_forward_speed}
+    for what, value in speeds.items():
+        if not math.isfinite(value):
+            raise RobotError(f"{what} must be finite, got {value!r} m/s")
     lead, trail = _feet(robot, leading)
     model = robot.model
     data = model.createData() if data is None else data

@@ -103,8 +103,12 @@ def robot_heel_strike_study(
     """
     L = np.atleast_1d(np.asarray(step_lengths, dtype=float))
     S = np.atleast_1d(np.asarray(strike_speeds, dtype=float))
-    if L.ndim != 1 or S.ndim != 1 or not (np.all(L >= 0) and np.all(S > 0)):
-        raise RobotError("step lengths must be >= 0 m and strike speeds > 0 m/s (1-D)")
+    if L.ndim != 1 or S.ndim != 1 or L.size == 0 or S.size == 0:
+        raise RobotError("step lengths and strike speeds must be non-empty 1-D arrays, got "
+                         f"shapes {L.shape} and {S.shape}")
+    if not (np.all(np.isfinite(L) & (L >= 0)) and np.all(np.isfinite(S) & (S > 0))):
+        raise RobotError("step lengths must be finite and >= 0 m, strike speeds finite and "
+                         "> 0 m/s")
     kind = contact or robot.foot_contact
     lead, trail = robot.feet if leading == "left" else robot.feet[::-1]
     strike = ContactSpec(frame=lead, kind=kind)  # type: ignore[arg-type]

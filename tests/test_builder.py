@@ -287,7 +287,9 @@ def test_asymmetric_mirror_is_rejected(tmp_path: Path) -> None:
     text = read_toml_text("compass").replace('com = "b"', 'com = "0.3"')
     p = tmp_path / "bad.toml"
     p.write_text(text)
-    with pytest.raises(ModelDescriptionError, match=r"^link\[0\]\.mirror"):
+    # the message names what does not mirror (QA sweep 12: it was always "link[0].mirror")
+    with pytest.raises(ModelDescriptionError, match=r"^link\[0\]\.com: after the leg swap the "
+                       "centre of mass of 'stance_leg' is not where 'swing_leg''s was"):
         load_walker(p)
 
 

@@ -480,7 +480,7 @@ def write_powered_energy(
     out = _directory(out_dir)
     name = gait.model or "compass gait"
     # each impact's own loss (a kneed walker's knee strike, then the heel strike)
-    losses = ", ".join(f"{str(r.kind).replace('_', ' ')} -T_c = {-float(r.T_c_J):.4f} J"
+    losses = ", ".join(f"{str(r.kind).replace('_', ' ')} loses $T_c$ = {float(r.T_c_J):.4f} J"
                        for r in impacts.itertuples(index=False))
     fig = energy_figure(energy, impacts, title=(
         f"{name}, powered gait at {gait.speed:.3g} m/s: {gait.torque_joint} torque "

@@ -34,6 +34,7 @@ from heelstrike.cli._common import (
     CliError,
     Parser,
     ShippedNameWarning,
+    UnusedParameterWarning,
     parse_angle,
     parse_range,
     warnings_as_notes,
@@ -83,11 +84,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         from heelstrike.analysis.newton import SearchTimeLimitWarning
 
         # a cut search and a file named like a shipped walker are news, said as such
-        with warnings_as_notes(SearchTimeLimitWarning, ShippedNameWarning):
+        with warnings_as_notes(SearchTimeLimitWarning, ShippedNameWarning,
+                               UnusedParameterWarning):
             status = int(args.func(args))
     except CliError as exc:
         return fail(one_line(exc))
-    except (ValueError, ArithmeticError) as exc:
+    except (ValueError, ArithmeticError, NotImplementedError) as exc:  # said as they are
         return fail(one_line(exc))
     except MemoryError as exc:
         detail = one_line(exc) if str(exc) else "the computation needs more memory than is free"

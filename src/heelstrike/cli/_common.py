@@ -181,10 +181,12 @@ def walker_from_args(args: argparse.Namespace) -> Any:
         raise CliError(f"{exc} ({', '.join(named)})" if named else str(exc)) from None
 
 
-def add_model_options(p: argparse.ArgumentParser) -> None:
-    """``--model`` (a TOML description or shipped name) and repeatable ``--param NAME=VALUE``."""
-    g = p.add_argument_group("described walker (overrides the compass-gait options)")
-    g.add_argument("--model", default=None, metavar="FILE_OR_NAME",
+def add_model_options(p: argparse.ArgumentParser, *, required: bool = False) -> None:
+    """``--model`` (a TOML description or shipped name; ``required`` for a command without
+    compass shorthand) and repeatable ``--param NAME=VALUE``."""
+    g = p.add_argument_group("described walker" if required
+                             else "described walker (overrides the compass-gait options)")
+    g.add_argument("--model", default=None, metavar="FILE_OR_NAME", required=required,
                    help="walker description: a .toml file or a shipped name "
                    "(compass, kneed, torso)")
     g.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
@@ -233,13 +235,25 @@ def model_from_args(args: argparse.Namespace) -> Any:
             raise CliError(f"invalid --param {item!r}: {value.strip()!r} is not a number "
                            "(NAME=VALUE in SI units, e.g. R=0.2)") from None
     model = str(args.model)
-    if os.path.exists(model) and not os.path.isfile(model):
+    from heelstrike.models.builder import shipped_walkers
+
+    if model in shipped_walkers():  # the shipped walker, whatever the working directory holds
+        if os.path.isfile(model):
+            warnings.warn(ShippedNameWarning(
+                f"--model {model} is the shipped walker; the file {model!r} in the working "
+                f"directory is not read (give it as ./{model} to use it)"), stacklevel=2)
+    elif os.path.exists(model) and not os.path.isfile(model):
         raise CliError(f"--model {model!r} is not a regular file")
     try:
         description = walker_description(model)
     except OSError as exc:
         raise CliError(f"cannot read model {model!r}: {exc.strerror or exc}") from exc
     _note_borrowed_name(model, description)
+    if description.unused_params:
+        idle = ", ".join(sorted(description.unused_params))
+        warnings.warn(UnusedParameterWarning(
+            f"model {description.name!r} declares parameter(s) {idle} that no field uses: "
+            "their values change nothing"), stacklevel=2)
     names = sorted(name for name, _ in description.params)
     unknown = sorted(set(params) - set(names))
     if unknown:  # before the derivation, which takes seconds on a cold cache (QA sweep 9)
@@ -328,7 +342,8 @@ def warnings_as_notes(*categories: type[Warning]) -> Iterator[None]:
     stderr (news for the user, not a Python warning with a source line); others as before.
 
     The notes are printed when the block ends normally: a command that fails prints its one
-    error line only."""
+    error line only. Each command says its notes again (``main`` called twice in one process,
+    as tests and scripts do: Python's default filter would show a repeated warning once)."""
     show = warnings.showwarning
     notes: list[str] = []
 
@@ -338,17 +353,24 @@ def warnings_as_notes(*categories: type[Warning]) -> Iterator[None]:
         else:
             show(message, category, *args, **kwargs)
 
-    warnings.showwarning = note
-    try:
-        yield
-    finally:
-        warnings.showwarning = show
+    with warnings.catch_warnings():
+        for category in categories:
+            warnings.simplefilter("always", category)
+        warnings.showwarning = note
+        try:
+            yield
+        finally:
+            warnings.showwarning = show
     for line in notes:  # reached only when the block ended normally
         print(line, file=sys.stderr)
 
 
 class ShippedNameWarning(UserWarning):
     """A walker file carries a shipped walker's ``name`` but describes another walker."""
+
+
+class UnusedParameterWarning(UserWarning):
+    """A walker file declares parameters that no field uses (their values change nothing)."""
 
 
 def run_with_store(store: str | None, compute: Callable[[], Any], out: str | None = None) -> Any:

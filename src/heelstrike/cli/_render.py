@@ -99,6 +99,12 @@ def print_step_lines(gait: Any) -> None:
     print(f"  speed           {gait.speed:10.5f} m/s")
 
 
+def print_impact_angle_line(gait: Any) -> None:
+    """The impact angle line of a gait report: the stance angle at heel strike (rad, deg)."""
+    print(f"  impact angle    {gait.impact_angle:10.5f} rad "
+          f"({math.degrees(gait.impact_angle):.3f} deg)")
+
+
 def print_stability_lines(gait: Any) -> None:
     """The ``|multipliers|`` and ``stable`` lines of a gait report; a largest ``|m|`` within
     :data:`~heelstrike.analysis.limit_cycle.MULTIPLIER_ACCURACY` of 1 is called neutral."""

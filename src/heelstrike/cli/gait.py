@@ -36,6 +36,7 @@ from heelstrike.cli._common import (
 from heelstrike.cli._render import (
     fixed_point_text,
     multipliers_text,
+    print_impact_angle_line,
     print_json,
     print_paths,
     print_stability_lines,
@@ -113,6 +114,7 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     print(f"passive gait of '{d['model']}', slope = {math.degrees(args.slope):g} deg")
     print(f"  fixed point (just after heel strike): {fixed_point_text(d['fixed_point'])}")
     print_step_lines(c)
+    print_impact_angle_line(c)
     print_stability_lines(c)
     for imp in d["impacts"]:
         print(f"  {imp['kind']:<15} T_c = {imp['T_c']:.6f} J")
@@ -192,8 +194,7 @@ def _run_gait(args: argparse.Namespace) -> int:
     print(f"passive gait, R = {args.radius:g} m, slope = {math.degrees(args.slope):g} deg")
     print(f"  fixed point (just after impact): {fixed_point_text(d['fixed_point'])}")
     print_step_lines(cycle)
-    print(f"  impact angle    {cycle.impact_angle:10.5f} rad "
-          f"({math.degrees(cycle.impact_angle):.3f} deg)")
+    print_impact_angle_line(cycle)
     print_stability_lines(cycle)
     print(f"  collision loss  {cycle.collision_loss:10.5f} J/step (T_c)")
     print(f"  energy released {cycle.potential_energy_released:10.5f} J/step (gravity)")
@@ -243,7 +244,7 @@ def _note_unstable_start(stable: bool, multipliers: Any) -> None:
               "and 'heelstrike basin')", file=sys.stderr)
 
 
-def _walk_model(args: argparse.Namespace, out: Any, to_dir: bool) -> int:
+def _walk_model(args: argparse.Namespace, walker: Any, out: Any, to_dir: bool) -> int:
     """``walk --model``: the walk from the gait (or --guess), animation and figures."""
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
     from heelstrike.analysis.model_gaits import find_model_gait
@@ -252,7 +253,6 @@ def _walk_model(args: argparse.Namespace, out: Any, to_dir: bool) -> int:
     from heelstrike.outputs import write_model_walk_figures
     from heelstrike.plots.gait import animate_model_walk
 
-    walker = model_from_args(args)
     backend = args.backend or "compiled"
     if args.guess is not None:
         z = parse_floats(args.guess, "--guess", len(walker.section_names))
@@ -302,9 +302,11 @@ def _run_walk(args: argparse.Namespace) -> int:
             raise CliError("writing .mp4 needs ffmpeg on the PATH; use a .gif file instead")
     if not to_dir and out.is_dir():
         raise CliError(f"--out {args.out!r} is a directory")
+    model = None if args.model is None else model_from_args(args)  # before making --out
     writable_dir(out if to_dir else out.parent)
-    if walker is None:
-        return _walk_model(args, out, to_dir)
+    if model is not None:
+        return _walk_model(args, model, out, to_dir)
+    assert walker is not None  # no --model: the compass shorthand
     # compiled by default; McGeer's wheel (no description to run dense samples on): scipy
     backend = args.backend or ("compiled" if walker.as_described() is not None else "scipy")
     z = parse_guess(args.guess)

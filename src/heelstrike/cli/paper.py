@@ -278,7 +278,7 @@ def add_impact_map(sub: Any) -> None:
         "energies and the loss per metre at a symmetric heel strike (stance rate --q3dot, "
         "joints at rest). Writes impact_map.png and impact_map.csv and prints their paths.",
     )
-    add_model_options(p)
+    add_model_options(p, required=True)
     p.add_argument("--x", type=parse_sweep, required=True, metavar="NAME:START:STOP:COUNT",
                    help="first swept quantity: a parameter of the walker file (SI units) or "
                    "'angle' (the impact angle, e.g. angle:5deg:30deg:11), COUNT values from "
@@ -310,8 +310,6 @@ def _run_impact_map(args: argparse.Namespace) -> int:
     from heelstrike.models.description import parameter_units
     from heelstrike.outputs import write_impact_map
 
-    if args.model is None:
-        raise CliError("--model is required (a .toml file or compass, kneed, torso)")
     if args.backend == "compiled":
         raise CliError("--backend compiled: impact-map's heel strikes run on the reference "
                        "(the compiled kernels resolve heel strikes inside their walks only); "

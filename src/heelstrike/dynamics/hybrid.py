@@ -130,7 +130,8 @@ class WalkStatus(StrEnum):
         8,
         "no consistent contact assignment at an impact (rank-deficient constraints?)",
     )
-    NO_LEG_SWAP = "no_leg_swap", 9, "no leg swap: the walker declares no link mirrors"
+    NO_LEG_SWAP = ("no_leg_swap", 9, "no leg swap: the walker declares no link mirrors "
+                   "(link.mirror), which a walk past its first heel strike needs")
 
     @classmethod
     def from_code(cls, code: int) -> WalkStatus:

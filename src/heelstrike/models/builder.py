@@ -304,6 +304,12 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
                 f"params.{unknown[0]}: unknown parameter (known: {list(description.param_names)})"
             )
         values: dict[str, Any] = description.default_params
+        idle = sorted(k for k in set(params) & description.unused_params
+                      if np.any(np.asarray(params[k], dtype=float) != values[k]))
+        if idle:  # setting it would change nothing, and nothing would say so (QA sweep 12)
+            raise ModelDescriptionError(
+                f"params.{idle[0]}: walker {description.name!r} uses it nowhere (no link, "
+                "foot, point mass or posture law), so setting it changes nothing")
         for k, v in params.items():
             a = np.asarray(v, dtype=float)
             values[k] = float(a) if a.ndim == 0 else a
@@ -335,6 +341,7 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         self.point_names: tuple[str, ...] = description.point_names
         # a batch of walkers does not walk (its parameters broadcast against states instead)
         self._feet_one_circle = not self.is_batched and self._feet_are_one_circle()
+        self._check_mass_matrix()
         if "swap_coordinates" in self.model.namespace and all(
             np.ndim(v) == 0 for v in values.values()
         ):
@@ -349,6 +356,29 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         if self.__dict__.get("_frozen", False):
             raise FrozenInstanceError(f"cannot delete field {name!r} of a frozen walker")
         super().__delattr__(name)
+
+    def _check_mass_matrix(self) -> None:
+        """Refuse parameter values whose mass matrix is singular, naming the coordinate that
+        moves no mass or inertia (a massless link without inertia at the end of a chain: no
+        acceleration, walk or impact is defined; QA sweep 12 met "division by zero").
+
+        Checked at a configuration without symmetries (every joint bent), where a walker's
+        mass matrix is singular only if it is singular everywhere.
+        """
+        k = np.arange(self._n - 2)
+        q = np.zeros(self._n)
+        q[2:] = 0.3 * (1.0 + 0.37 * k) * (-1.0) ** k
+        M = self.mass_matrix(q)
+        w, v = np.linalg.eigh(M)
+        bad = ~(w[..., 0] > 1e-12 * np.abs(w[..., -1]))
+        if not np.any(bad):
+            return
+        at = tuple(np.argwhere(bad)[0]) if bad.ndim else ()
+        name = self.coordinate_names[int(np.argmax(np.abs(v[at][:, 0])))]
+        raise ModelDescriptionError(
+            f"walker {self.description.name!r}: its mass matrix is singular with these "
+            f"parameter values: coordinate {name!r} moves no mass and no inertia (give the "
+            "links it moves a mass away from the joint or an inertia)")
 
     # -- parameters ---------------------------------------------------------------------------
     def _eval(self, v: Any) -> Any:
@@ -808,28 +838,50 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         Raises
         ------
         ModelDescriptionError
-            ``link[i].mirror: ...`` when the mirrors do not describe a symmetry.
+            When the mirrors do not describe a symmetry, naming the first thing that does not
+            map (``link[i].mass: ...``, a link's centre of mass, the feet, the masses).
         """
+        links = self.description.links
+        index = {lk.name: i for i, lk in enumerate(links)}
+        why = ("; a walker is described by role (stance and swing leg), so one whose legs "
+               "differ cannot be")
+        for i, lk in enumerate(links):  # the plainest cause first: the mirrors' own fields
+            if lk.mirror is None:
+                continue
+            other = links[index[lk.mirror]]
+            for key in ("length", "mass", "inertia"):
+                a, b = self._eval(getattr(lk, key)), self._eval(getattr(other, key))
+                if not np.allclose(a, b, rtol=rtol, atol=0.0):
+                    raise ModelDescriptionError(
+                        f"link[{i}].{key}: link {lk.name!r} and its mirror {other.name!r} "
+                        f"differ ({float(a):g} vs {float(b):g}), so the leg swap is not a "
+                        f"symmetry{why}")
         q, qd = _sample_states(n_samples, self._n, seed)
         q2, _ = self.swap_legs(q, qd)
+        pos1, pos2 = self.positions(q), self.positions(q2)
+        for lk in links:
+            if not np.allclose(pos2[f"{lk.name}.com"], pos1[f"{lk.mirror or lk.name}.com"],
+                               atol=1e-9):
+                raise ModelDescriptionError(
+                    f"link[{index[lk.name]}].com: after the leg swap the centre of mass of "
+                    f"{lk.name!r} is not where {lk.mirror or lk.name!r}'s was (its com, "
+                    f"com_offset, attach or direction do not mirror){why}")
+        if not np.allclose(self.foot_centre(q2, "left"), q[..., :2], atol=1e-9):
+            raise ModelDescriptionError(
+                "foot: after the leg swap the new stance foot's arc centre is not where the "
+                f"old one was (the feet's radius, centre or centre_offset do not mirror){why}")
         J = self.model.fn("swap_jacobian")(q, self._p)
         M1 = self.mass_matrix(q)
         M2 = np.swapaxes(J, -1, -2) @ self.mass_matrix(q2) @ J
-        scale = np.max(np.abs(M1))
-        ok = np.allclose(M1, M2, rtol=rtol, atol=rtol * scale)
+        ok = np.allclose(M1, M2, rtol=rtol, atol=rtol * np.max(np.abs(M1)))
         for slope in (0.0, 0.3):
             V1, V2 = self.potential_energy(q, slope), self.potential_energy(q2, slope)
             ok &= np.allclose(V1, V2, rtol=rtol, atol=rtol * np.max(np.abs(V1)) + 1e-12)
-        ok &= np.allclose(self.foot_centre(q2, "left"), q[..., :2], atol=1e-9)
-        pos1, pos2 = self.positions(q), self.positions(q2)
-        names = {lk.name: lk.mirror or lk.name for lk in self.description.links}
-        for a, b in names.items():
-            ok &= np.allclose(pos2[f"{a}.com"], pos1[f"{b}.com"], atol=1e-9)
         if not ok:
             raise ModelDescriptionError(
-                "link[0].mirror: the declared mirrors do not make the leg swap a symmetry "
-                "(mass matrix, potential energy, feet or centres of mass do not map)"
-            )
+                "point_mass: the leg swap maps the links but not the mass distribution (mass "
+                "matrix or potential energy): a point mass without a mirror image on the "
+                f"other leg, or one off the legs' line (offset){why}")
 
 
 def _sample_states(n_samples: int, n: int, seed: int) -> tuple[FloatArray, FloatArray]:
@@ -875,6 +927,10 @@ def load_walker(
 def walker_description(name_or_path: str | os.PathLike[str]) -> WalkerDescription:
     """The description of a shipped walker (by name) or of a TOML file (see :func:`load_walker`).
 
+    A string that is a shipped name (:func:`shipped_walkers`) means the shipped walker even if
+    a file or folder of that name is in the working directory: give such a file as a path
+    (``./compass`` or a ``pathlib.Path``).
+
     Raises
     ------
     ValueError
@@ -883,7 +939,8 @@ def walker_description(name_or_path: str | os.PathLike[str]) -> WalkerDescriptio
         A file that is not a valid description.
     """
     s = os.fspath(name_or_path)
-    if s.endswith(".toml") or os.sep in s or Path(s).is_file():
+    shipped = isinstance(name_or_path, str) and s in shipped_walkers()
+    if not shipped and (s.endswith(".toml") or os.sep in s or Path(s).is_file()):
         return read_description(s)
     res = importlib.resources.files("heelstrike") / "walkers" / f"{s}.toml"
     if not res.is_file():

@@ -82,6 +82,7 @@ import keyword
 import math
 import operator
 import os
+import re
 import stat
 import tomllib
 from collections.abc import Callable, Mapping
@@ -247,7 +248,10 @@ def _parse_expr(text: str, path: str) -> ast.Expression:
     try:
         tree = ast.parse(text, mode="eval")
     except (SyntaxError, RecursionError, MemoryError, ValueError) as exc:
-        raise ModelDescriptionError(f"{path}: invalid expression {text!r}") from exc
+        units = re.search(r"\d\s*(deg|rad|m|cm|mm|kg|g|s)\b", text)
+        hint = (": values in a walker file are plain numbers in SI units (angles in radians), "
+                f"without a unit such as {units.group(1)!r}") if units else ""
+        raise ModelDescriptionError(f"{path}: invalid expression {text!r}{hint}") from exc
     return tree
 
 
@@ -560,6 +564,27 @@ class WalkerDescription:
     def default_params(self) -> dict[str, float]:
         """Default parameter values."""
         return dict(self.params)
+
+    @property
+    def unused_params(self) -> frozenset[str]:
+        """Parameters declared in ``[params]`` that no field, foot, point mass or posture law
+        uses (``g`` is always used): their values change nothing. Constraints do not count."""
+        exprs: list[Any] = []
+        for lk in self.links:
+            exprs += [lk.length, lk.mass, lk.com, lk.com_offset, lk.inertia, lk.attach,
+                      lk.attach_offset, lk.joint.lock_angle if lk.joint is not None else None]
+        for ft in self.feet:
+            exprs += [ft.radius, ft.centre, ft.centre_offset]
+        for pm in self.point_masses:
+            exprs += [pm.at, pm.offset, pm.mass]
+        for law in self.control:
+            exprs += [law.kp, law.kd, law.angle]
+        used = {"g"}
+        for e in exprs:
+            if isinstance(e, str):
+                used |= {n.id for n in ast.walk(ast.parse(e, mode="eval"))
+                         if isinstance(n, ast.Name)}
+        return frozenset(self.param_names) - used
 
     @property
     def root(self) -> LinkSpec:
@@ -920,7 +945,12 @@ def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> Wal
             joint_names.count(lk.joint.name) > 1
             or lk.joint.name in ("x", "y", links[roots[0]].name)
         ):
-            raise ModelDescriptionError(f"link[{i}].joint.name: duplicate coordinate name")
+            clash = lk.joint.name
+            what = ("is a base coordinate's name (x, y)" if clash in ("x", "y") else
+                    "is the root link's name (its angle's coordinate)"
+                    if clash == links[roots[0]].name else "names another joint too")
+            raise ModelDescriptionError(
+                f"link[{i}].joint.name: duplicate coordinate name {clash!r}: it {what}")
     # tree order: root first, then repeatedly the first (file order) link whose parent is placed
     order = [roots[0]]
     placed = {links[roots[0]].name}

@@ -280,7 +280,12 @@ def add_robot_impact_options(p: argparse.ArgumentParser) -> None:
         "stderr, when a --keep contact pulls on the ground (negative normal impulse): pass it "
         "as --strike (complementarity decides whether it lifts) or drop it. A striking flat "
         "sole that needs a pull to stay flat, yet would move into the ground if released, "
-        "is refused: it lands on an edge or a corner, which is not modelled (use FRAME:point).")
+        "is refused: it lands on an edge or a corner, which is not modelled (use FRAME:point). "
+        "STATE.json holds q and v in Pinocchio's conventions: the base's linear and angular "
+        "velocity in the base's own frame (not the world's), then the joint rates. Each "
+        "contact's T_c_normal and T_c_tangential are nested shares in contact order (the "
+        "--strike then --keep order given): their sum, T_c, does not depend on it, the shares "
+        "of contacts that couple through the mass matrix do.")
     g.add_argument("--robot", default=None, metavar="NAME",
                    help="a shipped robot (see 'heelstrike robot list')")
     g.add_argument("--urdf", default=None, metavar="FILE", help="a URDF robot (floating base)")

@@ -286,3 +286,50 @@ def test_powered_non_finite_target_is_called_non_finite(value, capsys):
     assert main(["powered", "--speed", value]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("heelstrike: error: --speed must be finite")
+
+
+@pytest.mark.slow
+def test_the_wheel_has_a_gait_that_needs_no_work_so_no_one_gait_stands_for_it(capsys):
+    """QA sweep 12: ``powered --radius 1`` reported one gait's 0.0068 J per step as McGeer's
+    wheel's cost. Its gaits form a neutral family that includes a passive one: periodic on
+    level ground at 0.5 m/s with no actuation and T_c = 0 (found here by least squares on the
+    unactuated step map, not by the package's search). The study keeps no gait at R = l and
+    says why; ``powered`` says what its gait is."""
+    from scipy.optimize import least_squares
+
+    from heelstrike.analysis.cost_study import cost_study
+    from heelstrike.analysis.powered import WHEEL_FAMILY, powered_step
+
+    wheel = CompassGait(foot_radius=1.0)
+
+    def residual(z):
+        st = powered_step(wheel, z, None, None, rtol=1e-12, atol=1e-12)
+        assert st.ok
+        return np.append(st.z_next - z, st.record.step_length / st.record.step_duration - 0.5)
+
+    sol = least_squares(residual, [-0.21, 0.63, 0.0], xtol=1e-14, ftol=1e-14, gtol=1e-14)
+    assert np.max(np.abs(residual(sol.x))) < 1e-10
+    st = powered_step(wheel, sol.x, None, None, rtol=1e-12, atol=1e-12)
+    assert st.record.actuator_work == 0.0 and st.record.energy_lost < 1e-15
+    assert abs(sol.x[2]) < 1e-9  # the swing leg at rest relative to the stance leg
+    ds = cost_study([0.9, 1.0], [0.4])
+    assert np.isfinite(ds["cost_of_transport"].values[0, 0, 0])
+    assert np.isnan(ds["cost_of_transport"].values[0, 1, 0])
+    assert ds["failure"].values[0, 1, 0] == WHEEL_FAMILY
+    assert main(["powered", "--radius", "1"]) == 0
+    assert f"heelstrike: note: {WHEEL_FAMILY}" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_the_default_cost_study_keeps_gaits_whose_books_close():
+    """QA sweep 12: the compass gait's study kept fresh-search gaits at Newton's looser 1e-7
+    tolerance (polished for described walkers only): at R = 0.9 m, L = 0.5 m the actuator work
+    and the collision loss differed by 2e-6 of either, above BOOKS_RTOL."""
+    from heelstrike.analysis.cost_study import cost_study
+    from heelstrike.analysis.powered import BOOKS_RTOL
+
+    ds = cost_study(np.linspace(0.0, 0.9, 4), np.linspace(0.3, 0.6, 4))
+    work, loss = ds["actuator_work"].values, ds["collision_loss"].values
+    assert np.isfinite(work).all()
+    assert np.max(np.abs(work - loss) / loss) < BOOKS_RTOL
+    assert np.max(np.abs(work - loss)) < 2e-8

@@ -485,7 +485,7 @@ def write_powered_energy(
     fig = energy_figure(energy, impacts, title=(
         f"{name}, powered gait at {gait.speed:.3g} m/s: {gait.torque_joint} torque "
         f"{gait.torque_work:+.4f} J over the step,\npush-off {gait.push_off_work:+.4f} J "
-        f"(jump at heel strike), {losses}"))
+        f"(jump at heel strike){',' if len(impacts) < 2 else chr(10)} {losses}"))
     png = out / "powered_energy.png"
     fig.savefig(png)
     return png, write_csv(energy, out / "powered_energy.csv")

@@ -44,7 +44,8 @@ pass): with a light hip (``mH = 4 kg``) it has no seed gait on level ground eith
 McGeer's wheel (``R = l``)
 --------------------------
 With ``R = l`` both foot arcs are centred on the hip: the two contact points coincide, the
-heel strike constrains nothing that moves (``T_c = 0``) and the trailing foot's post-impact
+heel strike loses only the swing leg's rotation relative to the stance leg (``T_c = 0`` when
+that is at rest at the strike, :data:`WHEEL_FAMILY`) and the trailing foot's post-impact
 normal velocity is exactly zero, so :func:`heelstrike.dynamics.hybrid.simulate` reports
 ``trailing_foot_stays``. Here that outcome is accepted *only* for a wheel (``R = l``) and only if
 the trailing foot's normal velocity is zero to round-off (it grazes: the "other" contact is the
@@ -90,6 +91,7 @@ _T = TypeVar("_T")
 
 __all__ = [
     "ACTUATIONS",
+    "WHEEL_FAMILY",
     "ActuationFamily",
     "PoweredGait",
     "PoweredGaitNotFoundError",
@@ -710,6 +712,15 @@ BOOKS_RTOL = 1e-6
 
 #: A report notes a gait whose books (:func:`books_gap`) still disagree by more than this.
 BOOKS_NOTE = 1e-4
+
+#: What a powered gait of McGeer's wheel (``R = l``) is, said by ``powered`` and recorded as
+#: the cost study's failure at ``R = l`` (QA sweep 12: ``powered --radius 1`` reported one
+#: gait's 0.0068 J per step as the wheel's cost, and "stable, barely").
+WHEEL_FAMILY = (
+    "R = l is McGeer's wheel: its gaits at one target form a neutral family (a Floquet "
+    "multiplier of 1), which includes gaits that lose nothing (T_c = 0 when the swing leg is at "
+    "rest relative to the stance leg at the strike: no actuation needed). A gait found there is "
+    "one member: its work is not the wheel's least, and its stability is neutral")
 
 #: Smallest factor by which :func:`_books_refined` scales the tolerances down, and the smallest
 #: integration tolerance it asks for (round-off bounds what a tighter one could give).

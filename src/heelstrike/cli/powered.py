@@ -170,6 +170,7 @@ def _run_powered(args: argparse.Namespace) -> int:
             f"{declared_note} at R = {radius:g} m: {exc}{hint}"
         ) from exc
     gait = preferred_gait(gaits)
+    _note_wheel(walker)
     others = [g for g in gaits if g is not gait]
     d = {**gait.to_dict(), "target_speed": speed, "target_step_length": step_length,
          "target_source": source, "backend": backend, "gaits_found": len(gaits),
@@ -241,12 +242,21 @@ def _run_powered(args: argparse.Namespace) -> int:
         # from the 0.1 m/s gait
         print("  note: the search met no stable gait at this target, which does not show that "
               "none exists: it is local (seed gaits continued to the target, a few fresh "
-              "starts); a stable one may be reached by continuing from another target "
-              "(find_powered_gait(..., guess=(*fixed_point, parameter)) in small steps)")
+              "starts); a stable one, or a cheaper one, may be reached by continuing from "
+              "another target (find_powered_gait(..., guess=(*fixed_point, parameter)) in small "
+              "steps)")
     if gait.trailing_foot_grazes:
         print("  note: R = l (McGeer's wheel): the trailing foot's lift velocity is exactly 0; "
               "both contacts are the same point, so the step was accepted")
     return 0
+
+
+def _note_wheel(walker: Any) -> None:
+    """Say on stderr what a powered gait of McGeer's wheel is (``WHEEL_FAMILY``)."""
+    from heelstrike.analysis.powered import WHEEL_FAMILY
+
+    if walker.is_wheel:
+        print(f"heelstrike: note: {WHEEL_FAMILY}", file=sys.stderr)
 
 
 def _gait_summary(gait: Any) -> dict[str, Any]:
@@ -377,4 +387,8 @@ def _run_study(args: argparse.Namespace) -> int:
           f"fresh searches from several seeds ({fresh} point(s) came from a fresh search; "
           f"up to {int(ds['gaits_found'].max())} distinct gaits met at one point)")
     print(f"{found} of {ds['cost_of_transport'].size} gaits found", file=sys.stderr)
+    from heelstrike.analysis.powered import WHEEL_FAMILY
+
+    if (ds["failure"] == WHEEL_FAMILY).any():  # the study's record at McGeer's wheel
+        print(f"heelstrike: note: no gait is kept at R = l: {WHEEL_FAMILY}", file=sys.stderr)
     return 0

@@ -44,6 +44,7 @@ from heelstrike._typing import FloatArray
 from heelstrike.analysis._defaults import BASIN_STEPS, BASIN_TOLERANCE
 from heelstrike.analysis._memory import available_memory, require_memory
 from heelstrike.analysis.limit_cycle import LimitCycle, find_limit_cycle
+from heelstrike.dynamics.backends import check_one_walker
 from heelstrike.dynamics.compiled import ensemble_walk
 from heelstrike.dynamics.hybrid import WalkStatus
 from heelstrike.models.base import PlanarWalker, check_backend_name
@@ -178,6 +179,8 @@ class Basin(ResultDictMixin):
 
 def _check_grid(grid: tuple[int, int], steps: int) -> tuple[int, int]:
     """The grid sizes, after the checks every basin makes before computing."""
+    if any(isinstance(v, bool) or int(v) != v for v in grid):
+        raise ValueError(f"grid must be two whole numbers, got {grid}")
     n1, n2 = (int(v) for v in grid)
     if n1 < 1 or n2 < 1:
         raise ValueError(f"grid must be positive, got {grid}")
@@ -361,6 +364,7 @@ def basin_of_attraction(
         Unknown backend, or decreasing ranges.
     """
     check_backend_name(backend)
+    check_one_walker(walker)
     n3, nd = _check_grid(grid, steps)
     given = (None, None) if ranges is None else ranges
     if any(r is not None and not r[0] < r[1] for r in given):

@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import BoolArray, FloatArray
 from heelstrike.core._scalars import python_scalars
-from heelstrike.core.impact import ImpactResult, impact
+from heelstrike.core.impact import ImpactInputError, ImpactResult, impact
 from heelstrike.models._contact import CONTACT_TOLERANCE, LIFT_TOLERANCE, trailing_foot_lifts
 from heelstrike.models.base import Foot, PlanarWalker, check_backend_name, is_mcgeer_wheel
 from heelstrike.models.compass import CompassGait, heel_strike_state
@@ -342,10 +342,35 @@ def heel_strike_study(
     Raises
     ------
     heelstrike.core.impact.ImpactInputError
-        For non-finite angles or velocities or ``restitution`` outside [0, 1].
+        For non-finite angles or velocities, an angle outside ``0 <= q3 < pi/2`` (the leading
+        foot ahead), or ``restitution`` outside [0, 1].
+    NotAHeelStrikeError
+        Where the striking foot moves away from the ground before the impact (e.g.
+        ``q3_dot < 0``): no heel strike happens there, and the impact law would report a loss
+        that never happens (QA sweep 12: it did, without a word).
     """
     check_backend_name(backend)
+    for name, value, unit in (("impact_angle", impact_angle, "rad"),
+                              ("q3_dot", q3_dot, "rad/s"), ("q4_dot", q4_dot, "rad/s")):
+        if not np.all(np.isfinite(np.asarray(value, dtype=float))):
+            raise ImpactInputError(f"{name} must be finite ({unit}), got {value!r}")
+    q3 = np.asarray(impact_angle, dtype=float)
+    if np.any((q3 < 0.0) | (q3 >= np.pi / 2)):
+        bad = float(q3.ravel()[np.argmax(((q3 < 0.0) | (q3 >= np.pi / 2)).ravel())])
+        raise ImpactInputError(
+            f"impact_angle must satisfy 0 <= q3 < pi/2 rad (the leading foot ahead, the hip "
+            f"above the ground), got {bad:g} rad ({np.degrees(bad):g} deg)")
     q, q_dot = heel_strike_state(walker, impact_angle, q3_dot=q3_dot, q4_dot=q4_dot)
+    vn = np.einsum("...j,...j->...", walker.contact_jacobian(q, "left")[..., 1, :], q_dot)
+    away = vn > 1e-12 * np.maximum(1.0, np.asarray(walker.leg_length, dtype=float))
+    if np.any(away):
+        i = np.unravel_index(int(np.argmax(away)), away.shape) if away.ndim else ()
+        raise NotAHeelStrikeError(
+            f"the striking foot moves away from the ground before the impact at "
+            f"{int(np.sum(away))} of {away.size} state(s) (e.g. q3 = {float(q[i][2]):g} rad, "
+            f"q3_dot = {float(q_dot[i][2]):g}, q4_dot = {float(q_dot[i][3]):g} rad/s: normal "
+            f"velocity +{float(vn[i]):.6g} m/s): no heel strike happens there (the paper's "
+            "rates q3_dot = 1 rad/s, q4_dot = 0 bring it down)")
     res: ImpactResult | None = None
     if backend == "compiled":
         from heelstrike.models.compass_fast import heel_strike_impact

@@ -33,11 +33,14 @@ its base :class:`~heelstrike.dynamics.hybrid.WalkResult` (the compiled compass k
 from __future__ import annotations
 
 import importlib
+import math
+import numbers
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any, Literal
 
+import numpy as np
 from numpy.typing import ArrayLike
 
 from heelstrike.dynamics.hybrid import WalkResult
@@ -50,6 +53,9 @@ __all__ = [
     "KernelKind",
     "backend_entry",
     "check_backend",
+    "check_one_walker",
+    "check_slope",
+    "check_walk_arguments",
     "kernel_kind",
     "simulate",
     "simulator",
@@ -203,6 +209,62 @@ def check_backend(
     backend_entry(walker, backend).check_actuation(walker, torque, push_off, friction, options)
 
 
+def check_one_walker(walker: PlanarWalker) -> None:
+    """Refuse a batch of walkers (array parameters) where one walker is walked.
+
+    Raises
+    ------
+    ValueError
+        Naming the parameters' shape (QA sweep 12: numpy's broadcasting errors, deep inside).
+    """
+    if walker.is_batched:
+        raise ValueError(
+            f"one walker is walked at a time, and this one has array parameters (a batch of "
+            f"shape {walker.parameter_shape}): walk its members one by one "
+            "(walker.replace(name=value) for each value)")
+
+
+def check_slope(slope: Any) -> float:
+    """``slope`` (rad) as a float: one finite number, else a ValueError naming it."""
+    if isinstance(slope, (str, bytes, bool, np.bool_)) or np.ndim(slope) != 0:
+        raise ValueError(f"slope must be one number (rad), got {slope!r}")
+    try:
+        value = float(slope)
+    except (TypeError, ValueError):
+        raise ValueError(f"slope must be one number (rad), got {slope!r}") from None
+    if not math.isfinite(value):
+        raise ValueError(f"slope must be finite (rad), got {value!r}")
+    return value
+
+
+def check_walk_arguments(
+    walker: PlanarWalker, *, slope: Any, steps: Any, friction: Any, rtol: Any, atol: Any
+) -> None:
+    """The checks :func:`simulate` makes before running any backend: one walker, one finite
+    slope below 90 degrees, a whole number of steps >= 1, a friction coefficient >= 0 (or
+    None), positive finite tolerances (QA sweep 12: a NaN slope hung the compiled backend,
+    ``atol=0`` hung scipy's first step, ``rtol=-1`` was taken).
+
+    Raises
+    ------
+    ValueError
+        The first argument that fails, named.
+    """
+    check_one_walker(walker)
+    s = check_slope(slope)
+    if not abs(s) < math.pi / 2:  # a bare 3 meant as degrees is 172 deg
+        raise ValueError(f"slope {s:g} rad is {math.degrees(s):g} deg, no incline to walk on "
+                         "(slopes are in radians, |slope| < pi/2)")
+    if isinstance(steps, bool) or not isinstance(steps, numbers.Integral) or steps < 1:
+        raise ValueError(f"steps must be >= 1 (a whole number), got {steps!r}")
+    if friction is not None and not float(friction) >= 0.0:
+        raise ValueError(f"friction must be a coefficient >= 0 (or None: no limit), got "
+                         f"{friction!r}")
+    for name, tol in (("rtol", rtol), ("atol", atol)):
+        if isinstance(tol, bool) or not (math.isfinite(float(tol)) and float(tol) > 0.0):
+            raise ValueError(f"{name} must be a finite tolerance > 0, got {tol!r}")
+
+
 def simulate(
     walker: PlanarWalker,
     q0: ArrayLike,
@@ -263,8 +325,11 @@ def simulate(
     ------
     ValueError
         Unknown or unsupported backend (the message names ``walker.backends``), actuation the
-        backend cannot run, or an invalid initial state.
+        backend cannot run, an argument :func:`check_walk_arguments` refuses, or an invalid
+        initial state.
     """
+    check_walk_arguments(walker, slope=slope, steps=steps, friction=friction, rtol=rtol,
+                         atol=atol)
     entry = backend_entry(walker, backend)
     entry.check_actuation(walker, torque, push_off, friction, options)
     return entry.load()(

@@ -289,12 +289,12 @@ def test_powered_non_finite_target_is_called_non_finite(value, capsys):
 
 
 @pytest.mark.slow
-def test_the_wheel_has_a_gait_that_needs_no_work_so_no_one_gait_stands_for_it(capsys):
+def test_the_wheel_has_a_gait_that_needs_no_work_and_powered_finds_it(capsys):
     """QA sweep 12: ``powered --radius 1`` reported one gait's 0.0068 J per step as McGeer's
     wheel's cost. Its gaits form a neutral family that includes a passive one: periodic on
     level ground at 0.5 m/s with no actuation and T_c = 0 (found here by least squares on the
-    unactuated step map, not by the package's search). The study keeps no gait at R = l and
-    says why; ``powered`` says what its gait is."""
+    unactuated step map, written out in this test). ``powered`` and the cost study now keep
+    that gait, and say what the wheel's gaits are."""
     from scipy.optimize import least_squares
 
     from heelstrike.analysis.cost_study import cost_study
@@ -313,11 +313,15 @@ def test_the_wheel_has_a_gait_that_needs_no_work_so_no_one_gait_stands_for_it(ca
     assert st.record.actuator_work == 0.0 and st.record.energy_lost < 1e-15
     assert abs(sol.x[2]) < 1e-9  # the swing leg at rest relative to the stance leg
     ds = cost_study([0.9, 1.0], [0.4])
-    assert np.isfinite(ds["cost_of_transport"].values[0, 0, 0])
-    assert np.isnan(ds["cost_of_transport"].values[0, 1, 0])
-    assert ds["failure"].values[0, 1, 0] == WHEEL_FAMILY
-    assert main(["powered", "--radius", "1"]) == 0
-    assert f"heelstrike: note: {WHEEL_FAMILY}" in capsys.readouterr().err
+    work = ds["actuator_work"].values[0, :, 0]
+    assert work[0] > 1e-6 and abs(work[1]) < 1e-9  # a foot short of the wheel pays; it does not
+    assert ds["step_length"].values[0] == 0.4
+    assert main(["powered", "--radius", "1", "--json"]) == 0
+    out, err = capsys.readouterr()
+    d = json.loads(out)
+    assert abs(d["actuator_work"]) < 1e-9 and abs(d["collision_loss"]) < 1e-9
+    assert d["speed"] == pytest.approx(0.5, rel=1e-9)
+    assert f"heelstrike: note: {WHEEL_FAMILY}" in err
 
 
 @pytest.mark.slow

@@ -77,7 +77,7 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "paper_figure_data",
     ),
     "powered": (
-        "ACTUATIONS", "ActuationFamily", "PoweredGait", "PoweredGaitNotFoundError",
+        "ACTUATIONS", "WHEEL_FAMILY", "ActuationFamily", "PoweredGait", "PoweredGaitNotFoundError",
         "SearchLimitError", "actuation_family", "books_gap", "check_model_actuation",
         "declared_posture_law",
         "energy_book_tables", "family_simulator",

@@ -44,7 +44,6 @@ from heelstrike.analysis._memory import require_memory
 from heelstrike.analysis.heel_strike import heel_strike_study
 from heelstrike.analysis.powered import (
     ACTUATIONS,
-    WHEEL_FAMILY,
     PoweredGait,
     PoweredGaitNotFoundError,
     _count_distinct,
@@ -438,14 +437,9 @@ def _study_row(
     seed_size = np.zeros(T.size, dtype=np.int64)
     branch = np.full(T.size, np.nan)
     n_found = np.zeros(T.size, dtype=np.int64)
-    wheel = model is None and base.replace(foot_radius=r).is_wheel
     for j, v in enumerate(T):
         speed = float(v) if kind == "speed" else None
         length = float(v) if kind == "step_length" else None
-        if wheel:  # no one gait stands for McGeer's wheel (WHEEL_FAMILY): none is kept
-            msg = WHEEL_FAMILY.encode()[:_FAILURE_BYTES]
-            failure[j, :len(msg)] = np.frombuffer(msg, dtype=np.uint8)
-            continue
         # Newton from each neighbour (previous radius, previous target); where gaits
         # coexist keep the one needing the least work; seed search if none converges
         gaits: list[PoweredGait] = []

@@ -713,14 +713,18 @@ BOOKS_RTOL = 1e-6
 #: A report notes a gait whose books (:func:`books_gap`) still disagree by more than this.
 BOOKS_NOTE = 1e-4
 
+#: Smallest size (J) :func:`books_gap` measures a gap against: the integrator's round-off of
+#: a walker's energy (a gait needing no work has books of 1e-13 J, all round-off).
+BOOKS_FLOOR = 1e-8
+
 #: What a powered gait of McGeer's wheel (``R = l``) is, said by ``powered`` and recorded as
 #: the cost study's failure at ``R = l`` (QA sweep 12: ``powered --radius 1`` reported one
 #: gait's 0.0068 J per step as the wheel's cost, and "stable, barely").
 WHEEL_FAMILY = (
     "R = l is McGeer's wheel: its gaits at one target form a neutral family (a Floquet "
-    "multiplier of 1), which includes gaits that lose nothing (T_c = 0 when the swing leg is at "
-    "rest relative to the stance leg at the strike: no actuation needed). A gait found there is "
-    "one member: its work is not the wheel's least, and its stability is neutral")
+    "multiplier of 1: their stability is undecided), which includes gaits that lose nothing "
+    "(T_c = 0 when the swing leg is at rest relative to the stance leg at the strike: no "
+    "actuation needed); the gait shown is the one needing the least work")
 
 #: Smallest factor by which :func:`_books_refined` scales the tolerances down, and the smallest
 #: integration tolerance it asks for (round-off bounds what a tighter one could give).
@@ -1555,15 +1559,13 @@ def books_gap(gait: PoweredGait) -> float:
     Returns
     -------
     float
-        ``max(|ΔE|, |W - T_c - ΔE|) / max(|W|, |T_c|)``: ``ΔE`` the change of ``T + V`` over
-        the step (zero for a period-one gait on level ground), ``W`` the actuator work, ``T_c``
-        the collision loss; 0 when both are 0 (McGeer's wheel), inf when only the gap is not.
+        ``max(|ΔE|, |W - T_c - ΔE|) / max(|W|, |T_c|, BOOKS_FLOOR)``: ``ΔE`` the change of
+        ``T + V`` over the step (zero for a period-one gait on level ground), ``W`` the actuator
+        work, ``T_c`` the collision loss; books smaller than :data:`BOOKS_FLOOR` (McGeer's
+        wheel's gaits that need no work) are measured against it.
     """
     gap = max(abs(gait.energy_change), abs(gait.energy_balance_error))
-    size = max(abs(gait.actuator_work), abs(gait.collision_loss))
-    if size > 0:
-        return gap / size
-    return 0.0 if gap == 0 else float("inf")
+    return gap / max(abs(gait.actuator_work), abs(gait.collision_loss), BOOKS_FLOOR)
 
 
 def _books_refined(
@@ -2312,6 +2314,13 @@ def _fresh_gaits(
     if not np.isfinite(q3):
         return gaits, err
     p0 = float(min(family.seed(w)))
+    if family.name == "pushoff" and w.is_wheel:  # its passive gaits (WHEEL_FAMILY), polished
+        for z in _wheel_passive_gaits(w, speed, length):
+            try:
+                gaits.append(solve(r, speed=speed, step_length=length, guess=np.append(z, 0.0),
+                                   fallback=False, **kwargs))
+            except (PoweredGaitNotFoundError, ValueError):
+                pass
     # near the wheel the map is flat and Newton stalls at ~1e-8 (integrator noise floor)
     opts = {"max_iter": 12, "max_evaluations": 200, "tol": 1e-7} | kwargs
     for w3, w4 in _FRESH_STARTS:
@@ -2321,6 +2330,36 @@ def _fresh_gaits(
         except (PoweredGaitNotFoundError, ValueError):
             pass
     return gaits, err
+
+
+def _wheel_passive_gaits(
+    wheel: PlanarWalker, speed: float | None, length: float | None
+) -> list[FloatArray]:
+    """Section points of McGeer's wheel's passive level-ground gait meeting the target: the
+    unactuated step map's fixed point with that speed (m/s) or step length (m), by least
+    squares from a few stance rates (the family is neutral, so Newton's square system is
+    singular there); the first that meets it to 1e-9, or none (QA sweep 12: ``powered --radius
+    1`` kept a gait needing 0.0068 J per step)."""
+    from scipy.optimize import least_squares
+
+    target = float(length if length is not None else speed)  # type: ignore[arg-type]
+
+    def residual(z: FloatArray) -> FloatArray:
+        st = powered_step(wheel, z, None, None, rtol=1e-12, atol=1e-12)
+        if not st.ok:
+            return np.full(4, 10.0)
+        rec = st.record
+        if rec is None:  # pragma: no cover - an ok step has its heel strike
+            return np.full(4, 10.0)
+        got = rec.step_length if length is not None else rec.step_length / rec.step_duration
+        return np.append(st.z_next - z, got - target)
+
+    q3 = 0.5 * (length if length is not None else 0.4) / float(wheel.scale.leg_length)
+    for rate in (0.4, 0.7, 1.0, 1.5, 2.5):
+        sol = least_squares(residual, [-q3, rate, 0.0], xtol=1e-14, ftol=1e-14, gtol=1e-14)
+        if float(np.max(np.abs(residual(sol.x)))) < 1e-9:
+            return [np.asarray(sol.x, dtype=float)]
+    return []
 
 
 def _count_distinct(gaits: Sequence[PoweredGait]) -> int:

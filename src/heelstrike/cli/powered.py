@@ -169,7 +169,8 @@ def _run_powered(args: argparse.Namespace) -> int:
             f"{'m/s' if target == 'speed' else 'm'}"
             f"{declared_note} at R = {radius:g} m: {exc}{hint}"
         ) from exc
-    gait = preferred_gait(gaits)
+    # McGeer's wheel: every gait's stability is undecided (WHEEL_FAMILY), show the cheapest
+    gait = gaits[0] if walker.is_wheel else preferred_gait(gaits)
     _note_wheel(walker)
     others = [g for g in gaits if g is not gait]
     d = {**gait.to_dict(), "target_speed": speed, "target_step_length": step_length,
@@ -221,7 +222,9 @@ def _run_powered(args: argparse.Namespace) -> int:
     print(f"  cost of transport {gait.cost_of_transport:10.6g} (net actuator work / (m g L))")
     print(f"  eta             {gait.eta:10.6g} J/m")
     if others:
-        which = ("this is the stable one needing the least actuator work" if gait.stable else
+        which = ("this is the one needing the least actuator work (McGeer's wheel: their "
+                 "stability is undecided)" if walker.is_wheel else
+                 "this is the stable one needing the least actuator work" if gait.stable else
                  "none is stable: this is the one needing the least actuator work")
         print(f"  note: {len(gaits)} distinct gaits meet this target; {which} (study cost "
               "keeps the cheapest ordinary step, stable or not); the others:")
@@ -389,6 +392,6 @@ def _run_study(args: argparse.Namespace) -> int:
     print(f"{found} of {ds['cost_of_transport'].size} gaits found", file=sys.stderr)
     from heelstrike.analysis.powered import WHEEL_FAMILY
 
-    if (ds["failure"] == WHEEL_FAMILY).any():  # the study's record at McGeer's wheel
-        print(f"heelstrike: note: no gait is kept at R = l: {WHEEL_FAMILY}", file=sys.stderr)
+    if float(ds["radius"].max()) >= leg_length:  # a wheel's gaits: stability undecided
+        print(f"heelstrike: note: {WHEEL_FAMILY}", file=sys.stderr)
     return 0

@@ -26,7 +26,12 @@ from heelstrike._typing import FloatArray
 from heelstrike.analysis._defaults import BIFURCATION_RECORD, BIFURCATION_TRANSIENT
 from heelstrike.analysis.heel_strike import loss_per_metre
 from heelstrike.analysis.newton import floquet_multipliers
-from heelstrike.dynamics.backends import BoundSimulator, check_one_walker, check_slope
+from heelstrike.dynamics.backends import (
+    BoundSimulator,
+    check_one_walker,
+    check_slope,
+    check_tolerances,
+)
 from heelstrike.dynamics.hybrid import PushOff, WalkResult, simulate
 from heelstrike.dynamics.single_support import TorqueLaw
 from heelstrike.models.base import PlanarWalker, check_backend_name
@@ -92,10 +97,7 @@ class PoincareMap:
         check_backend_name(self.method, "method")
         check_one_walker(self.walker)
         object.__setattr__(self, "slope", check_slope(self.slope))
-        for name in ("rtol", "atol"):
-            tol = getattr(self, name)
-            if not (np.isfinite(tol) and tol > 0):
-                raise ValueError(f"{name} must be a finite tolerance > 0, got {tol!r}")
+        check_tolerances(self.rtol, self.atol)
         if self.method == "compiled" and (self.torque is not None or self.push_off is not None):
             raise ValueError("method='compiled' supports passive walkers only")
 

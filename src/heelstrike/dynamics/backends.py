@@ -55,6 +55,7 @@ __all__ = [
     "check_backend",
     "check_one_walker",
     "check_slope",
+    "check_tolerances",
     "check_walk_arguments",
     "kernel_kind",
     "simulate",
@@ -260,6 +261,11 @@ def check_walk_arguments(
     if friction is not None and not float(friction) >= 0.0:
         raise ValueError(f"friction must be a coefficient >= 0 (or None: no limit), got "
                          f"{friction!r}")
+    check_tolerances(rtol, atol)
+
+
+def check_tolerances(rtol: Any, atol: Any) -> None:
+    """Refuse integrator tolerances that are not finite and > 0, naming the first."""
     for name, tol in (("rtol", rtol), ("atol", atol)):
         if isinstance(tol, bool) or not (math.isfinite(float(tol)) and float(tol) > 0.0):
             raise ValueError(f"{name} must be a finite tolerance > 0, got {tol!r}")

@@ -455,36 +455,38 @@ def _check_link_inertials(path: Path) -> None:
             continue
         links.append((str(link.get("name")), m,
                       np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])))
-    tol = 1e-9 * max((float(np.abs(rot).max()) for *_, rot in links), default=0.0)
-    for name, m, rot in links:
-        if m < 0.0:
-            raise RobotError(f"{path}: link {name!r} has a negative mass, {m:g} kg")
-        low = float(np.linalg.eigvalsh(rot)[0])
+    bad = _unphysical(links)
+    if bad is not None:
+        raise RobotError(f"{path}: link {bad[0]!r} has {bad[1]}")
+
+
+def _unphysical(bodies: list[tuple[str, float, FloatArray]]) -> tuple[str, str] | None:
+    """The first ``(name, mass (kg), inertia (kg m^2))`` no rigid body has, with why: a
+    negative mass, or an inertia tensor with a principal moment below zero by more than
+    round-off of the largest inertia given (iCub's bodies of ~1e-18 kg m^2 are at -5e-20)."""
+    tol = 1e-9 * max((float(np.abs(rot).max()) for *_, rot in bodies), default=0.0)
+    for name, mass, rot in bodies:
+        if mass < 0.0:
+            return name, f"a negative mass, {mass:g} kg"
+        low = float(np.linalg.eigvalsh(0.5 * (rot + rot.T))[0])
         if low < -tol:
-            raise RobotError(f"{path}: link {name!r} has an inertia tensor that no rigid body "
-                             f"has (a principal moment of {low:.3g} kg m^2)")
+            return name, (f"an inertia tensor that no rigid body has (a principal moment of "
+                          f"{low:.3g} kg m^2)")
+    return None
 
 
 def _check_inertias(model: Any, source: Path) -> None:
-    """Refuse a body with a negative or non-finite mass, or a rotational inertia about its
-    centre of mass that is not positive semi-definite (no rigid body has it), naming its joint.
-    An eigenvalue below zero by round-off of the robot's largest inertia passes (iCub's
-    bodies of ~1e-18 kg m^2 are at -5e-20)."""
+    """Refuse a body with a non-finite mass or inertia, or one no rigid body has
+    (:func:`_unphysical`: its rotational inertia about its centre of mass), naming its joint."""
     bodies = [(str(model.names[j]), float(model.inertias[j].mass),
                np.array(model.inertias[j].inertia, dtype=float)) for j in range(1, model.njoints)]
     for name, mass, rot in bodies:
         if not (math.isfinite(mass) and np.isfinite(rot).all()):
             raise RobotError(f"{source}: the body moved by joint {name!r} has a non-finite "
                              "mass or inertia")
-    tol = 1e-9 * max((float(np.abs(rot).max()) for _, _, rot in bodies), default=0.0)
-    for name, mass, rot in bodies:
-        where = f"{source}: the body moved by joint {name!r}"
-        if mass < 0.0:
-            raise RobotError(f"{where} has a negative mass, {mass:g} kg")
-        low = float(np.linalg.eigvalsh(0.5 * (rot + rot.T))[0])
-        if low < -tol:
-            raise RobotError(f"{where} has a rotational inertia about its centre of mass that "
-                             f"no rigid body has (a principal moment of {low:.3g} kg m^2)")
+    bad = _unphysical(bodies)
+    if bad is not None:
+        raise RobotError(f"{source}: the body moved by joint {bad[0]!r} has {bad[1]}")
 
 
 def _couplings(path: Path, tags: tuple[str, ...]) -> tuple[str, ...]:

@@ -462,9 +462,10 @@ def _check_link_inertials(path: Path) -> None:
 
 def _unphysical(bodies: list[tuple[str, float, FloatArray]]) -> tuple[str, str] | None:
     """The first ``(name, mass (kg), inertia (kg m^2))`` no rigid body has, with why: a
-    negative mass, or an inertia tensor with a principal moment below zero by more than
-    round-off of the largest inertia given (iCub's bodies of ~1e-18 kg m^2 are at -5e-20)."""
-    tol = 1e-9 * max((float(np.abs(rot).max()) for *_, rot in bodies), default=0.0)
+    negative mass, or an inertia tensor with a principal moment below zero by more than 1e-6
+    of the largest inertia given: what rounding the file's numbers leaves (iCub's bodies of
+    ~1e-18 kg m^2 are at -5e-20, Tiago's antenna link at -3.5e-8) passes."""
+    tol = 1e-6 * max((float(np.abs(rot).max()) for *_, rot in bodies), default=0.0)
     for name, mass, rot in bodies:
         if mass < 0.0:
             return name, f"a negative mass, {mass:g} kg"

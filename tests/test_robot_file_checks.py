@@ -255,3 +255,44 @@ def test_the_checks_refuse_only_the_broken_files_of_example_robot_data() -> None
     assert ("link 'body' has an inertia tensor that no rigid body has (a principal moment of "
             "-0.0213 kg m^2)") in refused["romeo_description/urdf/romeo_laas_small.urdf"]
     assert "(No name given for the robot.)" in refused["ur_description/urdf/ur3.urdf"]
+
+
+def test_a_robot_file_with_feet_gets_gait_states(tmp_path: Path, capsys) -> None:
+    """A biped of one's own (here Talos's URDF, copied) with its sole frames named: gait
+    states as for the shipped robots, checked with Pinocchio's frame velocities."""
+    path = tmp_path / "mybiped.urdf"
+    path.write_text((robot_data_dir() / "talos_data/robots/talos_reduced.urdf").read_text())
+    with pytest.raises(RobotError, match="has no feet frames for gait states"):
+        gait_state(load_urdf(path), 0.3, 0.3)
+    with pytest.raises(RobotError, match=r"unknown frame 'left_sole' .*did you mean"):
+        load_urdf(path, feet=("left_sole", "right_sole_link"))
+    with pytest.raises(RobotError, match="foot_contact must be 'flat' or 'point'"):
+        load_urdf(path, feet=("left_sole_link", "right_sole_link"), foot_contact="round")
+    robot = load_urdf(path, feet=("left_sole_link", "right_sole_link"))
+    assert robot.feet == ("left_sole_link", "right_sole_link") and robot.foot_contact == "flat"
+    q, v = gait_state(robot, 0.3, 0.25, forward_speed=0.5)
+    data = robot.model.createData()
+    pin.forwardKinematics(robot.model, data, q, v)
+    pin.updateFramePlacements(robot.model, data)
+    lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+    lead, trail = (robot.frame_id(f) for f in robot.feet)
+    for fid in (lead, trail):  # flat on the ground plane
+        assert data.oMf[fid].translation[2] == pytest.approx(0.0, abs=1e-9)
+        np.testing.assert_allclose(data.oMf[fid].rotation, np.eye(3), atol=1e-8)
+    gap = data.oMf[lead].translation[0] - data.oMf[trail].translation[0]
+    assert gap == pytest.approx(0.3, abs=1e-9)
+    v_lead = pin.getFrameVelocity(robot.model, data, lead, lwa).vector
+    v_trail = pin.getFrameVelocity(robot.model, data, trail, lwa).vector
+    np.testing.assert_allclose(v_trail, 0.0, atol=1e-9)
+    np.testing.assert_allclose(v_lead, [0.0, 0.0, -0.25, 0.0, 0.0, 0.0], atol=1e-9)
+    # the command: a robot file needs its feet named, a shipped robot has its own
+    out = tmp_path / "state.json"
+    assert main(["robot", "state", "--urdf", str(path), "--feet",
+                 "left_sole_link,right_sole_link", "--out", str(out)]) == 0
+    state = json.loads(out.read_text())
+    np.testing.assert_allclose(state["q"], q, atol=1e-12)
+    capsys.readouterr()
+    assert main(["robot", "state", "--urdf", str(path)]) == 2
+    assert "a robot file needs --feet LEFT,RIGHT" in capsys.readouterr().err
+    assert main(["robot", "state", "talos", "--feet", "a,b"]) == 2
+    assert "--feet is for --urdf/--mjcf" in capsys.readouterr().err

@@ -90,10 +90,7 @@ def add_robot_command(sub: Any) -> None:
         description="Sizes, mass, feet, joints and frames of a shipped robot (NAME) or of your "
         "own robot file (--urdf FILE or --mjcf FILE): the frame names 'impact --strike/--keep' "
         "take.")
-    pi.add_argument("name", nargs="?", default=None,
-                    help="robot name (see 'heelstrike robot list')")
-    pi.add_argument("--urdf", default=None, metavar="FILE", help="a URDF robot instead")
-    pi.add_argument("--mjcf", default=None, metavar="FILE", help="an MJCF robot instead")
+    _add_robot_source(pi, "robot")
     pi.add_argument("--json", action="store_true", help="print one JSON object")
     pi.set_defaults(func=_run_robot_info)
     ps = rsub.add_parser(
@@ -102,8 +99,14 @@ def add_robot_command(sub: Any) -> None:
         "gait_state): both soles flat on the ground, the leading one STEP_LENGTH ahead and "
         "descending at STRIKE_SPEED, the trailing one at rest, the base moving forward; the "
         "velocity of least kinetic energy with these. Written as {\"q\": [...], \"v\": [...], "
-        "...} in Pinocchio's conventions, the file 'heelstrike impact --robot NAME --state' reads.")
-    ps.add_argument("name", help="robot name (see 'heelstrike robot list')")
+        "...} in Pinocchio's conventions, the file 'heelstrike impact --robot NAME --state' reads. "
+        "Your own biped: --urdf FILE or --mjcf FILE with --feet LEFT,RIGHT (its sole frames; "
+        "the inverse kinematics starts from its neutral configuration).")
+    _add_robot_source(ps, "biped")
+    ps.add_argument("--feet", default=None, metavar="LEFT,RIGHT",
+                    help="with --urdf/--mjcf: the left and right sole (or foot) frames")
+    ps.add_argument("--foot-contact", choices=("flat", "point"), default="flat",
+                    help="with --urdf/--mjcf: the feet's contact type (default flat)")
     ps.add_argument("--step-length", type=float, default=0.3, metavar="M",
                     help="distance between the soles along x (m, default 0.3)")
     ps.add_argument("--strike-speed", type=float, default=0.3, metavar="M/S",
@@ -135,13 +138,25 @@ def _run_robot_list(args: argparse.Namespace) -> int:
     return 0
 
 
-def _load(name: str | None, urdf: str | None, mjcf: str | None) -> Any:
-    """The shipped robot ``name``, else the URDF file, else the MJCF file (one is given)."""
+def _add_robot_source(p: argparse.ArgumentParser, what: str) -> None:
+    """``NAME`` (a shipped robot), or ``--urdf FILE`` / ``--mjcf FILE`` (one is given)."""
+    p.add_argument("name", nargs="?", default=None,
+                   help="robot name (see 'heelstrike robot list')")
+    p.add_argument("--urdf", default=None, metavar="FILE", help=f"a URDF {what} instead")
+    p.add_argument("--mjcf", default=None, metavar="FILE", help=f"an MJCF {what} instead")
+
+
+def _load(name: str | None, urdf: str | None, mjcf: str | None,
+          feet: tuple[str, str] | None = None, foot_contact: str = "flat") -> Any:
+    """The shipped robot ``name``, else the URDF file, else the MJCF file (one is given), the
+    files with the feet frames ``feet``."""
     from heelstrike.robots import load_mjcf, load_robot, load_urdf
 
     if name is not None:
         return load_robot(name)
-    return load_urdf(urdf) if urdf is not None else load_mjcf(str(mjcf))
+    if urdf is not None:
+        return load_urdf(urdf, feet=feet, foot_contact=foot_contact)
+    return load_mjcf(str(mjcf), feet=feet, foot_contact=foot_contact)
 
 
 def _run_robot_info(args: argparse.Namespace) -> int:
@@ -173,7 +188,6 @@ def _run_robot_info(args: argparse.Namespace) -> int:
 
 
 def _run_robot_state(args: argparse.Namespace) -> int:
-    from heelstrike.robots import load_robot
     from heelstrike.robots.states import gait_state
 
     for option, value in (("--step-length", args.step_length),
@@ -191,7 +205,18 @@ def _run_robot_state(args: argparse.Namespace) -> int:
     if args.out is not None and not args.out.parent.is_dir():
         raise RobotCliError(f"cannot write {str(args.out)!r}: no directory "
                             f"{str(args.out.parent)!r}")
-    robot = load_robot(args.name)
+    if sum(v is not None for v in (args.name, args.urdf, args.mjcf)) != 1:
+        raise RobotCliError("give one of NAME, --urdf FILE, --mjcf FILE")
+    feet = None
+    if args.name is None:
+        if args.feet is None or len(args.feet.split(",")) != 2:
+            raise RobotCliError("a robot file needs --feet LEFT,RIGHT: its left and right sole "
+                                "frames ('heelstrike robot info --urdf FILE' lists the frames)")
+        left, right = (f.strip() for f in args.feet.split(","))
+        feet = (left, right)
+    elif args.feet is not None:
+        raise RobotCliError(f"--feet is for --urdf/--mjcf: robot {args.name!r} has its own")
+    robot = _load(args.name, args.urdf, args.mjcf, feet, args.foot_contact)
     q, v = gait_state(robot, args.step_length, args.strike_speed,
                       forward_speed=args.forward_speed,
                       swing_forward_speed=args.swing_forward_speed, leading=args.leading)

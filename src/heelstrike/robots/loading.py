@@ -17,6 +17,7 @@ angular velocity in its own frame), world ``z`` is up.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import functools
 import importlib.metadata
 import math
@@ -536,13 +537,28 @@ def _checked_path(path: str | Path, kind: str) -> Path:
     return p
 
 
-def load_urdf(path: str | Path, *, name: str | None = None) -> Robot:
+def load_urdf(
+    path: str | Path, *, name: str | None = None, feet: tuple[str, str] | None = None,
+    foot_contact: str = "flat",
+) -> Robot:
     """Load a URDF with a free-flyer root joint.
+
+    Parameters
+    ----------
+    path : str or Path
+        The URDF file.
+    name : str, optional
+        The robot's name (default: the file's stem).
+    feet : (str, str), optional
+        Left and right sole (or foot) frames, for gait-like states
+        (:func:`~heelstrike.robots.states.gait_state`); none by default.
+    foot_contact : {"flat", "point"}
+        Natural contact type of those feet.
 
     Raises
     ------
     RobotError
-        If the file is missing or not a URDF robot.
+        If the file is missing or not a URDF robot, or a foot frame is not in it.
     """
     pin = _pin()
     p = _checked_path(path, "URDF")
@@ -563,16 +579,40 @@ def load_urdf(path: str | Path, *, name: str | None = None) -> Robot:
             "every robot a floating base itself (remove the world link and that joint)")
     if not _has_free_root(model):  # no root floating joint of its own: one is added
         model = pin.buildModelFromUrdf(str(p), pin.JointModelFreeFlyer())
-    return _finish(model, name or p.stem, p, None, ignored=_couplings(p, ("mimic",)))
+    return _with_feet(_finish(model, name or p.stem, p, None,
+                              ignored=_couplings(p, ("mimic",))), feet, foot_contact)
 
 
-def load_mjcf(path: str | Path, *, name: str | None = None) -> Robot:
+def _with_feet(robot: Robot, feet: tuple[str, str] | None, foot_contact: str) -> Robot:
+    """``robot`` with the feet frames ``feet`` (checked: two frames of it) and their contact
+    type (``"flat"`` or ``"point"``); ``robot`` itself if ``feet`` is None."""
+    if foot_contact not in ("flat", "point"):
+        raise RobotError(f"foot_contact must be 'flat' or 'point', got {foot_contact!r}")
+    if feet is None:
+        return robot
+    if len(feet) != 2 or not all(isinstance(f, str) and f for f in feet):
+        raise RobotError(f"feet must be two frame names (left, right), got {feet!r}")
+    for frame in feet:
+        robot.frame_id(frame)
+    return dataclasses.replace(robot, feet=(feet[0], feet[1]), foot_contact=foot_contact,
+                               data=None, cache={})
+
+
+def load_mjcf(
+    path: str | Path, *, name: str | None = None, feet: tuple[str, str] | None = None,
+    foot_contact: str = "flat",
+) -> Robot:
     """Load an MJCF (MuJoCo XML) with a free-flyer root joint (kept if it already has one).
+
+    Parameters
+    ----------
+    path, name, feet, foot_contact
+        As :func:`load_urdf`.
 
     Raises
     ------
     RobotError
-        If the file is missing or not an MJCF robot.
+        If the file is missing or not an MJCF robot, or a foot frame is not in it.
     """
     pin = _pin()
     p = _checked_path(path, "MJCF")
@@ -585,8 +625,8 @@ def load_mjcf(path: str | Path, *, name: str | None = None) -> Robot:
     except (RuntimeError, ValueError, OSError) as exc:
         reason = errors[0] if errors else _parser_reason(exc)
         raise RobotError(f"{p}: not an MJCF robot ({reason[:240]})") from None
-    return _finish(model, name or p.stem, p, None,
-                   ignored=_couplings(p, ("equality", "tendon")))
+    return _with_feet(_finish(model, name or p.stem, p, None,
+                              ignored=_couplings(p, ("equality", "tendon"))), feet, foot_contact)
 
 
 def _parser_reason(exc: BaseException) -> str:

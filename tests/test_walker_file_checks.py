@@ -61,7 +61,8 @@ def test_a_shipped_name_is_the_shipped_walker_whatever_the_folder_holds(
     rc, out, _ = _run(capsys, *args, "--model", "./compass")
     assert rc == 0 and json.loads(out)["T"] < t_shipped  # the lighter hip: the file's walker
     rc, out, err = _run(capsys, *args, "--model", "kneed")
-    assert rc == 0 and err == "" and json.loads(out)["model"] == "kneed"
+    # no note for the folder (stderr may show the walker's derivation on a cold cache)
+    assert rc == 0 and "note" not in err and json.loads(out)["model"] == "kneed"
 
 
 def test_a_failed_walk_leaves_no_output_folder(

@@ -361,7 +361,8 @@ def heel_strike_study(
             f"impact_angle must satisfy 0 <= q3 < pi/2 rad (the leading foot ahead, the hip "
             f"above the ground), got {bad:g} rad ({np.degrees(bad):g} deg)")
     q, q_dot = heel_strike_state(walker, impact_angle, q3_dot=q3_dot, q4_dot=q4_dot)
-    vn = np.einsum("...j,...j->...", walker.contact_jacobian(q, "left")[..., 1, :], q_dot)
+    A = walker.contact_jacobian(q, "left")  # the striking foot's rows (x, y)
+    vn = np.einsum("...j,...j->...", A[..., 1, :], q_dot)
     away = vn > 1e-12 * np.maximum(1.0, np.asarray(walker.leg_length, dtype=float))
     if np.any(away):
         i = np.unravel_index(int(np.argmax(away)), away.shape) if away.ndim else ()
@@ -385,8 +386,7 @@ def heel_strike_study(
         # v+ = v_a - e v_c with v_a, v_c M-orthogonal: T+ = T_a + e^2 T_c
         post = T_a + float(restitution) ** 2 * T_c
     else:
-        res = impact(walker.mass_matrix(q), walker.contact_jacobian(q, "left"), q_dot,
-                     restitution=restitution)
+        res = impact(walker.mass_matrix(q), A, q_dot, restitution=restitution)
         T, T_c, T_a = (np.asarray(x, dtype=float) for x in (
             res.kinetic_energy, res.kinetic_energy_constrained, res.kinetic_energy_admissible))
         v_post, impulse = res.velocity_post, res.constraint_impulse

@@ -77,6 +77,7 @@ depth and exponent size (see :func:`check_parameter_name` and the ``MAX_*`` cons
 from __future__ import annotations
 
 import ast
+import functools
 import json
 import keyword
 import math
@@ -565,10 +566,11 @@ class WalkerDescription:
         """Default parameter values."""
         return dict(self.params)
 
-    @property
+    @functools.cached_property
     def unused_params(self) -> frozenset[str]:
         """Parameters declared in ``[params]`` that no field, foot, point mass or posture law
-        uses (``g`` is always used): their values change nothing. Constraints do not count."""
+        uses (``g`` is always used): their values change nothing. Constraints do not count.
+        Computed once per description (every walker built from it asks)."""
         exprs: list[Any] = []
         for lk in self.links:
             exprs += [lk.length, lk.mass, lk.com, lk.com_offset, lk.inertia, lk.attach,

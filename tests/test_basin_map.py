@@ -140,6 +140,38 @@ def test_gait_map_figure_axes_stay_on_the_computed_grid():
     assert s0 >= 2.0 - 1e-9 and s1 <= 4.0 + 1e-9
 
 
+def test_gait_map_figure_draws_no_stability_line_along_the_no_gait_region():
+    # QA sweep 13: NaN cells (no gait) stood in as 10 for the contour, so a black "spectral
+    # radius 1" line ran along the grey region's edge where every gait is stable
+    from heelstrike.analysis.gait_map import GaitMap
+    from heelstrike.plots.gait import gait_map_figure
+
+    radii, slopes = np.array([0.0, 0.3, 0.6, 0.9]), np.deg2rad([1.0, 2.0, 3.0, 4.0])
+    rho = np.array([[0.6, 0.7, 0.8, 1.2], [0.55, 0.6, 0.7, 0.9],
+                    [0.5, 0.55, 0.6, 0.65], [np.nan] * 4])
+    ds = xr.Dataset(
+        {"spectral_radius": (("foot_radius", "slope"), rho),
+         "period_doubling_slope": ("foot_radius", np.full(4, np.nan))},
+        coords={"foot_radius": radii, "slope": slopes},
+    )
+    fig = gait_map_figure(GaitMap(dataset=ds))
+    ax = fig.axes[0]
+    lines = [seg for c in ax.collections if hasattr(c, "allsegs") for seg in c.allsegs[0]]
+    points = np.concatenate(lines)
+    # the one boundary is between 0.8 and 1.2 (R = 0, 3-4 deg) and between 0.7 and 0.9 (R =
+    # 0.3): it never reaches R = 0.6, the last row with gaits, all stable
+    assert points[:, 1].max() < 0.6 - 1e-9
+    assert "black line: spectral radius 1" in ax.get_title()
+    rho_stable = np.where(np.isfinite(rho), np.minimum(rho, 0.95), np.nan)
+    rho_stable[0, 0] = 1.5  # nothing crosses 1 but one corner cell
+    ds2 = ds.assign(spectral_radius=(("foot_radius", "slope"), rho_stable))
+    assert "black line" in gait_map_figure(GaitMap(dataset=ds2)).axes[0].get_title()
+    ds3 = ds.assign(spectral_radius=(("foot_radius", "slope"), np.where(
+        np.isfinite(rho), np.minimum(rho, 0.95), np.nan)))
+    title = gait_map_figure(GaitMap(dataset=ds3)).axes[0].get_title()
+    assert "black line" not in title and "grey: no gait found" in title
+
+
 def test_every_walk_status_has_its_own_basin_outcome() -> None:
     # QA sweep 6 (layout audit): slipped, no_consistent_assignment and no_leg_swap were
     # counted as integration_failed, and the colours matched the outcomes by position

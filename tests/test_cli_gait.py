@@ -317,3 +317,15 @@ def test_coarse_bifurcation_grid_does_not_carry_a_fall_along_a_stable_branch(
     assert len(on_stable) >= at_least
     for w in on_stable:  # released on a stable gait, the walker walks and stays on it
         assert w["status"] == "completed" and w["period_steps"] == 1, w
+
+
+def test_bifurcation_files_are_the_same_bytes_run_to_run(tmp_path, capsys):
+    # QA sweep 13: bifurcation.pdf carried its creation date, so no two runs wrote the same
+    # file (the reproduce figures already did not)
+    argv = ["bifurcation", "--slope-range", "2deg:5deg:4", "--transient", "10", "--record", "4"]
+    for name in ("a", "b"):
+        assert main([*argv, "--out", str(tmp_path / name)]) == 0
+    capsys.readouterr()
+    for f in sorted(p.name for p in (tmp_path / "a").iterdir()):
+        assert (tmp_path / "a" / f).read_bytes() == (tmp_path / "b" / f).read_bytes(), f
+    assert b"CreationDate" not in (tmp_path / "a" / "bifurcation.pdf").read_bytes()

@@ -334,6 +334,30 @@ def test_kneed_energy_books_mark_the_knee_strike(tmp_path: Path, capsys: Capture
 
 
 @pytest.mark.slow
+def test_the_seed_continuation_passes_the_push_off_gaits_branch_point() -> None:
+    # the seed gait's continuation (0.51 m/s) stalled near 0.89-0.92 m/s, where two families of
+    # push-off gaits meet (a multiplier pair on the unit circle; Newton converges slowly), and
+    # the search said "no gait ... end near 0.8878 m/s" (or 0.9202 on the compiled backend):
+    # no end, since gaits exist on both sides. One full solve at the stalled step carries it on.
+    from heelstrike.analysis import powered as P
+    from heelstrike.dynamics.actuation import PushOff
+
+    w = CompassGait()
+    sim = P.family_simulator(w, P.actuation_family("pushoff"), "compiled")
+    for speed in (0.9, 1.0, 1.5):
+        gait = find_powered_gait(w, speed=speed, simulator=sim)  # the search alone, no anchors
+        assert gait.speed == pytest.approx(speed, rel=1e-9)
+        # a gait of the walker on the scipy reference: periodic, and its books close
+        z = np.asarray(gait.fixed_point)
+        st = P.powered_step(w, z, None, PushOff(impulse=gait.parameter), rtol=1e-12,
+                            atol=1e-12)
+        assert st.ok and np.max(np.abs(st.z_next - z)) < 1e-7
+        assert st.record is not None
+        assert st.record.step_length / st.record.step_duration == pytest.approx(speed, rel=1e-7)
+        assert gait.actuator_work == pytest.approx(gait.collision_loss, rel=1e-6)
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize(("argv", "own"), [
     (["--radius", "0", "--speed", "0.9"], False),  # "no gait ... end near 0.8878 m/s"
     (["--model", "compass", "--param", "mH=40", "--param", "m=8", "--param", "l=0.9",
@@ -351,6 +375,9 @@ def test_gaits_beyond_a_fold_are_reached_from_another_target(
 
     with monkeypatch.context() as m:
         m.setattr(P, "ANCHOR_FACTORS", ())
+        # without the full solve at a stalled continuation step (``_rescue``, which now passes
+        # the push-off gaits' branch point near 0.91 m/s: the test below)
+        m.setattr(P, "_rescue", lambda *args, **kwargs: None)
         assert main(["powered", *argv]) == 2  # the premise: the search alone finds none
     capsys.readouterr()
     assert main(["powered", *argv, "--json"]) == 0

@@ -5,11 +5,13 @@ from __future__ import annotations
 import dataclasses
 import functools
 import importlib
+import re
 import subprocess
 import sys
 import textwrap
 import threading
 import time
+import types
 import warnings
 from pathlib import Path
 from typing import Any
@@ -86,6 +88,24 @@ MODEL = _Scaling()
 def modelled(a: np.ndarray, b: np.ndarray) -> dict[str, np.ndarray]:
     COUNTER.record(a, b)
     return _values(a, b, MODEL.scale)
+
+
+#: A configuration module set at run time (``CONFIG.SCALE = x``), read as ``CONFIG.SCALE``.
+CONFIG = types.ModuleType("sweep_test_config")
+CONFIG.SCALE = 1.0  # type: ignore[attr-defined]
+
+#: Walkers held in a list, as a script keeps several.
+MODELS = [_Scaling()]
+
+
+def configured(a: np.ndarray, b: np.ndarray) -> dict[str, np.ndarray]:
+    COUNTER.record(a, b)
+    return _values(a, b, CONFIG.SCALE)  # type: ignore[attr-defined]
+
+
+def listed(a: np.ndarray, b: np.ndarray) -> dict[str, np.ndarray]:
+    COUNTER.record(a, b)
+    return _values(a, b, MODELS[0].scale)
 
 
 def with_default(a: np.ndarray, b: np.ndarray, *, scale: float = 1.0) -> dict[str, np.ndarray]:
@@ -281,6 +301,80 @@ def test_changed_dataclass_global_is_not_resumed(
     counter.calls = []
     _assert_values(_run(modelled, store, overwrite=True), 2.0)
     assert len(counter.calls) == N_CHUNKS
+
+
+@pytest.mark.parametrize(("func", "change"), [
+    (configured, lambda mp: mp.setattr(CONFIG, "SCALE", 2.0)),
+    (listed, lambda mp: mp.setattr(sys.modules[__name__], "MODELS", [_Scaling(scale=2.0)])),
+])
+def test_changed_module_attribute_or_list_of_walkers_is_not_resumed(
+    tmp_path: Path, counter: Any, monkeypatch: pytest.MonkeyPatch, func: Any, change: Any
+) -> None:
+    # QA sweep 13: a module attribute read as ``CONFIG.SCALE`` and a list of dataclasses
+    # counted by name only, so a store of the old values was resumed silently
+    store = tmp_path / "s.zarr"
+    _assert_values(_run(func, store), 1.0)
+    change(monkeypatch)
+    with pytest.raises(SweepStoreMismatchError, match=r"function\.globals"):
+        _run(func, store)
+    counter.calls = []
+    _assert_values(_run(func, store, overwrite=True), 2.0)
+    assert len(counter.calls) == N_CHUNKS
+
+
+def test_overwrite_replaces_only_a_sweep_store(tmp_path: Path, counter: Any) -> None:
+    # QA sweep 13: overwrite=True removed any folder given as the store, with what it held
+    folder = tmp_path / "thesis"
+    (folder / "chapters").mkdir(parents=True)
+    (folder / "thesis.tex").write_text("years of work")
+    with pytest.raises(sweep_module.SweepError, match="not a heelstrike sweep store"):
+        _run(counted, folder, overwrite=True)
+    assert (folder / "thesis.tex").read_text() == "years of work"
+    assert sorted(p.name for p in folder.iterdir()) == ["chapters", "thesis.tex"]
+    a_file = tmp_path / "notes.txt"
+    a_file.write_text("keep")
+    with pytest.raises(sweep_module.SweepError, match=r"\(a file\)"):
+        _run(counted, a_file, overwrite=True)
+    assert a_file.read_text() == "keep"
+    assert counter.calls == []  # refused before computing anything
+    store = tmp_path / "s.zarr"  # a sweep store is replaced
+    _assert_values(_run(make_closure(1.0), store), 1.0)
+    _assert_values(_run(make_closure(2.0), store, overwrite=True), 2.0)
+
+
+def uses_builtin_names(a: np.ndarray, b: np.ndarray) -> dict[str, np.ndarray]:
+    COUNTER.record(a, b)
+    assert isinstance(np.asarray(str(a.dtype)), object)  # ``np`` with ``str``, ``object``
+    return _values(a, b, 1.0)
+
+
+def test_the_identity_reads_no_attribute_of_a_library_module(
+    tmp_path: Path, counter: Any
+) -> None:
+    # QA sweep 13: reading ``module.NAME`` values went through numpy too, where
+    # ``getattr(np, "object")`` warns (two FutureWarnings on every basin and map run)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        _assert_values(_run(uses_builtin_names, tmp_path / "s.zarr"), 1.0)
+
+
+def test_a_failing_point_is_located_in_the_grid(counter: Any) -> None:
+    # QA sweep 13: the caller's exception, unchanged in type, says which chunk and grid values
+    def fails_at_large_a(a: np.ndarray, b: np.ndarray) -> dict[str, np.ndarray]:
+        if np.any(a > 0.9):
+            raise ValueError("a too large")
+        return _values(a, b, 1.0)
+
+    with pytest.raises(ValueError, match="a too large") as info:
+        sweep(fails_at_large_a, GRID, chunks=CHUNKS, units=UNITS, progress=False,
+              scheduler="sync")
+    notes = getattr(info.value, "__notes__", [])
+    assert len(notes) == 1
+    m = re.fullmatch(r"in sweep chunk \(3, (\d)\): a 1, b (.+)", notes[0])
+    assert m is not None, notes
+    j = int(m.group(2 - 1))
+    b = B[2 * j:2 * j + 2]  # the chunk's b values (chunks of 2, the last one ragged)
+    assert m.group(2) == (f"{b[0]:g}" if b.size == 1 else f"{b[0]:g}..{b[-1]:g}")
 
 
 def test_changed_default_is_not_resumed(

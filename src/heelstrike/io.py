@@ -3,9 +3,11 @@
 Every table and dataset heelstrike saves goes through :func:`write_csv` or
 :func:`write_netcdf`, so all its files share one layout: CSV with a header row, no index column,
 floats as ``%.17g`` (:data:`FLOAT_FORMAT`, which round-trips every ``float64`` exactly), booleans
-as ``True``/``False``; netCDF-4 when the ``scale`` extra's ``netCDF4`` is installed, otherwise
-the classic 64-bit-offset format. Units are part of the column names (``T_c_J``, ``t_s``) or of
-the dataset's ``units`` attributes; these functions write the values as given (SI units).
+as ``True``/``False`` (except where a table is all numbers and writes its flags as ``1``/``0``,
+so that ``numpy.loadtxt`` reads it whole: ``impact_map.csv``); netCDF-4 when the ``scale``
+extra's ``netCDF4`` is installed, otherwise the classic 64-bit-offset format. Units are part
+of the column names (``T_c_J``, ``t_s``) or of the dataset's ``units`` attributes; these
+functions write the values as given (SI units).
 
 Figures are drawn by :mod:`heelstrike.plots`; :mod:`heelstrike.outputs` puts figures and data
 files together.

@@ -1516,6 +1516,18 @@ def _find(
         except PoweredGaitNotFoundError as exc:
             dfrac = 0.5 * (f_try - frac)  # half the increment that failed
             if dfrac * abs(value - current) < CONTINUATION_RESOLUTION * max(abs(value), 1e-3):
+                # where two families of gaits meet (the push-off gaits near 0.91 m/s, a
+                # multiplier pair on the unit circle) Newton converges, but slower than a
+                # continuation step allows; one
+                # solve with the full iterations decides whether the path goes on
+                rescued = _rescue(search, x_pred, v_try, s_tol if last else p_tol, max_iter,
+                                  s_h)
+                if rescued is not None:
+                    x_new, it, J_new = rescued
+                    total_it += it
+                    dfrac = f_try - frac  # the next step: the one that passed
+                    x, frac, J = x_new, f_try, J_new
+                    continue
                 if not via:  # where the gaits really end (the path may lie past a fold)
                     ended = end_of_family(x, v_try, exc, (current, reached))
                     if ended is not None:
@@ -1547,6 +1559,22 @@ def _find(
         if ended is None:
             raise
         raise ended from exc
+
+
+def _rescue(
+    prob: _Problem, x0: FloatArray, value: float, tol: float, max_iter: int, h: float,
+) -> tuple[FloatArray, int, FloatArray] | None:
+    """One damped Newton solve with ``max_iter`` iterations (no rate bar) for a continuation
+    step that its short solves failed at the resolution: ``(x, iterations, jacobian)``, or None
+    if that fails too (a :class:`SearchLimitError` propagates)."""
+    try:
+        x, _res, it, J = _newton(prob, x0, value, tol, max_iter, h, forward=True,
+                                 accept=10.0 * tol)
+    except SearchLimitError:
+        raise
+    except PoweredGaitNotFoundError:
+        return None
+    return x, it, J
 
 
 def books_gap(gait: PoweredGait) -> float:

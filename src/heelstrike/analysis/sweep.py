@@ -166,8 +166,9 @@ _log = logging.getLogger(__name__)
 # every Python function it reaches (through globals, closures, defaults, partials and the methods
 # of classes it uses) that is defined outside the standard library and site-packages (or in
 # heelstrike), the values of the closure cells, defaults and bound arguments, the values of the
-# referenced globals that are plain data, and the source text of every module reached; plus the
-# heelstrike version. Third-party code is identified by name only.
+# referenced globals (and ``module.NAME`` attributes) that are plain data or dataclasses, and the
+# source text of every module reached; plus the heelstrike version. Third-party code is
+# identified by name only.
 _PLAIN_SCALARS = (bool, int, float, complex, str, bytes, type(None), np.generic)
 _MAX_DEPTH = 16
 
@@ -240,6 +241,21 @@ def _user_module(name: str | None) -> bool:
         return False
     real = os.path.realpath(path)
     return not any(real.startswith(root) for root in _library_roots())
+
+
+def _library_module(module: types.ModuleType) -> bool:
+    """Whether a module is the standard library's or an installed package's (not heelstrike,
+    not the user's own file, not one made at run time)."""
+    name = module.__name__
+    if name.split(".")[0] == "heelstrike":
+        return False
+    if name.split(".")[0] in sys.stdlib_module_names or name in sys.builtin_module_names:
+        return True
+    path = getattr(module, "__file__", None)
+    if path is None:
+        return False
+    real = os.path.realpath(path)
+    return any(real.startswith(root) for root in _library_roots())
 
 
 @functools.lru_cache(maxsize=1)
@@ -381,18 +397,54 @@ class _Identity:
                 content = "<empty>"
             self.parts["closure"].append(f"{name}.{var}={self.value(content)}")
         glb = func.__globals__
-        for var in sorted(_code_names(func.__code__)):
+        names = sorted(_code_names(func.__code__))
+        for var in names:
             if var not in glb:
                 continue
             obj = glb[var]
             plain = _plain_token(obj)
             if plain is not None:
                 self.parts["globals"].append(f"{func.__module__}.{var}={plain}")
-            elif isinstance(obj, type | types.ModuleType) or callable(obj):
+            elif isinstance(obj, types.ModuleType):
+                self.value(obj)
+                if _library_module(obj):  # numpy, math...: their attributes are code
+                    continue
+                # ``module.NAME`` read by the code: the name is in the bytecode, its value is
+                # not (a config module set at run time, ``helper.SCALE = x``: QA sweep 13)
+                for attr in names:
+                    token = self._data_token(getattr(obj, attr, None))
+                    if token is not None:
+                        self.parts["globals"].append(f"{func.__module__}.{var}.{attr}={token}")
+            elif isinstance(obj, type) or callable(obj):
                 self.value(obj)  # follows code; its name is in the bytecode already
-            elif dataclasses.is_dataclass(obj):  # e.g. a walker: field by field, as an argument
-                self.parts["globals"].append(f"{func.__module__}.{var}={self.value(obj)}")
+            elif (token := self._data_token(obj)) is not None:
+                # e.g. a walker, or a list of walkers: field by field, as an argument
+                self.parts["globals"].append(f"{func.__module__}.{var}={token}")
             # other objects (locks, caches, models): by name, i.e. through the bytecode only
+
+    def _data_token(self, obj: Any, depth: int = 0) -> str | None:
+        """Token of data: plain data, dataclass instances, and lists, tuples and dicts of
+        them; None for anything else (a container holding a lock or a function: state, not
+        data, counted by name)."""
+        plain = _plain_token(obj)
+        if plain is not None:
+            return plain
+        if depth > _MAX_DEPTH:
+            return None
+        if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+            return self.value(obj)
+        if isinstance(obj, list | tuple):
+            items = [self._data_token(x, depth + 1) for x in obj]
+            if any(t is None for t in items):
+                return None
+            return f"{type(obj).__name__}({','.join(items)})"  # type: ignore[arg-type]
+        if isinstance(obj, dict):
+            pairs = [(self._data_token(k, depth + 1), self._data_token(v, depth + 1))
+                     for k, v in obj.items()]
+            if any(k is None or v is None for k, v in pairs):
+                return None
+            return "dict(" + ",".join(sorted(f"{k}:{v}" for k, v in pairs)) + ")"
+        return None
 
     def digest(self) -> dict[str, str]:
         out = {
@@ -536,7 +588,11 @@ def _run_chunk(
     chunk_shape: tuple[int, ...],
     index: tuple[int, ...],
 ) -> dict[str, NDArray[Any]]:
-    out = func(**kwargs)
+    try:
+        out = func(**kwargs)
+    except Exception as exc:  # the caller's own exception, told where in the grid it arose
+        exc.add_note(f"in sweep chunk {index}: {_chunk_span(kwargs)}")
+        raise
     if not isinstance(out, Mapping):
         raise SweepError(f"sweep function returned {type(out).__name__}, expected a mapping")
     d = len(chunk_shape)
@@ -557,6 +613,17 @@ def _run_chunk(
             ) from exc
         result[str(name)] = np.ascontiguousarray(full)
     return result
+
+
+def _chunk_span(kwargs: dict[str, NDArray[Any]]) -> str:
+    """The grid values a chunk covers, ``name lo..hi`` per numeric grid name."""
+    parts = []
+    for name, value in kwargs.items():
+        arr = np.asarray(value)
+        if arr.size and np.issubdtype(arr.dtype, np.number):
+            lo, hi = float(np.min(arr)), float(np.max(arr))
+            parts.append(f"{name} {lo:g}" if lo == hi else f"{name} {lo:g}..{hi:g}")
+    return ", ".join(parts) or "(no numeric grid values)"
 
 
 def _drop(_: object) -> None:
@@ -916,9 +983,12 @@ def sweep(
         the standard library and site-packages (and in heelstrike), through globals, closures,
         defaults, partials and the methods of classes it uses; the values of its closure cells,
         defaults and bound arguments; the referenced module globals that are plain data
-        (numbers, strings, numeric arrays and containers of them) or dataclasses (a
-        ``CompassGait``, field by field); and the source text of every module reached. Other
-        objects (third-party functions, locks, caches) count by name only. A store of a
+        (numbers, strings, numeric arrays and containers of them), dataclasses (a
+        ``CompassGait``, field by field) or lists, tuples and dicts of them, and the values
+        of module attributes the code reads as ``module.NAME`` when they are plain data or
+        dataclasses (``config.SCALE`` set at run time); and the source text of every module
+        reached. Other objects (third-party functions, locks, caches, instances of plain
+        classes) count by name only. A store of a
         different sweep raises :class:`SweepStoreMismatchError` naming what differs (e.g.
         ``function.closure``), unless ``overwrite=True`` (compute afresh).
         While the sweep runs it holds an exclusive lock, the sibling file ``<store>.lock``
@@ -1019,14 +1089,17 @@ def _sweep(
     if store is not None:
         path = Path(os.fspath(store))
         st = _Store(path, plan, attrs)
+        # only a sweep store is ever removed: overwrite=True once deleted any folder given as
+        # the store, with whatever it held (QA sweep 13)
+        if path.exists() and not _is_sweep_store(path):
+            raise SweepError(
+                f"{str(path)!r} exists and is not a heelstrike sweep store "
+                f"({'a file' if not path.is_dir() else 'a folder'}): "
+                "remove it or choose another store; overwrite=True replaces only a sweep store"
+            )
         if path.exists() and overwrite:
             shutil.rmtree(path)
         elif path.exists():
-            if not _is_sweep_store(path):
-                raise SweepError(
-                    f"{str(path)!r} exists and is not a heelstrike sweep store: remove it or "
-                    "choose another store"
-                )
             record = st.open_existing()
             if record is not None:
                 done = record

@@ -184,7 +184,9 @@ class CompassGait(PlanarWalker):
 
         def one(v: Any) -> str:
             a = np.asarray(v, dtype=float)
-            return f"{float(a):.12g}" if a.ndim == 0 else f"{a.min():.12g}..{a.max():.12g}"
+            if a.ndim == 0 or a.min() == a.max():  # one value, however broadcast
+                return f"{float(a.flat[0]):.12g}"
+            return f"{a.min():.12g}..{a.max():.12g}"
 
         return ", ".join(f"{f.name} = {one(getattr(self, f.name))}" for f in fields(self)
                          if f.name in names)

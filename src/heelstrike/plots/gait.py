@@ -390,6 +390,7 @@ def gait_map_figure(gmap: GaitMap) -> Figure:
     vmax = max(2.0, float(finite.max()) if finite.size else 2.0)
     norm = TwoSlopeNorm(vmin=0.0, vcenter=1.0, vmax=vmax)
     mesh: Any
+    drawn = False  # a stability boundary (spectral radius 1) drawn
     if S.size > 1 and R.size > 1:
         mesh = ax.pcolormesh(S, R, rho, cmap="RdYlGn_r", norm=norm, shading="nearest")
         # the axes span the computed grid only: the cells' outer halves would show slopes
@@ -397,8 +398,11 @@ def gait_map_figure(gmap: GaitMap) -> Figure:
         ax.set_xlim(float(S.min()), float(S.max()))
         ax.set_ylim(float(R.min()), float(R.max()))
         if np.nanmin(rho) < 1.0 < np.nanmax(rho):
-            ax.contour(S, R, np.where(np.isfinite(rho), rho, 10.0), levels=[1.0],
-                       colors="black", linewidths=1.2)
+            # NaN cells (no gait) masked: a stand-in value drew a false "spectral radius 1"
+            # line along every edge of the grey region (QA sweep 13)
+            contour = ax.contour(S, R, np.ma.masked_invalid(rho), levels=[1.0],
+                                 colors="black", linewidths=1.2)
+            drawn = any(len(seg) for seg in contour.allsegs[0])
     else:
         mesh = ax.scatter(np.broadcast_to(S, rho.shape), np.broadcast_to(R[:, None], rho.shape),
                           c=rho, cmap="RdYlGn_r", norm=norm, s=60)
@@ -413,8 +417,9 @@ def gait_map_figure(gmap: GaitMap) -> Figure:
     ax.set_ylabel(ds[pname].attrs.get("label", "foot radius R (m)"))
     who = (f"'{ds.attrs['model']}'" if "model" in ds.attrs
            else "the circular-feet compass gait")
-    ax.set_title(f"passive period-one gaits of {who}\n"
-                 "(black line: spectral radius 1; grey: no gait found)", fontsize=10)
+    legend = "black line: spectral radius 1; grey: no gait found" if drawn else (
+        "grey: no gait found")
+    ax.set_title(f"passive period-one gaits of {who}\n({legend})", fontsize=10)
     return fig
 
 

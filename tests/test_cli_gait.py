@@ -329,3 +329,55 @@ def test_bifurcation_files_are_the_same_bytes_run_to_run(tmp_path, capsys):
     for f in sorted(p.name for p in (tmp_path / "a").iterdir()):
         assert (tmp_path / "a" / f).read_bytes() == (tmp_path / "b" / f).read_bytes(), f
     assert b"CreationDate" not in (tmp_path / "a" / "bifurcation.pdf").read_bytes()
+
+
+def test_a_slowly_shrinking_alternation_is_not_period_two() -> None:
+    # QA sweep 13: just below the period doubling (multiplier -0.998) the walk alternates on its
+    # way to the period-one gait, its alternation shrinking 3 % over the 16 recorded steps; it
+    # passed as "period 2". A cycle's width must hold over the record.
+    from heelstrike.analysis.limit_cycle import BifurcationDiagram
+
+    i = np.arange(16)
+    converging = 0.3085 + 1.58e-4 * (-0.998) ** (i + 300)  # x* + A mu^i after 300 steps
+    two_cycle = 0.3085 + 1.58e-4 * (-1.0) ** i
+    fixed = np.full(16, 0.3085)
+    rows = np.stack([converging, two_cycle, fixed])
+    diagram = BifurcationDiagram(slopes=np.array([0.0766, 0.078, 0.07]), impact_angles=rows,
+                                 periods=np.ones_like(rows))
+    assert diagram.period_steps().tolist() == [0, 2, 1]
+
+
+@pytest.mark.slow
+def test_walks_still_settling_on_a_stable_branch_are_not_drawn_as_steady_states(tmp_path, capsys):
+    # QA sweep 13: at R = 0.9 m (multipliers near 1) 50 transient steps left the walks far
+    # from the stable gait, and the figure drew them as "steady state (simulated)": 8 deg off
+    # the branch at 0.0967 deg
+    from heelstrike.analysis.gait_map import compass_bifurcation
+    from heelstrike.plots.gait import bifurcation_figure
+
+    walker = CompassGait(foot_radius=0.9)
+    slopes = np.linspace(0.0005, 0.01, 9)
+    diagram, branch = compass_bifurcation(walker, slopes, continuation_points=None)
+    settling = diagram.settling(branch)
+    assert settling.tolist()[:3] == [False, True, True]
+    # walked 3000 steps instead of 50, the same walks do settle on the stable gait
+    longer, _ = compass_bifurcation(walker, slopes[:3], transient=3000, continuation_points=None)
+    assert longer.period_steps().tolist() == [1, 1, 1]
+    for k in np.flatnonzero(settling):
+        at = np.isclose(branch.values, diagram.slopes[k], rtol=1e-9)
+        gait = branch.cycles[int(np.flatnonzero(at)[0])]
+        assert gait.stable
+        np.testing.assert_allclose(longer.impact_angles[k], gait.impact_angle, atol=1e-7)
+        recorded = diagram.impact_angles[k]
+        assert np.min(np.abs(recorded - gait.impact_angle)) > 1e-3  # off it when recorded
+    fig = bifurcation_figure(diagram, branch)
+    lines = {ln.get_label(): ln for ln in fig.axes[0].lines}
+    steady = np.asarray(lines["steady state (simulated)"].get_xdata())
+    still = np.asarray(lines["still settling (the stable gait not yet reached)"].get_xdata())
+    degrees = np.rad2deg(diagram.slopes)
+    assert not np.isin(degrees[settling], steady).any()
+    assert set(np.unique(still)) == set(degrees[settling])
+    assert main(["bifurcation", "--radius", "0.9", "--slope-range", "0.0005:0.01:9",
+                 "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "walks at 0.09669, 0.1647 deg: still settling towards the stable period-one gait" in out

@@ -444,7 +444,9 @@ def _bifurcation_summary(diagram: Any, branch: Any, period_steps: Any) -> list[s
         if branch.stopped:
             lines.append(f"branch stopped: {branch.stopped}")
     counts: dict[str, list[float]] = {}
-    for s, st, n in zip(diagram.slopes, diagram.statuses, period_steps, strict=True):
+    settling = diagram.settling(branch)
+    for s, st, n, slow in zip(diagram.slopes, diagram.statuses, period_steps, settling,
+                              strict=True):
         if not st:
             continue
         longest = diagram.impact_angles.shape[1] // 2
@@ -452,6 +454,9 @@ def _bifurcation_summary(diagram: Any, branch: Any, period_steps: Any) -> list[s
             key = f"{st} ({WalkStatus(st).message})"
         elif n:
             key = f"settled on period {n}"
+        elif slow:
+            key = ("still settling towards the stable period-one gait (drawn as circles, not "
+                   "as a steady state; --transient longer)")
         elif longest < 2:  # 1 step tells nothing, 2-3 only period 1
             key = (f"walked, period not told from {diagram.impact_angles.shape[1]} recorded "
                    f"step{'s' if longest else ''} (--record 2P tells periods up to P)")

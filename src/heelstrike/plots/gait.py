@@ -252,12 +252,31 @@ def bifurcation_figure(
     fig = _new_figure(7, 6, dpi=110, layout=None)
     ax1, ax2 = fig.subplots(2, 1, sharex=True)
     slopes_deg = np.rad2deg(diagram.slopes)
+    # a walk is drawn as a steady state where it settled into a period; one still converging
+    # to the stable period-one gait, or without a period found (chaos, or a transient that
+    # may yet fall: QA sweep 13), is drawn apart
+    settling = (diagram.settling(continuation) if continuation is not None
+                else np.zeros(slopes_deg.size, dtype=bool))
+    periodic = diagram.period_steps() > 0
+    if len(diagram.statuses) != slopes_deg.size:  # a diagram built by hand: all as recorded
+        periodic = np.ones(slopes_deg.size, dtype=bool)
     for ax, data, ylabel, scale in (
         (ax1, diagram.impact_angles, "impact angle q3 (deg)", 180 / np.pi),
         (ax2, diagram.periods, "step period (s)", 1.0),
     ):
-        xs = np.repeat(slopes_deg, data.shape[1])
-        ax.plot(xs, data.ravel() * scale, ".", ms=3, color="k", label="steady state (simulated)")
+        marks: tuple[tuple[NDArray[np.bool_], dict[str, Any], str], ...] = (
+            (periodic, dict(marker=".", ms=3, color="k"), "steady state (simulated)"),
+            (settling, dict(marker="o", ms=3, mfc="none", color="0.55"),
+             "still settling (the stable gait not yet reached)"),
+            (~periodic & ~settling, dict(marker="x", ms=3, color="0.3"),
+             "no period found (chaotic, or still settling)"),
+        )
+        for rows, mark, label in marks:
+            if not np.any(rows):
+                continue
+            sub = data[rows]
+            xs = np.repeat(slopes_deg[rows], sub.shape[1])
+            ax.plot(xs, sub.ravel() * scale, ls="none", label=label, **mark)
         ax.set_ylabel(ylabel)
         ax.grid(alpha=0.3)
         branch_deg = (np.rad2deg(continuation.values)

@@ -381,3 +381,34 @@ def test_walks_still_settling_on_a_stable_branch_are_not_drawn_as_steady_states(
                  "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     assert "walks at 0.09669, 0.1647 deg: still settling towards the stable period-one gait" in out
+
+
+def test_a_multi_swing_passive_gait_is_marked_and_listed_last(capsys):
+    # QA sweep 13: 'gait' listed a 1.74 s gait whose swing leg crosses the stance leg three
+    # times (its foot under the ground away from mid-stance, outside the scuffing convention)
+    # as an ordinary gait; the powered search already set such gaits apart
+    from heelstrike.analysis.limit_cycle import find_limit_cycles
+    from heelstrike.dynamics import simulate
+
+    walker = CompassGait(foot_radius=0.2, hip_mass=5.0, leg_mass=2.0, leg_com_from_hip=0.3,
+                         leg_inertia=0.05, leg_length=0.8)
+    slope = np.deg2rad(2.0)
+    for method in ("compiled", "scipy"):
+        gaits = find_limit_cycles(walker, slope=slope, method=method)
+        counts = [g.leg_crossings for g in gaits]
+        assert counts == [1, 1, 3], (method, counts)
+        assert [g.multi_swing for g in gaits] == [False, False, True]
+        for g in gaits:  # each count against the reference walk, sampled every millisecond
+            walk = simulate(walker, g.q, g.q_dot, slope=slope, steps=1, rtol=1e-10, atol=1e-10,
+                            max_step=1e-3)
+            hip = np.asarray(walk.q)[:, walker.hip_joint]
+            assert np.count_nonzero(np.diff(np.sign(hip[hip != 0]))) == g.leg_crossings
+    argv = ["gait", "--radius", "0.2", "--hip-mass", "5", "--leg-mass", "2", "--com-from-hip",
+            "0.3", "--leg-inertia", "0.05", "--leg-length", "0.8", "--slope", "2deg"]
+    assert main(argv) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[3].startswith("  [2] ") and "multi-swing: the legs cross 3 times" in lines[3]
+    assert not any("multi-swing" in line for line in lines[1:3])
+    assert main([*argv, "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert [g["leg_crossings"] for g in d["gaits"]] == [1, 1, 3]

@@ -61,7 +61,7 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
     "limit_cycle": (
         "BifurcationDiagram", "Continuation", "GaitNotFoundError", "LimitCycle", "PoincareMap",
         "bifurcation_diagram", "continue_limit_cycle", "find_limit_cycle", "find_limit_cycles",
-        "refine_period_doubling",
+        "leg_crossings", "refine_period_doubling",
     ),
     "model_gaits": (
         "ANGLE", "IMPACT_MAP_BYTES_PER_POINT", "IMPACT_MAP_SECONDS_PER_POINT", "ImpactMap",
@@ -82,7 +82,7 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "declared_posture_law",
         "energy_book_tables", "family_simulator",
         "find_model_powered_gait", "find_powered_gait", "impact_angle_for_step_length",
-        "law_gains", "leg_crossings", "max_walking_speed", "powered_gaits",
+        "law_gains", "max_walking_speed", "powered_gaits",
         "passive_gait_finder", "powered_step", "preferred_gait",
     ),
     "sweep": (

@@ -69,6 +69,7 @@ from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
 from heelstrike._units import UNITS
 from heelstrike.analysis.heel_strike import loss_per_metre
+from heelstrike.analysis.limit_cycle import leg_crossings
 from heelstrike.analysis.newton import floquet_multipliers
 from heelstrike.core.impact import kinetic_energy
 from heelstrike.dynamics._aot import compile_seconds
@@ -106,7 +107,6 @@ __all__ = [
     "find_powered_gait",
     "impact_angle_for_step_length",
     "law_gains",
-    "leg_crossings",
     "max_walking_speed",
     "passive_gait_finder",
     "powered_gaits",
@@ -581,39 +581,6 @@ class PoweredGait(ResultDictMixin):
         }
 
 
-#: Fewest samples of a step's walk from which :func:`leg_crossings` counts. The samples are the
-#: integrator's steps (15 on the scipy reference's ordinary compass step at 0.5 m/s, 75 on the
-#: compiled kernel's); a crossing and back within one sample interval would be missed.
-LEG_CROSSING_SAMPLES = 8
-
-
-def leg_crossings(walker: PlanarWalker, walk: WalkResult) -> int | None:
-    """How many times the swing leg crosses the stance leg in a simulated step.
-
-    The sign changes of the hip angle ``q[hip_joint]`` (:attr:`PlanarWalker.hip_joint`, the
-    swing leg relative to the stance leg) over the walk's samples: an ordinary step has one,
-    from behind to ahead. A straight-legged swing foot is under the ground between the legs'
-    crossing and the nearby instant where the stance leg's angle is half the hip angle, near
-    mid-stance (the scuffing convention, README); with more crossings it is under the ground
-    away from mid-stance too (QA sweep 6: 4.4 mm deep for 0.2 s, the legs 9 deg apart).
-
-    Parameters
-    ----------
-    walker : PlanarWalker
-    walk : WalkResult
-        One step, sampled (``walk.q``, shape (N, n)).
-
-    Returns
-    -------
-    int or None
-        The count; None with fewer than :data:`LEG_CROSSING_SAMPLES` samples.
-    """
-    q = np.asarray(walk.q, dtype=float)
-    if q.ndim != 2 or q.shape[0] < LEG_CROSSING_SAMPLES:
-        return None
-    sign = np.sign(q[:, walker.hip_joint])
-    sign = sign[sign != 0]
-    return int(np.count_nonzero(sign[1:] != sign[:-1]))
 
 
 #: Integrator tolerance (``rtol = atol``) of the search stage: the seed, Newton from the seed and

@@ -137,6 +137,7 @@ def _gait_summary(c: Any) -> dict[str, Any]:
         "multipliers": [float(abs(m)) for m in c.multipliers],
         "stable": bool(c.stable),
         "collision_loss": float(c.collision_loss),
+        "leg_crossings": c.leg_crossings,
     }
 
 
@@ -149,9 +150,11 @@ def _print_gait_list(gaits: Sequence[Any]) -> None:
           f"{'the most attracting stable one' if first.stable else 'the least unstable'}, "
           "is shown in detail):")
     for i, c in enumerate(gaits):
+        swings = (f", multi-swing: the legs cross {c.leg_crossings} times, the swing foot "
+                  "through the ground away from mid-stance" if c.multi_swing else "")
         print(f"  [{i}] step length {c.step_length:.5f} m, period {c.period:.5f} s, "
               f"|multipliers| {multipliers_text(c.multipliers)}, "
-              f"{'stable' if c.stable else 'unstable'}")
+              f"{'stable' if c.stable else 'unstable'}{swings}")
 
 
 def _run_gait(args: argparse.Namespace) -> int:

@@ -246,3 +246,29 @@ def test_default_window_holds_the_fixed_point_of_large_feet(tmp_path, capsys):
     capsys.readouterr()
     back = xr.open_dataset(out / "basin.nc")
     assert float(back["q3"][0]) == pytest.approx(z[0] - 0.1, abs=1e-6)
+
+
+def test_the_map_follows_the_fast_changing_gaits_near_the_wheel(capsys, tmp_path) -> None:
+    # QA sweep 13: at R = 0.9 m the gait's impact angle goes from 15 to 41 deg between 0.01 and
+    # 0.107 deg of slope; the continuation's first sub-step jumped farther than it accepts, and
+    # the smallest sub-step (1/32 of 0.25 deg) ended the branch: "no gait" where a stable one
+    # exists. Each cell is checked against the automatic gait search at that slope alone.
+    from heelstrike.analysis.limit_cycle import GaitNotFoundError, find_limit_cycle
+
+    assert main(["map", "--radius", "0.9:0.95:2", "--slope", "0.01deg:0.3deg:4", "--json",
+                 "--out", str(tmp_path)]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["gait_found"][0][:2] == [True, True]
+    with xr.open_dataset(d["data"]) as ds:
+        rho = ds["spectral_radius"].values
+    slopes = np.deg2rad(np.linspace(0.01, 0.3, 4))
+    for i, radius in enumerate((0.9, 0.95)):
+        for j, slope in enumerate(slopes):
+            try:
+                alone = find_limit_cycle(CompassGait(foot_radius=radius), slope=float(slope),
+                                         method="compiled")
+            except GaitNotFoundError:
+                assert not d["gait_found"][i][j], (radius, slope)
+                continue
+            assert d["gait_found"][i][j], (radius, slope)
+            assert rho[i, j] == pytest.approx(alone.spectral_radius, abs=1e-6)

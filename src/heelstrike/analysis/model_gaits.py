@@ -60,6 +60,7 @@ __all__ = [
     "check_impact_map_memory",
     "find_model_gait",
     "find_model_gaits",
+    "hanging_links",
     "impact_map",
     "model_heel_strike",
     "symmetric_heel_strike_state",
@@ -464,6 +465,46 @@ def find_model_gait(
 
 
 # -- single heel strike -------------------------------------------------------------------------
+def hanging_links(walker: Any, q: ArrayLike, slope: float) -> tuple[str, ...]:
+    """Links described upright that hang at the configuration ``q``.
+
+    A link declared ``direction = "up"`` (a torso, or the root's stance leg) is meant to
+    stand above its proximal joint; a passive gait can instead carry it hanging, its centre of
+    mass below the joint along gravity (the torso walker's stable passive gaits on 1-2 deg
+    carry the torso through the legs, 179 deg from upright, while its upright gaits are
+    unstable: QA sweep 13). Reports say so, since a gait of the hanging link is another gait.
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+        A described walker (others have no such links: ``()``).
+    q : array_like, shape (n,)
+        Configuration (m, rad).
+    slope : float
+        Ground slope (rad).
+
+    Returns
+    -------
+    tuple of str
+        Names of the upright links whose centre of mass is below their proximal joint.
+    """
+    desc = getattr(walker, "description", None)
+    if desc is None:
+        return ()
+    from heelstrike.models.base import gravity_vector
+
+    down = gravity_vector(1.0, float(slope))  # unit vector along gravity
+    points = walker.positions(np.asarray(q, dtype=float))
+    out = []
+    for link in desc.links:
+        if link.direction != "up" or link.parent is None:  # the root stands on its foot
+            continue
+        drop = float((points[f"{link.name}.com"] - points[f"{link.name}.proximal"]) @ down)
+        if drop > 0.0:
+            out.append(link.name)
+    return tuple(out)
+
+
 def symmetric_heel_strike_state(
     walker: BuiltWalker, angle: float, *, stance_rate: float = 1.0
 ) -> tuple[FloatArray, FloatArray]:

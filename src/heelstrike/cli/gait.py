@@ -76,7 +76,11 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     import numpy as np
 
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
-    from heelstrike.analysis.model_gaits import REFERENCE_SLOPE, find_model_gaits
+    from heelstrike.analysis.model_gaits import (
+        REFERENCE_SLOPE,
+        find_model_gaits,
+        hanging_links,
+    )
 
     walker = model_from_args(args)
     guess = None
@@ -92,8 +96,12 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     gait = gaits[0]
     d = gait.to_dict()
     d["model"] = walker.description.name
+    hanging = [hanging_links(walker, g.cycle.q, args.slope) for g in gaits]
+    d["hanging_links"] = list(hanging[0])
     # each gait's collision loss is its step's total (knee strikes included), as in d
-    d["gaits"] = [_gait_summary(g.cycle) | {"collision_loss": g.collision_loss} for g in gaits]
+    d["gaits"] = [_gait_summary(g.cycle) | {"collision_loss": g.collision_loss,
+                                            "hanging_links": list(h)}
+                  for g, h in zip(gaits, hanging, strict=True)]
     if guess is None and not gait.cycle.stable:
         # QA sweep 10: this said "where it has a stable one" of the torso walker, which has none
         reference = abs(float(args.slope) - REFERENCE_SLOPE) <= 1e-12 and all(
@@ -110,9 +118,12 @@ def _run_gait_model(args: argparse.Namespace) -> int:
         print_json(d)
         return 0
     c = gait.cycle
-    _print_gait_list([g.cycle for g in gaits])
+    _print_gait_list([g.cycle for g in gaits], hanging)
     print(f"passive gait of '{d['model']}', slope = {math.degrees(args.slope):g} deg")
     print(f"  fixed point (just after heel strike): {fixed_point_text(d['fixed_point'])}")
+    if hanging[0]:
+        print(f"  note: {hanging_text(hanging[0])} in this gait: a gait of the hanging link, "
+              "not of the upright one")
     print_step_lines(c)
     print_impact_angle_line(c)
     print_stability_lines(c)
@@ -141,8 +152,18 @@ def _gait_summary(c: Any) -> dict[str, Any]:
     }
 
 
-def _print_gait_list(gaits: Sequence[Any]) -> None:
-    """With several gaits found, one line each (the first is shown in detail)."""
+def hanging_text(links: Sequence[str]) -> str:
+    """``'torso' hangs (its centre of mass below its joint)`` for links described upright
+    that hang (:func:`~heelstrike.analysis.model_gaits.hanging_links`)."""
+    names = ", ".join(f"'{n}'" for n in links)
+    one = len(links) == 1
+    return (f"{names} {'hangs' if one else 'hang'} ({'its centre' if one else 'their centres'} "
+            f"of mass below {'its' if one else 'their'} joint)")
+
+
+def _print_gait_list(gaits: Sequence[Any], hanging: Sequence[Sequence[str]] = ()) -> None:
+    """With several gaits found, one line each (the first is shown in detail); ``hanging``:
+    per gait, its links described upright that hang (:func:`hanging_links`)."""
     if len(gaits) < 2:
         return
     first = gaits[0]
@@ -152,6 +173,8 @@ def _print_gait_list(gaits: Sequence[Any]) -> None:
     for i, c in enumerate(gaits):
         swings = (f", multi-swing: the legs cross {c.leg_crossings} times, the swing foot "
                   "through the ground away from mid-stance" if c.multi_swing else "")
+        if i < len(hanging) and hanging[i]:
+            swings += f", {hanging_text(hanging[i])}"
         print(f"  [{i}] step length {c.step_length:.5f} m, period {c.period:.5f} s, "
               f"|multipliers| {multipliers_text(c.multipliers)}, "
               f"{'stable' if c.stable else 'unstable'}{swings}")
@@ -397,6 +420,19 @@ def _run_bifurcation(args: argparse.Namespace) -> int:
                 "bisection to 1e-5 rad); the diagram and the branch are empty below it (other, "
                 "unstable gaits may exist there: 'heelstrike gait --slope ...' lists them)")
     period_steps = diagram.period_steps()
+    if args.model is not None:
+        from heelstrike.analysis.model_gaits import hanging_links
+
+        hanging = [hanging_links(walker, c.q, float(v))
+                   for v, c in zip(branch.values, branch.cycles, strict=True)]
+        if any(hanging):
+            at = [float(v) for v, h in zip(branch.values, hanging, strict=True) if h]
+            names = sorted({n for h in hanging for n in h})
+            where = ("at every slope of the branch" if len(at) == len(hanging) else
+                     f"from {math.degrees(min(at)):.4g} to {math.degrees(max(at)):.4g} deg")
+            hang_note = (f"on the branch followed, {hanging_text(names)} {where}: gaits of the "
+                         "hanging link, not of the upright one")
+            note = hang_note if note is None else f"{note}; {hang_note}"
     if args.json:
         print_json({
             "model": None if args.model is None else walker.description.name,
@@ -589,6 +625,12 @@ def _run_basin_model(args: argparse.Namespace) -> int:
     ))
     names = walker.section_names
     ia, ib = basin.axes
+    from heelstrike.analysis.model_gaits import hanging_links
+
+    hang = hanging_links(walker, walker.section_to_state(basin.fixed_point)[0], args.slope)
+    if hang:
+        print(f"heelstrike: note: in the gait the basin is built around, {hanging_text(hang)}: "
+              "a gait of the hanging link, not of the upright one", file=sys.stderr)
     return _render_basin(
         basin, args, grid, {"model": walker.description.name}, names,
         f"basin of attraction of '{walker.description.name}', slope = "
@@ -709,7 +751,37 @@ def _run_map_model(args: argparse.Namespace) -> int:
     return _render_gait_map(
         gmap, args, head,
         f"stable passive gaits of '{walker.description.name}'", f"({name}, slope)",
-        [f"{name} = {v:8.4g}{'' if unit is None else ' ' + unit}" for v in values])
+        [f"{name} = {v:8.4g}{'' if unit is None else ' ' + unit}" for v in values],
+        note=_hanging_cells_note(walker, name, values, gmap.dataset))
+
+
+def _hanging_cells_note(walker: Any, name: str, values: Any, ds: Any) -> str | None:
+    """Where the map's gaits carry a link described upright hanging (QA sweep 13: the torso
+    walker's map followed its upright gaits, its bifurcation diagram a hanging-torso gait):
+    a note, or None."""
+    import numpy as np
+
+    from heelstrike.analysis.model_gaits import hanging_links
+
+    fixed = ds["fixed_point"].values  # (values, slopes, section)
+    slopes = ds["slope"].values
+    links: set[str] = set()
+    cells = 0
+    for i, v in enumerate(values):
+        w = walker.replace(**{name: float(v)})
+        for j, slope in enumerate(slopes):
+            z = fixed[i, j]
+            if not np.all(np.isfinite(z)):
+                continue
+            hang = hanging_links(w, w.section_to_state(z)[0], float(slope))
+            if hang:
+                cells += 1
+                links.update(hang)
+    if not cells:
+        return None
+    found = int(np.isfinite(fixed[..., 0]).sum())
+    return (f"in {cells} of the {found} gaits found, {hanging_text(sorted(links))}: gaits of "
+            "the hanging link, not of the upright one")
 
 
 def _run_map(args: argparse.Namespace) -> int:
@@ -740,8 +812,9 @@ def _run_map(args: argparse.Namespace) -> int:
 
 
 def _render_gait_map(gmap: Any, args: argparse.Namespace, head: dict[str, Any], title: str,
-                     points: str, rows: list[str]) -> int:
-    """Write the map's figure and data and report it (JSON ``head`` keys first)."""
+                     points: str, rows: list[str], note: str | None = None) -> int:
+    """Write the map's figure and data and report it (JSON ``head`` keys first; ``note``
+    said last, and as the JSON's ``note``)."""
     import warnings
 
     import numpy as np
@@ -765,6 +838,7 @@ def _render_gait_map(gmap: Any, args: argparse.Namespace, head: dict[str, Any], 
             "gait_found": found.tolist(),
             "figure": str(png),
             "data": str(nc),
+            "note": note,
         })
         return 0
     # counts of grid points, written "K of N grid points" / "K/N slopes" so that no count
@@ -782,4 +856,6 @@ def _render_gait_map(gmap: Any, args: argparse.Namespace, head: dict[str, Any], 
               f"no gait on the branch at {int((~frow).sum()):3d}/{frow.size} slopes, "
               f"period doubling {pd_text}")
     print_paths((png, nc))
+    if note:
+        print(f"note: {note}")
     return 0

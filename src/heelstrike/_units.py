@@ -52,6 +52,7 @@ UNITS: dict[str, str | None] = {
     "parameter_name": None, "parameter_unit": None, "kind": None, "figure": None,
     "data": None, "residual": None, "status": None, "message": None, "gait_found": None,
     "gait_stable": None, "note": None, "branch_data": None, "branch_stopped": None,
+    "hanging_links": None,
     # robots (heelstrike.cli.robot writes its own units maps with these)
     "loss_beyond_T_c": "J", "normal_impulse": "N s", "admissible": None, "frame": None,
     "joint": None, "unit": None,
@@ -115,6 +116,8 @@ def json_units(obj: Mapping[str, Any]) -> dict[str, Any]:
             units[key] = _section(value)
         elif key == "fractions" and isinstance(value, Mapping):
             units[key] = dict.fromkeys(value, "1")
+        elif key == "lock_torque_range" and isinstance(value, Mapping):  # joint -> (min, max)
+            units[key] = dict.fromkeys(value, "N m")
         elif key == "parameter" and isinstance(obj.get("parameter_unit"), str):
             units[key] = obj["parameter_unit"]
         elif key == "parameter_values":  # a swept walker parameter: its unit, if known

@@ -65,9 +65,11 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
     ),
     "model_gaits": (
         "ANGLE", "IMPACT_MAP_BYTES_PER_POINT", "IMPACT_MAP_SECONDS_PER_POINT", "ImpactMap",
+        "LOCK_TORQUE_SAMPLES",
         "check_impact_map_memory",
         "ModelGait", "ModelHeelStrike", "REFERENCE_SLOPE", "find_model_gait",
-        "find_model_gaits", "hanging_links", "impact_map", "model_heel_strike",
+        "find_model_gaits", "hanging_links", "impact_map", "lock_torque_ranges",
+        "model_heel_strike",
         "symmetric_heel_strike_state",
     ),
     "newton": ("NewtonSolution", "NewtonStatus", "SearchTimeLimitWarning", "floquet_multipliers",

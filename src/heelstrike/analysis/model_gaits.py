@@ -53,6 +53,7 @@ __all__ = [
     "ANGLE",
     "IMPACT_MAP_BYTES_PER_POINT",
     "IMPACT_MAP_SECONDS_PER_POINT",
+    "LOCK_TORQUE_SAMPLES",
     "REFERENCE_SLOPE",
     "ImpactMap",
     "ModelGait",
@@ -62,6 +63,7 @@ __all__ = [
     "find_model_gaits",
     "hanging_links",
     "impact_map",
+    "lock_torque_ranges",
     "model_heel_strike",
     "symmetric_heel_strike_state",
 ]
@@ -503,6 +505,52 @@ def hanging_links(walker: Any, q: ArrayLike, slope: float) -> tuple[str, ...]:
         if drop > 0.0:
             out.append(link.name)
     return tuple(out)
+
+
+#: Samples per step of the walk :func:`lock_torque_ranges` measures on (the integrator's
+#: largest step is the period over this).
+LOCK_TORQUE_SAMPLES = 200
+
+
+def lock_torque_ranges(
+    walker: Any, cycle: LimitCycle, *, backend: str = "compiled"
+) -> dict[str, tuple[float, float]]:
+    """The smallest and largest torque each lock exerts over one step of a gait.
+
+    The step is walked again from the gait's fixed point, sampled densely (at least
+    :data:`LOCK_TORQUE_SAMPLES` samples), and
+    :func:`~heelstrike.dynamics.hybrid.lock_torques` evaluated along it. A range that spans
+    both signs is a lock that must pull as well as push: a one-sided knee stop could not hold
+    it (QA sweep 13: the kneed walker's stance knee at 3 deg, -0.18 to +0.22 N m).
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+        A described walker with lockable joints (others: an empty dict).
+    cycle : LimitCycle
+        Its gait (``q``, ``q_dot``, ``period``, ``slope``).
+    backend : {"compiled", "scipy"}
+        Where to walk the step.
+
+    Returns
+    -------
+    dict of str to (float, float)
+        Per lockable joint (coordinate name): ``(min, max)`` of its holding torque (N m) while
+        locked.
+    """
+    from heelstrike.dynamics import simulate
+    from heelstrike.dynamics.hybrid import lock_torques
+
+    if not walker.step_schedule().lock_angles:
+        return {}
+    walk = simulate(walker, cycle.q, cycle.q_dot, slope=cycle.slope, steps=1, backend=backend,
+                    max_step=cycle.period / LOCK_TORQUE_SAMPLES)
+    out = {}
+    for name, torque in lock_torques(walker, walk).items():
+        held = torque[np.isfinite(torque)]
+        if held.size:
+            out[name] = (float(held.min()), float(held.max()))
+    return out
 
 
 def symmetric_heel_strike_state(

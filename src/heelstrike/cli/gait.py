@@ -80,6 +80,7 @@ def _run_gait_model(args: argparse.Namespace) -> int:
         REFERENCE_SLOPE,
         find_model_gaits,
         hanging_links,
+        lock_torque_ranges,
     )
 
     walker = model_from_args(args)
@@ -98,6 +99,12 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     d["model"] = walker.description.name
     hanging = [hanging_links(walker, g.cycle.q, args.slope) for g in gaits]
     d["hanging_links"] = list(hanging[0])
+    locks = lock_torque_ranges(walker, gait.cycle, backend=args.backend)
+    d["lock_torque_range"] = {k: list(v) for k, v in locks.items()}
+    # a lock that must pull as well as push: a one-sided knee stop could not hold it
+    floor = 1e-6 * float(walker.scale.total_mass * walker.scale.gravity
+                         * walker.scale.leg_length)
+    two_sided = {k: v for k, v in locks.items() if v[0] < -floor and v[1] > floor}
     # each gait's collision loss is its step's total (knee strikes included), as in d
     d["gaits"] = [_gait_summary(g.cycle) | {"collision_loss": g.collision_loss,
                                             "hanging_links": list(h)}
@@ -114,6 +121,11 @@ def _run_gait_model(args: argparse.Namespace) -> int:
                     "parameters and slope")
         print(f"heelstrike: note: no stable period-one gait found (not by the automatic "
               f"search{followed}); the least unstable gait found is shown", file=sys.stderr)
+    for name, (lo, hi) in two_sided.items():
+        print(f"heelstrike: note: the lock of '{name}' holds it with torques of both signs over "
+              f"the step ({lo:+.4g} to {hi:+.4g} N m): the walker file's locks are two-sided "
+              "latches; a knee stop that can only push could not hold it, and the knee would "
+              "buckle where the lock pulls", file=sys.stderr)
     if args.json:
         print_json(d)
         return 0

@@ -63,6 +63,7 @@ __all__ = [
     "WalkStatus",
     "check_initial_state",
     "heel_strike",
+    "lock_torques",
     "simulate",
 ]
 
@@ -354,11 +355,57 @@ def ground_reaction(
     the balance (a kneed walker's knees; see
     :meth:`~heelstrike.dynamics.single_support.SingleSupport.ground_reaction`).
     """
+    lam = _constraint_forces(walker, walk, torque)[0][:, :2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        mu = np.where(lam[:, 1] > 0, np.abs(lam[:, 0]) / lam[:, 1], np.inf)
+    return GroundReaction(
+        t=walk.t, tangential=lam[:, 0], normal=lam[:, 1], required_friction=mu
+    )
+
+
+def lock_torques(
+    walker: PlanarWalker, walk: WalkResult, torque: TorqueLaw | None = None
+) -> dict[str, FloatArray]:
+    """Torque each lock exerts to hold its joint at every sample of a walk.
+
+    Walker files' locks (a kneed walker's knees) are two-sided latches: the constraint
+    ``q[j] = lock angle`` holds whatever torque it takes. A knee stop that can only push
+    holds only where that torque has one sign; where it changes sign over a step (the kneed
+    walker's stance knee at 3 deg, QA sweep 13) such a stop would let the knee buckle.
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+    walk : WalkResult
+        A sampled walk (a :class:`PhasedWalkResult` labels each sample's phase).
+    torque : TorqueLaw, optional
+        The law the walk was simulated with (None: passive).
+
+    Returns
+    -------
+    dict of str to ndarray
+        Per lockable joint (by coordinate name), shape (N,): the holding torque (N m) on its
+        coordinate where the sample's phase locks it, NaN where the joint is free.
+    """
+    forces, locked = _constraint_forces(walker, walk, torque)
+    names = walker.coordinate_names
+    out: dict[str, FloatArray] = {}
+    for j, _angle in walker.step_schedule().lock_angles:
+        out[names[j]] = np.where(locked[:, j], forces[:, j], np.nan)
+    return out
+
+
+def _constraint_forces(
+    walker: PlanarWalker, walk: WalkResult, torque: TorqueLaw | None
+) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """``M q_ddot + h - B u`` at every sample (N, n) (:meth:`SingleSupport.constraint_forces`,
+    each sample with its phase's locks) and which joints each sample's phase locks (N, n)."""
     locks = {phase.name: phase.locked for phase in walker.step_schedule().phases}
     n = walk.t.size
     names = walk.phase if isinstance(walk, PhasedWalkResult) and len(walk.phase) == n \
         else np.full(n, "")
-    lam = np.empty((n, 2))
+    out = np.empty((n, np.asarray(walk.q).shape[1]))
+    held = np.zeros(out.shape, dtype=bool)
     if torque is not None:  # the law's clock: time since the start of each step
         starts = {int(k): float(walk.t[walk.step == k][0]) for k in np.unique(walk.step)}
     for name in np.unique(names):
@@ -370,18 +417,16 @@ def ground_reaction(
         else:
             raise ValueError(f"the walk's phase {str(name)!r} is none of the walker's phases "
                              f"{sorted(locks)}: which joints it holds is unknown")
+        for j in locked:
+            held[sel, j] = True
         sup = SingleSupport(walker=walker, slope=walk.slope, torque=torque, locked=locked)
         if torque is None:
-            lam[sel] = sup.ground_reaction(0.0, walk.q[sel], walk.q_dot[sel])
+            out[sel] = sup.constraint_forces(0.0, walk.q[sel], walk.q_dot[sel])
             continue
         for i in sel:
-            lam[i] = sup.ground_reaction(float(walk.t[i]) - starts[int(walk.step[i])],
-                                         walk.q[i], walk.q_dot[i])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        mu = np.where(lam[:, 1] > 0, np.abs(lam[:, 0]) / lam[:, 1], np.inf)
-    return GroundReaction(
-        t=walk.t, tangential=lam[:, 0], normal=lam[:, 1], required_friction=mu
-    )
+            out[i] = sup.constraint_forces(float(walk.t[i]) - starts[int(walk.step[i])],
+                                           walk.q[i], walk.q_dot[i])
+    return out, held
 
 
 def heel_strike(

@@ -180,19 +180,33 @@ class SingleSupport:
         locked joints (a locked knee) are part of the balance: the unlocked formula
         ``(A M^-1 A^T)^-1 A M^-1 (h - B u)`` would let those joints accelerate.
         """
+        return self._balance(t, q, q_dot, rows=2)
+
+    def constraint_forces(self, t: float, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
+        """Generalized constraint forces ``A^T lambda + E^T mu = M q_ddot + h - B u``, (..., n).
+
+        The base rows are :meth:`ground_reaction` (N); the row of a locked joint is the torque
+        (N m) its lock exerts to hold it (the stance foot's contact acts on the base rows and
+        the root link only); the free joints' rows are zero to round-off.
+        """
+        return self._balance(t, q, q_dot, rows=None)
+
+    def _balance(self, t: float, q: ArrayLike, q_dot: ArrayLike, rows: int | None) -> FloatArray:
+        """``(M q_ddot + h - B u)[..., :rows]`` with the single-support accelerations."""
         q_, qd = np.asarray(q, dtype=float), np.asarray(q_dot, dtype=float)
         M, f = self.walker.dynamics_terms(q_, qd, self.slope)
         if self.torque is not None:
             f = f - self.generalized_actuation(t, q_, qd)
         J = self._basis
+        k = M.shape[-1] if rows is None else rows
         if q_.ndim == 1:  # one state (an event function's case): the small solve in closed form
             Mr = (self._reduce @ M.reshape(-1)).reshape(J.shape[1], J.shape[1])
             q_dd = J @ solve_small(Mr, -(self._basis_t @ f))
-            return np.asarray(M[:2] @ q_dd + f[:2])
+            return np.asarray(M[:k] @ q_dd + f[:k])
         Mr = np.einsum("ai,...ij,jb->...ab", J.T, M, J)
         theta_dd = np.linalg.solve(Mr, -np.einsum("ai,...i->...a", J.T, f)[..., None])[..., 0]
         q_dd = np.einsum("ij,...j->...i", J, theta_dd)
-        return np.asarray(np.einsum("...ij,...j->...i", M[..., :2, :], q_dd) + f[..., :2])
+        return np.asarray(np.einsum("...ij,...j->...i", M[..., :k, :], q_dd) + f[..., :k])
 
     def actuator_power(self, t: float, q: ArrayLike, q_dot: ArrayLike) -> FloatArray:
         """Mechanical power of the actuators ``(B u) . q_dot`` (W), shape (...)."""

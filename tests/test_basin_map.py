@@ -272,3 +272,27 @@ def test_the_map_follows_the_fast_changing_gaits_near_the_wheel(capsys, tmp_path
                 continue
             assert d["gait_found"][i][j], (radius, slope)
             assert rho[i, j] == pytest.approx(alone.spectral_radius, abs=1e-6)
+
+
+def test_a_single_value_is_a_range_of_one_point(capsys, tmp_path) -> None:
+    # QA sweep 13: map --radius 0.3 was refused; 0.3:0.3:1 had to be spelled out
+    from heelstrike.cli import parse_range
+
+    assert parse_range("0.3") == (0.3, 0.3, 1)
+    assert main(["map", "--radius", "0.3", "--slope", "2deg:4deg:3", "--out", str(tmp_path),
+                 "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["foot_radius"] == [0.3] and d["gait_found"] == [[True, True, True]]
+    # one row of the grid is drawn as points coloured by their spectral radius (a 2-D colour
+    # array left them uncoloured, with a warning)
+    from heelstrike.analysis.gait_map import GaitMap
+    from heelstrike.plots.gait import gait_map_figure
+
+    with xr.open_dataset(d["data"]) as ds:
+        ds = ds.load()
+    ax = gait_map_figure(GaitMap(dataset=ds)).axes[0]
+    coloured = [c for c in ax.collections if c.get_array() is not None]
+    assert len(coloured) == 1
+    np.testing.assert_allclose(coloured[0].get_array(), ds["spectral_radius"].values.ravel())
+    assert main(["map", "--radius", "abc", "--out", str(tmp_path)]) == 2
+    assert "invalid range 'abc'" in capsys.readouterr().err

@@ -412,3 +412,28 @@ def test_a_multi_swing_passive_gait_is_marked_and_listed_last(capsys):
     assert main([*argv, "--json"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert [g["leg_crossings"] for g in d["gaits"]] == [1, 1, 3]
+
+
+def test_tiny_energies_are_printed_so_that_the_books_can_be_read(capsys):
+    # QA sweep 13: on a slope of 1e-6 rad the loss and the energy released both printed as
+    # 0.00000 J; they are 2.8e-6 J, equal (a passive gait's books), m g L sin(slope)
+    assert main(["gait", "--radius", "0", "--slope", "1e-6", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    released = 20.0 * 9.81 * d["step_length"] * np.sin(1e-6)  # m_H + 2 m = 20 kg
+    assert d["collision_loss"] == pytest.approx(released, rel=1e-6)
+    assert main(["gait", "--radius", "0", "--slope", "1e-6"]) == 0
+    out = capsys.readouterr().out
+    text = f"{d['collision_loss']:.4e}"
+    assert f"collision loss  {text:>10} J/step (T_c)" in out
+    assert f"energy released {text:>10} J/step (gravity)" in out
+
+
+def test_bifurcation_records_from_the_first_step_with_transient_zero(tmp_path, capsys):
+    # QA sweep 13: --transient 0 was refused ("expected a positive integer"); recording from
+    # the first step is a legitimate choice: the walk at the first slope starts on its gait
+    assert main(["bifurcation", "--slope-range", "2deg:4deg:3", "--transient", "0", "--record",
+                 "4", "--out", str(tmp_path), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["walks"][0]["period_steps"] == 1
+    assert main(["bifurcation", "--transient", "-1", "--out", str(tmp_path)]) == 2
+    assert "expected an integer >= 0, got '-1'" in capsys.readouterr().err

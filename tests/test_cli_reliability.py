@@ -416,6 +416,10 @@ def test_impact_map_axes_have_units() -> None:
     fig = impact_map_figure(_synthetic_map(), compass)
     ax = fig.axes[0]
     assert ax.get_xlabel() == "R (m)" and ax.get_ylabel() == "impact angle (deg)"
+    # the axes span the computed grid, R from 0 m (QA sweep 13: from -0.05 m, half a cell
+    # past it), impact angles 0.1-0.6 rad in degrees
+    assert ax.get_xlim() == pytest.approx((0.0, 1.0))
+    assert ax.get_ylim() == pytest.approx(tuple(np.degrees([0.1, 0.6])))
 
 
 # -- issue 9: continuation of described walkers, one scale ---------------------------------------

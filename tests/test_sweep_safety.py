@@ -546,6 +546,28 @@ def test_study_cost_command_resumes_from_store(tmp_path: Path, monkeypatch: pyte
     assert np.isfinite(a["cost_of_transport"].values).all()
 
 
+def test_study_cost_refuses_a_folder_that_is_not_its_store(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # QA sweep 13: the study wrote its rows into any folder given as --store, next to what it
+    # held, where basin and map refuse a folder that is not a sweep store
+    from heelstrike.cli import main
+
+    folder = tmp_path / "notastore"
+    folder.mkdir()
+    (folder / "x.txt").write_text("data")
+    argv = ["study", "cost", "--radius", "0:0.2:2", "--step-length", "0.3:0.4:2",
+            "--out", str(tmp_path / "c")]
+    assert main([*argv, "--store", str(folder)]) == 2
+    err = capsys.readouterr().err
+    assert "is not a heelstrike cost-study store (it holds 'x.txt')" in err
+    assert sorted(p.name for p in folder.iterdir()) == ["x.txt"]
+    (tmp_path / "afile").write_text("keep")
+    assert main([*argv, "--store", str(tmp_path / "afile")]) == 2
+    assert "is a file, not a heelstrike cost-study store" in capsys.readouterr().err
+    assert (tmp_path / "afile").read_text() == "keep"
+
+
 def test_store_of_other_arguments_is_refused_by_the_command(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

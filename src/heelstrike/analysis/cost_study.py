@@ -230,6 +230,8 @@ def cost_study(
                 act, **(actuation_options or {})), backend) is None else "compiled" for r in R]
             for act in actuations
         ]
+    if store is not None:
+        _check_store_folder(Path(store))
     shape = (len(actuations), R.size, T.size)
     data = {k: np.full(shape, np.nan) for k in GAIT_VARIABLES}
     branch = np.full(shape, np.nan)
@@ -378,6 +380,25 @@ _FAILURE_BYTES = 512  # failure messages are stored as UTF-8, NUL-padded, trunca
 
 def _decode(raw: NDArray[np.uint8]) -> str:
     return bytes(np.asarray(raw, dtype=np.uint8)).rstrip(b"\0").decode("utf-8", errors="ignore")
+
+
+def _check_store_folder(path: Path) -> None:
+    """Refuse a ``store`` that is not a cost study's: a file, or a folder holding anything but
+    its actuations' folders (``<store>/<actuation>/radius_<i>.zarr``). The study wrote its rows
+    into any folder, next to what it held (QA sweep 13), where ``basin`` and ``map`` refuse a
+    folder that is not a sweep store."""
+    from heelstrike.analysis.sweep import SweepError
+
+    if not path.exists():
+        return
+    if not path.is_dir():
+        raise SweepError(f"{str(path)!r} exists and is a file, not a heelstrike cost-study "
+                         "store: remove it or choose another store")
+    foreign = sorted(p.name for p in path.iterdir() if p.name not in ACTUATIONS)
+    if foreign:
+        shown = ", ".join(repr(n) for n in foreign[:3]) + (", ..." if len(foreign) > 3 else "")
+        raise SweepError(f"{str(path)!r} exists and is not a heelstrike cost-study store (it "
+                         f"holds {shown}): remove it or choose another store")
 
 
 def _run_row(

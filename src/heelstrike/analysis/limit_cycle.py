@@ -711,7 +711,11 @@ def find_limit_cycles(
         if not starts:
             raise GaitNotFoundError(
                 "no period-one gait found from 864 seeds over step angles 3-34 deg (compiled "
-                "map, 80 steps and Newton from the 40 most nearly periodic seeds)"
+                "map, 80 steps and Newton from the 40 most nearly periodic seeds"
+                + ("; the search runs on the compiled map whatever the backend, the gaits it "
+                   "finds are then converged on the scipy reference" if method != "compiled"
+                   else "")
+                + ")"
                 + (", nor by continuation in the foot radius from the point foot"
                    if float(walker.foot_radius) > 0 else "")  # type: ignore[attr-defined]
             )

@@ -78,11 +78,18 @@ def parse_slope(text: str) -> float:
 def parse_range(
     text: str, convert: Callable[[str], float] = float
 ) -> tuple[float, float, int | None]:
-    """Parse ``'start:stop'`` or ``'start:stop:count'`` (count points, inclusive)."""
+    """Parse ``'start:stop'`` or ``'start:stop:count'`` (count points, inclusive), or one
+    value ``'v'``: the one point ``v:v:1``."""
     parts = str(text).split(":")
+    if len(parts) == 1:
+        try:
+            value = convert(parts[0])
+        except (ValueError, argparse.ArgumentTypeError) as exc:
+            raise argparse.ArgumentTypeError(f"invalid range {text!r}: {exc}") from None
+        return value, value, 1
     if len(parts) not in (2, 3):
         raise argparse.ArgumentTypeError(
-            f"invalid range {text!r}: use START:STOP or START:STOP:COUNT"
+            f"invalid range {text!r}: use VALUE, START:STOP or START:STOP:COUNT"
         )
     try:
         start, stop = convert(parts[0]), convert(parts[1])
@@ -108,6 +115,16 @@ def positive_int(text: str) -> int:
         raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
     if v < 1:
         raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return v
+
+
+def nonnegative_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
     return v
 
 

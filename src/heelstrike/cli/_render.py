@@ -92,6 +92,15 @@ def multipliers_text(multipliers: Iterable[complex]) -> str:
     return ", ".join(text(m) for m in multipliers)
 
 
+def energy_text(value: float, width: int = 10) -> str:
+    """An energy per step (or per metre) with 5 decimals, or in exponent form below 1e-3
+    (QA sweep 13: on a slope of 1e-6 rad the loss and the energy released both printed as
+    0.00000 J, so that the books could not be read)."""
+    if value == 0.0 or 1e-3 <= abs(value) < 1e7:
+        return f"{value:{width}.5f}"
+    return f"{value:{width}.4e}"
+
+
 def print_step_lines(gait: Any) -> None:
     """The period (s), step length (m) and speed (m/s) lines of a gait report."""
     print(f"  period          {gait.period:10.5f} s")

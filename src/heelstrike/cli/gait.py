@@ -21,6 +21,7 @@ from heelstrike.cli._common import (
     add_store_option,
     add_walker_options,
     model_from_args,
+    nonnegative_int,
     parse_angle,
     parse_floats,
     parse_grid,
@@ -34,6 +35,7 @@ from heelstrike.cli._common import (
     writable_dir,
 )
 from heelstrike.cli._render import (
+    energy_text,
     fixed_point_text,
     multipliers_text,
     print_impact_angle_line,
@@ -141,9 +143,9 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     print_stability_lines(c)
     for imp in d["impacts"]:
         print(f"  {imp['kind']:<15} T_c = {imp['T_c']:.6f} J")
-    print(f"  collision loss  {gait.collision_loss:10.5f} J/step (sum of T_c)")
-    print(f"  energy released {gait.potential_energy_released:10.5f} J/step (gravity)")
-    print(f"  eta             {gait.eta:10.5f} J/m")
+    print(f"  collision loss  {energy_text(gait.collision_loss)} J/step (sum of T_c)")
+    print(f"  energy released {energy_text(gait.potential_energy_released)} J/step (gravity)")
+    print(f"  eta             {energy_text(gait.eta)} J/m")
     return 0
 
 
@@ -234,9 +236,9 @@ def _run_gait(args: argparse.Namespace) -> int:
     print_step_lines(cycle)
     print_impact_angle_line(cycle)
     print_stability_lines(cycle)
-    print(f"  collision loss  {cycle.collision_loss:10.5f} J/step (T_c)")
-    print(f"  energy released {cycle.potential_energy_released:10.5f} J/step (gravity)")
-    print(f"  eta             {cycle.eta:10.5f} J/m")
+    print(f"  collision loss  {energy_text(cycle.collision_loss)} J/step (T_c)")
+    print(f"  energy released {energy_text(cycle.potential_energy_released)} J/step (gravity)")
+    print(f"  eta             {energy_text(cycle.eta)} J/m")
     return 0
 
 
@@ -386,8 +388,8 @@ def add_bifurcation(sub: Any) -> None:
                    type=lambda t: parse_range(t, parse_slope),
                    help="START:STOP[:COUNT] slopes, e.g. 0.5deg:6deg:56 (default "
                    "0.5deg:6deg, count 45)")
-    p.add_argument("--transient", type=positive_int, default=BIFURCATION_TRANSIENT,
-                   help="steps discarded at each slope before recording (default "
+    p.add_argument("--transient", type=nonnegative_int, default=BIFURCATION_TRANSIENT,
+                   help="steps discarded at each slope before recording, 0 or more (default "
                    f"{BIFURCATION_TRANSIENT})")
     p.add_argument("--record", type=positive_int, default=BIFURCATION_RECORD,
                    help=f"steps recorded at each slope (default {BIFURCATION_RECORD})")

@@ -423,8 +423,15 @@ def gait_map_figure(gmap: GaitMap) -> Figure:
                                  colors="black", linewidths=1.2)
             drawn = any(len(seg) for seg in contour.allsegs[0])
     else:
-        mesh = ax.scatter(np.broadcast_to(S, rho.shape), np.broadcast_to(R[:, None], rho.shape),
-                          c=rho, cmap="RdYlGn_r", norm=norm, s=60)
+        # one row or column of the grid: points, coloured by their values (flat arrays: a 2-D
+        # ``c`` left the points uncoloured)
+        xs = np.broadcast_to(S, rho.shape).ravel()
+        ys = np.broadcast_to(R[:, None], rho.shape).ravel()
+        ax.set_facecolor("white")  # the background is no grid cell here
+        gap = ~np.isfinite(rho.ravel())
+        ax.scatter(xs[gap], ys[gap], color="#d9d9d9", edgecolors="0.5", s=60)  # no gait
+        mesh = ax.scatter(xs[~gap], ys[~gap], c=rho.ravel()[~gap], cmap="RdYlGn_r", norm=norm,
+                          s=60)
     fig.colorbar(mesh, ax=ax, label="spectral radius of the step map (stable < 1)")
     pd = np.degrees(ds["period_doubling_slope"].values)
     ok = np.isfinite(pd)
@@ -588,7 +595,8 @@ def phase_portrait_figure(
         if len(nxt):
             a, b = d.iloc[-1], nxt.iloc[0]
             ax.plot([a["q3_rad"], b["q3_rad"]], [a["q3_dot_rad_s"], b["q3_dot_rad_s"]], ":",
-                    color="0.5", lw=1, label="heel strike" if first else None)
+                    color="0.5", lw=1,
+                    label="heel strike + leg relabelling" if first else None)
             ax.plot([a["swing_rad"], b["swing_rad"]],
                     [a["swing_dot_rad_s"], b["swing_dot_rad_s"]], ":", color="0.5", lw=1)
     d0 = portrait[portrait["step"] == steps[0]].iloc[0]

@@ -82,6 +82,10 @@ def impact_map_figure(m: ImpactMap, units: Mapping[str, str] | None = None) -> F
                 cs = ax.contour(X, Y, lifts.astype(float), levels=[0.5], colors="k",
                                 linestyles="--", linewidths=1.2)
                 cs.set_gid(LIFT_BOUNDARY_GID)
+            # the computed grid only: the cells' outer halves would show values never
+            # computed, a negative foot radius at R = 0 (QA sweep 13), as the gait map does
+            ax.set_xlim(float(np.min(xs)), float(np.max(xs)))
+            ax.set_ylim(float(np.min(ys)), float(np.max(ys)))
             ax.set_xlabel(_label(m.x_name, u))
             ax.set_ylabel(_label(m.y_name, u))
         else:

@@ -194,7 +194,8 @@ def test_bifurcation_json_says_what_the_diagram_shows(tmp_path, capsys):
     out = capsys.readouterr().out.strip().splitlines()
     assert len(out) == 1
     d = json.loads(out[0])
-    assert d["units"]["walks"] == {"slope": "rad", "status": None, "period_steps": "1"}
+    assert d["units"]["walks"] == {"slope": "rad", "status": None, "period_steps": "1",
+                                   "settling": None}
     assert d["units"]["branch"]["slope"] == "rad" and d["units"]["branch"]["period"] == "s"
     assert d["units"]["period_doubling_slopes"] == "rad"
     # the compass gait's period doubling (4.39 deg, Goswami et al. 1998's cascade)
@@ -381,6 +382,10 @@ def test_walks_still_settling_on_a_stable_branch_are_not_drawn_as_steady_states(
                  "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     assert "walks at 0.09669, 0.1647 deg: still settling towards the stable period-one gait" in out
+    assert main(["bifurcation", "--radius", "0.9", "--slope-range", "0.0005:0.01:9",
+                 "--out", str(tmp_path), "--json"]) == 0
+    walks = json.loads(capsys.readouterr().out)["walks"]
+    assert [w["settling"] for w in walks] == settling.tolist()
 
 
 def test_a_multi_swing_passive_gait_is_marked_and_listed_last(capsys):

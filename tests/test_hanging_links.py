@@ -44,10 +44,15 @@ def test_gait_says_which_gaits_hang_the_torso(capsys: pytest.CaptureFixture[str]
 
 
 def test_the_compass_and_the_kneed_walker_hang_nothing() -> None:
+    from heelstrike.analysis.model_gaits import upright_links
+
     for name in ("compass", "kneed"):
         w = load_walker(name)
         q = np.zeros(len(w.coordinate_names))
         assert hanging_links(w, q, 0.05) == ()
+        # the kneed walker's stance thigh stands on a lockable knee: not a link to turn over
+        assert upright_links(w) == ()
+    assert upright_links(load_walker("torso")) == ("torso",)
 
 
 def test_an_upright_torso_turned_over_hangs() -> None:
@@ -87,5 +92,7 @@ def test_bifurcation_basin_and_map_say_which_gait_they_follow(
         if hanging:
             assert d["note"].startswith(f"in {down} of the {len(found)} gaits found, 'torso' "
                                         "hangs")
-        else:
-            assert d["note"] is None  # this grid's branch is of the upright gaits
+        else:  # this grid's branch is of the upright gaits, and the note says so
+            assert d["note"].startswith(f"in all {len(found)} gaits found, 'torso' stands "
+                                        "above its joint: gaits of the upright link; gaits "
+                                        "with it hanging may exist too")

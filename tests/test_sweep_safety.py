@@ -340,6 +340,10 @@ def test_overwrite_replaces_only_a_sweep_store(tmp_path: Path, counter: Any) -> 
     store = tmp_path / "s.zarr"  # a sweep store is replaced
     _assert_values(_run(make_closure(1.0), store), 1.0)
     _assert_values(_run(make_closure(2.0), store, overwrite=True), 2.0)
+    empty = tmp_path / "made_for_it"  # an empty folder is where the store is made
+    empty.mkdir()
+    _assert_values(_run(make_closure(1.0), empty), 1.0)
+    assert sweep_progress(empty) == (N_CHUNKS, N_CHUNKS)
 
 
 def uses_builtin_names(a: np.ndarray, b: np.ndarray) -> dict[str, np.ndarray]:

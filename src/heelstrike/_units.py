@@ -52,7 +52,7 @@ UNITS: dict[str, str | None] = {
     "parameter_name": None, "parameter_unit": None, "kind": None, "figure": None,
     "data": None, "residual": None, "status": None, "message": None, "gait_found": None,
     "gait_stable": None, "note": None, "branch_data": None, "branch_stopped": None,
-    "hanging_links": None,
+    "hanging_links": None, "settling": None,
     # robots (heelstrike.cli.robot writes its own units maps with these)
     "loss_beyond_T_c": "J", "normal_impulse": "N s", "admissible": None, "frame": None,
     "joint": None, "unit": None,

@@ -70,7 +70,7 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "ModelGait", "ModelHeelStrike", "REFERENCE_SLOPE", "find_model_gait",
         "find_model_gaits", "hanging_links", "impact_map", "lock_torque_ranges",
         "model_heel_strike",
-        "symmetric_heel_strike_state",
+        "symmetric_heel_strike_state", "upright_links",
     ),
     "newton": ("NewtonSolution", "NewtonStatus", "SearchTimeLimitWarning", "floquet_multipliers",
                "newton_solve"),

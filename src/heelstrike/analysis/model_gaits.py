@@ -66,6 +66,7 @@ __all__ = [
     "lock_torque_ranges",
     "model_heel_strike",
     "symmetric_heel_strike_state",
+    "upright_links",
 ]
 
 #: Name of the impact angle as a swept quantity of :func:`impact_map`.
@@ -467,6 +468,19 @@ def find_model_gait(
 
 
 # -- single heel strike -------------------------------------------------------------------------
+def upright_links(walker: Any) -> tuple[str, ...]:
+    """The links of a described walker meant to stand above a joint that lets them turn over
+    (``direction = "up"``, on a joint that does not lock: a torso; not the root's stance leg,
+    nor a kneed walker's stance thigh, held by its knee lock): those :func:`hanging_links`
+    looks at."""
+    desc = getattr(walker, "description", None)
+    if desc is None:
+        return ()
+    return tuple(link.name for link in desc.links
+                 if link.direction == "up" and link.parent is not None
+                 and link.joint is not None and not link.joint.lockable)
+
+
 def hanging_links(walker: Any, q: ArrayLike, slope: float) -> tuple[str, ...]:
     """Links described upright that hang at the configuration ``q``.
 
@@ -490,21 +504,16 @@ def hanging_links(walker: Any, q: ArrayLike, slope: float) -> tuple[str, ...]:
     tuple of str
         Names of the upright links whose centre of mass is below their proximal joint.
     """
-    desc = getattr(walker, "description", None)
-    if desc is None:
+    upright = upright_links(walker)
+    if not upright:
         return ()
     from heelstrike.models.base import gravity_vector
 
     down = gravity_vector(1.0, float(slope))  # unit vector along gravity
     points = walker.positions(np.asarray(q, dtype=float))
-    out = []
-    for link in desc.links:
-        if link.direction != "up" or link.parent is None:  # the root stands on its foot
-            continue
-        drop = float((points[f"{link.name}.com"] - points[f"{link.name}.proximal"]) @ down)
-        if drop > 0.0:
-            out.append(link.name)
-    return tuple(out)
+    return tuple(
+        name for name in upright
+        if float((points[f"{name}.com"] - points[f"{name}.proximal"]) @ down) > 0.0)
 
 
 #: Samples per step of the walk :func:`lock_torque_ranges` measures on (the integrator's

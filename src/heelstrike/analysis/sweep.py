@@ -1091,11 +1091,13 @@ def _sweep(
         st = _Store(path, plan, attrs)
         # only a sweep store is ever removed: overwrite=True once deleted any folder given as
         # the store, with whatever it held (QA sweep 13)
+        if path.is_dir() and not any(path.iterdir()):
+            path.rmdir()  # an empty folder made for the store: the store is made there
         if path.exists() and not _is_sweep_store(path):
             raise SweepError(
                 f"{str(path)!r} exists and is not a heelstrike sweep store "
                 f"({'a file' if not path.is_dir() else 'a folder'}): "
-                "remove it or choose another store; overwrite=True replaces only a sweep store"
+                "remove it or choose another store (overwriting replaces only a sweep store)"
             )
         if path.exists() and overwrite:
             shutil.rmtree(path)

@@ -166,6 +166,20 @@ def _gait_summary(c: Any) -> dict[str, Any]:
     }
 
 
+#: What a report of gaits with an upright link says of the others (QA sweep 13: the torso
+#: walker's map followed its unstable upright gaits where stable ones with the torso hanging
+#: exist, and said nothing).
+OTHER_POSTURE = ("gaits with it hanging may exist too, and be stable where these are not "
+                 "('heelstrike gait --model ...' lists the gaits at one slope)")
+
+
+def upright_text(links: Sequence[str]) -> str:
+    """``'torso' stands above its joint`` for links described upright that do."""
+    names = ", ".join(f"'{n}'" for n in links)
+    one = len(links) == 1
+    return f"{names} {'stands' if one else 'stand'} above {'its' if one else 'their'} joint"
+
+
 def hanging_text(links: Sequence[str]) -> str:
     """``'torso' hangs (its centre of mass below its joint)`` for links described upright
     that hang (:func:`~heelstrike.analysis.model_gaits.hanging_links`)."""
@@ -410,8 +424,8 @@ def _run_bifurcation(args: argparse.Namespace) -> int:
 
     walker = walker_from_args(args) if args.model is None else model_from_args(args)
     start, stop, count = args.slope_range
-    if not 0 < start < stop:
-        raise CliError("--slope-range needs 0 < START < STOP")
+    if not (0 < start < stop or (0 < start == stop and count == 1)):
+        raise CliError("--slope-range needs 0 < START < STOP, or one slope > 0")
     writable_dir(args.out)
     slopes = np.linspace(start, stop, count or 45)
     # the branch over the diagram's slopes, refined where it curves (what the figure draws)
@@ -435,7 +449,7 @@ def _run_bifurcation(args: argparse.Namespace) -> int:
                 "unstable gaits may exist there: 'heelstrike gait --slope ...' lists them)")
     period_steps = diagram.period_steps()
     if args.model is not None:
-        from heelstrike.analysis.model_gaits import hanging_links
+        from heelstrike.analysis.model_gaits import hanging_links, upright_links
 
         hanging = [hanging_links(walker, c.q, float(v))
                    for v, c in zip(branch.values, branch.cycles, strict=True)]
@@ -447,14 +461,18 @@ def _run_bifurcation(args: argparse.Namespace) -> int:
             hang_note = (f"on the branch followed, {hanging_text(names)} {where}: gaits of the "
                          "hanging link, not of the upright one")
             note = hang_note if note is None else f"{note}; {hang_note}"
+        elif hanging and (upright := upright_links(walker)):
+            hang_note = (f"on the branch followed, {upright_text(upright)}: gaits of the upright "
+                         f"link; {OTHER_POSTURE}")
+            note = hang_note if note is None else f"{note}; {hang_note}"
     if args.json:
         print_json({
             "model": None if args.model is None else walker.description.name,
             "backend": args.backend,
             "walks": [{"slope": float(s), "status": st or None,
-                       "period_steps": int(n) if n else None}
-                      for s, st, n in zip(diagram.slopes, diagram.statuses, period_steps,
-                                          strict=True)],
+                       "period_steps": int(n) if n else None, "settling": bool(slow)}
+                      for s, st, n, slow in zip(diagram.slopes, diagram.statuses, period_steps,
+                                                diagram.settling(branch), strict=True)],
             "branch": [{"slope": float(v), "impact_angle": c.impact_angle, "period": c.period,
                         "spectral_radius": c.spectral_radius, "stable": c.stable}
                        for v, c in zip(branch.values, branch.cycles, strict=True)],
@@ -714,8 +732,8 @@ def _map_slopes(args: argparse.Namespace) -> Any:
     import numpy as np
 
     s0, s1, ns = args.slope
-    if not 0 < s0 < s1:
-        raise CliError("--slope needs 0 < START < STOP")
+    if not (0 < s0 < s1 or (0 < s0 == s1 and ns == 1)):
+        raise CliError("--slope needs 0 < START < STOP, or one slope > 0")
     return np.linspace(s0, s1, ns or 21)
 
 
@@ -775,7 +793,7 @@ def _hanging_cells_note(walker: Any, name: str, values: Any, ds: Any) -> str | N
     a note, or None."""
     import numpy as np
 
-    from heelstrike.analysis.model_gaits import hanging_links
+    from heelstrike.analysis.model_gaits import hanging_links, upright_links
 
     fixed = ds["fixed_point"].values  # (values, slopes, section)
     slopes = ds["slope"].values
@@ -791,9 +809,13 @@ def _hanging_cells_note(walker: Any, name: str, values: Any, ds: Any) -> str | N
             if hang:
                 cells += 1
                 links.update(hang)
-    if not cells:
-        return None
     found = int(np.isfinite(fixed[..., 0]).sum())
+    if not cells:
+        upright = upright_links(walker)
+        if not (upright and found):
+            return None
+        return (f"in all {found} gaits found, {upright_text(upright)}: gaits of the upright "
+                f"link; {OTHER_POSTURE}")
     return (f"in {cells} of the {found} gaits found, {hanging_text(sorted(links))}: gaits of "
             "the hanging link, not of the upright one")
 

@@ -296,3 +296,10 @@ def test_a_single_value_is_a_range_of_one_point(capsys, tmp_path) -> None:
     np.testing.assert_allclose(coloured[0].get_array(), ds["spectral_radius"].values.ravel())
     assert main(["map", "--radius", "abc", "--out", str(tmp_path)]) == 2
     assert "invalid range 'abc'" in capsys.readouterr().err
+    # one slope too: the gait there, as 'gait' finds it alone
+    assert main(["map", "--radius", "0:0.3:2", "--slope", "2deg", "--out", str(tmp_path),
+                 "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["slope"] == [pytest.approx(np.deg2rad(2.0))] and d["gait_found"] == [[True], [True]]
+    assert main(["map", "--slope", "0", "--out", str(tmp_path)]) == 2
+    assert "--slope needs 0 < START < STOP, or one slope > 0" in capsys.readouterr().err

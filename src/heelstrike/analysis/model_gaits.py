@@ -47,6 +47,7 @@ from heelstrike.dynamics.phased import (
     PhasedWalkResult,
 )
 from heelstrike.dynamics.single_support import TorqueLaw
+from heelstrike.models.base import PlanarWalker
 from heelstrike.models.builder import BuiltWalker
 
 __all__ = [
@@ -468,12 +469,12 @@ def find_model_gait(
 
 
 # -- single heel strike -------------------------------------------------------------------------
-def upright_links(walker: Any) -> tuple[str, ...]:
+def upright_links(walker: PlanarWalker) -> tuple[str, ...]:
     """The links of a described walker meant to stand above a joint that lets them turn over
     (``direction = "up"``, on a joint that does not lock: a torso; not the root's stance leg,
     nor a kneed walker's stance thigh, held by its knee lock): those :func:`hanging_links`
     looks at."""
-    desc = getattr(walker, "description", None)
+    desc = walker.description
     if desc is None:
         return ()
     return tuple(link.name for link in desc.links
@@ -481,7 +482,7 @@ def upright_links(walker: Any) -> tuple[str, ...]:
                  and link.joint is not None and not link.joint.lockable)
 
 
-def hanging_links(walker: Any, q: ArrayLike, slope: float) -> tuple[str, ...]:
+def hanging_links(walker: PlanarWalker, q: ArrayLike, slope: float) -> tuple[str, ...]:
     """Links described upright that hang at the configuration ``q``.
 
     A link declared ``direction = "up"`` (a torso, or the root's stance leg) is meant to
@@ -510,7 +511,7 @@ def hanging_links(walker: Any, q: ArrayLike, slope: float) -> tuple[str, ...]:
     from heelstrike.models.base import gravity_vector
 
     down = gravity_vector(1.0, float(slope))  # unit vector along gravity
-    points = walker.positions(np.asarray(q, dtype=float))
+    points = cast(BuiltWalker, walker).positions(np.asarray(q, dtype=float))  # described
     return tuple(
         name for name in upright
         if float((points[f"{name}.com"] - points[f"{name}.proximal"]) @ down) > 0.0)
@@ -522,7 +523,7 @@ LOCK_TORQUE_SAMPLES = 200
 
 
 def lock_torque_ranges(
-    walker: Any, cycle: LimitCycle, *, backend: str = "compiled"
+    walker: PlanarWalker, cycle: LimitCycle, *, backend: str = "compiled"
 ) -> dict[str, tuple[float, float]]:
     """The smallest and largest torque each lock exerts over one step of a gait.
 

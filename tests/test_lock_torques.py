@@ -12,7 +12,11 @@ import json
 import numpy as np
 import pytest
 
-from heelstrike.analysis.model_gaits import find_model_gaits, lock_torque_ranges
+from heelstrike.analysis.model_gaits import (
+    find_model_gaits,
+    lock_torque_ranges,
+    two_sided_locks,
+)
 from heelstrike.cli import main
 from heelstrike.dynamics import simulate
 from heelstrike.dynamics.hybrid import lock_torques
@@ -61,6 +65,7 @@ def test_gait_notes_a_lock_that_must_pull(capsys: pytest.CaptureFixture[str]) ->
     gait = find_model_gaits(walker, slope=SLOPE)[0].cycle
     ref = lock_torque_ranges(walker, gait, backend="scipy")
     np.testing.assert_allclose(ref["stance_knee"], (lo, hi), rtol=1e-3)
+    assert list(two_sided_locks(walker, ref)) == ["stance_knee"]  # the swing knee only pushes
 
 
 def test_walkers_without_locks_have_no_lock_torques() -> None:

@@ -56,6 +56,7 @@ __all__ = [
     "IMPACT_MAP_SECONDS_PER_POINT",
     "LOCK_TORQUE_SAMPLES",
     "REFERENCE_SLOPE",
+    "TWO_SIDED_FLOOR",
     "ImpactMap",
     "ModelGait",
     "ModelHeelStrike",
@@ -67,6 +68,7 @@ __all__ = [
     "lock_torque_ranges",
     "model_heel_strike",
     "symmetric_heel_strike_state",
+    "two_sided_locks",
     "upright_links",
 ]
 
@@ -561,6 +563,21 @@ def lock_torque_ranges(
         if held.size:
             out[name] = (float(held.min()), float(held.max()))
     return out
+
+
+#: A lock's torque counts as of both signs when it passes this fraction of the walker's
+#: ``m g l`` (N m) either way (round-off of a torque that keeps one sign stays far below).
+TWO_SIDED_FLOOR = 1e-6
+
+
+def two_sided_locks(
+    walker: PlanarWalker, ranges: dict[str, tuple[float, float]]
+) -> dict[str, tuple[float, float]]:
+    """The locks of :func:`lock_torque_ranges` that must pull as well as push: a one-sided
+    stop could not hold them (their ``(min, max)`` torques, N m)."""
+    sc = walker.scale
+    floor = TWO_SIDED_FLOOR * float(sc.total_mass * sc.gravity * sc.leg_length)
+    return {k: v for k, v in ranges.items() if v[0] < -floor and v[1] > floor}
 
 
 def symmetric_heel_strike_state(

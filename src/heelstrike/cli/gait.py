@@ -83,6 +83,7 @@ def _run_gait_model(args: argparse.Namespace) -> int:
         find_model_gaits,
         hanging_links,
         lock_torque_ranges,
+        two_sided_locks,
     )
 
     walker = model_from_args(args)
@@ -103,10 +104,7 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     d["hanging_links"] = list(hanging[0])
     locks = lock_torque_ranges(walker, gait.cycle, backend=args.backend)
     d["lock_torque_range"] = {k: list(v) for k, v in locks.items()}
-    # a lock that must pull as well as push: a one-sided knee stop could not hold it
-    floor = 1e-6 * float(walker.scale.total_mass * walker.scale.gravity
-                         * walker.scale.leg_length)
-    two_sided = {k: v for k, v in locks.items() if v[0] < -floor and v[1] > floor}
+    two_sided = two_sided_locks(walker, locks)  # a one-sided knee stop could not hold them
     # each gait's collision loss is its step's total (knee strikes included), as in d
     d["gaits"] = [_gait_summary(g.cycle) | {"collision_loss": g.collision_loss,
                                             "hanging_links": list(h)}

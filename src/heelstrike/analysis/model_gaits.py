@@ -47,7 +47,7 @@ from heelstrike.dynamics.phased import (
     PhasedWalkResult,
 )
 from heelstrike.dynamics.single_support import TorqueLaw
-from heelstrike.models.base import PlanarWalker
+from heelstrike.models.base import PlanarWalker, gravity_vector
 from heelstrike.models.builder import BuiltWalker
 
 __all__ = [
@@ -487,9 +487,9 @@ def upright_links(walker: PlanarWalker) -> tuple[str, ...]:
 def hanging_links(walker: PlanarWalker, q: ArrayLike, slope: float) -> tuple[str, ...]:
     """Links described upright that hang at the configuration ``q``.
 
-    A link declared ``direction = "up"`` (a torso, or the root's stance leg) is meant to
-    stand above its proximal joint; a passive gait can instead carry it hanging, its centre of
-    mass below the joint along gravity (the torso walker's stable passive gaits on 1-2 deg
+    A link of :func:`upright_links` (a torso: ``direction = "up"`` on a joint that does not
+    lock) is meant to stand above its proximal joint; a passive gait can instead carry it
+    hanging, its centre of mass below the joint along gravity (the torso walker's stable passive gaits on 1-2 deg
     carry the torso through the legs, 179 deg from upright, while its upright gaits are
     unstable: QA sweep 13). Reports say so, since a gait of the hanging link is another gait.
 
@@ -510,8 +510,6 @@ def hanging_links(walker: PlanarWalker, q: ArrayLike, slope: float) -> tuple[str
     upright = upright_links(walker)
     if not upright:
         return ()
-    from heelstrike.models.base import gravity_vector
-
     down = gravity_vector(1.0, float(slope))  # unit vector along gravity
     points = cast(BuiltWalker, walker).positions(np.asarray(q, dtype=float))  # described
     return tuple(

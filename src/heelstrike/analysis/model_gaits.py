@@ -489,9 +489,10 @@ def hanging_links(walker: PlanarWalker, q: ArrayLike, slope: float) -> tuple[str
 
     A link of :func:`upright_links` (a torso: ``direction = "up"`` on a joint that does not
     lock) is meant to stand above its proximal joint; a passive gait can instead carry it
-    hanging, its centre of mass below the joint along gravity (the torso walker's stable passive gaits on 1-2 deg
-    carry the torso through the legs, 179 deg from upright, while its upright gaits are
-    unstable: QA sweep 13). Reports say so, since a gait of the hanging link is another gait.
+    hanging, its centre of mass below the joint along gravity (the torso walker's stable
+    passive gaits on 1-2 deg carry the torso through the legs, 179 deg from upright, while its
+    upright gaits are unstable: QA sweep 13). Reports say so, since a gait of the hanging link
+    is another gait.
 
     Parameters
     ----------

@@ -12,6 +12,13 @@ import importlib.util
 import os
 
 import pytest
+from hypothesis import settings
+
+# Numerical property tests must not depend on machine speed: no per-example deadline (hypothesis'
+# default of 200 ms fails numerical code on a loaded machine). Loaded before any test module is
+# imported, so every @settings(...) in the tests inherits it.
+settings.register_profile("heelstrike", deadline=None)
+settings.load_profile("heelstrike")
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:

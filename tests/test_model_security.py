@@ -350,7 +350,7 @@ def test_derivation_reports_progress(monkeypatch: pytest.MonkeyPatch) -> None:
     seen: dict[str, int] = {"total": 0, "ticks": 0}
 
     class FakeBar:
-        def __init__(self, *, total: int, file: Any, delay: float, **_: Any) -> None:
+        def __init__(self, *_args: Any, total: int, file: Any, delay: float, **_: Any) -> None:
             assert file is sys.stderr and delay > 0
             seen["total"] = total
 
@@ -363,7 +363,7 @@ def test_derivation_reports_progress(monkeypatch: pytest.MonkeyPatch) -> None:
         def update(self, n: int) -> None:
             seen["ticks"] += n
 
-    monkeypatch.setattr("tqdm.tqdm", FakeBar)
+    monkeypatch.setattr("tqdm.auto.tqdm", FakeBar)
     desc = read_description(WALKERS / "kneed.toml")
     codegen.generate_source(desc, "ab" * 32)
     assert seen["total"] > 0 and seen["ticks"] == seen["total"]

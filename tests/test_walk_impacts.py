@@ -174,6 +174,7 @@ def test_walk_model_cli_writes_every_impact_and_shows_progress(
         return real(*args, **{**kwargs, "delay": 0.0, "mininterval": 0.0})
 
     monkeypatch.setattr(tqdm.auto, "tqdm", eager)
+    monkeypatch.setenv("HEELSTRIKE_PROGRESS", "1")  # captured stderr is no terminal
     assert main(["walk", "--model", "kneed", "--steps", "2", "--fps", "10", "--out",
                  str(tmp_path)]) == 0
     out, err = capsys.readouterr()

@@ -240,9 +240,9 @@ def cost_study(
     total = shape[0] * shape[1] * shape[2]
     bar: Any = None
     if progress:
-        from tqdm.auto import tqdm
+        from heelstrike._progress import progress_bar
 
-        bar = tqdm(total=total, desc="cost study")
+        bar = progress_bar(total=total, desc="cost study", delay=0.0, leave=True)
     for a, act in enumerate(actuations):
         previous: tuple[tuple[float, ...], ...] = ((),) * T.size
         for i in range(R.size):

@@ -11,7 +11,6 @@ the gait is stable if all have modulus < 1. A real multiplier leaving the unit c
 
 from __future__ import annotations
 
-import sys
 import time
 import warnings
 from collections.abc import Callable, Iterable, Sequence
@@ -421,9 +420,9 @@ def _automatic_guess(pmap: PoincareMap, progress: bool = False) -> FloatArray:
 def _progress(items: Sequence[Any], enabled: bool, desc: str) -> Iterable[Any]:
     if not enabled:
         return items
-    from tqdm.auto import tqdm
+    from heelstrike._progress import progress_bar
 
-    return tqdm(items, desc=desc, leave=False, delay=2.0, file=sys.stderr)
+    return progress_bar(items, desc=desc)
 
 
 #: Time bound (s) of the automatic search for gaits (seeding and Newton from every seed).

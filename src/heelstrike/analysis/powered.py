@@ -56,7 +56,6 @@ same point); the legs are then relabelled by hand and the gait is flagged
 from __future__ import annotations
 
 import dataclasses
-import sys
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -1329,10 +1328,9 @@ def find_powered_gait(
     limit = float("inf") if time_limit is None else float(time_limit)
     bar: Any = None
     if progress:
-        from tqdm.auto import tqdm
+        from heelstrike._progress import progress_bar
 
-        bar = tqdm(desc=f"{family.name} gait search", unit=" steps", delay=2.0,
-                   file=sys.stderr, leave=False)
+        bar = progress_bar(desc=f"{family.name} gait search", unit=" steps")
     prob = _Problem(walker=walker, family=family, target=target, rtol=rtol, atol=atol,
                     budget=max_evaluations, deadline=time.monotonic() + limit, time_limit=limit,
                     compiled_before=compile_seconds(),

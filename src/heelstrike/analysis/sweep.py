@@ -1156,14 +1156,16 @@ def _sweep(
                 memory[name][region] = arr
         bar.update(1)
 
-    from tqdm.auto import tqdm
+    from heelstrike._progress import progress_bar
 
-    bar = tqdm(
+    bar = progress_bar(
         total=len(all_chunks),
         initial=len(all_chunks) - len(pending),
-        disable=not progress,
+        enabled=bool(progress),
         desc=progress if isinstance(progress, str) else f"sweep {_func_name(func)}",
         unit="chunk",
+        delay=0.0,
+        leave=True,
     )
     try:
         if pending:

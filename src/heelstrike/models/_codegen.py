@@ -22,7 +22,6 @@ sums of coordinates),
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Any
@@ -272,16 +271,10 @@ def generate_source(desc: WalkerDescription, key: str) -> str:
 @contextmanager
 def _progress(total: int, name: str) -> Iterator[Callable[[], None]]:
     """A tick callback that shows a progress bar on stderr once the work passes ~2 s."""
-    from tqdm import tqdm
+    from heelstrike._progress import progress_bar
 
-    with tqdm(
-        total=total,
-        desc=f"heelstrike: deriving walker {name!r}",
-        unit="step",
-        file=sys.stderr,
-        delay=2.0,
-        leave=False,
-    ) as bar:
+    with progress_bar(total=total, desc=f"heelstrike: deriving walker {name!r}",
+                      unit="step") as bar:
         yield lambda: bar.update(1)
 
 

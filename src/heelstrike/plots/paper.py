@@ -50,7 +50,7 @@ def figure2(data: pd.DataFrame) -> Figure:
         Two panels sharing the ``q3`` (deg) axis: ``T_c`` (J) and ``T_a`` (J).
     """
     df = data
-    fig = _new_figure(9.0, 3.8)
+    fig = _new_figure(10.5, 3.8)
     ax_c, ax_a = fig.subplots(1, 2, sharex=True)
     radii = np.unique(df["R_m"].to_numpy())
     colours = _radius_colours(radii, mpl.colormaps["viridis"])
@@ -70,7 +70,8 @@ def figure2(data: pd.DataFrame) -> Figure:
         ax.set_xlim(0.0, 45.0)
         ax.grid(alpha=0.3)
     ax_a.set_ylim(bottom=0.0)
-    ax_c.legend(fontsize="small", loc="upper left")
+    # beside the panels: inside, the R = 0 curve ran under it between 14 and 22 deg
+    fig.legend(*ax_c.get_legend_handles_labels(), fontsize="small", loc="outside right upper")
     fig.suptitle(
         "Fig. 2: decomposition of the pre-impact kinetic energy "
         r"($\dot q_3^- = 1$ rad/s, $\dot q_4^- = 0$; admissible impacts only)",
@@ -93,7 +94,7 @@ def figure3a(data: pd.DataFrame) -> Figure:
     matplotlib.figure.Figure
     """
     df = data
-    fig = _new_figure(5.5, 4.2)
+    fig = _new_figure(7.0, 4.2)
     ax = fig.subplots()
     radii = np.unique(df["R_m"].to_numpy())
     colours = _radius_colours(radii, mpl.colormaps["viridis"])
@@ -106,7 +107,7 @@ def figure3a(data: pd.DataFrame) -> Figure:
     ax.set_ylabel(r"energy lost per metre $\eta$ (J/m)")
     ax.set_xlim(0.0, 45.0)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize="small", loc="upper left")
+    ax.legend(fontsize="small", loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     ax.set_title(r"Fig. 3a: $\eta = T_c / L_S$ (admissible impacts only)", fontsize="medium")
     return fig
 

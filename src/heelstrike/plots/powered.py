@@ -14,9 +14,10 @@ from matplotlib import colormaps
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from heelstrike.analysis.powered import BOOKS_FLOOR
 from heelstrike.plots import _new_figure
 
-__all__ = ["BRANCH_CAPTION", "cost_figure", "paper_comparison_figure"]
+__all__ = ["BRANCH_CAPTION", "NO_WORK_LABEL", "cost_figure", "paper_comparison_figure"]
 
 
 
@@ -85,17 +86,28 @@ def cost_figure(ds: xr.Dataset, variable: str = "cost_of_transport") -> Figure:
                                   i))
     axes[-1].legend([handles[i] for i in order], [labels[i] for i in order], fontsize=7,
                     loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
-    fig.suptitle(BRANCH_CAPTION, fontsize=7)
+    _caption(fig, BRANCH_CAPTION)
     return fig
+
+
+def _caption(fig: Figure, text: str) -> None:
+    """``text`` as the figure's title at 7 pt, its lines wrapped to the figure's width (a
+    caption wider than a one-panel figure ran over the panel's y label)."""
+    chars = max(int(fig.get_figwidth() * 72.0 / (0.55 * 7.0)), 30)  # ~0.55 em a character
+    lines = [textwrap.fill(p.strip(), chars) for p in text.split(";")]
+    fig.suptitle(";\n".join(lines), fontsize=7)
 
 
 #: Figure caption of how the study chose its gaits (see ``cost_study.BRANCH_NOTE``).
 BRANCH_CAPTION = (
-    "each point: the cheapest periodic gait found (a gait whose legs cross more than once\n"
+    "each point: the cheapest periodic gait found (a gait whose legs cross more than once "
     "a step only where no other was found; continuation from neighbours and fresh "
-    "searches;\nopen squares: found by a fresh search, not by continuation;\nred x: unstable "
-    "gait, a Floquet multiplier |m| > 1;\nopen triangles on the bottom edge: no gait found there)"
+    "searches; open squares: found by a fresh search, not by continuation; red x: unstable "
+    "gait, a Floquet multiplier |m| > 1; open triangles on the bottom edge: no gait found there)"
 )
+
+#: What the comparison figure draws on its bottom edge where the gait needs no work.
+NO_WORK_LABEL = "no work needed (W_act <= 1e-8 J, round-off)"
 
 
 def paper_comparison_figure(ds: xr.Dataset) -> Figure:
@@ -105,7 +117,7 @@ def paper_comparison_figure(ds: xr.Dataset) -> Figure:
     if tgt != "step_length" or "eta_paper" not in ds:
         raise ValueError("the comparison needs a study over step length")
     L = ds[tgt].values
-    fig = _new_figure(3.4 * len(L), 3.4)
+    fig = _new_figure(3.4 * len(L) + 2.0, 3.6)
     axes = fig.subplots(1, len(L), squeeze=False, sharey=True)[0]
     R = ds["radius"].values
     for j, (ax, length) in enumerate(zip(axes, L, strict=True)):
@@ -122,10 +134,18 @@ def paper_comparison_figure(ds: xr.Dataset) -> Figure:
                     label="paper: no loss (McGeer's wheel)" if j == 0 else None)
         for act in ds["actuation"].values:
             sel = ds.sel(actuation=act).isel({tgt: j})
-            y = sel["work_per_metre"].values
-            (line,) = ax.plot(R, y, "o-", ms=3, label=f"{act}: W_act / L")
-            if "stable" in sel:
-                unstable = sel["stable"].values == 0
+            y = np.asarray(sel["work_per_metre"].values, dtype=float)
+            # a gait needing no work (McGeer's wheel) has W_act of round-off (1e-13 J): on the
+            # log axis its line dived to 1e-12; drawn as a marker on the bottom edge instead
+            free = np.isfinite(y) & (y * float(length) <= BOOKS_FLOOR)
+            (line,) = ax.plot(R, np.where(free, np.nan, y), "o-", ms=3,
+                              label=f"{act}: W_act / L")
+            if np.any(free):
+                ax.plot(R[free], np.full(int(free.sum()), 0.03), "o", ms=6,
+                        color=line.get_color(), transform=ax.get_xaxis_transform(),
+                        clip_on=False, label=f"{act}: {NO_WORK_LABEL}")
+            if "stable" in sel:  # 0: unstable; NaN: no gait, or stability undecided
+                unstable = (sel["stable"].values == 0) & ~free
                 ax.plot(R[unstable], y[unstable], "x", ms=7, mew=1.5, color="tab:red")
             _mark_missing(ax, R, y, line.get_color(),
                           f"{act}: no gait found" if np.any(~np.isfinite(y)) else None)
@@ -134,6 +154,14 @@ def paper_comparison_figure(ds: xr.Dataset) -> Figure:
         ax.set_yscale("log")
         ax.grid(alpha=0.3, which="both")
     axes[0].set_ylabel("energy per metre (J/m)")
-    axes[0].legend(fontsize=7, loc="lower left")
-    fig.suptitle(BRANCH_CAPTION, fontsize=7)
+    handles, labels = axes[0].get_legend_handles_labels()
+    for ax in axes[1:]:  # entries drawn in later panels only (a marker of one step length)
+        for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
+            if lab not in labels:
+                handles.append(h)
+                labels.append(lab)
+    # beside the panels: inside, it covered the data of the first panel
+    axes[-1].legend(handles, labels, fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0),
+                    borderaxespad=0.0)
+    _caption(fig, BRANCH_CAPTION)
     return fig

@@ -7,7 +7,6 @@ import os
 import re
 import subprocess
 import sys
-import time
 import tomllib
 from collections.abc import Iterator
 from pathlib import Path
@@ -318,10 +317,9 @@ def test_verifier_accepts_generator_shapes_and_sandbox_has_no_builtins() -> None
 def test_unbounded_expressions_are_refused_quickly(expr: str, pattern: str) -> None:
     data = _compass_data()
     data["link"][0]["com"] = expr
-    t0 = time.perf_counter()
+    # refused by the parser's bounds before anything is evaluated (a hang would show as one)
     with pytest.raises(ModelDescriptionError, match=rf"^link\[0\]\.com: .*{pattern}"):
         parse_description(data)
-    assert time.perf_counter() - t0 < 60  # generous: a hang would be killed by faulthandler
 
 
 def test_bounded_but_legitimate_expressions_still_work() -> None:

@@ -185,7 +185,7 @@ def run(quick: bool = False) -> dict[str, Any]:
     try:
         import pinocchio as pin
     except ImportError:
-        notes.append("pinocchio: not installed (pip install 'heelstrike[bench]'), skipped")
+        notes.append("pinocchio: not installed (pip install '.[bench]'), skipped")
     else:
         agreement = pinocchio_agreement(200 if quick else 1000)
         items = []

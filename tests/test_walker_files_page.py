@@ -1,7 +1,8 @@
 """The walker-file reference page (docs/walker_files.rst) cannot rot (issue 35, item 5).
 
 Every ``.. code-block:: toml`` on the page is a complete walker file. One whose first line is
-``# refused: MESSAGE`` must be refused by the loader with a message starting with ``MESSAGE``;
+``# refused: MESSAGE`` must be refused by :func:`heelstrike.models.builder.load_walker` (which
+reads, checks and builds) with a message starting with ``MESSAGE``;
 every other one must be read by :func:`heelstrike.models.description.read_description` and
 built by :func:`heelstrike.models.builder.load_walker` into a walker whose mass matrix is
 symmetric positive definite. The page's tables must name every key the loader accepts.
@@ -79,7 +80,7 @@ def test_page_refused_example_is_refused_as_it_says(block: str, tmp_path: Path) 
     path = tmp_path / "walker.toml"
     path.write_text(block, encoding="utf-8")
     with pytest.raises(ModelDescriptionError) as info:
-        read_description(path)
+        load_walker(path)  # reads the file (read_description), then builds the walker
     assert str(info.value).startswith(expected), (str(info.value), expected)
 
 

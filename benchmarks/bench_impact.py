@@ -2,7 +2,8 @@
 
 All paths resolve the same heel strike of the paper's compass gait (mH = 2 m = 10 kg,
 a = b = 0.5 m, l = 1 m) at random impact angles q3 in [0.02, pi/4] rad and foot radii R in
-[0, 1] m, with q3_dot = 1 rad/s, q4_dot = 0 and the stance foot rolling (MODEL.md).
+[0, 1] m, with q3_dot = 1 rad/s, q4_dot = 0 and the stance foot rolling (the paper's model,
+see heelstrike.models.compass).
 
 Paths
 -----
@@ -77,7 +78,8 @@ def pinocchio_compass(foot_radius: float, walker: CompassGait = WALKER) -> tuple
     Joints: prismatic x, prismatic y (``q1, q2``: the stance foot's arc centre), revolute z at
     that centre (``q3``, stance leg angle), revolute z at the hip (``q4``, relative swing
     angle). A revolute z joint maps a point ``(0, d)`` of its frame to ``d e(theta)``, the
-    MODEL.md convention. Legs and hip are point masses (zero rotational inertia).
+    paper's convention (heelstrike.models.compass). Legs and hip are point masses (zero
+    rotational inertia).
     """
     import pinocchio as pin
 
@@ -183,7 +185,7 @@ def run(quick: bool = False) -> dict[str, Any]:
     try:
         import pinocchio as pin
     except ImportError:
-        notes.append("pinocchio: not installed (pip install 'heelstrike[bench]'), skipped")
+        notes.append("pinocchio: not installed (pip install '.[bench]'), skipped")
     else:
         agreement = pinocchio_agreement(200 if quick else 1000)
         items = []

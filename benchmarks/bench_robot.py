@@ -395,7 +395,7 @@ def run(quick: bool = False) -> dict[str, Any]:
     title = "robot impact decompositions per second (Talos, nv = 38, two flat soles, 12 rows)"
     if any(r.get("skipped") for r in runs):
         return {"benchmark": title, "machine": machine(("numpy", "scipy", "pin")), "rows": [],
-                "stages": [], "notes": ["skipped: pip install 'heelstrike[robots]'"]}
+                "stages": [], "notes": ["skipped: pip install '.[robots]'"]}
     one, every = runs
     rows = one["rows"] + every["rows"]
     ref = BEFORE["pinocchio impulseDynamics, single calls (J given)"]

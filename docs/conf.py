@@ -11,6 +11,11 @@ and puts the figure the script drew under it, so a gallery page cannot show a fi
 current code does not draw; autodoc/autosummary give the API reference and the cross-references
 from the paper's equations to the functions that implement them, all checked at build time
 (``-W``: a broken reference fails the build). Theme: furo (light, readable, few dependencies).
+
+Math: typeset by MathJax 3 shipped *with the built site* (``_static/mathjax/``, copied from the
+PyPI package ``sphinx-mathjax-offline`` of the ``docs`` extra), never loaded from a CDN, so the
+equations render on a site opened from disk with no network (checked in headless Chromium with
+the network off by ``tests/test_docs_site.py``).
 """
 
 from __future__ import annotations
@@ -34,6 +39,7 @@ extensions = [
     "sphinx.ext.autosummary",
     "sphinx.ext.intersphinx",
     "sphinx.ext.mathjax",
+    "sphinx-mathjax-offline",  # MathJax 3 copied into _static/mathjax/ (no CDN: works offline)
     "sphinx.ext.viewcode",
     "numpydoc",
     "sphinx_gallery.gen_gallery",
@@ -44,6 +50,8 @@ exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "**.ipynb", "**.py.md5",
 html_theme = "furo"
 html_title = f"heelstrike {release}"
 html_static_path: list[str] = []
+# the MathJax copy that sphinx-mathjax-offline puts into the site (relative to _static/)
+mathjax_path = "mathjax/tex-chtml.js"
 
 # -- API reference --------------------------------------------------------------------------------
 autosummary_generate = True

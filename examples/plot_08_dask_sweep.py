@@ -7,7 +7,8 @@ of named grids, chunk by chunk, and returns a labelled xarray Dataset. Here the 
 energy split of the paper is swept over foot radius and impact angle on a
 ``dask.distributed`` :class:`~distributed.LocalCluster` (two single-threaded worker processes
 on this machine; pass a scheduler address such as ``"tcp://host:8786"`` to use a real
-cluster). Needs ``pip install 'heelstrike[scale]'``.
+cluster). Needs the ``scale`` extra
+(``pip install '.[scale]'`` in a clone of heelstrike).
 """
 
 import logging

@@ -10,8 +10,8 @@ URDF shipped offline by the ``example-robot-data`` package) is loaded through Pi
 without slip (:func:`heelstrike.robots.robot_impact`). Then the paper's Figs. 2-3 for the robot:
 ``T_c`` and ``T_a`` over step length and strike speed
 (:func:`heelstrike.robots.robot_heel_strike_study`, drawn by
-:func:`heelstrike.plots.robots.plot_robot_study`). Needs
-``pip install 'heelstrike[robots]'``.
+:func:`heelstrike.plots.robots.plot_robot_study`). Needs the
+``robots`` extra (``pip install '.[robots]'`` in a clone of heelstrike).
 """
 
 from pathlib import Path

@@ -1,7 +1,8 @@
 """The hand-written compass-gait model against an independent sympy Lagrangian derivation.
 
-The derivation below is built from ``shared/MODEL.md`` only: positions of the points, kinetic
-and potential energies, ``M = d^2 T / d q_dot^2`` and
+The derivation below is built from the paper's model only (Font & Kövecses 2008, Fig. 1, as
+restated in the module docstring of :mod:`heelstrike.models.compass`): positions of the points,
+kinetic and potential energies, ``M = d^2 T / d q_dot^2`` and
 ``h = d/dt(dT/dq_dot) - M q_ddot - dT/dq + dV/dq``, with leg inertia and gravity tilted by the
 slope, ``g (-sin gamma, -cos gamma)``.
 """

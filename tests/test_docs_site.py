@@ -14,6 +14,12 @@ list as JSON into the DOM. ``chromium --headless --dump-dom`` prints the DOM aft
 and the test reads the JSON back. So a page passes only if a real browser displayed a decoded
 figure on it; the PNG files are also checked to exist and hold a non-trivial image. The built
 site itself is never modified.
+
+Math (issue 35, item 2): the paper page is loaded the same way with the network off (a proxy at
+an address where nothing listens, and no host name resolves), and a script run once MathJax has
+typeset the page counts the equations that hold MathJax's output (``mjx-container``) and the raw
+TeX delimiters left in the text. A control loads the same page with MathJax taken from a CDN
+instead and must see raw TeX, which shows that the check really runs offline.
 """
 
 from __future__ import annotations
@@ -54,6 +60,36 @@ window.addEventListener("load", function () {
 </script>
 """
 
+# Runs when the page has loaded and, if MathJax is there, once MathJax has typeset the page
+# (``MathJax.startup.promise``); counts Sphinx's math elements (``div.math`` for displayed
+# equations, ``span.math`` inline), those that hold MathJax's output (``mjx-container``), the
+# TeX delimiters ``\[`` and ``\(`` left in the visible text, and the MathJax script's source.
+MATH_SCRIPT = r"""
+<script>
+window.addEventListener("load", function () {
+  function report() {
+    var pre = document.createElement("pre");
+    pre.id = "heelstrike-math-check";
+    var scripts = Array.prototype.slice.call(document.querySelectorAll("script[src]"))
+      .map(function (s) { return s.getAttribute("src"); })
+      .filter(function (s) { return s.indexOf("tex-chtml") !== -1; });
+    pre.textContent = JSON.stringify({
+      mathjax: typeof window.MathJax === "object" && !!window.MathJax.startup,
+      math: document.querySelectorAll("div.math, span.math").length,
+      typeset: document.querySelectorAll("div.math mjx-container, span.math mjx-container").length,
+      raw: (document.body.innerText.match(/\\\[|\\\(/g) || []).length,
+      scripts: scripts
+    });
+    document.body.appendChild(pre);
+  }
+  var mj = window.MathJax;
+  if (mj && mj.startup && mj.startup.promise) { mj.startup.promise.then(report, report); }
+  else { report(); }
+});
+</script>
+"""
+CDN = "https://cdn.jsdelivr.net/npm/mathjax@3/es5/tex-chtml.js"
+
 
 def _chromium() -> str | None:
     for name in ("chromium", "chromium-browser", "google-chrome"):
@@ -80,11 +116,18 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return copy
 
 
-def _figures_shown(page: Path, profile: Path) -> list[dict[str, object]]:
-    """Load ``page`` (a copy) in headless Chromium; the gallery figures it displayed."""
+def _run_in_chromium(
+    page: Path, profile: Path, script: str, marker: str, offline: bool = False
+) -> object:
+    """Load ``page`` (a copy) with ``script`` added in headless Chromium; the JSON it wrote.
+
+    ``script`` must append ``<pre id="{marker}">JSON</pre>`` to the body. ``offline``: every
+    request that is not a local file goes to a proxy at an address where nothing listens and
+    every host name fails to resolve, so the page sees no network at all.
+    """
     text = page.read_text(encoding="utf-8")
     assert "</body>" in text, page
-    page.write_text(text.replace("</body>", CHECK_SCRIPT + "</body>", 1), encoding="utf-8")
+    page.write_text(text.replace("</body>", script + "</body>", 1), encoding="utf-8")
     chromium = _chromium()
     assert chromium is not None
     cmd = [
@@ -92,15 +135,30 @@ def _figures_shown(page: Path, profile: Path) -> list[dict[str, object]]:
         "--no-first-run", "--disable-background-networking", "--disable-component-update",
         "--disable-sync", "--disable-dev-shm-usage", f"--user-data-dir={profile}",
         "--window-size=1280,2000", "--virtual-time-budget=10000", "--dump-dom",
-        page.as_uri(),
     ]
+    if offline:
+        cmd += ["--proxy-server=127.0.0.1:9", "--host-resolver-rules=MAP * ~NOTFOUND"]
+    cmd.append(page.as_uri())
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=180, check=False)
-    m = re.search(r'<pre id="heelstrike-figure-check">(.*?)</pre>', proc.stdout, re.S)
+    m = re.search(rf'<pre id="{marker}">(.*?)</pre>', proc.stdout, re.S)
     assert m is not None, (
         f"chromium did not run the check on {page.name} (exit {proc.returncode}):\n"
         f"{proc.stderr[-2000:]}"
     )
-    found: list[dict[str, object]] = json.loads(html.unescape(m.group(1)))
+    return json.loads(html.unescape(m.group(1)))
+
+
+def _figures_shown(page: Path, profile: Path) -> list[dict[str, object]]:
+    """Load ``page`` (a copy) in headless Chromium; the gallery figures it displayed."""
+    found = _run_in_chromium(page, profile, CHECK_SCRIPT, "heelstrike-figure-check")
+    assert isinstance(found, list)
+    return found
+
+
+def _math_shown(page: Path, profile: Path) -> dict[str, object]:
+    """Load ``page`` (a copy) in headless Chromium, network off; what became of its math."""
+    found = _run_in_chromium(page, profile, MATH_SCRIPT, "heelstrike-math-check", offline=True)
+    assert isinstance(found, dict)
     return found
 
 
@@ -177,3 +235,29 @@ def test_paper_page_links_every_equation_to_its_code(site: Path) -> None:
         # a resolved cross-reference is a link to the API page's anchor of that object
         assert re.search(rf'<a class="reference internal" href="[^"]*#{re.escape(target)}"',
                          text), f"paper page does not link {target}"
+
+
+def test_paper_page_typesets_its_equations_offline(site: Path, tmp_path: Path) -> None:
+    """Opened from disk with the network off, the paper page shows typeset equations."""
+    page = site / "paper.html"
+    found = _math_shown(page, tmp_path / "profile")
+    # MathJax comes with the site (sphinx-mathjax-offline), not from a CDN
+    assert found["scripts"] == ["_static/mathjax/tex-chtml.js"], found
+    assert (site / "_static" / "mathjax" / "tex-chtml.js").is_file()
+    assert found["mathjax"] is True, found
+    assert int(found["math"]) >= 16, found  # type: ignore[call-overload]  # eqs. (1)-(16) at least
+    assert found["typeset"] == found["math"], f"equations left untypeset: {found}"
+    assert found["raw"] == 0, f"raw TeX delimiters in the text: {found}"
+
+
+def test_the_offline_check_sees_no_network(site: Path, tmp_path: Path) -> None:
+    """Control: the same page with MathJax from the CDN instead shows raw TeX in the same
+    check, so the check above really runs with the network off."""
+    text = (site / "paper.html").read_text(encoding="utf-8")
+    assert '"_static/mathjax/tex-chtml.js"' in text
+    page = site / "paper_from_cdn.html"  # beside paper.html, so that relative links resolve
+    page.write_text(text.replace('"_static/mathjax/tex-chtml.js"', f'"{CDN}"'), encoding="utf-8")
+    found = _math_shown(page, tmp_path / "profile")
+    assert found["scripts"] == [CDN], found
+    assert found["mathjax"] is False and found["typeset"] == 0, found
+    assert int(found["raw"]) >= 16, found  # type: ignore[call-overload]

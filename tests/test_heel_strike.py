@@ -1,11 +1,11 @@
-"""The paper's heel-strike study: an independent momentum check and the facts of MODEL.md.
+"""The paper's heel-strike study: an independent momentum check and the facts of its model.
 
 The impact is checked without the impact algebra: the only external impulse acts at the new
 contact point C (ground point below the left foot's centre P_L), so the walker's angular
 momentum about C is conserved; the trailing (right) leg receives an impulse only at the hip, so
 its angular momentum about the hip is conserved. With the no-slip contact ``A_L q+ = 0`` these
-are four linear equations for ``q+``. Kinematics here are written from MODEL.md, not taken from
-the model.
+are four linear equations for ``q+``. Kinematics here are written from the paper (Fig. 1,
+restated in :mod:`heelstrike.models.compass`'s docstring), not taken from the model.
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ def _momentum_rows(w: CompassGait, q: np.ndarray) -> tuple[np.ndarray, np.ndarra
     P_L = H - s * _e(q34)
     C = P_L + np.array([0.0, -R])
     G_R, G_L = H - b * _e(q3), H - b * _e(q34)
-    # velocity Jacobians (2 x 4) of the points, from their positions in MODEL.md
+    # velocity Jacobians (2 x 4) of the points, from their positions in the paper's Fig. 1
     ex = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]])
 
     def jac(c3: np.ndarray, c34: np.ndarray) -> np.ndarray:

@@ -75,7 +75,7 @@ def test_heavy_module_detection_can_fail() -> None:
 # -- the scale extra ----------------------------------------------------------------------
 @pytest.fixture
 def without_scale(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Make the scale extra's packages unimportable (as in ``pip install heelstrike``)."""
+    """Make the scale extra's packages unimportable (as in the light install, ``pip install .``)."""
     for name in SCALE_MODULES:
         monkeypatch.setitem(sys.modules, name, None)
 
@@ -123,7 +123,8 @@ def test_sweep_features_of_the_extra_name_it(
         sweep(_energies, GRID, chunks=3, progress=False, **kwargs)
     message = str(info.value)
     assert feature in message
-    assert message.endswith("needs the 'scale' extra: pip install 'heelstrike[scale]'")
+    assert message.endswith(
+        "needs the 'scale' extra: pip install '.[scale]' in a clone of heelstrike")
     assert "\n" not in message
     assert not (tmp_path / "s.zarr").exists()
 
@@ -146,7 +147,7 @@ def test_cli_reports_a_missing_extra_in_one_line(
     assert captured.out == ""
     assert captured.err == (
         "heelstrike: error: netCDF output needs the 'scale' extra: "
-        "pip install 'heelstrike[scale]'\n"
+        "pip install '.[scale]' in a clone of heelstrike\n"
     )
 
 

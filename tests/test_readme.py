@@ -1,5 +1,6 @@
-"""The README works as written: its Python blocks run as one script and print what they claim,
-its ``my.toml`` example runs, and its first lines give the commands and their times.
+"""The README works as written: each Python block runs alone (in a fresh namespace, with its own
+imports) and prints what it claims, its ``my.toml`` example runs, its robot headline example is
+admissible as printed, and its first lines give the commands and their times.
 
 Claims: a ``print(...)`` line carries the expected output after ``# -> `` at the end of the
 line, or on the comment line just below it (``# -> ...``). Every ``print`` in the README must
@@ -10,7 +11,9 @@ carry one, and prints exactly one line. A block whose first line is
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import io
+import json
 import os
 import re
 import shlex
@@ -50,16 +53,29 @@ def test_readme_has_python_blocks_with_claims() -> None:
     assert sum(len(_claims(b)) for b in blocks) >= 10
 
 
-def test_readme_python_blocks_print_what_they_claim() -> None:
+def _run_alone(block: str, name: str) -> list[str]:
+    """Run ``block`` in a fresh namespace (as a reader pasting only it would); its printed lines."""
     namespace: dict[str, object] = {"__name__": "__readme__"}
-    for k, block in enumerate(_blocks("python")):
-        if block.startswith(SKIP):
-            continue
-        out = io.StringIO()
-        with contextlib.redirect_stdout(out):
-            exec(compile(block, f"README.md python block {k + 1}", "exec"), namespace)
-        printed = [line.rstrip() for line in out.getvalue().splitlines()]
-        assert printed == _claims(block), f"README python block {k + 1}"
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        exec(compile(block, name, "exec"), namespace)
+    return [line.rstrip() for line in out.getvalue().splitlines()]
+
+
+@pytest.mark.parametrize("k", range(len(_blocks("python"))))
+def test_readme_python_block_runs_alone_and_prints_what_it_claims(k: int) -> None:
+    block = _blocks("python")[k]
+    if block.startswith(SKIP):
+        pytest.skip("README block marked '# readme-test: skip'")
+    printed = _run_alone(block, f"README.md python block {k + 1}")
+    assert printed == _claims(block), f"README python block {k + 1}"
+
+
+def test_a_block_that_leans_on_another_fails_alone() -> None:
+    """The namespaces really are fresh: a block using a name another block imported fails."""
+    _run_alone("import numpy as np\n", "first")
+    with pytest.raises(NameError, match="np"):
+        _run_alone("print(np.pi)  # -> 3.141592653589793\n", "second")
 
 
 def test_claim_checker_catches_a_wrong_claim() -> None:
@@ -105,3 +121,33 @@ def test_readme_first_lines_give_install_test_and_full_commands_with_times() -> 
         assert re.search(r"\d+\s*(s|min)\b", line), f"no time given: {line!r}"
     ci = (README.parent / ".ci" / "run").read_text(encoding="utf-8")
     assert re.search(r"^pytest --runslow\b", ci, flags=re.M)
+
+
+def test_readme_robot_headline_example_is_admissible_as_printed(tmp_path: Path) -> None:
+    """The robot block (``robot state`` then ``impact --robot ... --json``) runs, its impact is
+    admissible, and the numbers the text gives after it are the ones printed."""
+    if importlib.util.find_spec("pinocchio") is None and not os.environ.get("CI"):
+        pytest.skip("needs the robots extra: pip install '.[robots]'")
+    blocks = [b for b in _blocks("console") if "impact --robot" in b and "robot state" in b]
+    assert len(blocks) == 1
+    lines = [ln.split("  #")[0].strip() for ln in blocks[0].strip().splitlines()]
+    commands = [ln for ln in lines if ln.startswith("heelstrike ")]
+    assert [c.split()[1] for c in commands] == ["robot", "robot", "impact"]
+    env = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"}
+    res = None
+    for cmd in commands:
+        res = subprocess.run(shlex.split(cmd), cwd=tmp_path, env=env, capture_output=True,
+                             text=True, timeout=300)
+        assert res.returncode == 0, (cmd, res.stderr)
+    assert res is not None
+    out = json.loads(res.stdout)
+    assert out["admissible"] is True and out["pulling_contacts"] == [], out["pulling_contacts"]
+    assert "not admissible" not in res.stderr, res.stderr
+    kept = [c for c in out["contacts"] if c["role"] == "keep"]
+    assert len(kept) == 1 and kept[0]["force_impulse"][2] > 0
+    assert all(c["mode"] == "stick" for c in out["contacts"])
+    text = README.read_text(encoding="utf-8")
+    after = text[text.index(blocks[0]) + len(blocks[0]):]
+    assert '"admissible": true' in after
+    assert f"normal impulse is +{kept[0]['force_impulse'][2]:.3f} N s" in after
+    assert f"`T` = {out['T']:.4f} J" in after and f"`T_c` = {out['T_c']:.4f} J" in after

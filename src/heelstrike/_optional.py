@@ -1,8 +1,9 @@
 """Optional dependencies: import them on use, and name the extra that installs them.
 
-``pip install heelstrike`` is the light install (everything ``reproduce``, ``impact``, ``gait``,
+heelstrike is installed from a clone of its repository (it is not on a package index):
+``pip install .`` is the light install (everything ``reproduce``, ``impact``, ``gait``,
 ``walk``, ``powered``, ``basin`` and ``map`` need). The ``scale`` extra
-(``pip install 'heelstrike[scale]'``) adds Dask process pools and clusters (``dask``,
+(``pip install '.[scale]'``, in the clone) adds Dask process pools and clusters (``dask``,
 ``distributed``), resumable Zarr sweep stores (``zarr``) and netCDF-4 files (``netCDF4``).
 Without ``netCDF4``, netCDF files are written in the classic 64-bit-offset format through
 scipy (readable by every netCDF library and by :func:`xarray.open_dataset`); the writing is
@@ -22,9 +23,18 @@ class MissingExtraError(ImportError):
     """A package of an optional extra is missing; the message says how to install it."""
 
 
+def install_hint(extra: str) -> str:
+    """``"pip install '.[<extra>]' in a clone of heelstrike"``: the install that works.
+
+    heelstrike is not on a package index, so an install by the package's name would find
+    nothing (or someone else's package); the extra is installed from the repository's clone.
+    """
+    return f"pip install '.[{extra}]' in a clone of heelstrike"
+
+
 def missing_extra_message(what: str, extra: str = "scale") -> str:
-    """``"<what> needs the '<extra>' extra: pip install 'heelstrike[<extra>]'"``."""
-    return f"{what} needs the '{extra}' extra: pip install 'heelstrike[{extra}]'"
+    """``"<what> needs the '<extra>' extra: pip install '.[<extra>]' in a clone of heelstrike"``."""
+    return f"{what} needs the '{extra}' extra: {install_hint(extra)}"
 
 
 def require(module: str, what: str, extra: str = "scale") -> ModuleType:

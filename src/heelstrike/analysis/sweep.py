@@ -9,7 +9,7 @@ same computation (grid, chunks, function identity including closures, defaults, 
 globals and module sources, heelstrike version), and every finished chunk carries a checksum,
 so a deleted or overwritten chunk is computed again (see :func:`sweep`). Local threads work in
 the light install (a plain thread pool when Dask is absent); processes, clusters and stores
-need ``pip install 'heelstrike[scale]'``.
+need the ``scale`` extra (``pip install '.[scale]'`` in a clone of heelstrike).
 
 The function contract
 ---------------------
@@ -1001,7 +1001,7 @@ def sweep(
         by the calling process, so workers need no access to ``store``. Without Dask (the light
         install) ``"threads"`` and ``"sync"`` run on a :mod:`concurrent.futures` thread pool
         with the same results; ``"processes"``, clusters and ``store`` need the ``scale`` extra
-        (``pip install 'heelstrike[scale]'``).
+        (``pip install '.[scale]'`` in a clone of heelstrike).
     progress : bool or str
         Show a tqdm progress bar over chunks (default True), labelled ``sweep <function>``;
         a string shows it with that label (e.g. ``"basin of attraction"``).

@@ -1,9 +1,12 @@
 """The compass-gait biped with circular feet of Font & Kövecses (2008).
 
-Coordinates (4 DOF in flight), see ``shared/MODEL.md``:
+Frame and coordinates (4 DOF in flight), the paper's (Fig. 1): ``x`` along the ground, walking
+towards ``-x``, ``y`` along the ground normal; angles from the ground normal, counter-clockwise
+positive; on a slope ``gamma`` (downhill towards ``-x``) gravity is ``g (-sin gamma, -cos gamma)``
+in this frame. The right leg is the stance leg (its foot rolls on the ground without slipping):
 
 - ``q1, q2``: position of ``P_R``, the centre of the right foot's arc;
-- ``q3``: absolute angle of the right leg from the vertical (counter-clockwise positive);
+- ``q3``: absolute angle of the right leg from the ground normal (counter-clockwise positive);
 - ``q4``: angle of the left leg relative to the right one.
 
 With ``e(theta) = (-sin theta, cos theta)`` and ``s = l - R``: hip ``H = P_R + s e(q3)``, left arc
@@ -12,7 +15,9 @@ centre ``P_L = H - s e(q3 + q4)``, leg centres of mass ``H - b e(leg angle)``.
 The mass matrix is assembled by hand from the point Jacobians,
 ``M = sum_i m_i J_i^T J_i + I (w_R w_R^T + w_L w_L^T)``; ``tests/`` check it against an
 independent sympy Lagrangian derivation. Every function broadcasts over leading axes of ``q`` and
-over array-valued parameters (e.g. a grid of foot radii).
+over array-valued parameters (e.g. a grid of foot radii). The shipped walker file
+``walkers/compass.toml`` describes the same walker with the same coordinates (the conventions of
+walker files: :doc:`/walker_files`).
 """
 
 from __future__ import annotations

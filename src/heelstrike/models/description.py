@@ -4,70 +4,15 @@ A walker is a *description*, not a derivation: a tree of rigid links connected b
 joints, two circular-arc feet and optional point masses, with named numeric parameters. The
 builder (:mod:`heelstrike.models.builder`) derives the equations of motion from it.
 
-Geometry conventions (those of the paper, ``shared/MODEL.md``)
---------------------------------------------------------------
-- Angles are absolute, from the ground normal, counter-clockwise positive; walking is towards
-  ``-x``. ``e(theta) = (-sin theta, cos theta)`` and the *forward* unit vector
-  ``f(theta) = de/dtheta = (-cos theta, -sin theta)`` (``-x`` when the link is vertical).
-- Every link has a *proximal* point (its joint on the parent; for the root, its lower end) and
-  runs a distance ``length`` in its *distal* direction ``sigma e(theta)``, with ``sigma = +1`` for
-  ``direction = "up"`` (default of the root, e.g. a stance leg or a torso) and ``-1`` for
-  ``direction = "down"`` (default of the other links, e.g. a hanging swing leg).
-- A point on a link is given by ``(along, offset)``: the point
-  ``proximal + along * sigma e(theta) + offset * f(theta)``.
-- Coordinates ``q = (x, y, theta_root, q_1, ..., q_k)``: the stance foot's arc centre, the root
-  link's absolute angle, then the relative joint angles ``q_j = theta_child - theta_parent`` in
-  tree order (links sorted so that parents precede children, otherwise in file order).
-
-Numeric fields accept a number or an expression string in the parameters (``"l - R"``), parsed
+The file format (every table and key, types, units, defaults, an example per feature, and the
+errors a file is refused with) is documented on the page :doc:`/walker_files` of the
+documentation site (source ``docs/walker_files.rst``). In short, with the paper's conventions:
+angles are absolute, from the ground normal, counter-clockwise positive, and walking is towards
+``-x``; a point on a link is ``(along, offset)`` from its proximal point; the coordinates are
+``q = (x, y, theta_root, q_1, ..., q_k)``: the stance foot's arc centre, the root link's
+absolute angle, then the relative joint angles ``theta_child - theta_parent`` in tree order.
+Numeric fields take a number or an expression string in the parameters (``"l - R"``), parsed
 safely (numbers, parameter names, ``+ - * / **``, ``pi``, ``sqrt``, ``sin``, ``cos``).
-
-TOML format
------------
-::
-
-    name = "compass"
-    constraints = ["0 <= R", "R <= l", "b <= l"]  # optional, checked whenever values change
-    [params]                # numeric defaults; every name may be overridden when loading
-    l = 1.0
-    R = 0.0
-    g = 9.81                # gravity (m/s^2); defaults to 9.81 if absent
-    [[link]]
-    name = "stance_leg"     # no parent: the root, carries the stance foot
-    length = "l"
-    mass = "m"
-    com = "l - b"           # along the link from its proximal point (m)
-    com_offset = 0.0        # optional, forward offset (m)
-    inertia = 0.0           # optional, about the COM (kg m^2)
-    mirror = "swing_leg"    # optional, for the leg swap
-    [[link]]
-    name = "swing_leg"
-    parent = "stance_leg"
-    attach = "l"            # optional, along the parent (default: the parent's distal end)
-    joint = { name = "hip", actuated = true, lockable = false, lock_angle = 0.0 }
-    ...
-    [[foot]]
-    link = "stance_leg"
-    radius = "R"
-    centre = "R"            # optional, along the link (default: radius from the root's
-                            # proximal end, or length - radius on another link)
-    [[point_mass]]
-    name = "hip"
-    link = "stance_leg"
-    at = "l"
-    mass = "mH"
-    [control.torso]         # optional: a declared posture law (PD on the joint's child link)
-    joint = "torso"         # an actuated joint whose parent is the root link
-    kp = "60.0 * mT"        # stiffness (N m/rad), >= 0; a number or an expression
-    kd = 30.0               # damping (N m s/rad), >= 0
-    angle = 0.0             # optional, set point of the link's absolute angle (rad)
-    [powered]               # optional: the walker's default powered target (PoweredSpec)
-    speed = 0.5             # mean speed (m/s), a finite number > 0: what `heelstrike powered
-                            # --model FILE` seeks when given neither --speed nor --step-length
-
-Without ``[powered]`` the walker declares no default target and ``heelstrike powered --model``
-asks for ``--speed`` or ``--step-length``. Choose a speed inside the walker's family of
-level-ground push-off gaits (the shipped files: compass 0.5, torso 0.45, kneed 1.3 m/s).
 
 Walker files are data: nothing in them is ever executed or pasted into code. Parameter names
 must be ASCII identifiers (not keywords, not reserved); expressions are bounded in length,

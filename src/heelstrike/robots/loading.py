@@ -59,7 +59,7 @@ def _pin() -> Any:
         import pinocchio
     except ImportError as exc:  # pragma: no cover - exercised only without the extra
         raise RobotError(
-            "robots need Pinocchio: pip install 'heelstrike[robots]'"
+            "robots need Pinocchio: pip install '.[robots]' in a clone of heelstrike"
         ) from exc
     return pinocchio
 
@@ -146,7 +146,8 @@ def robot_data_dir() -> Path:
         dist = importlib.metadata.distribution("example-robot-data")
     except importlib.metadata.PackageNotFoundError as exc:
         raise RobotError(
-            "shipped robots need example-robot-data: pip install 'heelstrike[robots]'"
+            "shipped robots need example-robot-data: pip install '.[robots]' in a clone of "
+            "heelstrike"
         ) from exc
     path = Path(str(dist.locate_file("cmeel.prefix/share/example-robot-data/robots")))
     if not path.is_dir():  # pragma: no cover - broken install

@@ -90,7 +90,7 @@ def test_compass_grid_matches_single_contact_when_trailing_foot_lifts() -> None:
 
 
 def test_paper_fact_trailing_foot_lifts_for_large_radii() -> None:
-    """MODEL.md: for R above about 0.4 m the trailing foot lifts for every q3 in [0, 45 deg]."""
+    """Fig. 3b: for R above about 0.4 m the trailing foot lifts for every q3 in [0, 45 deg]."""
     for R in (0.45, 0.7, 1.0):
         cg = CompassGait(foot_radius=R)
         for q3 in _ANGLES:

@@ -610,7 +610,7 @@ def heel_strike_state(
     q3_dot: ArrayLike = 1.0,
     q4_dot: ArrayLike = 0.0,
 ) -> tuple[FloatArray, FloatArray]:
-    """Pre-impact state of the paper's heel-strike study (MODEL.md).
+    """Pre-impact state of the paper's heel-strike study (Font & Kövecses 2008, Figs. 2-3).
 
     Right foot on the ground and rolling (``q2 = R``, ``q1_dot = -R q3_dot``, ``q2_dot = 0``),
     legs symmetric (``q4 = -2 q3``), ``q1 = 0``.

@@ -434,33 +434,6 @@ def _has_free_root(model: Any) -> bool:
             and float(model.inertias[0].mass) == 0.0)
 
 
-def _check_link_inertials(path: Path) -> None:
-    """Refuse a URDF link with a negative mass or an inertia tensor that is not positive
-    semi-definite, naming it: its body, once Pinocchio has merged the links fixed to one
-    another, may still look physical (the parallel-axis terms of the other links hide it)."""
-    import xml.etree.ElementTree as ET
-
-    try:
-        root = ET.parse(path).getroot()
-    except (ET.ParseError, OSError):  # pragma: no cover - urdfdom has just read it
-        return
-    keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
-    links = []
-    for link in root.iter("link"):
-        mass, inertia = link.find("inertial/mass"), link.find("inertial/inertia")
-        try:
-            m = float(mass.get("value", "")) if mass is not None else 0.0
-            xx, xy, xz, yy, yz, zz = (float(inertia.get(k, "0")) if inertia is not None
-                                      else 0.0 for k in keys)
-        except ValueError:  # pragma: no cover - urdfdom has refused it already
-            continue
-        links.append((str(link.get("name")), m,
-                      np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])))
-    bad = _unphysical(links)
-    if bad is not None:
-        raise RobotError(f"{path}: link {bad[0]!r} has {bad[1]}")
-
-
 def _unphysical(bodies: list[tuple[str, float, FloatArray]]) -> tuple[str, str] | None:
     """The first ``(name, mass (kg), inertia (kg m^2))`` no rigid body has, with why: a
     negative mass, or an inertia tensor with a principal moment below zero by more than 1e-6
@@ -491,23 +464,6 @@ def _check_inertias(model: Any, source: Path) -> None:
         raise RobotError(f"{source}: the body moved by joint {bad[0]!r} has {bad[1]}")
 
 
-def _couplings(path: Path, tags: tuple[str, ...]) -> tuple[str, ...]:
-    """Which of the coupling elements ``tags`` a robot file has (the parsers drop them). A URDF
-    ``mimic`` counts only inside a joint that moves (not ``type="fixed"``)."""
-    import re
-
-    try:
-        text = path.read_text(errors="replace")
-    except OSError:  # pragma: no cover - the parser read it just before
-        return ()
-    if "mimic" in tags:  # joint blocks: <joint ... type="..."> ... </joint>
-        moving = [body for kind, body in re.findall(
-            r"<\s*joint\b[^>]*?\btype\s*=\s*[\"'](\w+)[\"'][^>]*>(.*?)<\s*/\s*joint\s*>",
-            text, flags=re.DOTALL) if kind != "fixed"]
-        text = "\n".join(moving) + "\n" + re.sub(r"<\s*mimic\b", "", text)
-    return tuple(t for t in tags if re.search(rf"<\s*{t}\b", text))
-
-
 def _finish(model: Any, name: str, source: Path, q_ref: FloatArray | None,
             feet: tuple[str, str] = ("", ""), foot_contact: str = "flat",
             ignored: tuple[str, ...] = ()) -> Robot:
@@ -528,13 +484,17 @@ def _finish(model: Any, name: str, source: Path, q_ref: FloatArray | None,
                  foot_contact=foot_contact, ignored_couplings=ignored)
 
 
-def _checked_path(path: str | Path, kind: str) -> Path:
-    p = Path(path)
-    if p.is_dir():
-        raise RobotError(f"{kind} file {str(p)!r} is a directory, not a {kind} file")
-    if not p.is_file():
-        raise RobotError(f"{kind} file {str(p)!r} does not exist")
-    return p
+def _checked_file(path: str | Path, kind: str) -> Any:
+    """The robot file at ``path`` read once and checked as written
+    (:func:`heelstrike.robots.files.read_robot_file`)."""
+    from heelstrike.robots.files import read_robot_file
+
+    return read_robot_file(path, kind)
+
+
+#: What Pinocchio's parsers raise on a file they cannot read (an ``IndexError`` is a C++
+#: ``std::out_of_range``, e.g. a name they look up and do not find).
+_PARSER_ERRORS = (RuntimeError, ValueError, OSError, IndexError, KeyError)
 
 
 def load_urdf(
@@ -561,16 +521,16 @@ def load_urdf(
         If the file is missing or not a URDF robot, or a foot frame is not in it.
     """
     pin = _pin()
-    p = _checked_path(path, "URDF")
+    checked = _checked_file(path, "URDF")
+    p = checked.path
     try:
         with _native_errors() as errors:
             model = pin.buildModelFromUrdf(str(p))
-    except (RuntimeError, ValueError, OSError) as exc:
+    except _PARSER_ERRORS as exc:
         reason = errors[0] if errors else _parser_reason(exc)
         raise RobotError(f"{p}: not a URDF robot ({reason[:240]})") from None
     if errors:  # urdfdom dropped an element it could not read (a link's inertial: a typo)
         raise RobotError(f"{p}: {'; '.join(dict.fromkeys(errors))[:240]}")
-    _check_link_inertials(p)
     if model.njoints > 1 and model.parents[1] == 0 and model.joints[1].shortname() in (
             "JointModelPlanar", "JointModelTranslation"):
         raise RobotError(
@@ -579,8 +539,9 @@ def load_urdf(
             "every robot a floating base itself (remove the world link and that joint)")
     if not _has_free_root(model):  # no root floating joint of its own: one is added
         model = pin.buildModelFromUrdf(str(p), pin.JointModelFreeFlyer())
-    return _with_feet(_finish(model, name or p.stem, p, None,
-                              ignored=_couplings(p, ("mimic",))), feet, foot_contact)
+    checked.require_unchanged()
+    return _with_feet(_finish(model, name or p.stem, p, None, ignored=checked.couplings),
+                      feet, foot_contact)
 
 
 def _with_feet(robot: Robot, feet: tuple[str, str] | None, foot_contact: str) -> Robot:
@@ -615,18 +576,20 @@ def load_mjcf(
         If the file is missing or not an MJCF robot, or a foot frame is not in it.
     """
     pin = _pin()
-    p = _checked_path(path, "MJCF")
+    checked = _checked_file(path, "MJCF")
+    p = checked.path
     try:
         with _native_errors() as errors:
             model = pin.buildModelFromMJCF(str(p))
             if not _has_free_root(model):  # a fixed root: a free flyer is added
                 model = pin.buildModelFromMJCFAndRootJoint(
                     str(p), pin.JointModelFreeFlyer(), "root_joint")
-    except (RuntimeError, ValueError, OSError) as exc:
+    except _PARSER_ERRORS as exc:
         reason = errors[0] if errors else _parser_reason(exc)
         raise RobotError(f"{p}: not an MJCF robot ({reason[:240]})") from None
-    return _with_feet(_finish(model, name or p.stem, p, None,
-                              ignored=_couplings(p, ("equality", "tendon"))), feet, foot_contact)
+    checked.require_unchanged()
+    return _with_feet(_finish(model, name or p.stem, p, None, ignored=checked.couplings),
+                      feet, foot_contact)
 
 
 def _parser_reason(exc: BaseException) -> str:
@@ -664,6 +627,7 @@ def load_robot(name: str) -> Robot:
         raise RobotError(f"unknown robot {name!r}; known: {', '.join(sorted(SHIPPED_ROBOTS))}")
     root = robot_data_dir()
     path = root / spec.urdf
+    checked = _checked_file(path, "URDF")
     model = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
     for sole, parent, depth in spec.soles:
         frame = model.frames[model.getFrameId(parent)]
@@ -676,7 +640,7 @@ def load_robot(name: str) -> Robot:
     else:
         q_ref = _bent_neutral(model, spec.knee_bend)
     robot = _finish(model, spec.name, path, q_ref, spec.feet, spec.foot_contact,
-                    ignored=_couplings(path, ("mimic",)))
+                    ignored=checked.couplings)
     for f in spec.feet:
         robot.frame_id(f)
     return robot

@@ -336,13 +336,21 @@ def robot_requested(args: argparse.Namespace) -> bool:
     return any(getattr(args, k, None) is not None for k in ("robot", "urdf", "mjcf"))
 
 
+#: Largest state file read (bytes): a state of 1,000 joints takes about 60 KB.
+STATE_FILE_BYTES = 1 << 20
+
+
 def _read_state(path: str, nq: int, nv: int) -> tuple[list[float], list[float]]:
+    from heelstrike.io import InputFileError, read_regular_file
+
     try:
-        text = Path(path).read_text()
-    except OSError as exc:
-        raise RobotCliError(f"cannot read state file {path!r}: {exc.strerror or exc}") from None
+        data = read_regular_file(path, what="state file", max_bytes=STATE_FILE_BYTES)
+    except InputFileError as exc:
+        raise RobotCliError(str(exc)) from None
     try:
-        obj = json.loads(text)
+        obj = json.loads(data)
+    except UnicodeDecodeError:
+        raise RobotCliError(f"state file {path!r} is not JSON: not UTF-8 text") from None
     except json.JSONDecodeError as exc:
         raise RobotCliError(f"state file {path!r} is not JSON: {exc.msg}") from None
     if not isinstance(obj, dict) or "q" not in obj or "v" not in obj:

@@ -1,0 +1,263 @@
+"""Robot files checked as written (issue #36): one bounded parse of the file, then checks of
+the values the file itself gives, for URDF and MJCF alike, before Pinocchio's loader runs; and
+special files (FIFO, devices, directories) refused by type before anything reads them.
+
+Every bad file is built here, small: a bound is met by counting, never by letting the loader
+allocate or recurse.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+from pathlib import Path
+
+import pytest
+
+if not os.environ.get("CI"):  # CI installs heelstrike[robots]: there these tests must run
+    pytest.importorskip("pinocchio", reason="needs heelstrike[robots]")
+
+from heelstrike.cli import main
+from heelstrike.robots import RobotError, load_mjcf, load_urdf
+
+pytestmark = pytest.mark.robots
+Capture = pytest.CaptureFixture[str]
+
+_I = 'ixy="0" ixz="0" iyz="0"'
+
+
+def _urdf(tmp_path: Path, *, robot: str = '<robot name="bip">', pelvis_mass: str = "10",
+          extra: str = "", hip: str = "", axis: str = "0 1 0", lower: str = "-1",
+          upper: str = "1", leg_inertia: str = 'ixx="0.1" iyy="0.1" izz="0.1"',
+          name: str = "bip.urdf") -> Path:
+    """A two-link biped: a pelvis and one leg on a revolute hip."""
+    path = tmp_path / name
+    path.write_text(f"""<?xml version="1.0"?>
+{robot}
+  <link name="pelvis"><inertial><origin xyz="0 0 0"/><mass value="{pelvis_mass}"/>
+    <inertia ixx="0.1" iyy="0.1" izz="0.1" {_I}/></inertial></link>
+  <link name="leg"><inertial><origin xyz="0 0 -0.5"/><mass value="5"/>
+    <inertia {leg_inertia} {_I}/></inertial></link>
+  <joint name="hip" type="revolute"><parent link="pelvis"/><child link="leg"/>
+    <axis xyz="{axis}"/><limit lower="{lower}" upper="{upper}" effort="1" velocity="1"/>{hip}
+  </joint>
+  {extra}
+</robot>
+""")
+    return path
+
+
+_HEAVY = ('<link name="weight"><inertial><mass value="-2"/><inertia ixx="0" iyy="0" izz="0" '
+          f'{_I}/></inertial></link><joint name="weld" type="fixed"><parent link="pelvis"/>'
+          '<child link="weight"/></joint>')
+
+
+def test_the_biped_file_loads(tmp_path: Path) -> None:
+    robot = load_urdf(_urdf(tmp_path))
+    assert robot.mass == pytest.approx(15.0) and robot.nv == 7
+
+
+def test_an_entity_is_refused_not_a_reason_to_skip_the_checks(tmp_path: Path) -> None:
+    # urdfdom reads '&nbsp;'; the old check's own parse failed on it and skipped the check,
+    # so a -2 kg link welded to the pelvis loaded
+    path = _urdf(tmp_path, robot='<robot name="bip" note="&nbsp;">', extra=_HEAVY)
+    with pytest.raises(RobotError, match=r"bip\.urdf: not a well-formed XML URDF file "
+                       r"\(undefined entity at line 2, column \d+\): only &amp; .* are read"):
+        load_urdf(path)
+    doctype = ('<!DOCTYPE robot [<!ENTITY m "-2">]>\n<robot name="bip">')
+    with pytest.raises(RobotError, match=r"not read as a URDF file: it has a document type "
+                       r"declaration"):
+        load_urdf(_urdf(tmp_path, robot=doctype))
+    # the five XML entities and character references are read as usual
+    assert load_urdf(_urdf(tmp_path, robot='<robot name="b&amp;p&#33;">')).mass == 15.0
+
+
+def _nested_mjcf(path: Path, n: int) -> Path:
+    opening = "".join(f'<body name="b{i}">' + ('<freejoint/>' if i == 0 else
+                      f'<joint name="j{i}" axis="0 1 0"/>') +
+                      '<inertial pos="0 0 0" mass="1" diaginertia="1 1 1"/>' for i in range(n))
+    path.write_text(f'<mujoco model="m"><worldbody>{opening}{"</body>" * n}'
+                    "</worldbody></mujoco>")
+    return path
+
+
+def _chain_urdf(path: Path, n: int) -> Path:
+    links = "".join(f'<link name="l{i}"><inertial><mass value="1"/><inertia ixx="1" iyy="1" '
+                    f'izz="1" {_I}/></inertial></link>' for i in range(n))
+    joints = "".join(f'<joint name="j{i}" type="revolute"><parent link="l{i - 1}"/><child '
+                     f'link="l{i}"/><axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="1" '
+                     'velocity="1"/></joint>' for i in range(1, n))
+    path.write_text(f'<robot name="chain">{links}{joints}</robot>')
+    return path
+
+
+def test_bounds_are_counted_before_the_loader_runs(tmp_path: Path) -> None:
+    # 10,000 nested MJCF bodies crashed Pinocchio's parser (SIGSEGV); 1,000 took 23.8 GB
+    for n in (10_000, 1_000):
+        with pytest.raises(RobotError, match=r"elements nested more than 128 deep .*at most 64 "
+                           "bodies on one chain"):
+            load_mjcf(_nested_mjcf(tmp_path / f"n{n}.xml", n))
+    with pytest.raises(RobotError, match=r"body 'b64' is 65 bodies from the root: at most 64"):
+        load_mjcf(_nested_mjcf(tmp_path / "n65.xml", 65))
+    assert load_mjcf(_nested_mjcf(tmp_path / "n64.xml", 64)).nv == 6 + 63
+    # a 10,000-link URDF chain crashed too
+    with pytest.raises(RobotError, match=r"10000 links: at most 1000 are allowed"):
+        load_urdf(_chain_urdf(tmp_path / "c10000.urdf", 10_000))
+    with pytest.raises(RobotError, match=r"link 'l65' is 65 links from the root: at most 64"):
+        load_urdf(_chain_urdf(tmp_path / "c65.urdf", 66))
+    many = "".join("<a/>" for _ in range(100_001))
+    with pytest.raises(RobotError, match=r"more than 100000 XML elements"):
+        load_urdf(_urdf(tmp_path, extra=f"<gazebo>{many}</gazebo>"))
+    big = tmp_path / "big.urdf"
+    with big.open("wb") as f:  # sparse: refused by its size, never read
+        f.truncate(40 << 20)
+    with pytest.raises(RobotError, match=r"URDF file '.*big\.urdf' has 41943040 bytes, more "
+                       r"than the 8 MiB allowed"):
+        load_urdf(big)
+
+
+def test_couplings_are_found_by_the_parse_not_a_regex(tmp_path: Path) -> None:
+    # the mimic regex was cubic: 1,000 joint tags in a comment took 18.5 s
+    comment = "<!--" + '<joint type="revolute">' * 2_000 + "-->"
+    assert load_urdf(_urdf(tmp_path, extra=comment)).ignored_couplings == ()
+    assert load_urdf(_urdf(tmp_path, hip='<mimic joint="hip"/>')).ignored_couplings == (
+        "mimic",)
+    # a long comment is read in one pass
+    assert load_urdf(_urdf(tmp_path, extra="<!--" + "x" * (4 << 20) + "-->")).nv == 7
+
+
+@pytest.mark.parametrize(("values", "message"), [
+    ({"pelvis_mass": "nan"}, r"link 'pelvis': <mass value> is 'nan': finite numbers are needed"),
+    ({"pelvis_mass": "-1"}, r"link 'pelvis': <mass value> is -1 kg: a mass is >= 0 kg"),
+    ({"leg_inertia": 'ixx="0.01" iyy="0.01" izz="0.1"'},
+     r"link 'leg' has an inertia tensor that no rigid body has \(principal moments 0\.01, "
+     r"0\.01, 0\.1 kg m\^2\): the largest must be at most the sum of the other two"),
+    ({"leg_inertia": 'ixx="-0.1" iyy="0.1" izz="0.1"'},
+     r"link 'leg' has an inertia tensor .* principal moment of -0\.1 kg m\^2\): it must be "
+     "positive semi-definite"),
+    ({"axis": "0 0 0"}, r"joint 'hip': <axis xyz> is zero: a joint axis must be nonzero"),
+    ({"axis": "0 1"}, r"joint 'hip': <axis xyz> has 2 values \('0 1'\): exactly 3"),
+    ({"lower": "1", "upper": "-1"},
+     r"joint 'hip': <limit lower=1 upper=-1> is inverted: lower must be at most upper"),
+    ({"extra": '<link name="leg"/>'}, r"two links are named 'leg': names must be unique"),
+    ({"extra": '<link name="l2"/><joint name="hip" type="fixed"><parent link="leg"/>'
+               '<child link="l2"/></joint>'}, r"two joints are named 'hip'"),
+    ({"extra": '<link name="l2"/><joint name="f" type="floating"><parent link="leg"/>'
+               '<child link="l2"/></joint>'},
+     r"joint 'f' is floating but not at the root"),
+    ({"extra": '<link name="l2&#x9b;31m"/>'},
+     r"the link named 'l2\\x9b31m' has control characters in its name: printable names only"),
+    ({"extra": '<link name="l2\x1b[31m"/>'}, r"not a well-formed XML URDF file \(not "
+     r"well-formed \(invalid token\)"),
+])
+def test_urdf_values_are_checked_as_written(tmp_path: Path, values: dict[str, str],
+                                            message: str) -> None:
+    with pytest.raises(RobotError, match=r"bip\.urdf: " + message):
+        load_urdf(_urdf(tmp_path, **values))
+
+
+def _mjcf(tmp_path: Path, *, base: str = 'mass="2" diaginertia="0.02 0.03 0.04"',
+          joint: str = 'type="hinge" axis="0 1 0" range="-1 1"', extra_body: str = "",
+          world: str = "", top: str = "", leg: str = "leg") -> Path:
+    path = tmp_path / "hop.xml"
+    path.write_text(f"""<mujoco model="hopper">{top}
+  <worldbody>
+    <body name="base" pos="0 0 0.5">
+      <freejoint name="root"/>
+      <inertial pos="0 0 0" {base}/>
+      <body name="{leg}" pos="0 0 0">
+        <joint name="hip" {joint}/>
+        <inertial pos="0 0 -0.25" mass="1" diaginertia="0.01 0.01 0.001"/>
+        <site name="foot" pos="0 0 -0.5"/>
+      </body>
+      {extra_body}
+    </body>
+    {world}
+  </worldbody>
+</mujoco>
+""")
+    return path
+
+
+_FREE = ('<body name="box" pos="1 0 0"><freejoint/><inertial pos="0 0 0" mass="1" '
+         'diaginertia="1 1 1"/></body>')
+
+
+@pytest.mark.parametrize(("values", "message"), [
+    ({"base": 'mass="-2" diaginertia="1 1 1"'},
+     r"body 'base': <inertial mass> is -2 kg: a mass is >= 0 kg"),
+    ({"base": 'mass="2" diaginertia="nan 1 1"'},
+     r"body 'base': <inertial diaginertia> is 'nan 1 1': finite numbers are needed"),
+    ({"base": 'mass="2" diaginertia="-1 1 1"'}, r"body 'base' has an inertia tensor that no "
+     r"rigid body has \(a principal moment of -1 kg m\^2\)"),
+    ({"base": 'mass="2" diaginertia="1 1"'},
+     r"body 'base': <inertial diaginertia> has 2 values \('1 1'\): exactly 3 are allowed"),
+    ({"base": 'mass="2" diaginertia="1 1 5"'}, r"body 'base' .*\(principal moments 1, 1, 5 "
+     r"kg m\^2\): .* \(triangle inequality\)"),
+    ({"base": 'mass="2" fullinertia="1 1 1 0 0"'},
+     r"body 'base': <inertial fullinertia> has 5 values \('1 1 1 0 0'\): exactly 6"),
+    ({"leg": "base"}, r"two bodys are named 'base'"),
+    ({"extra_body": '<body name="arm"><joint name="hip"/></body>'},
+     r"two joints are named 'hip'"),
+    ({"world": _FREE}, r"2 free bodies \('base', 'box'\): one robot has one free body"),
+    ({"extra_body": _FREE}, r"body 'box' has a free joint but is not at the root"),
+    ({"extra_body": '<geom type="sphere" size="0.1" density="nan"/>'},
+     r"body 'base': <geom density> is 'nan': finite numbers are needed"),
+    ({"top": '<default><geom density="-1"/></default>'},
+     r"<default>: <geom density> is -1: it must be >= 0"),
+    ({"joint": 'type="hinge" axis="0 0 0"'}, r"body 'leg': joint 'hip' axis is zero: a joint axis "
+     "must be nonzero"),
+    ({"joint": 'type="hinge" axis="0 1 0" range="1 -1"'}, r"body 'leg': joint 'hip' range \"1 -1\" "
+     "is inverted: the lower limit must be at most the upper one"),
+    ({"extra_body": '<body name="arm" childclass="nope"/>'},
+     r"<body childclass='nope'> names no <default class>"),
+    ({"top": '<include file="other.xml"/>'}, r"<include> is not allowed"),
+])
+def test_mjcf_values_are_checked_as_written(tmp_path: Path, values: dict[str, str],
+                                            message: str) -> None:
+    assert load_mjcf(_mjcf(tmp_path)).nv == 7
+    with pytest.raises(RobotError, match=r"hop\.xml: " + message):
+        load_mjcf(_mjcf(tmp_path, **values))
+
+
+# -- special files ----------------------------------------------------------------------------
+def _special(tmp_path: Path, kind: str) -> tuple[str, str]:
+    """A special file of ``kind`` and what the message calls it."""
+    if kind == "fifo":
+        fifo = tmp_path / "pipe"
+        os.mkfifo(fifo)
+        return str(fifo), "a FIFO (named pipe)"
+    if kind == "device":
+        return "/dev/zero", "a character device"
+    return str(tmp_path), "a directory"
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo") or not Path("/dev/zero").exists(),
+                    reason="needs FIFOs and /dev/zero")
+@pytest.mark.parametrize("kind", ["fifo", "device", "directory"])
+def test_special_files_are_refused_by_type(tmp_path: Path, capsys: Capture, kind: str) -> None:
+    path, what = _special(tmp_path, kind)
+    for loader, name in ((load_urdf, "URDF"), (load_mjcf, "MJCF")):
+        with pytest.raises(RobotError, match=re.escape(f"{name} file '{path}' is {what}, not "
+                                                       "a regular file: give a file")):
+            loader(path)
+    robot = _urdf(tmp_path)
+    assert main(["impact", "--urdf", str(robot), "--state", path, "--keep",
+                 "leg:point"]) == 2
+    err = capsys.readouterr().err
+    assert f"state file '{path}' is {what}, not a regular file" in err, err
+    assert main(["robot", "info", "--urdf", path]) == 2
+    assert f"URDF file '{path}' is {what}" in capsys.readouterr().err
+
+
+def test_a_huge_state_file_is_refused_by_its_size(tmp_path: Path, capsys: Capture) -> None:
+    state = tmp_path / "s.json"
+    with state.open("wb") as f:
+        f.truncate(64 << 20)
+    assert main(["impact", "--urdf", str(_urdf(tmp_path)), "--state", str(state), "--keep",
+                 "leg:point"]) == 2
+    assert "state file" in (err := capsys.readouterr().err) and "more than the 1 MiB" in err
+    state.write_text(json.dumps({"q": [0.0] * 6 + [1.0, 0.0], "v": [0.0] * 7}))
+    assert main(["impact", "--urdf", str(_urdf(tmp_path)), "--state", str(state), "--keep",
+                 "leg:point"]) == 0

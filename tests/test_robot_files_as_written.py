@@ -261,3 +261,43 @@ def test_a_huge_state_file_is_refused_by_its_size(tmp_path: Path, capsys: Captur
     state.write_text(json.dumps({"q": [0.0] * 6 + [1.0, 0.0], "v": [0.0] * 7}))
     assert main(["impact", "--urdf", str(_urdf(tmp_path)), "--state", str(state), "--keep",
                  "leg:point"]) == 0
+
+
+# -- gait states ------------------------------------------------------------------------------
+def test_a_state_the_feet_constraints_cannot_have_is_refused(tmp_path: Path,
+                                                             capsys: Capture) -> None:
+    from heelstrike.robots import gait_state, gait_velocity, load_robot
+    from heelstrike.robots.loading import robot_data_dir
+
+    # bolt: 12 degrees of freedom, flat feet need 17 rows (it wrote 1e16 rad/s)
+    path = robot_data_dir() / "bolt_description/robots/bolt.urdf"
+    flat = load_urdf(path, feet=("FL_FOOT", "FR_FOOT"), foot_contact="flat")
+    message = (r"robot 'bolt' cannot meet the feet constraints of a gait state: flat feet need "
+               r"17 independent velocity rows \(6 per sole, 5 for the base\), the robot has "
+               r"nv = 12 degrees of freedom: point feet")
+    with pytest.raises(RobotError, match=message):
+        gait_state(flat, 0.3, 0.3)
+    point = load_urdf(path, feet=("FL_FOOT", "FR_FOOT"), foot_contact="point")
+    q, _ = gait_state(point, 0.3, 0.3)
+    with pytest.raises(RobotError, match=message):
+        gait_velocity(flat, q, strike_speed=0.3)
+    out = tmp_path / "s.json"
+    assert main(["robot", "state", "--urdf", str(path), "--feet", "FL_FOOT,FR_FOOT",
+                 "--out", str(out)]) == 2
+    assert "cannot meet the feet constraints" in capsys.readouterr().err
+    assert not out.exists()
+    # a shipped robot: the option is honoured (it was silently ignored)
+    assert main(["robot", "state", "bolt", "--foot-contact", "flat", "--out", str(out)]) == 2
+    assert "flat feet need 17 independent velocity rows" in capsys.readouterr().err
+    assert not out.exists()
+    assert main(["robot", "state", "talos", "--foot-contact", "point", "--out", str(out)]) == 0
+    assert json.loads(out.read_text())["foot_contact"] == "point"
+    assert main(["robot", "state", "bolt", "--out", str(out)]) == 0
+    assert json.loads(out.read_text())["foot_contact"] == "point"
+    # a singular pose is refused by the rank of its rows (not solved into huge rates)
+    talos = load_robot("talos")
+    q = talos.reference_q.copy()
+    q[7:] = 0.0  # every joint at zero: straight legs, the soles' rows lose rank
+    with pytest.raises(RobotError, match=r"its 17 rows \(6 per sole, 5 for the base\) are "
+                       r"not independent \(straight or folded legs"):
+        gait_velocity(talos, q, strike_speed=0.3)

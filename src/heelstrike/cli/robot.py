@@ -105,8 +105,10 @@ def add_robot_command(sub: Any) -> None:
     _add_robot_source(ps, "biped")
     ps.add_argument("--feet", default=None, metavar="LEFT,RIGHT",
                     help="with --urdf/--mjcf: the left and right sole (or foot) frames")
-    ps.add_argument("--foot-contact", choices=("flat", "point"), default="flat",
-                    help="with --urdf/--mjcf: the feet's contact type (default flat)")
+    ps.add_argument("--foot-contact", choices=("flat", "point"), default=None,
+                    help="the feet's contact type: flat soles (6 rows each) or points (3 rows "
+                    "each); default: the shipped robot's own (talos, g1 flat; bolt point), "
+                    "flat for --urdf/--mjcf")
     ps.add_argument("--step-length", type=float, default=0.3, metavar="M",
                     help="distance between the soles along x (m, default 0.3)")
     ps.add_argument("--strike-speed", type=float, default=0.3, metavar="M/S",
@@ -188,6 +190,7 @@ def _run_robot_info(args: argparse.Namespace) -> int:
 
 
 def _run_robot_state(args: argparse.Namespace) -> int:
+    from heelstrike.robots.loading import _with_feet
     from heelstrike.robots.states import gait_state
 
     for option, value in (("--step-length", args.step_length),
@@ -216,7 +219,9 @@ def _run_robot_state(args: argparse.Namespace) -> int:
         feet = (left, right)
     elif args.feet is not None:
         raise RobotCliError(f"--feet is for --urdf/--mjcf: robot {args.name!r} has its own")
-    robot = _load(args.name, args.urdf, args.mjcf, feet, args.foot_contact)
+    robot = _load(args.name, args.urdf, args.mjcf, feet, args.foot_contact or "flat")
+    if args.foot_contact is not None and args.foot_contact != robot.foot_contact:
+        robot = _with_feet(robot, robot.feet, args.foot_contact)  # the option, honoured
     q, v = gait_state(robot, args.step_length, args.strike_speed,
                       forward_speed=args.forward_speed,
                       swing_forward_speed=args.swing_forward_speed, leading=args.leading)

@@ -301,3 +301,81 @@ def test_a_state_the_feet_constraints_cannot_have_is_refused(tmp_path: Path,
     with pytest.raises(RobotError, match=r"its 17 rows \(6 per sole, 5 for the base\) are "
                        r"not independent \(straight or folded legs"):
         gait_velocity(talos, q, strike_speed=0.3)
+
+
+# -- messages ---------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def talos():
+    from heelstrike.robots import load_robot
+
+    return load_robot("talos")
+
+
+def test_api_arguments_are_named_not_numpy_or_attribute_errors(talos) -> None:
+    import numpy as np
+
+    from heelstrike.robots import (
+        contact_heights,
+        gait_state,
+        inert_energy_split_batch,
+        mass_matrices_and_jacobians,
+        parse_contact,
+        robot_impact,
+    )
+
+    q, v = gait_state(talos, 0.3, 0.3)
+    sole = [parse_contact("left_sole_link:flat")]
+    with pytest.raises(RobotError, match=r"strike\[0\] must be a ContactSpec, got str: "
+                       r"parse_contact\('left_sole_link:flat'\) makes one"):
+        robot_impact(talos, q, v, strike=["left_sole_link:flat"])
+    with pytest.raises(RobotError, match=r"keep must be a sequence of ContactSpec, got str"):
+        robot_impact(talos, q, v, keep="right_sole_link:flat")
+    with pytest.raises(RobotError, match=r"contacts\[0\] must be a ContactSpec, got int"):
+        contact_heights(talos, q, [1])
+    with pytest.raises(RobotError, match=r"q must be real numbers, got complex numbers"):
+        robot_impact(talos, q.astype(complex), v, strike=sole)
+    with pytest.raises(RobotError, match=r"v must be real numbers, got text"):
+        robot_impact(talos, q, [*v[:-1], "a"], strike=sole)
+    with pytest.raises(RobotError, match=r"configurations are an empty batch: give at least "
+                       r"one \(B >= 1\)"):
+        inert_energy_split_batch(talos, np.empty((0, talos.nq)), np.empty((0, talos.nv)), sole)
+    with pytest.raises(RobotError, match=r"configurations must be real numbers, got complex"):
+        mass_matrices_and_jacobians(talos, q[None, :] + 1j, sole)
+    # a base far away spoiled the rows, and the error blamed "redundant contacts"
+    far = q.copy()
+    far[0] = 1e20
+    with pytest.raises(RobotError, match=r"q\[0:3\], the base position, is 1e\+20 m from the "
+                       r"origin: at most 1e\+06 m is allowed"):
+        robot_impact(talos, far, v, strike=sole)
+    far[0] = 1e5  # far, but exact enough: the same impact
+    near = robot_impact(talos, q, v, strike=sole).to_dict()
+    assert robot_impact(talos, far, v, strike=sole).to_dict()["T_c"] == pytest.approx(
+        near["T_c"], rel=1e-6)
+
+
+def test_a_frame_name_with_colons_can_strike(tmp_path: Path, capsys: Capture) -> None:
+    from heelstrike.robots import parse_contact
+
+    assert parse_contact("base:foot:point").frame == "base:foot"
+    arc = parse_contact("a:b:arc:0.05")
+    assert (arc.frame, arc.kind, arc.radius) == ("a:b", "arc", 0.05)
+    with pytest.raises(RobotError, match=r"the type is read after the last colon"):
+        parse_contact("foot:round")
+    path = _urdf(tmp_path, extra='<link name="leg:sole"/><joint name="sole" type="fixed">'
+                 '<parent link="leg"/><child link="leg:sole"/><origin xyz="0 0 -1"/></joint>')
+    state = tmp_path / "s.json"
+    state.write_text(json.dumps({"q": [0.0] * 6 + [1.0, 0.0],
+                                 "v": [0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0]}))
+    assert main(["impact", "--urdf", str(path), "--state", str(state), "--strike",
+                 "leg:sole:point", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["contacts"][0]["frame"] == "leg:sole"
+
+
+def test_control_characters_reach_the_terminal_escaped(tmp_path: Path, capsys: Capture) -> None:
+    path = _urdf(tmp_path, name="bip\x1b[31m.urdf")
+    assert main(["robot", "info", "--urdf", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "\x1b" not in out and "bip\\x1b[31m: nq=8 nv=7" in out
+    with pytest.raises(SystemExit):
+        main(["impact", "--help"])
+    assert "base:foot:point" in " ".join(capsys.readouterr().out.split())

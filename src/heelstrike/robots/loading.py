@@ -317,18 +317,21 @@ class Robot:
         Raises
         ------
         RobotError
-            Wrong sizes, non-finite entries, or a unit block of norm outside (0.5, 1.5) (not a
-            slightly perturbed unit vector: the joint's angle is then undefined), named.
+            Entries that are not real numbers (complex, text), wrong sizes, non-finite
+            entries, a base position farther than :data:`MAX_BASE_DISTANCE` from the origin,
+            or a unit block of norm outside (0.5, 1.5) (not a slightly perturbed unit vector:
+            the joint's angle is then undefined), named.
         """
         nq, nv = self.nq, self.nv
-        q_ = np.array(q, dtype=float).reshape(-1)  # a copy: normalised below
+        q_ = real_array(q, "q", copy=True).reshape(-1)  # a copy: normalised below
         if q_.shape != (nq,):
             raise RobotError(f"q has {q_.size} entries, robot {self.name!r} needs nq={nq}")
-        v_ = np.zeros(nv) if v is None else np.asarray(v, dtype=float).reshape(-1)
+        v_ = np.zeros(nv) if v is None else real_array(v, "v").reshape(-1)
         if v_.shape != (nv,):
             raise RobotError(f"v has {v_.size} entries, robot {self.name!r} needs nv={nv}")
         if not (np.isfinite(q_).all() and np.isfinite(v_).all()):
             raise RobotError("q and v must be finite")
+        _check_base_position(q_[None, :3])
         for b in self.unit_blocks:
             block = q_[b.start:b.stop]
             nrm = math.sqrt(float(block.dot(block)))  # np.linalg.norm, without overhead
@@ -339,21 +342,29 @@ class Robot:
         return q_, v_
 
     def check_states(self, qs: ArrayLike) -> FloatArray:
-        """:meth:`check_state` for many configurations at once: (B, nq) with unit blocks.
+        """:meth:`check_state` for many configurations at once: (B, nq) with unit blocks
+        (one configuration (nq,) is a batch of one).
 
         Raises
         ------
         RobotError
-            As :meth:`check_state`, naming the first offending configuration.
+            As :meth:`check_state`, naming the first offending configuration; an empty batch
+            (B = 0).
         """
-        q_all = np.asarray(qs, dtype=float)
+        q_all = real_array(qs, "configurations")
+        if q_all.shape == (self.nq,):
+            q_all = q_all[None, :]
         if q_all.ndim != 2 or q_all.shape[1] != self.nq:
             raise RobotError(
                 f"configurations must be (B, nq={self.nq}) for robot {self.name!r}, "
                 f"got {q_all.shape}"
             )
+        if q_all.shape[0] == 0:
+            raise RobotError(f"configurations are an empty batch: give at least one (B >= 1) "
+                             f"of nq={self.nq} entries")
         if not np.all(np.isfinite(q_all)):
             raise RobotError("q and v must be finite")
+        _check_base_position(q_all[:, :3])
         out = q_all.copy()
         for b in self.unit_blocks:
             nrm = np.linalg.norm(q_all[:, b.start:b.stop], axis=1)
@@ -388,6 +399,44 @@ class Robot:
         M = np.array(_pin().crba(self.model, data, q))
         np.copyto(M, M.T, where=_strictly_lower(M.shape[0]))
         return M
+
+
+#: Farthest base position accepted (m from the origin): an impact does not depend on where the
+#: robot stands, and beyond this round-off spoils the contact rows (1e-10 m at 1e6 m).
+MAX_BASE_DISTANCE = 1e6
+
+
+def _check_base_position(base: FloatArray) -> None:
+    """Refuse base positions (B, 3) farther than :data:`MAX_BASE_DISTANCE` from the origin."""
+    dist = np.sqrt(np.einsum("ij,ij->i", base, base))
+    if dist.size and not float(dist.max()) <= MAX_BASE_DISTANCE:
+        i = int(np.argmax(dist))
+        which = f" (configuration {i})" if dist.size > 1 else ""
+        raise RobotError(
+            f"q[0:3], the base position, is {float(dist[i]):.3g} m from the origin{which}: at "
+            f"most {MAX_BASE_DISTANCE:g} m is allowed (the impact does not depend on where the "
+            "robot is, and farther away round-off spoils the contact rows): move it near the "
+            "origin")
+
+
+def real_array(x: ArrayLike, what: str, *, copy: bool = False) -> FloatArray:
+    """``x`` as a float array, refusing what is not real numbers (complex, text, objects,
+    ragged lists) with a message naming ``what``.
+
+    Raises
+    ------
+    RobotError
+        Naming ``what`` and the kind of values found.
+    """
+    try:
+        arr = np.array(x, copy=copy) if copy else np.asarray(x)
+    except (ValueError, TypeError) as exc:
+        raise RobotError(f"{what} must be an array of real numbers ({exc})") from None
+    if arr.dtype.kind not in "biuf":
+        kind = {"c": "complex numbers", "U": "text", "S": "bytes", "O": "objects"}.get(
+            arr.dtype.kind, f"values of type {arr.dtype}")
+        raise RobotError(f"{what} must be real numbers, got {kind}")
+    return np.asarray(arr, dtype=float)
 
 
 @functools.lru_cache(maxsize=16)

@@ -62,11 +62,11 @@ def test_an_entity_is_refused_not_a_reason_to_skip_the_checks(tmp_path: Path) ->
     # urdfdom reads '&nbsp;'; the old check's own parse failed on it and skipped the check,
     # so a -2 kg link welded to the pelvis loaded
     path = _urdf(tmp_path, robot='<robot name="bip" note="&nbsp;">', extra=_HEAVY)
-    with pytest.raises(RobotError, match=r"bip\.urdf: not a well-formed XML URDF file "
-                       r"\(undefined entity at line 2, column \d+\): only &amp; .* are read"):
+    with pytest.raises(RobotError, match=r"bip\.urdf: not a URDF robot \(not well-formed XML: "
+                       r"undefined entity at line 2, column \d+\): only &amp; .* are read"):
         load_urdf(path)
     doctype = ('<!DOCTYPE robot [<!ENTITY m "-2">]>\n<robot name="bip">')
-    with pytest.raises(RobotError, match=r"not read as a URDF file: it has a document type "
+    with pytest.raises(RobotError, match=r"not a URDF robot: it has a document type "
                        r"declaration"):
         load_urdf(_urdf(tmp_path, robot=doctype))
     # the five XML entities and character references are read as usual
@@ -148,7 +148,7 @@ def test_couplings_are_found_by_the_parse_not_a_regex(tmp_path: Path) -> None:
      r"joint 'f' is floating but not at the root"),
     ({"extra": '<link name="l2&#x9b;31m"/>'},
      r"the link named 'l2\\x9b31m' has control characters in its name: printable names only"),
-    ({"extra": '<link name="l2\x1b[31m"/>'}, r"not a well-formed XML URDF file \(not "
+    ({"extra": '<link name="l2\x1b[31m"/>'}, r"not a URDF robot \(not well-formed XML: not "
      r"well-formed \(invalid token\)"),
 ])
 def test_urdf_values_are_checked_as_written(tmp_path: Path, values: dict[str, str],

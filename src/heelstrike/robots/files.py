@@ -187,16 +187,17 @@ def _parse(data: bytes, path: Path, kind: str) -> ET.Element:
     parser.EndElementHandler = end
     parser.StartDoctypeDeclHandler = doctype
     parser.EntityDeclHandler = entity
+    robot = f"not {'an' if kind == 'MJCF' else 'a'} {kind} robot"
     try:
         parser.Parse(data, True)
     except _Refused as exc:
-        raise RobotError(f"{path}: not read as a {kind} file: it has {exc}") from None
+        raise RobotError(f"{path}: {robot}: it has {exc}") from None
     except expat.ExpatError as exc:
         reason = expat.errors.messages[exc.code] if exc.code else str(exc)
         undefined = expat.errors.codes[expat.errors.XML_ERROR_UNDEFINED_ENTITY]
         hint = (": only &amp; &lt; &gt; &quot; &apos; and character references such as &#160; "
                 "are read" if exc.code == undefined else "")
-        raise RobotError(f"{path}: not a well-formed XML {kind} file ({reason} at line "
+        raise RobotError(f"{path}: {robot} (not well-formed XML: {reason} at line "
                          f"{exc.lineno}, column {exc.offset + 1}){hint}") from None
     return builder.close()
 
@@ -253,12 +254,16 @@ def _check_inertias(tensors: list[tuple[str, FloatArray]]) -> None:
     """Refuse a tensor no rigid body has: a principal moment below zero, or the largest above
     the sum of the other two, beyond the rounding tolerances of the file's numbers."""
     scale = max((float(np.abs(t).max()) for _, t in tensors), default=0.0)
+    moments: list[tuple[str, float, float, float]] = []
     for where, tensor in tensors:
         low, mid, high = (float(x) for x in np.linalg.eigvalsh(tensor))
+        moments.append((where, low, mid, high))
+    for where, low, _, _ in moments:  # a negative moment first: the worse fault
         if low < -_PSD_TOLERANCE * scale:
             raise RobotError(f"{where} has an inertia tensor that no rigid body has (a "
                              f"principal moment of {low:.3g} kg m^2): it must be positive "
                              "semi-definite")
+    for where, low, mid, high in moments:
         if high > low + mid + _TRIANGLE_TOLERANCE * scale:
             raise RobotError(
                 f"{where} has an inertia tensor that no rigid body has (principal moments "

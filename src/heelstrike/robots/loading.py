@@ -280,14 +280,22 @@ class Robot:
     def frame_id(self, frame: str) -> int:
         """Index of a frame; raises :class:`RobotError` naming it if absent (with the frames
         of close names, or, if the robot file names it, why the model has no such frame)."""
+        if not isinstance(frame, str):
+            raise RobotError(f"a frame is named by a str, got {type(frame).__name__} "
+                             f"{frame!r}")
         if not self.model.existFrame(frame):
             import difflib
 
             names = [str(f.name) for f in self.model.frames]
             close = difflib.get_close_matches(frame, names, n=3)
             hint = f"; did you mean {' or '.join(map(repr, close))}?" if close else ""
-            with contextlib.suppress(OSError):
-                if f'"{frame}"' in Path(self.source).read_text(errors="replace"):
+            from heelstrike.io import InputFileError, read_regular_file
+            from heelstrike.robots.files import MAX_FILE_BYTES
+
+            with contextlib.suppress(InputFileError):
+                text = read_regular_file(self.source, what="robot file",
+                                         max_bytes=MAX_FILE_BYTES).decode(errors="replace")
+                if f'"{frame}"' in text:
                     hint = "; the file names it, but Pinocchio's parser dropped it" + (
                         " (it keeps no site of a root body without <freejoint/>: give that "
                         "body one)" if self.source.endswith(".xml") else "")

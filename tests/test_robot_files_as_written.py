@@ -213,6 +213,8 @@ _FREE = ('<body name="box" pos="1 0 0"><freejoint/><inertial pos="0 0 0" mass="1
     ({"extra_body": '<body name="arm" childclass="nope"/>'},
      r"<body childclass='nope'> names no <default class>"),
     ({"top": '<include file="other.xml"/>'}, r"<include> is not allowed"),
+    ({"extra_body": '<frame><body name="arm"/></frame>'},
+     r"1 bodies sit inside elements other than <body> \(e\.g\. <frame>\)"),
 ])
 def test_mjcf_values_are_checked_as_written(tmp_path: Path, values: dict[str, str],
                                             message: str) -> None:

@@ -443,6 +443,11 @@ def _mjcf_bodies(root: ET.Element) -> tuple[list[str], list[str], list[str]]:
                 free_bodies.append(name)
         sites += [_name(s, "site") for s in body.findall("site")]
         stack += [(b, depth + 1) for b in reversed(body.findall("body"))]
+    hidden = sum(1 for w in root.findall("worldbody") for _ in w.iter("body")) - len(bodies)
+    if hidden:
+        raise RobotError(f"{hidden} bodies sit inside elements other than <body> (e.g. "
+                         "<frame>), which these checks and Pinocchio's parser do not follow: "
+                         "nest bodies in bodies")
     if len(joints) > MAX_JOINTS:
         raise RobotError(f"{len(joints)} joints: at most {MAX_JOINTS} are allowed")
     if len(free_bodies) > 1:

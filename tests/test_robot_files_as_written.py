@@ -381,3 +381,35 @@ def test_control_characters_reach_the_terminal_escaped(tmp_path: Path, capsys: C
     with pytest.raises(SystemExit):
         main(["impact", "--help"])
     assert "base:foot:point" in " ".join(capsys.readouterr().out.split())
+
+
+def test_loader_and_state_arguments_are_named(talos) -> None:
+    from heelstrike.robots import (
+        gait_configuration,
+        gait_state,
+        joint_limit_violations,
+        load_robot,
+        robot_heel_strike_study,
+    )
+
+    with pytest.raises(RobotError, match=r"a URDF file is given by its path \(str or Path\), "
+                       "got int"):
+        load_urdf(123)  # type: ignore[arg-type]
+    with pytest.raises(RobotError, match=r"the MJCF file's path is empty"):
+        load_mjcf("")
+    with pytest.raises(RobotError, match=r"unknown robot \['talos'\]"):
+        load_robot(["talos"])  # type: ignore[arg-type]
+    with pytest.raises(RobotError, match=r"step_length must be a real number, got str '0\.3'"):
+        gait_state(talos, "0.3", 0.3)  # type: ignore[arg-type]
+    with pytest.raises(RobotError, match=r"strike_speed must be a real number, got str"):
+        gait_state(talos, 0.3, "0.3")  # type: ignore[arg-type]
+    with pytest.raises(RobotError, match=r"forward_speed must be a real number, got NoneType"):
+        gait_state(talos, 0.3, 0.3, forward_speed=None)  # type: ignore[arg-type]
+    with pytest.raises(RobotError, match=r"max_iterations must be an int >= 1, got 'a'"):
+        gait_configuration(talos, 0.3, max_iterations="a")  # type: ignore[arg-type]
+    with pytest.raises(RobotError, match=r"tol must be a real number, got str"):
+        joint_limit_violations(talos, talos.reference_q, tol="a")  # type: ignore[arg-type]
+    with pytest.raises(RobotError, match=r"step lengths must be real numbers, got complex"):
+        robot_heel_strike_study(talos, [0.3 + 1j], [0.3])
+    with pytest.raises(RobotError, match=r"strike speeds must be real numbers, got text"):
+        robot_heel_strike_study(talos, [0.3], "a")

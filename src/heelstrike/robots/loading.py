@@ -447,6 +447,22 @@ def real_array(x: ArrayLike, what: str, *, copy: bool = False) -> FloatArray:
     return np.asarray(arr, dtype=float)
 
 
+def real_number(x: Any, what: str) -> float:
+    """``x`` as a float, refusing what is not a real number (text, None, complex) with a
+    message naming ``what``.
+
+    Raises
+    ------
+    RobotError
+        Naming ``what`` and the type given.
+    """
+    import numbers
+
+    if isinstance(x, bool) or not isinstance(x, numbers.Real):
+        raise RobotError(f"{what} must be a real number, got {type(x).__name__} {x!r:.40}")
+    return float(x)
+
+
 @functools.lru_cache(maxsize=16)
 def _strictly_lower(n: int) -> NDArray[np.bool_]:
     """Mask of the strictly lower triangle of an (n, n) matrix (read-only)."""
@@ -546,6 +562,11 @@ def _checked_file(path: str | Path, kind: str) -> Any:
     (:func:`heelstrike.robots.files.read_robot_file`)."""
     from heelstrike.robots.files import read_robot_file
 
+    if not isinstance(path, str | os.PathLike):
+        raise RobotError(f"a {kind} file is given by its path (str or Path), got "
+                         f"{type(path).__name__}")
+    if not str(path):
+        raise RobotError(f"the {kind} file's path is empty: give a file")
     return read_robot_file(path, kind)
 
 
@@ -679,7 +700,7 @@ def load_robot(name: str) -> Robot:
         If ``name`` is unknown or the package is not installed.
     """
     pin = _pin()
-    spec = SHIPPED_ROBOTS.get(name)
+    spec = SHIPPED_ROBOTS.get(name) if isinstance(name, str) else None
     if spec is None:
         raise RobotError(f"unknown robot {name!r}; known: {', '.join(sorted(SHIPPED_ROBOTS))}")
     root = robot_data_dir()

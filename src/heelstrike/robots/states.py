@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
-from heelstrike.robots.loading import Robot, RobotError, _pin
+from heelstrike.robots.loading import Robot, RobotError, _pin, real_number
 
 __all__ = [
     "MAX_RATE_PER_SPEED",
@@ -66,6 +66,11 @@ def gait_configuration(
         If the inverse kinematics does not converge (step too long for the legs).
     """
     pin = _pin()
+    step_length = real_number(step_length, "step_length")
+    tol = real_number(tol, "tol")
+    if isinstance(max_iterations, bool) or not isinstance(max_iterations, int | np.integer) \
+            or max_iterations < 1:
+        raise RobotError(f"max_iterations must be an int >= 1, got {max_iterations!r:.40}")
     if not (np.isfinite(step_length) and step_length >= 0.0):
         raise RobotError(f"step_length must be finite and >= 0 m, got {step_length!r}")
     lead, trail = _feet(robot, leading)
@@ -144,8 +149,9 @@ def gait_velocity(
         unchecked).
     """
     pin = _pin()
-    speeds = {"strike_speed": strike_speed, "forward_speed": forward_speed,
-              "swing_forward_speed": swing_forward_speed}
+    speeds = {"strike_speed": real_number(strike_speed, "strike_speed"),
+              "forward_speed": real_number(forward_speed, "forward_speed"),
+              "swing_forward_speed": real_number(swing_forward_speed, "swing_forward_speed")}
     for what, value in speeds.items():
         if not math.isfinite(value):
             raise RobotError(f"{what} must be finite, got {value!r} m/s")
@@ -163,8 +169,8 @@ def gait_velocity(
     k = _require_enough_joints(robot)
     C = np.vstack((J_trail[:k], J_lead[:k], J_base))
     d = np.zeros(C.shape[0])
-    d[k], d[k + 2] = swing_forward_speed, -strike_speed
-    d[2 * k] = forward_speed
+    d[k], d[k + 2] = speeds["swing_forward_speed"], -speeds["strike_speed"]
+    d[2 * k] = speeds["forward_speed"]
     with np.errstate(all="ignore"):  # a singular system is refused below, by its rank
         X = np.linalg.solve(M, C.T)
         S = C @ X
@@ -291,6 +297,7 @@ def joint_limit_violations(
     list of JointLimitViolation
         In joint order; empty when the configuration is within the limits.
     """
+    tol = real_number(tol, "tol")
     q_, _ = robot.check_state(q)
     model = robot.model
     lo_all, hi_all = np.asarray(model.lowerPositionLimit), np.asarray(model.upperPositionLimit)

@@ -7,7 +7,10 @@ the optional extra ``heelstrike[robots]``. Nothing is fetched from the network.
 
 Every model gets a floating base ``JointModelFreeFlyer`` as its root joint (a root ``floating``
 joint in a URDF or a ``freejoint`` at an MJCF root is kept, and no second one is added).
-Couplings the model cannot hold (URDF ``<mimic>``, MJCF ``<equality>`` and ``<tendon>``) are
+A robot file is read once and checked as written before Pinocchio's parser reads it
+(:mod:`heelstrike.robots.files`: bounded size, depth and counts; the file's own masses,
+inertias, names, axes, limits and free joints). Couplings the model cannot hold (URDF
+``<mimic>``, MJCF ``<equality>`` and ``<tendon>``) are
 dropped by Pinocchio's parsers: they are listed in :attr:`Robot.ignored_couplings` and the
 CLI says so. Pinocchio's conventions hold: ``q`` has ``nq`` entries (the base as
 position and unit quaternion ``x, y, z, w``), ``v`` has ``nv`` entries (the base's linear and
@@ -596,7 +599,9 @@ def load_urdf(
     Raises
     ------
     RobotError
-        If the file is missing or not a URDF robot, or a foot frame is not in it.
+        If the file is missing, not a regular file, or fails the checks of what it says
+        (:mod:`heelstrike.robots.files`: bounds, masses, inertias, names, axes, limits, free
+        joints), is not a URDF robot, or a foot frame is not in it.
     """
     pin = _pin()
     checked = _checked_file(path, "URDF")
@@ -651,7 +656,7 @@ def load_mjcf(
     Raises
     ------
     RobotError
-        If the file is missing or not an MJCF robot, or a foot frame is not in it.
+        As :func:`load_urdf`, for an MJCF file.
     """
     pin = _pin()
     checked = _checked_file(path, "MJCF")

@@ -413,3 +413,14 @@ def test_loader_and_state_arguments_are_named(talos) -> None:
         robot_heel_strike_study(talos, [0.3 + 1j], [0.3])
     with pytest.raises(RobotError, match=r"strike speeds must be real numbers, got text"):
         robot_heel_strike_study(talos, [0.3], "a")
+
+
+def test_gait_rates_beyond_the_stated_bound_are_refused(talos, monkeypatch) -> None:
+    from heelstrike.robots import gait_state, states
+
+    _, v = gait_state(talos, 0.3, 0.3)  # forward at 0.5 m/s, the largest speed
+    assert 0.0 < abs(v).max() < states.MAX_RATE_PER_SPEED * 0.5
+    monkeypatch.setattr(states, "MAX_RATE_PER_SPEED", 1.0)  # a bound the state exceeds
+    with pytest.raises(RobotError, match=r"robot 'talos': the gait state needs v\[\d+\] = "
+                       r".*beyond the 0\.5 allowed \(1 times the largest speed asked"):
+        gait_state(talos, 0.3, 0.3)

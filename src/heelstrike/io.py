@@ -100,3 +100,86 @@ def write_netcdf(dataset: Any, path: str | Path) -> Path:
         p.unlink(missing_ok=True)
         raise MissingExtraError(missing_extra_message(f"netCDF-4 output ({exc})")) from exc
     return p
+
+
+class InputFileError(ValueError):
+    """A file given to read that is not a regular file of a readable size (named in the
+    message)."""
+
+
+def read_regular_file(path: str | Path, *, what: str, max_bytes: int) -> bytes:
+    """The bytes of ``path``, refusing anything but a regular file of at most ``max_bytes``.
+
+    The file's type is checked before it is opened and again on the open descriptor (opened
+    non-blocking, so a FIFO swapped in meanwhile cannot hang the open), and at most
+    ``max_bytes + 1`` bytes are read: a FIFO, a device such as ``/dev/zero``, a socket or a
+    directory is refused by type, never read.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+    what : str
+        What the file is, for messages (``"URDF file"``, ``"state file"``).
+    max_bytes : int
+        Largest size accepted (bytes).
+
+    Returns
+    -------
+    bytes
+        The file's contents.
+
+    Raises
+    ------
+    InputFileError
+        Naming the file: it does not exist, is not a regular file (saying what it is), is
+        larger than ``max_bytes``, or cannot be read.
+    """
+    import os
+
+    shown = repr(str(path))
+    try:
+        _require_regular(os.stat(path), what, shown, max_bytes)
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except FileNotFoundError:
+        raise InputFileError(f"{what} {shown} does not exist") from None
+    except OSError as exc:
+        raise InputFileError(f"cannot read {what} {shown}: {exc.strerror or exc}") from None
+    try:
+        _require_regular(os.fstat(fd), what, shown, max_bytes)
+        chunks: list[bytes] = []
+        size = 0
+        while size <= max_bytes:
+            chunk = os.read(fd, min(1 << 20, max_bytes + 1 - size))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            size += len(chunk)
+    except OSError as exc:
+        raise InputFileError(f"cannot read {what} {shown}: {exc.strerror or exc}") from None
+    finally:
+        os.close(fd)
+    if size > max_bytes:  # it grew while being read
+        raise InputFileError(f"{what} {shown} is larger than the {_size(max_bytes)} allowed")
+    return b"".join(chunks)
+
+
+def _require_regular(st: Any, what: str, shown: str, max_bytes: int) -> None:
+    """Refuse a ``stat`` result that is not a regular file of at most ``max_bytes``."""
+    import stat
+
+    mode = st.st_mode
+    if not stat.S_ISREG(mode):
+        kind = ("a directory" if stat.S_ISDIR(mode) else "a FIFO (named pipe)"
+                if stat.S_ISFIFO(mode) else "a character device" if stat.S_ISCHR(mode)
+                else "a block device" if stat.S_ISBLK(mode) else "a socket"
+                if stat.S_ISSOCK(mode) else "not a regular file")
+        raise InputFileError(f"{what} {shown} is {kind}, not a regular file: give a file")
+    if st.st_size > max_bytes:
+        raise InputFileError(f"{what} {shown} has {st.st_size} bytes, more than the "
+                             f"{_size(max_bytes)} allowed")
+
+
+def _size(n: int) -> str:
+    """``n`` bytes in MiB or KiB for messages."""
+    return f"{n / (1 << 20):g} MiB" if n >= 1 << 20 else f"{n / 1024:g} KiB"

@@ -67,6 +67,18 @@ def _one_joint_units(kind: str, nq: int, nv: int) -> tuple[list[str], list[str]]
     return (["rad"] if nq == nv == 1 else ["1"]) * nq, ["rad/s"] * nv
 
 
+def _printable(text: str) -> str:
+    """``text`` with every control character but newline and tab written as an escape
+    (``\\x1b``): names from robot files and paths must not drive the terminal."""
+    return "".join(ch if ch in "\n\t" or not (ord(ch) < 32 or 127 <= ord(ch) < 160)
+                   else f"\\x{ord(ch):02x}" for ch in text)
+
+
+def _print(text: str = "", *, file: Any = None) -> None:
+    """:func:`print` one line (or block) of text output, control characters escaped."""
+    print(_printable(text), file=file)
+
+
 def _joules(value: float) -> str:
     """An energy (J) with 6 decimals, or in exponent form outside 1e-6..1e7 J (where fixed
     decimals would print zeros or hundreds of digits)."""
@@ -105,8 +117,10 @@ def add_robot_command(sub: Any) -> None:
     _add_robot_source(ps, "biped")
     ps.add_argument("--feet", default=None, metavar="LEFT,RIGHT",
                     help="with --urdf/--mjcf: the left and right sole (or foot) frames")
-    ps.add_argument("--foot-contact", choices=("flat", "point"), default="flat",
-                    help="with --urdf/--mjcf: the feet's contact type (default flat)")
+    ps.add_argument("--foot-contact", choices=("flat", "point"), default=None,
+                    help="the feet's contact type: flat soles (6 rows each) or points (3 rows "
+                    "each); default: the shipped robot's own (talos, g1 flat; bolt point), "
+                    "flat for --urdf/--mjcf")
     ps.add_argument("--step-length", type=float, default=0.3, metavar="M",
                     help="distance between the soles along x (m, default 0.3)")
     ps.add_argument("--strike-speed", type=float, default=0.3, metavar="M/S",
@@ -132,9 +146,9 @@ def _run_robot_list(args: argparse.Namespace) -> int:
         print_json({"robots": [{k: r[k] for k in _LIST_UNITS} for r in robots]},
                     {"robots": dict(_LIST_UNITS)})
         return 0
-    print(f"{'name':<8} {'nq':>4} {'nv':>4} {'mass (kg)':>10}  source")
+    _print(f"{'name':<8} {'nq':>4} {'nv':>4} {'mass (kg)':>10}  source")
     for r in robots:
-        print(f"{r['name']:<8} {r['nq']:>4} {r['nv']:>4} {r['mass']:>10.3f}  {r['source']}")
+        _print(f"{r['name']:<8} {r['nq']:>4} {r['nv']:>4} {r['mass']:>10.3f}  {r['source']}")
     return 0
 
 
@@ -176,18 +190,19 @@ def _run_robot_info(args: argparse.Namespace) -> int:
         print_json(info, {**_LIST_UNITS, "reference_q": q_units, "joints": None,
                            "frames": None})
         return 0
-    print(f"{r.name}: nq={r.nq} nv={r.nv} mass={r.mass:.3f} kg")
-    print(f"  source  {r.source}")
-    print(f"  feet    {', '.join(r.feet) if any(r.feet) else 'not known (a robot file)'}"
+    _print(f"{r.name}: nq={r.nq} nv={r.nv} mass={r.mass:.3f} kg")
+    _print(f"  source  {r.source}")
+    _print(f"  feet    {', '.join(r.feet) if any(r.feet) else 'not known (a robot file)'}"
           f"{f' ({r.foot_contact} contact)' if any(r.feet) else ''}")
-    print(f"  joints  {len(joints)} (root: {joints[0]}, free flyer)")
-    print(f"  frames  {len(frames)}:")
-    print(textwrap.fill(", ".join(frames), width=96, initial_indent="    ",
+    _print(f"  joints  {len(joints)} (root: {joints[0]}, free flyer)")
+    _print(f"  frames  {len(frames)}:")
+    _print(textwrap.fill(", ".join(frames), width=96, initial_indent="    ",
                         subsequent_indent="    ", break_on_hyphens=False))
     return 0
 
 
 def _run_robot_state(args: argparse.Namespace) -> int:
+    from heelstrike.robots.loading import _with_feet
     from heelstrike.robots.states import gait_state
 
     for option, value in (("--step-length", args.step_length),
@@ -216,7 +231,9 @@ def _run_robot_state(args: argparse.Namespace) -> int:
         feet = (left, right)
     elif args.feet is not None:
         raise RobotCliError(f"--feet is for --urdf/--mjcf: robot {args.name!r} has its own")
-    robot = _load(args.name, args.urdf, args.mjcf, feet, args.foot_contact)
+    robot = _load(args.name, args.urdf, args.mjcf, feet, args.foot_contact or "flat")
+    if args.foot_contact is not None and args.foot_contact != robot.foot_contact:
+        robot = _with_feet(robot, robot.feet, args.foot_contact)  # the option, honoured
     q, v = gait_state(robot, args.step_length, args.strike_speed,
                       forward_speed=args.forward_speed,
                       swing_forward_speed=args.swing_forward_speed, leading=args.leading)
@@ -252,7 +269,7 @@ def _run_robot_state(args: argparse.Namespace) -> int:
                      "trailing_foot": None,
                      "joint_limit_violations": _violation_units(violations)})
         return 0
-    print(f"wrote {args.out}: {robot.name} (nq={robot.nq}, nv={robot.nv}), leading foot "
+    _print(f"wrote {args.out}: {robot.name} (nq={robot.nq}, nv={robot.nv}), leading foot "
           f"{lead} {args.step_length:g} m ahead of {trail}, descending at "
           f"{args.strike_speed:g} m/s")
     return 0
@@ -289,7 +306,7 @@ def _violation_units(violations: list[dict[str, Any]]) -> dict[str, Any]:
 def _note_limit_violations(violations: list[dict[str, Any]], where: str) -> None:
     """One ``heelstrike: note:`` line on stderr per joint outside its limits."""
     for x in violations:
-        print(f"heelstrike: note: {where}: joint {x['joint']!r} at {x['position']:.3f} "
+        _print(f"heelstrike: note: {where}: joint {x['joint']!r} at {x['position']:.3f} "
               f"{x['unit']} is outside its limits [{x['lower']:.3f}, {x['upper']:.3f}] "
               f"{x['unit']}: the robot cannot reach this pose", file=sys.stderr)
 
@@ -319,7 +336,8 @@ def add_robot_impact_options(p: argparse.ArgumentParser) -> None:
                    metavar="FRAME:point|flat|arc:RADIUS",
                    help="striking contact (repeatable; FRAME:arc:RADIUS: an arc heel of radius "
                    "RADIUS m whose centre is the frame's origin, the contact point RADIUS below "
-                   "it along the ground normal); "
+                   "it along the ground normal; the type is read after the last colon, so a "
+                   "FRAME with colons is given as it is: base:foot:point); "
                    "unilateral, with --friction and --restitution, its lift is decided")
     g.add_argument("--keep", action="append", default=None,
                    metavar="FRAME:point|flat|arc:RADIUS",
@@ -336,13 +354,21 @@ def robot_requested(args: argparse.Namespace) -> bool:
     return any(getattr(args, k, None) is not None for k in ("robot", "urdf", "mjcf"))
 
 
+#: Largest state file read (bytes): a state of 1,000 joints takes about 60 KB.
+STATE_FILE_BYTES = 1 << 20
+
+
 def _read_state(path: str, nq: int, nv: int) -> tuple[list[float], list[float]]:
+    from heelstrike.io import InputFileError, read_regular_file
+
     try:
-        text = Path(path).read_text()
-    except OSError as exc:
-        raise RobotCliError(f"cannot read state file {path!r}: {exc.strerror or exc}") from None
+        data = read_regular_file(path, what="state file", max_bytes=STATE_FILE_BYTES)
+    except InputFileError as exc:
+        raise RobotCliError(str(exc)) from None
     try:
-        obj = json.loads(text)
+        obj = json.loads(data)
+    except UnicodeDecodeError:
+        raise RobotCliError(f"state file {path!r} is not JSON: not UTF-8 text") from None
     except json.JSONDecodeError as exc:
         raise RobotCliError(f"state file {path!r} is not JSON: {exc.msg}") from None
     if not isinstance(obj, dict) or "q" not in obj or "v" not in obj:
@@ -368,7 +394,7 @@ def _note_normalised_blocks(robot: Any, q: list[float], where: str) -> None:
     the robot functions normalise them (:meth:`Robot.check_state`), so the pose computed is
     each block divided by its norm."""
     for block, norm in robot.normalised_blocks(q):
-        print(f"heelstrike: note: {where}: {block.describe()} has norm {norm:.9g}; it is "
+        _print(f"heelstrike: note: {where}: {block.describe()} has norm {norm:.9g}; it is "
               "normalised", file=sys.stderr)
 
 
@@ -379,7 +405,7 @@ def _note_separating_strikes(contacts: list[dict[str, Any]]) -> None:
     for c in contacts:
         u = c["normal_velocity_pre"]
         if c["role"] == "strike" and c["mode"] == "separate" and u > 1e-9 * max(scale, 1.0):
-            print(f"heelstrike: note: the striking contact {c['frame']} moves away from the "
+            _print(f"heelstrike: note: the striking contact {c['frame']} moves away from the "
                   f"ground before the impact (normal velocity {u:+.4g} m/s) and stays separate: "
                   "it strikes nothing (no impulse, no share of T_c)", file=sys.stderr)
 
@@ -423,30 +449,30 @@ def run_robot_impact(args: argparse.Namespace) -> int:
     _note_normalised_blocks(robot, q, f"state {args.state}")
     if robot.ignored_couplings:
         tags = ", ".join(f"<{t}>" for t in robot.ignored_couplings)
-        print(f"heelstrike: note: {robot.source} has {tags} elements, which the model does not "
+        _print(f"heelstrike: note: {robot.source} has {tags} elements, which the model does not "
               "hold (Pinocchio's parser drops them): the joints they couple move independently "
               "in this impact", file=sys.stderr)
     keep_text = dict(zip([c.frame for c in keep], args.keep or [], strict=True))
     for frame, lam_n in res.pulling_contacts():
-        print(f"heelstrike: note: the kept contact {frame} pulls on the ground (normal impulse "
+        _print(f"heelstrike: note: the kept contact {frame} pulls on the ground (normal impulse "
               f"{lam_n:.4g} N s < 0), so this impact is not admissible: pass it as --strike "
               f"{keep_text.get(frame, frame)} (complementarity then decides whether it lifts) "
               "or drop it", file=sys.stderr)
     _note_separating_strikes(d["contacts"])
     for c, z in zip((*strike, *keep), contact_heights(robot, q, (*strike, *keep)), strict=True):
         if abs(z) > GROUND_GAP_TOLERANCE:  # QA sweep 9: computed as touching, silently
-            print(f"heelstrike: note: contact {c.frame} is {abs(z) * 1e3:.3g} mm "
+            _print(f"heelstrike: note: contact {c.frame} is {abs(z) * 1e3:.3g} mm "
                   f"{'above' if z > 0 else 'below'} the ground (z = 0) in state {args.state}; "
                   "the impact is computed as if it touched there", file=sys.stderr)
     if d["T_plus"] > d["T"] + 1e-9 * max(d["T"], 1e-300):
-        print(f"heelstrike: note: the impact adds {d['T_plus'] - d['T']:.6g} J of kinetic "
+        _print(f"heelstrike: note: the impact adds {d['T_plus'] - d['T']:.6g} J of kinetic "
               f"energy (T_plus {d['T_plus']:.6g} J > T {d['T']:.6g} J): Newton's restitution "
               "with sticking friction can do so (Kane's paradox); the numbers follow that law, "
               "not an energetic bound", file=sys.stderr)
     if math.isinf(args.friction):
         for c in d["contacts"]:
             if c["role"] == "strike" and c["mode"] == "slip":
-                print(f"heelstrike: note: {c['frame']} slips although friction is unbounded: "
+                _print(f"heelstrike: note: {c['frame']} slips although friction is unbounded: "
                       "sticking would need the ground to pull (a Painleve-type case), so the "
                       "contact slides with a vanishing normal impulse", file=sys.stderr)
     if args.json:
@@ -468,19 +494,19 @@ def run_robot_impact(args: argparse.Namespace) -> int:
         }
         print_json(d, {k: units[k] for k in d})
         return 0
-    print(f"impact of '{robot.name}' (nq={robot.nq}, nv={robot.nv})")
+    _print(f"impact of '{robot.name}' (nq={robot.nq}, nv={robot.nv})")
     extra = d["loss_beyond_T_c"]
     extra_shown = abs(extra) > 1e-9 * max(d["T"], 1e-300)  # beyond round-off
     for key in ("T", "T_c", "T_a", "T_plus", "energy_lost", "loss_beyond_T_c"):
         value = d[key] if key != "loss_beyond_T_c" or extra_shown else 0.0
-        print(f"  {key:<15} {_joules(value):>12} J")
+        _print(f"  {key:<15} {_joules(value):>12} J")
     for c in d["contacts"]:
-        print(f"  {c['role']:<6} {c['frame']:<24} {c['type']:<5} {c['mode']:<8} "
+        _print(f"  {c['role']:<6} {c['frame']:<24} {c['type']:<5} {c['mode']:<8} "
               f"T_c normal {_joules(c['T_c_normal'])} J, "
               f"tangential {_joules(c['T_c_tangential'])} J")
         if c.get("centre_of_pressure") is not None:
             x, y = c["centre_of_pressure"]
-            print(f"         centre of pressure ({x:+.4f}, {y:+.4f}) m from the frame origin "
+            _print(f"         centre of pressure ({x:+.4f}, {y:+.4f}) m from the frame origin "
                   "(world x, y; the sole is taken as unbounded: check it lies on the sole)")
     if extra_shown:
         slipping = [c["frame"] for c in d["contacts"] if c["mode"] == "slip"]
@@ -490,7 +516,7 @@ def run_robot_impact(args: argparse.Namespace) -> int:
                           "admissible energy (its tangential rows are not in T_c)")
         if args.restitution > 0.0:
             causes.append(f"restitution e = {args.restitution:g} returns energy")
-        print(f"  energy_lost - T_c = {extra:+.6f} J (the energy lost is not T_c here): "
+        _print(f"  energy_lost - T_c = {extra:+.6f} J (the energy lost is not T_c here): "
               f"{' and '.join(causes) or 'see impact --help'}")
-    print(f"  admissible      {'yes' if d['admissible'] else 'no (a kept contact pulls)'}")
+    _print(f"  admissible      {'yes' if d['admissible'] else 'no (a kept contact pulls)'}")
     return 0

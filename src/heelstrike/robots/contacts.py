@@ -49,7 +49,7 @@ from heelstrike.core.contact_laws import (
     resolve_contact_impact,
 )
 from heelstrike.core.impact import ImpactInputError, ImpactResult, impact
-from heelstrike.robots.loading import Robot, RobotError, _pin
+from heelstrike.robots.loading import Robot, RobotError, _pin, real_array
 
 __all__ = [
     "ContactKind",
@@ -125,21 +125,45 @@ class ContactSpec:
 def parse_contact(text: str) -> ContactSpec:
     """Parse ``FRAME:point``, ``FRAME:flat`` or ``FRAME:arc:RADIUS`` (m).
 
+    The type is read from the end, so a frame name may itself hold colons
+    (``base:foot:point`` is the frame ``base:foot``).
+
     Raises
     ------
     RobotError
         On a malformed specification.
     """
-    parts = text.split(":")
-    if len(parts) == 2 and parts[1] in ("point", "flat") and parts[0]:
-        return ContactSpec(frame=parts[0], kind=parts[1])  # type: ignore[arg-type]
-    if len(parts) == 3 and parts[1] == "arc" and parts[0]:
+    if not isinstance(text, str):
+        raise RobotError(f"a contact is a text FRAME:point|flat|arc:RADIUS, got "
+                         f"{type(text).__name__}")
+    frame, _, kind = text.rpartition(":")
+    if kind in ("point", "flat") and frame:
+        return ContactSpec(frame=frame, kind=kind)  # type: ignore[arg-type]
+    frame, _, arc = frame.rpartition(":")
+    if arc == "arc" and frame:
         try:
-            radius = float(parts[2])
+            radius = float(kind)
         except ValueError:
             raise RobotError(f"invalid arc radius in contact {text!r}") from None
-        return ContactSpec(frame=parts[0], kind="arc", radius=radius)
-    raise RobotError(f"invalid contact {text!r}: use FRAME:point, FRAME:flat or FRAME:arc:RADIUS")
+        return ContactSpec(frame=frame, kind="arc", radius=radius)
+    raise RobotError(f"invalid contact {text!r}: use FRAME:point, FRAME:flat or FRAME:arc:RADIUS"
+                     " (the type is read after the last colon, so FRAME may hold colons)")
+
+
+def _contact_specs(what: str, items: Any) -> tuple[ContactSpec, ...]:
+    """``items`` as a tuple of :class:`ContactSpec`, refusing anything else by name (a text
+    such as ``"x:flat"`` is what :func:`parse_contact` reads, not a contact)."""
+    if isinstance(items, str | ContactSpec) or not isinstance(items, Sequence):
+        raise RobotError(f"{what} must be a sequence of ContactSpec, got "
+                         f"{type(items).__name__}" + (
+                             f" (parse_contact({items!r}) makes one)"
+                             if isinstance(items, str) else ""))
+    for i, c in enumerate(items):
+        if not isinstance(c, ContactSpec):
+            hint = f": parse_contact({c!r}) makes one" if isinstance(c, str) else ""
+            raise RobotError(f"{what}[{i}] must be a ContactSpec, got {type(c).__name__}"
+                             f"{hint}")
+    return tuple(items)
 
 
 def _skew(r: FloatArray) -> FloatArray:
@@ -417,6 +441,7 @@ def robot_impact(
     -------
     RobotImpact
     """
+    strike, keep = _contact_specs("strike", strike), _contact_specs("keep", keep)
     if not strike and not keep:
         raise RobotError("give at least one contact")
     q_, v_ = robot.check_state(q, v)
@@ -501,6 +526,7 @@ def contact_heights(
     computed with a contact far from it treats that contact as touching all the same.
     """
     pin = _pin()
+    contacts = _contact_specs("contacts", contacts)
     q_, _ = robot.check_state(q)
     data = robot.data
     pin.framesForwardKinematics(robot.model, data, q_)
@@ -517,7 +543,7 @@ def robot_matrices(
     (``LOCAL_WORLD_ALIGNED``) per contact; the robot's ``Data`` is reused.
     """
     q_, _ = robot.check_state(q)
-    return _matrices(robot, _row_plan(robot, tuple(contacts)), q_)
+    return _matrices(robot, _row_plan(robot, _contact_specs("contacts", contacts)), q_)
 
 
 def mass_matrices_and_jacobians(
@@ -527,8 +553,8 @@ def mass_matrices_and_jacobians(
 
     One Pinocchio ``Data`` is reused for all configurations.
     """
-    q_all = robot.check_states(np.asarray(qs, dtype=float).reshape(-1, robot.nq))
-    plan = _row_plan(robot, tuple(contacts))
+    q_all = robot.check_states(qs)
+    plan = _row_plan(robot, _contact_specs("contacts", contacts))
     Ms = np.empty((q_all.shape[0], robot.nv, robot.nv))
     As = np.empty((q_all.shape[0], plan.k, robot.nv))
     _assemble(robot, plan, q_all, Ms, As)
@@ -588,10 +614,10 @@ def inert_energy_split_batch(
     InertImpactBatch
         Arrays with leading shape ``(B,)``; impulses in contact order.
     """
-    if not contacts:
+    if not _contact_specs("contacts", contacts):
         raise RobotError("give at least one contact")
-    q_all = robot.check_states(np.asarray(qs, dtype=float).reshape(-1, robot.nq))
-    v_all = np.asarray(vs, dtype=float)
+    q_all = robot.check_states(qs)
+    v_all = real_array(vs, "velocities")
     if v_all.shape != (q_all.shape[0], robot.nv):
         raise RobotError(
             f"velocities must be (B={q_all.shape[0]}, nv={robot.nv}), got {v_all.shape}"
@@ -641,5 +667,5 @@ def inert_impact_batch(
         With leading shape ``(B,)``.
     """
     Ms, As = mass_matrices_and_jacobians(robot, qs, contacts)
-    v_all = np.asarray(vs, dtype=float).reshape(-1, robot.nv)
+    v_all = real_array(vs, "velocities").reshape(-1, robot.nv)
     return impact(Ms, As, v_all, restitution=restitution)

@@ -7,7 +7,10 @@ the optional extra ``heelstrike[robots]``. Nothing is fetched from the network.
 
 Every model gets a floating base ``JointModelFreeFlyer`` as its root joint (a root ``floating``
 joint in a URDF or a ``freejoint`` at an MJCF root is kept, and no second one is added).
-Couplings the model cannot hold (URDF ``<mimic>``, MJCF ``<equality>`` and ``<tendon>``) are
+A robot file is read once and checked as written before Pinocchio's parser reads it
+(:mod:`heelstrike.robots.files`: bounded size, depth and counts; the file's own masses,
+inertias, names, axes, limits and free joints). Couplings the model cannot hold (URDF
+``<mimic>``, MJCF ``<equality>`` and ``<tendon>``) are
 dropped by Pinocchio's parsers: they are listed in :attr:`Robot.ignored_couplings` and the
 CLI says so. Pinocchio's conventions hold: ``q`` has ``nq`` entries (the base as
 position and unit quaternion ``x, y, z, w``), ``v`` has ``nv`` entries (the base's linear and
@@ -281,14 +284,22 @@ class Robot:
     def frame_id(self, frame: str) -> int:
         """Index of a frame; raises :class:`RobotError` naming it if absent (with the frames
         of close names, or, if the robot file names it, why the model has no such frame)."""
+        if not isinstance(frame, str):
+            raise RobotError(f"a frame is named by a str, got {type(frame).__name__} "
+                             f"{frame!r}")
         if not self.model.existFrame(frame):
             import difflib
 
             names = [str(f.name) for f in self.model.frames]
             close = difflib.get_close_matches(frame, names, n=3)
             hint = f"; did you mean {' or '.join(map(repr, close))}?" if close else ""
-            with contextlib.suppress(OSError):
-                if f'"{frame}"' in Path(self.source).read_text(errors="replace"):
+            from heelstrike.io import InputFileError, read_regular_file
+            from heelstrike.robots.files import MAX_FILE_BYTES
+
+            with contextlib.suppress(InputFileError):
+                text = read_regular_file(self.source, what="robot file",
+                                         max_bytes=MAX_FILE_BYTES).decode(errors="replace")
+                if f'"{frame}"' in text:
                     hint = "; the file names it, but Pinocchio's parser dropped it" + (
                         " (it keeps no site of a root body without <freejoint/>: give that "
                         "body one)" if self.source.endswith(".xml") else "")
@@ -318,18 +329,21 @@ class Robot:
         Raises
         ------
         RobotError
-            Wrong sizes, non-finite entries, or a unit block of norm outside (0.5, 1.5) (not a
-            slightly perturbed unit vector: the joint's angle is then undefined), named.
+            Entries that are not real numbers (complex, text), wrong sizes, non-finite
+            entries, a base position farther than :data:`MAX_BASE_DISTANCE` from the origin,
+            or a unit block of norm outside (0.5, 1.5) (not a slightly perturbed unit vector:
+            the joint's angle is then undefined), named.
         """
         nq, nv = self.nq, self.nv
-        q_ = np.array(q, dtype=float).reshape(-1)  # a copy: normalised below
+        q_ = real_array(q, "q", copy=True).reshape(-1)  # a copy: normalised below
         if q_.shape != (nq,):
             raise RobotError(f"q has {q_.size} entries, robot {self.name!r} needs nq={nq}")
-        v_ = np.zeros(nv) if v is None else np.asarray(v, dtype=float).reshape(-1)
+        v_ = np.zeros(nv) if v is None else real_array(v, "v").reshape(-1)
         if v_.shape != (nv,):
             raise RobotError(f"v has {v_.size} entries, robot {self.name!r} needs nv={nv}")
         if not (np.isfinite(q_).all() and np.isfinite(v_).all()):
             raise RobotError("q and v must be finite")
+        _check_base_position(q_[None, :3])
         for b in self.unit_blocks:
             block = q_[b.start:b.stop]
             nrm = math.sqrt(float(block.dot(block)))  # np.linalg.norm, without overhead
@@ -340,21 +354,29 @@ class Robot:
         return q_, v_
 
     def check_states(self, qs: ArrayLike) -> FloatArray:
-        """:meth:`check_state` for many configurations at once: (B, nq) with unit blocks.
+        """:meth:`check_state` for many configurations at once: (B, nq) with unit blocks
+        (one configuration (nq,) is a batch of one).
 
         Raises
         ------
         RobotError
-            As :meth:`check_state`, naming the first offending configuration.
+            As :meth:`check_state`, naming the first offending configuration; an empty batch
+            (B = 0).
         """
-        q_all = np.asarray(qs, dtype=float)
+        q_all = real_array(qs, "configurations")
+        if q_all.shape == (self.nq,):
+            q_all = q_all[None, :]
         if q_all.ndim != 2 or q_all.shape[1] != self.nq:
             raise RobotError(
                 f"configurations must be (B, nq={self.nq}) for robot {self.name!r}, "
                 f"got {q_all.shape}"
             )
+        if q_all.shape[0] == 0:
+            raise RobotError(f"configurations are an empty batch: give at least one (B >= 1) "
+                             f"of nq={self.nq} entries")
         if not np.all(np.isfinite(q_all)):
             raise RobotError("q and v must be finite")
+        _check_base_position(q_all[:, :3])
         out = q_all.copy()
         for b in self.unit_blocks:
             nrm = np.linalg.norm(q_all[:, b.start:b.stop], axis=1)
@@ -389,6 +411,60 @@ class Robot:
         M = np.array(_pin().crba(self.model, data, q))
         np.copyto(M, M.T, where=_strictly_lower(M.shape[0]))
         return M
+
+
+#: Farthest base position accepted (m from the origin): an impact does not depend on where the
+#: robot stands, and beyond this round-off spoils the contact rows (1e-10 m at 1e6 m).
+MAX_BASE_DISTANCE = 1e6
+
+
+def _check_base_position(base: FloatArray) -> None:
+    """Refuse base positions (B, 3) farther than :data:`MAX_BASE_DISTANCE` from the origin."""
+    dist = np.sqrt(np.einsum("ij,ij->i", base, base))
+    if dist.size and not float(dist.max()) <= MAX_BASE_DISTANCE:
+        i = int(np.argmax(dist))
+        which = f" (configuration {i})" if dist.size > 1 else ""
+        raise RobotError(
+            f"q[0:3], the base position, is {float(dist[i]):.3g} m from the origin{which}: at "
+            f"most {MAX_BASE_DISTANCE:g} m is allowed (the impact does not depend on where the "
+            "robot is, and farther away round-off spoils the contact rows): move it near the "
+            "origin")
+
+
+def real_array(x: ArrayLike, what: str, *, copy: bool = False) -> FloatArray:
+    """``x`` as a float array, refusing what is not real numbers (complex, text, objects,
+    ragged lists) with a message naming ``what``.
+
+    Raises
+    ------
+    RobotError
+        Naming ``what`` and the kind of values found.
+    """
+    try:
+        arr = np.array(x, copy=copy) if copy else np.asarray(x)
+    except (ValueError, TypeError) as exc:
+        raise RobotError(f"{what} must be an array of real numbers ({exc})") from None
+    if arr.dtype.kind not in "biuf":
+        kind = {"c": "complex numbers", "U": "text", "S": "bytes", "O": "objects"}.get(
+            arr.dtype.kind, f"values of type {arr.dtype}")
+        raise RobotError(f"{what} must be real numbers, got {kind}")
+    return np.asarray(arr, dtype=float)
+
+
+def real_number(x: Any, what: str) -> float:
+    """``x`` as a float, refusing what is not a real number (text, None, complex) with a
+    message naming ``what``.
+
+    Raises
+    ------
+    RobotError
+        Naming ``what`` and the type given.
+    """
+    import numbers
+
+    if isinstance(x, bool) or not isinstance(x, numbers.Real):
+        raise RobotError(f"{what} must be a real number, got {type(x).__name__} {x!r:.40}")
+    return float(x)
 
 
 @functools.lru_cache(maxsize=16)
@@ -435,33 +511,6 @@ def _has_free_root(model: Any) -> bool:
             and float(model.inertias[0].mass) == 0.0)
 
 
-def _check_link_inertials(path: Path) -> None:
-    """Refuse a URDF link with a negative mass or an inertia tensor that is not positive
-    semi-definite, naming it: its body, once Pinocchio has merged the links fixed to one
-    another, may still look physical (the parallel-axis terms of the other links hide it)."""
-    import xml.etree.ElementTree as ET
-
-    try:
-        root = ET.parse(path).getroot()
-    except (ET.ParseError, OSError):  # pragma: no cover - urdfdom has just read it
-        return
-    keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
-    links = []
-    for link in root.iter("link"):
-        mass, inertia = link.find("inertial/mass"), link.find("inertial/inertia")
-        try:
-            m = float(mass.get("value", "")) if mass is not None else 0.0
-            xx, xy, xz, yy, yz, zz = (float(inertia.get(k, "0")) if inertia is not None
-                                      else 0.0 for k in keys)
-        except ValueError:  # pragma: no cover - urdfdom has refused it already
-            continue
-        links.append((str(link.get("name")), m,
-                      np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])))
-    bad = _unphysical(links)
-    if bad is not None:
-        raise RobotError(f"{path}: link {bad[0]!r} has {bad[1]}")
-
-
 def _unphysical(bodies: list[tuple[str, float, FloatArray]]) -> tuple[str, str] | None:
     """The first ``(name, mass (kg), inertia (kg m^2))`` no rigid body has, with why: a
     negative mass, or an inertia tensor with a principal moment below zero by more than 1e-6
@@ -492,23 +541,6 @@ def _check_inertias(model: Any, source: Path) -> None:
         raise RobotError(f"{source}: the body moved by joint {bad[0]!r} has {bad[1]}")
 
 
-def _couplings(path: Path, tags: tuple[str, ...]) -> tuple[str, ...]:
-    """Which of the coupling elements ``tags`` a robot file has (the parsers drop them). A URDF
-    ``mimic`` counts only inside a joint that moves (not ``type="fixed"``)."""
-    import re
-
-    try:
-        text = path.read_text(errors="replace")
-    except OSError:  # pragma: no cover - the parser read it just before
-        return ()
-    if "mimic" in tags:  # joint blocks: <joint ... type="..."> ... </joint>
-        moving = [body for kind, body in re.findall(
-            r"<\s*joint\b[^>]*?\btype\s*=\s*[\"'](\w+)[\"'][^>]*>(.*?)<\s*/\s*joint\s*>",
-            text, flags=re.DOTALL) if kind != "fixed"]
-        text = "\n".join(moving) + "\n" + re.sub(r"<\s*mimic\b", "", text)
-    return tuple(t for t in tags if re.search(rf"<\s*{t}\b", text))
-
-
 def _finish(model: Any, name: str, source: Path, q_ref: FloatArray | None,
             feet: tuple[str, str] = ("", ""), foot_contact: str = "flat",
             ignored: tuple[str, ...] = ()) -> Robot:
@@ -529,13 +561,22 @@ def _finish(model: Any, name: str, source: Path, q_ref: FloatArray | None,
                  foot_contact=foot_contact, ignored_couplings=ignored)
 
 
-def _checked_path(path: str | Path, kind: str) -> Path:
-    p = Path(path)
-    if p.is_dir():
-        raise RobotError(f"{kind} file {str(p)!r} is a directory, not a {kind} file")
-    if not p.is_file():
-        raise RobotError(f"{kind} file {str(p)!r} does not exist")
-    return p
+def _checked_file(path: str | Path, kind: str) -> Any:
+    """The robot file at ``path`` read once and checked as written
+    (:func:`heelstrike.robots.files.read_robot_file`)."""
+    from heelstrike.robots.files import read_robot_file
+
+    if not isinstance(path, str | os.PathLike):
+        raise RobotError(f"a {kind} file is given by its path (str or Path), got "
+                         f"{type(path).__name__}")
+    if not str(path):
+        raise RobotError(f"the {kind} file's path is empty: give a file")
+    return read_robot_file(path, kind)
+
+
+#: What Pinocchio's parsers raise on a file they cannot read (an ``IndexError`` is a C++
+#: ``std::out_of_range``, e.g. a name they look up and do not find).
+_PARSER_ERRORS = (RuntimeError, ValueError, OSError, IndexError, KeyError)
 
 
 def load_urdf(
@@ -559,19 +600,21 @@ def load_urdf(
     Raises
     ------
     RobotError
-        If the file is missing or not a URDF robot, or a foot frame is not in it.
+        If the file is missing, not a regular file, or fails the checks of what it says
+        (:mod:`heelstrike.robots.files`: bounds, masses, inertias, names, axes, limits, free
+        joints), is not a URDF robot, or a foot frame is not in it.
     """
     pin = _pin()
-    p = _checked_path(path, "URDF")
+    checked = _checked_file(path, "URDF")
+    p = checked.path
     try:
         with _native_errors() as errors:
             model = pin.buildModelFromUrdf(str(p))
-    except (RuntimeError, ValueError, OSError) as exc:
+    except _PARSER_ERRORS as exc:
         reason = errors[0] if errors else _parser_reason(exc)
         raise RobotError(f"{p}: not a URDF robot ({reason[:240]})") from None
     if errors:  # urdfdom dropped an element it could not read (a link's inertial: a typo)
         raise RobotError(f"{p}: {'; '.join(dict.fromkeys(errors))[:240]}")
-    _check_link_inertials(p)
     if model.njoints > 1 and model.parents[1] == 0 and model.joints[1].shortname() in (
             "JointModelPlanar", "JointModelTranslation"):
         raise RobotError(
@@ -580,8 +623,9 @@ def load_urdf(
             "every robot a floating base itself (remove the world link and that joint)")
     if not _has_free_root(model):  # no root floating joint of its own: one is added
         model = pin.buildModelFromUrdf(str(p), pin.JointModelFreeFlyer())
-    return _with_feet(_finish(model, name or p.stem, p, None,
-                              ignored=_couplings(p, ("mimic",))), feet, foot_contact)
+    checked.require_unchanged()
+    return _with_feet(_finish(model, name or p.stem, p, None, ignored=checked.couplings),
+                      feet, foot_contact)
 
 
 def _with_feet(robot: Robot, feet: tuple[str, str] | None, foot_contact: str) -> Robot:
@@ -613,21 +657,23 @@ def load_mjcf(
     Raises
     ------
     RobotError
-        If the file is missing or not an MJCF robot, or a foot frame is not in it.
+        As :func:`load_urdf`, for an MJCF file.
     """
     pin = _pin()
-    p = _checked_path(path, "MJCF")
+    checked = _checked_file(path, "MJCF")
+    p = checked.path
     try:
         with _native_errors() as errors:
             model = pin.buildModelFromMJCF(str(p))
             if not _has_free_root(model):  # a fixed root: a free flyer is added
                 model = pin.buildModelFromMJCFAndRootJoint(
                     str(p), pin.JointModelFreeFlyer(), "root_joint")
-    except (RuntimeError, ValueError, OSError) as exc:
+    except _PARSER_ERRORS as exc:
         reason = errors[0] if errors else _parser_reason(exc)
         raise RobotError(f"{p}: not an MJCF robot ({reason[:240]})") from None
-    return _with_feet(_finish(model, name or p.stem, p, None,
-                              ignored=_couplings(p, ("equality", "tendon"))), feet, foot_contact)
+    checked.require_unchanged()
+    return _with_feet(_finish(model, name or p.stem, p, None, ignored=checked.couplings),
+                      feet, foot_contact)
 
 
 def _parser_reason(exc: BaseException) -> str:
@@ -660,11 +706,12 @@ def load_robot(name: str) -> Robot:
         If ``name`` is unknown or the package is not installed.
     """
     pin = _pin()
-    spec = SHIPPED_ROBOTS.get(name)
+    spec = SHIPPED_ROBOTS.get(name) if isinstance(name, str) else None
     if spec is None:
         raise RobotError(f"unknown robot {name!r}; known: {', '.join(sorted(SHIPPED_ROBOTS))}")
     root = robot_data_dir()
     path = root / spec.urdf
+    checked = _checked_file(path, "URDF")
     model = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
     for sole, parent, depth in spec.soles:
         frame = model.frames[model.getFrameId(parent)]
@@ -677,7 +724,7 @@ def load_robot(name: str) -> Robot:
     else:
         q_ref = _bent_neutral(model, spec.knee_bend)
     robot = _finish(model, spec.name, path, q_ref, spec.feet, spec.foot_contact,
-                    ignored=_couplings(path, ("mimic",)))
+                    ignored=checked.couplings)
     for f in spec.feet:
         robot.frame_id(f)
     return robot

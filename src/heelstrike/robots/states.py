@@ -23,9 +23,10 @@ from numpy.typing import ArrayLike
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
-from heelstrike.robots.loading import Robot, RobotError, _pin
+from heelstrike.robots.loading import Robot, RobotError, _pin, real_number
 
 __all__ = [
+    "MAX_RATE_PER_SPEED",
     "JointLimitViolation",
     "gait_configuration",
     "gait_state",
@@ -65,9 +66,15 @@ def gait_configuration(
         If the inverse kinematics does not converge (step too long for the legs).
     """
     pin = _pin()
+    step_length = real_number(step_length, "step_length")
+    tol = real_number(tol, "tol")
+    if isinstance(max_iterations, bool) or not isinstance(max_iterations, int | np.integer) \
+            or max_iterations < 1:
+        raise RobotError(f"max_iterations must be an int >= 1, got {max_iterations!r:.40}")
     if not (np.isfinite(step_length) and step_length >= 0.0):
         raise RobotError(f"step_length must be finite and >= 0 m, got {step_length!r}")
     lead, trail = _feet(robot, leading)
+    _require_enough_joints(robot)
     model = robot.model
     data = model.createData()
     q = robot.reference_q.copy()
@@ -131,10 +138,20 @@ def gait_velocity(
         Forward speed of the base (m/s).
     swing_forward_speed : float
         Forward speed of the leading sole (m/s).
+
+    Raises
+    ------
+    RobotError
+        If a speed is not finite, or the robot cannot meet the constraints: fewer degrees of
+        freedom than rows (flat feet: 17, point feet: 11), rows that are not independent at
+        ``q``, or a velocity that misses them beyond round-off or has an entry beyond
+        :data:`MAX_RATE_PER_SPEED` times the largest speed (a state is never returned
+        unchecked).
     """
     pin = _pin()
-    speeds = {"strike_speed": strike_speed, "forward_speed": forward_speed,
-              "swing_forward_speed": swing_forward_speed}
+    speeds = {"strike_speed": real_number(strike_speed, "strike_speed"),
+              "forward_speed": real_number(forward_speed, "forward_speed"),
+              "swing_forward_speed": real_number(swing_forward_speed, "swing_forward_speed")}
     for what, value in speeds.items():
         if not math.isfinite(value):
             raise RobotError(f"{what} must be finite, got {value!r} m/s")
@@ -149,13 +166,70 @@ def gait_velocity(
     J_trail = np.array(pin.getFrameJacobian(model, data, robot.frame_id(trail), lwa))
     J_lead = np.array(pin.getFrameJacobian(model, data, robot.frame_id(lead), lwa))
     J_base = np.array(pin.getJointJacobian(model, data, 1, lwa))[[0, 1, 3, 4, 5]]
-    k = 3 if robot.foot_contact == "point" else 6  # point feet: no sole orientation
+    k = _require_enough_joints(robot)
     C = np.vstack((J_trail[:k], J_lead[:k], J_base))
     d = np.zeros(C.shape[0])
-    d[k], d[k + 2] = swing_forward_speed, -strike_speed
-    d[2 * k] = forward_speed
-    X = np.linalg.solve(M, C.T)
-    return np.asarray(X @ np.linalg.solve(C @ X, d))
+    d[k], d[k + 2] = speeds["swing_forward_speed"], -speeds["strike_speed"]
+    d[2 * k] = speeds["forward_speed"]
+    with np.errstate(all="ignore"):  # a singular system is refused below, by its rank
+        X = np.linalg.solve(M, C.T)
+        S = C @ X
+        eig = np.linalg.eigvalsh(0.5 * (S + S.T)) if np.isfinite(S).all() else np.zeros(1)
+        if not eig[0] > _RANK_TOLERANCE * eig[-1]:
+            raise RobotError(
+                f"robot {robot.name!r} cannot meet the feet constraints of a gait state at "
+                f"this pose: its {C.shape[0]} rows ({k} per sole, 5 for the base) are not "
+                "independent (straight or folded legs: a singular pose)")
+        v = np.asarray(X @ np.linalg.solve(S, d))
+    _require_state(robot, q_, v, C, d, speeds)
+    return v
+
+
+#: Gait states whose feet constraints are worse conditioned than this are refused.
+_RANK_TOLERANCE = 1e-12
+
+#: Every entry of a gait state's velocity (rad/s for a joint, m/s for the base's linear
+#: velocity) is at most this times the largest speed asked (m/s): the rate of a lever of
+#: 1 cm. Typical shipped bipeds need 7 to 10 times the speed.
+MAX_RATE_PER_SPEED = 100.0
+
+
+def _point_hint(robot: Robot) -> str:
+    return (": point feet (foot_contact 'point', 3 rows per sole) need fewer"
+            if robot.foot_contact == "flat" else "")
+
+
+def _require_enough_joints(robot: Robot) -> int:
+    """Rows per sole (6 flat, 3 point), refusing a robot with fewer degrees of freedom than
+    the gait state's constraints."""
+    k = 3 if robot.foot_contact == "point" else 6  # point feet: no sole orientation
+    rows = 2 * k + 5
+    if robot.nv < rows:
+        raise RobotError(
+            f"robot {robot.name!r} cannot meet the feet constraints of a gait state: "
+            f"{robot.foot_contact} feet need {rows} independent velocity rows ({k} per sole, 5 "
+            f"for the base), the robot has nv = {robot.nv} degrees of freedom"
+            f"{_point_hint(robot)}")
+    return k
+
+
+def _require_state(robot: Robot, q: FloatArray, v: FloatArray, C: FloatArray, d: FloatArray,
+                   speeds: dict[str, float]) -> None:
+    """Refuse a gait velocity that is not finite, misses its constraints ``C v = d`` beyond
+    round-off, or has an entry beyond :data:`MAX_RATE_PER_SPEED` times the largest speed."""
+    bound = MAX_RATE_PER_SPEED * max(abs(x) for x in speeds.values())
+    with np.errstate(all="ignore"):
+        residual = float(np.max(np.abs(C @ v - d))) if np.isfinite(v).all() else math.inf
+    if not residual <= 1e-8 * max(float(np.max(np.abs(d))), 1e-300):
+        raise RobotError(f"robot {robot.name!r}: the gait state misses its feet constraints "
+                         f"by {residual:.3g} m/s (the legs are singular at this pose)")
+    i = int(np.argmax(np.abs(v)))
+    if abs(float(v[i])) > bound:
+        raise RobotError(
+            f"robot {robot.name!r}: the gait state needs v[{i}] = {float(v[i]):.3g} (rad/s or "
+            f"m/s), beyond the {bound:.3g} allowed ({MAX_RATE_PER_SPEED:g} times the largest "
+            "speed asked, a 1 cm lever): the legs are near a singular pose")
+    robot.check_state(q, v)
 
 
 def gait_state(
@@ -223,6 +297,7 @@ def joint_limit_violations(
     list of JointLimitViolation
         In joint order; empty when the configuration is within the limits.
     """
+    tol = real_number(tol, "tol")
     q_, _ = robot.check_state(q)
     model = robot.model
     lo_all, hi_all = np.asarray(model.lowerPositionLimit), np.asarray(model.upperPositionLimit)

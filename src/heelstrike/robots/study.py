@@ -27,7 +27,7 @@ from heelstrike.robots.contacts import (
     ground_admissible,
     mass_matrices_and_jacobians,
 )
-from heelstrike.robots.loading import Robot, RobotError
+from heelstrike.robots.loading import Robot, RobotError, real_array, real_number
 from heelstrike.robots.states import Leading, gait_configuration, gait_velocity
 
 __all__ = ["RobotStudy", "robot_heel_strike_study"]
@@ -101,8 +101,9 @@ def robot_heel_strike_study(
     leading : {"left", "right"}
         Striking foot.
     """
-    L = np.atleast_1d(np.asarray(step_lengths, dtype=float))
-    S = np.atleast_1d(np.asarray(strike_speeds, dtype=float))
+    L = np.atleast_1d(real_array(step_lengths, "step lengths"))
+    S = np.atleast_1d(real_array(strike_speeds, "strike speeds"))
+    forward_speed = real_number(forward_speed, "forward_speed")
     if L.ndim != 1 or S.ndim != 1 or L.size == 0 or S.size == 0:
         raise RobotError("step lengths and strike speeds must be non-empty 1-D arrays, got "
                          f"shapes {L.shape} and {S.shape}")

@@ -136,6 +136,9 @@ def add_robot_command(sub: Any) -> None:
     ps.add_argument("--json", action="store_true",
                     help="with --out: print one JSON object describing what was written")
     ps.set_defaults(func=_run_robot_state)
+    from heelstrike.cli.replay import add_replay_command
+
+    add_replay_command(rsub)
 
 
 def _run_robot_list(args: argparse.Namespace) -> int:

@@ -268,7 +268,7 @@ def mujoco_rollout(
             if arr.shape != (size,) or not np.all(np.isfinite(arr)):
                 raise RobotError(f"{name} must be {size} finite numbers, got {arr.shape}")
             target[:] = arr
-    steps = int(math.ceil(duration / mm.opt.timestep - 1e-9))
+    steps = math.ceil(duration / mm.opt.timestep - 1e-9)
     n = steps // every + 1
     t, qp, qv, ke = np.empty(n), np.empty((n, mm.nq)), np.empty((n, mm.nv)), np.empty(n)
     for k in range(n):
@@ -579,13 +579,15 @@ class ReplayResult(ResultDictMixin):
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary: settings and the touchdowns (no per-sample arrays; NaN
-        restitutions as None)."""
+        restitutions as None, an unbounded friction cone as ``"friction": None``)."""
         out = [_plain(d) for d in self.touchdowns]
         return {
             "robot": self.robot, "source": self.source,
             "contacts": [f"{c.frame}:{c.kind}" + (f":{c.radius:g}" if c.kind == "arc" else "")
                          for c in self.contacts],
-            "window": self.window, "friction": self.friction, "restitution": self.restitution,
+            "window": self.window,
+            "friction": self.friction if math.isfinite(self.friction) else None,
+            "restitution": self.restitution,
             "samples": int(self.time.size), "touchdowns": out,
         }
 

@@ -4,6 +4,7 @@ MuJoCo's own stiff, inelastic contact."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import sys
 
@@ -12,10 +13,13 @@ import pytest
 
 pytest.importorskip("pinocchio")
 
-from heelstrike._optional import MissingExtraError  # noqa: E402
-from heelstrike.cli import main  # noqa: E402
-from heelstrike.robots import ContactSpec, load_mjcf  # noqa: E402
-from heelstrike.robots.replay import (  # noqa: E402
+from heelstrike._optional import MissingExtraError
+from heelstrike._results import ResultDictMixin
+from heelstrike.cli import main
+from heelstrike.robots import ContactSpec, load_mjcf
+from heelstrike.robots.replay import (
+    ReplayResult,
+    Touchdown,
     Trajectory,
     detect_touchdowns,
     kinetic_energy,
@@ -264,6 +268,14 @@ def test_touchdowns_ignore_chatter_and_keep_the_stance() -> None:
     assert len(detect_touchdowns(h, clearance=0.0)) == 4
 
 
+@pytest.mark.parametrize("cls", [Trajectory, Touchdown, ReplayResult])
+def test_results_are_frozen_keyword_only_with_to_dict(cls) -> None:
+    assert dataclasses.is_dataclass(cls) and cls.__dataclass_params__.frozen
+    assert issubclass(cls, ResultDictMixin)
+    with pytest.raises(TypeError):
+        cls(*range(len(dataclasses.fields(cls))))
+
+
 def test_trajectory_refuses_bad_input(tmp_path) -> None:
     with pytest.raises(ValueError, match="increase"):
         Trajectory(time=np.array([0.0, 0.0]), q=np.zeros((2, 8)), v=np.zeros((2, 7)))
@@ -276,6 +288,14 @@ def test_missing_mujoco_names_the_extra(tmp_path, monkeypatch) -> None:
     monkeypatch.setitem(sys.modules, "mujoco", None)
     with pytest.raises(MissingExtraError, match=r"pip install 'heelstrike\[mujoco\]'"):
         mujoco_rollout(_rod_file(tmp_path), duration=0.01)
+
+
+def test_cli_defaults_are_the_api_defaults() -> None:
+    from heelstrike.cli import replay as cli_replay
+    from heelstrike.robots import replay as api_replay
+
+    assert cli_replay.DEFAULT_WINDOW == api_replay.DEFAULT_WINDOW
+    assert cli_replay.DEFAULT_CLEARANCE == api_replay.DEFAULT_CLEARANCE
 
 
 def test_cli_robot_replay(mujoco, tmp_path, capsys) -> None:

@@ -21,10 +21,14 @@ _TOUCHDOWN_UNITS: dict[str, Any] = {
 }
 
 
+#: :data:`heelstrike.robots.replay.DEFAULT_WINDOW` (s) and ``DEFAULT_CLEARANCE`` (m), repeated
+#: here so that building the parser imports no robot code (a test checks they agree).
+DEFAULT_WINDOW = 0.01
+DEFAULT_CLEARANCE = 1e-3
+
+
 def add_replay_command(rsub: Any) -> None:
     """Register ``heelstrike robot replay`` on the ``robot`` subcommands ``rsub``."""
-    from heelstrike.robots.replay import DEFAULT_CLEARANCE, DEFAULT_WINDOW
-
     p = rsub.add_parser(
         "replay", help="touchdowns of a recorded motion against the rigid-impact prediction",
         description="Find the touchdowns of a recorded motion (a contact's height crossing "

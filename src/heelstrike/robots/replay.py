@@ -94,10 +94,13 @@ class Trajectory(ResultDictMixin):
     reference_kinetic: FloatArray | None = None
 
     def __post_init__(self) -> None:
-        t = np.asarray(self.time, dtype=float)
+        for name in ("time", "q", "v"):
+            object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=float))
+        t = self.time
         if t.ndim != 1 or t.size < 2:
             raise RobotError(f"a trajectory needs at least 2 samples, got {t.size}")
-        if self.q.shape[0] != t.size or self.v.shape[0] != t.size:
+        if self.q.ndim != 2 or self.v.ndim != 2 or self.q.shape[0] != t.size \
+                or self.v.shape[0] != t.size:
             raise RobotError(f"time, q and v must have one row per sample ({t.size}), got "
                              f"q {self.q.shape} and v {self.v.shape}")
         if not (np.all(np.isfinite(t)) and np.all(np.isfinite(self.q))

@@ -9,9 +9,7 @@ the last sample before it (``v+``, ``T_c``, ``T_a``, the share of ``T_c`` per co
 the recorded motion did across the contact transient (kinetic energy lost over a stated window,
 effective restitution of each striking contact's normal velocity).
 
-Conventions
------------
-Pinocchio's (heelstrike's): ``q`` holds the root free flyer as position (m) and unit
+The two conventions. Pinocchio's (heelstrike's): ``q`` holds the root free flyer as position (m) and unit
 quaternion ``(x, y, z, w)``, then the joints; ``v`` holds the base's linear velocity (m/s) and
 angular velocity (rad/s) **both in the base's own frame**, then the joint rates.
 
@@ -52,9 +50,12 @@ __all__ = [
     "ReplayResult",
     "Touchdown",
     "Trajectory",
+    "contact_height_history",
     "detect_touchdowns",
+    "kinetic_energy",
     "mujoco_rollout",
     "mujoco_to_pinocchio",
+    "potential_energy",
     "read_trajectory",
     "replay",
     "write_trajectory",

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -17,7 +18,8 @@ _TOUCHDOWN_UNITS: dict[str, Any] = {
     "strike": None, "keep": None, "T": "J", "T_c": "J", "T_a": "J", "T_plus": "J",
     "predicted_loss": "J", "T_c_contact": "J", "T_after": "J", "recorded_loss": "J",
     "mechanical_loss": "J", "normal_velocity_pre": "m/s", "normal_velocity_post": "m/s",
-    "predicted_normal_velocity": "m/s", "effective_restitution": "1",
+    "predicted_normal_velocity": "m/s", "effective_restitution": "1", "admissible": None,
+    "note": None,
 }
 
 
@@ -125,6 +127,9 @@ def _run_robot_replay(args: argparse.Namespace) -> int:
                      for x in d.effective_restitution)
         print(f"  {d.time:>10.5f}  {names:<24} {d.T:>10.5g} {d.T_c:>12.5g} "
               f"{d.recorded_loss:>12.5g} {d.mechanical_loss:>13.5g}  {e}")
+    for d in result.touchdowns:
+        if d.note:
+            print(f"heelstrike: note: touchdown at {d.time:.5f} s: {d.note}", file=sys.stderr)
     for p in written:
         print(f"wrote {p}")
     return 0

@@ -9,9 +9,10 @@ the last sample before it (``v+``, ``T_c``, ``T_a``, the share of ``T_c`` per co
 the recorded motion did across the contact transient (kinetic energy lost over a stated window,
 effective restitution of each striking contact's normal velocity).
 
-The two conventions. Pinocchio's (heelstrike's): ``q`` holds the root free flyer as position (m) and unit
-quaternion ``(x, y, z, w)``, then the joints; ``v`` holds the base's linear velocity (m/s) and
-angular velocity (rad/s) **both in the base's own frame**, then the joint rates.
+The two conventions. Pinocchio's (heelstrike's): ``q`` holds the root free flyer as position
+(m) and unit quaternion ``(x, y, z, w)``, then the joints; ``v`` holds the base's linear
+velocity (m/s) and angular velocity (rad/s) **both in the base's own frame**, then the joint
+rates.
 
 MuJoCo's: ``qpos`` holds the free joint's position (m) and quaternion ``(w, x, y, z)``; ``qvel``
 holds the free joint's linear velocity **in the world frame** and its angular velocity **in the
@@ -36,6 +37,7 @@ from numpy.typing import ArrayLike
 from heelstrike._optional import require
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
+from heelstrike.core.impact import ImpactInputError
 from heelstrike.robots.contacts import (
     ContactSpec,
     contact_heights,
@@ -502,6 +504,13 @@ class Touchdown(ResultDictMixin):
     effective_restitution : tuple of float
         ``-u_post / u_pre`` of each striking contact's recorded normal velocity (NaN when it
         did not approach the ground, ``u_pre >= 0``).
+    admissible : bool
+        No kept contact pulls on the ground in the prediction
+        (:meth:`heelstrike.robots.RobotImpact.pulling_contacts`).
+    note : str
+        Empty, or why the prediction is not to be trusted: the kept contacts that pull, or
+        the impact law's refusal (the predicted numbers are then NaN, e.g. two points of one
+        rigid body, whose rows are rank deficient).
     """
 
     time: float
@@ -524,6 +533,8 @@ class Touchdown(ResultDictMixin):
     normal_velocity_post: tuple[float, ...]
     predicted_normal_velocity: tuple[float, ...]
     effective_restitution: tuple[float, ...]
+    admissible: bool = True
+    note: str = ""
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -579,11 +590,14 @@ class ReplayResult(ResultDictMixin):
             "mechanical_loss_J": [d.mechanical_loss for d in rows],
             "effective_restitution": [" ".join(f"{e:.6g}" for e in d.effective_restitution)
                                       for d in rows],
+            "admissible": [d.admissible for d in rows],
+            "note": [d.note for d in rows],
         }
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary: settings and the touchdowns (no per-sample arrays; NaN
-        restitutions as None, an unbounded friction cone as ``"friction": None``)."""
+        numbers, e.g. a restitution or a refused prediction, as None, an unbounded friction
+        cone as ``"friction": None``)."""
         out = [_plain(d) for d in self.touchdowns]
         return {
             "robot": self.robot, "source": self.source,
@@ -596,6 +610,10 @@ class ReplayResult(ResultDictMixin):
         }
 
 
+def _finite_or_none(x: Any) -> Any:
+    return None if isinstance(x, float) and not math.isfinite(x) else x
+
+
 def _plain(d: Touchdown) -> dict[str, Any]:
     from dataclasses import fields
 
@@ -603,9 +621,8 @@ def _plain(d: Touchdown) -> dict[str, Any]:
     for f in fields(d):
         value = getattr(d, f.name)
         if isinstance(value, tuple):
-            value = [None if isinstance(x, float) and not math.isfinite(x) else x
-                     for x in value]
-        out[f.name] = value
+            value = [_finite_or_none(x) for x in value]
+        out[f.name] = _finite_or_none(value)
     return out
 
 
@@ -677,33 +694,55 @@ def replay(
         post = max(post, k + 1)
         strike = tuple(specs[c] for c in crossing)
         keep = tuple(specs[i] for i in on_ground)
-        res = robot_impact(robot, traj.q[k], traj.v[k], strike=strike, keep=keep,
-                           friction=friction, restitution=restitution).result
+        pred = _predict(robot, traj.q[k], traj.v[k], strike, keep, friction, restitution)
+        _, A_pre = robot_matrices(robot, traj.q[k], strike)
         _, A_post = robot_matrices(robot, traj.q[post], strike)
-        u_post_all = A_post @ traj.v[post]
-        u_pre, u_post, u_pred, e_eff = [], [], [], []
-        start = 0
-        for i, s in enumerate(strike):
-            a, b = float(res.contact_velocity_pre[i][2]), float(u_post_all[start + 2])
-            start += s.rows
-            u_pre.append(a)
-            u_post.append(b)
-            u_pred.append(float(res.contact_velocity_post[i][2]))
-            e_eff.append(-b / a if a < 0.0 else float("nan"))
+        rows = np.cumsum([0, *(s.rows for s in strike)])[:-1] + 2  # each contact's z row
+        u_pre = (A_pre @ traj.v[k])[rows]
+        u_post = (A_post @ traj.v[post])[rows]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            e_eff = np.where(u_pre < 0.0, -u_post / u_pre, np.nan)
         c0 = crossing[0]
         h0, h1 = h[k, c0], h[k + 1, c0]
         t_cross = float(t[k] + (t[k + 1] - t[k]) * (h0 - ground) / (h0 - h1))
         out.append(Touchdown(
             time=t_cross, index_pre=int(k), index_post=post, time_pre=float(t[k]),
             time_post=float(t[post]), strike=tuple(s.frame for s in strike),
-            keep=tuple(s.frame for s in keep), T=float(res.T), T_c=float(res.T_c),
-            T_a=float(res.T_a), T_plus=float(res.T_post), predicted_loss=float(res.energy_lost),
-            T_c_contact=tuple(float(a + b) for a, b in zip(res.T_c_normal, res.T_c_tangential,
-                                                            strict=True)),
+            keep=tuple(s.frame for s in keep), **pred,
             T_after=float(T[post]), recorded_loss=float(T[k] - T[post]),
             mechanical_loss=float(T[k] + V[k] - T[post] - V[post]),
-            normal_velocity_pre=tuple(u_pre), normal_velocity_post=tuple(u_post),
-            predicted_normal_velocity=tuple(u_pred), effective_restitution=tuple(e_eff)))
+            normal_velocity_pre=tuple(float(x) for x in u_pre),
+            normal_velocity_post=tuple(float(x) for x in u_post),
+            effective_restitution=tuple(float(x) for x in e_eff)))
     return ReplayResult(robot=robot.name, source=traj.source, contacts=specs, window=window,
                         friction=friction, restitution=restitution, time=t, kinetic=T,
                         potential=V, heights=h, touchdowns=tuple(out))
+
+
+def _predict(robot: Robot, q: FloatArray, v: FloatArray, strike: tuple[ContactSpec, ...],
+             keep: tuple[ContactSpec, ...], friction: float, restitution: float
+             ) -> dict[str, Any]:
+    """The prediction's fields of a :class:`Touchdown`: NaN, with the reason in ``note``,
+    where the impact law refuses the contacts (e.g. rank-deficient rows)."""
+    try:
+        impact = robot_impact(robot, q, v, strike=strike, keep=keep, friction=friction,
+                              restitution=restitution)
+    except ImpactInputError as exc:
+        nan = float("nan")
+        return {"T": nan, "T_c": nan, "T_a": nan, "T_plus": nan, "predicted_loss": nan,
+                "T_c_contact": (nan,) * (len(strike) + len(keep)),
+                "predicted_normal_velocity": (nan,) * len(strike), "admissible": False,
+                "note": f"no prediction: {exc}"}
+    res = impact.result
+    pulling = impact.pulling_contacts()
+    return {
+        "T": float(res.T), "T_c": float(res.T_c), "T_a": float(res.T_a),
+        "T_plus": float(res.T_post), "predicted_loss": float(res.energy_lost),
+        "T_c_contact": tuple(float(a + b) for a, b in zip(res.T_c_normal, res.T_c_tangential,
+                                                          strict=True)),
+        "predicted_normal_velocity": tuple(float(res.contact_velocity_post[i][2])
+                                           for i in range(len(strike))),
+        "admissible": not pulling,
+        "note": "" if not pulling else "kept contact(s) pull on the ground: " + ", ".join(
+            f"{f} ({lam:.4g} N s)" for f, lam in pulling),
+    }

@@ -236,12 +236,9 @@ def test_rod_landing_matches_closed_form_and_stiff_contact(mujoco, tmp_path) -> 
     assert 0.3 * d.T < d.T_c < 0.8 * d.T
 
 
-def test_compass_second_foot_lands_with_the_first_kept(mujoco, tmp_path) -> None:
-    """A compass landing on foot a, then pivoting onto foot b: two touchdowns, the second
-    keeps a. Its motion is planar (x-z) and, with both feet pinned, only a rotation about
-    the line through the feet (in the x-z plane) remains, which planar momentum does not
-    reach: the rigid law takes everything, T_a = 0. MuJoCo's stiff contact agrees within 3%
-    (measured: 0.07% and 1.5%)."""
+def _compass_replay(tmp_path):
+    """The compass dropped with foot a 1 mm above the ground (leg a 0.25 rad from the
+    vertical, legs 0.6 rad apart), moving at (0.5, 0, -0.5) m/s, for 0.1 s; its replay."""
     path = tmp_path / "compass.xml"
     path.write_text(_on_floor("compass", COMPASS_BODIES))
     robot = load_mjcf(path)
@@ -251,7 +248,16 @@ def test_compass_second_foot_lands_with_the_first_kept(mujoco, tmp_path) -> None
     qvel = np.array([0.5, 0.0, -0.5, 0.0, 0.0, 0.0, 0.0])
     traj = mujoco_rollout(path, duration=0.1, robot=robot, qpos=qpos, qvel=qvel, every=2)
     feet = [ContactSpec(frame=f, kind="arc", radius=RADIUS) for f in ("a", "b")]
-    result = replay(robot, traj, feet, window=0.002)
+    return replay(robot, traj, feet, window=0.002)
+
+
+def test_compass_second_foot_lands_with_the_first_kept(mujoco, tmp_path) -> None:
+    """A compass landing on foot a, then pivoting onto foot b: two touchdowns, the second
+    keeps a. Its motion is planar (x-z) and, with both feet pinned, only a rotation about
+    the line through the feet (in the x-z plane) remains, which planar momentum does not
+    reach: the rigid law takes everything, T_a = 0. MuJoCo's stiff contact agrees within 3%
+    (measured: 0.07% and 1.5%)."""
+    result = _compass_replay(tmp_path)
     assert [(d.strike, d.keep) for d in result.touchdowns] == [(("a",), ()), (("b",), ("a",))]
     first, second = result.touchdowns
     for d in result.touchdowns:
@@ -394,3 +400,19 @@ def test_cli_robot_replay(mujoco, tmp_path, capsys) -> None:
     assert main(["robot", "replay", str(out / "trajectory.npz"), "--contact",
                  "foot:arc:0.005"]) == 2
     assert "needs --model" in capsys.readouterr().err
+
+
+def test_replay_figure_draws_both_losses_and_is_readable(mujoco, tmp_path) -> None:
+    """The figure's bars hang from the pre-impact energy by T_c (predicted) and by the
+    recorded loss; axes labelled with units; data clear of the legend."""
+    from heelstrike.plots.replay import plot_replay
+    from test_figure_bounds import assert_figure_is_readable
+
+    result = _compass_replay(tmp_path)
+    fig = plot_replay(result)
+    assert_figure_is_readable(fig)
+    (ax,) = fig.axes
+    assert ax.get_xlabel() == "time (s)" and ax.get_ylabel() == "kinetic energy (J)"
+    spans = sorted(float(np.ptp(seg[:, 1])) for c in ax.collections for seg in c.get_segments())
+    expected = sorted(x for d in result.touchdowns for x in (d.T_c, d.recorded_loss))
+    assert np.allclose(spans, expected, rtol=1e-12)

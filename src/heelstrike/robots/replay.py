@@ -47,6 +47,7 @@ from heelstrike.robots.contacts import (
 from heelstrike.robots.loading import Robot, RobotError, _pin
 
 __all__ = [
+    "APPROACH_SPEED",
     "DEFAULT_CLEARANCE",
     "DEFAULT_WINDOW",
     "ReplayResult",
@@ -69,6 +70,8 @@ Convention = Literal["pinocchio", "mujoco"]
 DEFAULT_WINDOW = 0.01
 #: Default lift (m) above the ground that ends a contact's stay on it (:func:`detect_touchdowns`).
 DEFAULT_CLEARANCE = 1e-3
+#: Approach speed (m/s) below which a striking contact's effective restitution is not defined.
+APPROACH_SPEED = 1e-6
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -320,7 +323,7 @@ def kinetic_energy(robot: Robot, traj: Trajectory) -> FloatArray:
 
 
 def potential_energy(robot: Robot, traj: Trajectory) -> FloatArray:
-    """Gravitational potential ``-m g . c`` (J, Pinocchio's ``model.gravity``) per sample (N,)."""
+    """Gravitational potential ``-m g^T c`` (J, Pinocchio's ``model.gravity``) per sample (N,)."""
     pin = _pin()
     data = robot.model.createData()
     return np.array([pin.computePotentialEnergy(robot.model, data, q)
@@ -503,7 +506,7 @@ class Touchdown(ResultDictMixin):
         the window's end, and the rigid prediction after the impact.
     effective_restitution : tuple of float
         ``-u_post / u_pre`` of each striking contact's recorded normal velocity (NaN when it
-        did not approach the ground, ``u_pre >= 0``).
+        did not approach the ground faster than :data:`APPROACH_SPEED`).
     admissible : bool
         No kept contact pulls on the ground in the prediction
         (:meth:`heelstrike.robots.RobotImpact.pulling_contacts`).
@@ -701,7 +704,7 @@ def replay(
         u_pre = (A_pre @ traj.v[k])[rows]
         u_post = (A_post @ traj.v[post])[rows]
         with np.errstate(divide="ignore", invalid="ignore"):
-            e_eff = np.where(u_pre < 0.0, -u_post / u_pre, np.nan)
+            e_eff = np.where(u_pre < -APPROACH_SPEED, -u_post / u_pre, np.nan)
         c0 = crossing[0]
         h0, h1 = h[k, c0], h[k + 1, c0]
         t_cross = float(t[k] + (t[k + 1] - t[k]) * (h0 - ground) / (h0 - h1))

@@ -236,9 +236,9 @@ def test_rod_landing_matches_closed_form_and_stiff_contact(mujoco, tmp_path) -> 
     assert 0.3 * d.T < d.T_c < 0.8 * d.T
 
 
-def _compass_replay(tmp_path):
+def _compass_rollout(tmp_path):
     """The compass dropped with foot a 1 mm above the ground (leg a 0.25 rad from the
-    vertical, legs 0.6 rad apart), moving at (0.5, 0, -0.5) m/s, for 0.1 s; its replay."""
+    vertical, legs 0.6 rad apart), moving at (0.5, 0, -0.5) m/s, for 0.1 s: robot, record."""
     path = tmp_path / "compass.xml"
     path.write_text(_on_floor("compass", COMPASS_BODIES))
     robot = load_mjcf(path)
@@ -246,9 +246,17 @@ def _compass_replay(tmp_path):
     qpos = np.array([0.0, 0.0, 0.5 * np.cos(tilt) + 0.006, np.cos(tilt / 2), 0.0,
                      np.sin(tilt / 2), 0.0, spread])
     qvel = np.array([0.5, 0.0, -0.5, 0.0, 0.0, 0.0, 0.0])
-    traj = mujoco_rollout(path, duration=0.1, robot=robot, qpos=qpos, qvel=qvel, every=2)
-    feet = [ContactSpec(frame=f, kind="arc", radius=RADIUS) for f in ("a", "b")]
-    return replay(robot, traj, feet, window=0.002)
+    return robot, mujoco_rollout(path, duration=0.1, robot=robot, qpos=qpos, qvel=qvel,
+                                 every=2)
+
+
+COMPASS_FEET = [ContactSpec(frame=f, kind="arc", radius=RADIUS) for f in ("a", "b")]
+
+
+def _compass_replay(tmp_path):
+    """The compass's replay (height signal, 2 ms window)."""
+    robot, traj = _compass_rollout(tmp_path)
+    return replay(robot, traj, COMPASS_FEET, window=0.002)
 
 
 def test_compass_second_foot_lands_with_the_first_kept(mujoco, tmp_path) -> None:
@@ -266,6 +274,26 @@ def test_compass_second_foot_lands_with_the_first_kept(mujoco, tmp_path) -> None
         assert d.mechanical_loss == pytest.approx(d.T_c, rel=0.03)
     assert 0.1 * first.T < first.T_c < 0.9 * first.T
     assert second.T_a <= 1e-9 * second.T
+
+
+def test_mujoco_contact_list_finds_the_same_touchdowns(mujoco, tmp_path) -> None:
+    """The contact-list signal (the geom named like the frame entering MuJoCo's contact
+    list) finds the compass's touchdowns at the same samples as the height signal (sphere
+    geoms of the arcs' radius: MuJoCo lists a contact when the sphere's lowest point is below
+    the floor); a log has no contact list."""
+    robot, rollout = _compass_rollout(tmp_path)
+    by_height = replay(robot, rollout, COMPASS_FEET, window=0.002)
+    log = dataclasses.replace(rollout, contact_geoms=(), touching=None)
+    with pytest.raises(ValueError, match="needs a MuJoCo rollout"):
+        replay(robot, log, COMPASS_FEET, signal="mujoco")
+    assert rollout.contact_geoms == ("a", "b")
+    by_list = replay(robot, rollout, COMPASS_FEET, window=0.002, signal="mujoco")
+    assert [(d.index_pre, d.strike, d.keep) for d in by_list.touchdowns] == [
+        (d.index_pre, d.strike, d.keep) for d in by_height.touchdowns]
+    for a, b in zip(by_list.touchdowns, by_height.touchdowns, strict=True):
+        assert a.T_c == b.T_c and a.time == rollout.time[a.index_pre + 1]
+    with pytest.raises(ValueError, match="no geom named 'leg_b'"):
+        replay(robot, rollout, [ContactSpec(frame="leg_b")], signal="mujoco")
 
 
 def test_a_refused_prediction_is_reported_not_raised(mujoco, tmp_path, monkeypatch) -> None:
@@ -392,6 +420,10 @@ def test_cli_robot_replay(mujoco, tmp_path, capsys) -> None:
     assert {p.name for p in out.iterdir()} == {"replay.png", "touchdowns.csv",
                                                "trajectory.npz"}
     assert "recorded_loss_J" in (out / "touchdowns.csv").read_text().splitlines()[0]
+    assert main(["robot", "replay", str(path), "--contact", "foot:arc:0.005", "--duration",
+                 "0.01", "--window", "0.002", "--signal", "mujoco", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["touchdowns"][0]["index_pre"] == \
+        first["touchdowns"][0]["index_pre"]
     assert main(["robot", "replay", str(out / "trajectory.npz"), "--model", str(path),
                  "--contact", "foot:arc:0.005", "--window", "0.002"]) == 0
     table = capsys.readouterr().out

@@ -65,6 +65,9 @@ def add_replay_command(rsub: Any) -> None:
     p.add_argument("--clearance", type=float, default=DEFAULT_CLEARANCE, metavar="M",
                    help=f"lift that ends a contact's stay on the ground (m, default "
                    f"{DEFAULT_CLEARANCE:g})")
+    p.add_argument("--signal", choices=("height", "mujoco"), default="height",
+                   help="a touchdown is the contact point crossing z = 0 (default), or, for an "
+                   "MJCF FILE, the geom named like the frame entering MuJoCo's contact list")
     p.add_argument("--friction", type=float, default=math.inf, metavar="MU",
                    help="Coulomb coefficient of the striking contacts (default inf)")
     p.add_argument("--restitution", type=float, default=0.0, metavar="E",
@@ -109,7 +112,8 @@ def _run_robot_replay(args: argparse.Namespace) -> int:
     else:
         traj = read_trajectory(args.file, robot, convention=args.convention)
     result = replay(robot, traj, contacts, window=args.window, friction=args.friction,
-                    restitution=args.restitution, clearance=args.clearance)
+                    restitution=args.restitution, clearance=args.clearance,
+                    signal=args.signal)
     written = _write(result, traj, args.out, is_mjcf) if args.out is not None else []
     if args.json:
         summary = {**result.to_dict(), "written": [str(p) for p in written]}

@@ -32,7 +32,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._optional import require
 from heelstrike._results import ResultDictMixin
@@ -65,6 +65,7 @@ __all__ = [
 ]
 
 Convention = Literal["pinocchio", "mujoco"]
+Signal = Literal["height", "mujoco"]
 
 #: Default length (s) of the contact transient over which the recorded loss is measured.
 DEFAULT_WINDOW = 0.01
@@ -91,6 +92,11 @@ class Trajectory(ResultDictMixin):
     reference_kinetic : ndarray, shape (N,) or None
         The recorder's own kinetic energy (J) of each sample (a MuJoCo rollout: MuJoCo's
         ``mj_energyVel``), None for a log.
+    contact_geoms : tuple of str
+        Names of the geoms whose contacts were recorded (a MuJoCo rollout: every named geom
+        of a body other than the world), empty for a log.
+    touching : ndarray of bool, shape (N, len(contact_geoms)) or None
+        Whether each of those geoms is in MuJoCo's contact list at each sample.
     """
 
     time: FloatArray
@@ -98,6 +104,8 @@ class Trajectory(ResultDictMixin):
     v: FloatArray
     source: str = ""
     reference_kinetic: FloatArray | None = None
+    contact_geoms: tuple[str, ...] = ()
+    touching: NDArray[np.bool_] | None = None
 
     def __post_init__(self) -> None:
         for name in ("time", "q", "v"):
@@ -208,10 +216,11 @@ def mujoco_rollout(
 
     MuJoCo (its own contacts, solver, integrator and timestep, unactuated: ``ctrl`` stays 0)
     runs from the initial state for ``duration`` seconds; every ``every``-th state is
-    recorded with MuJoCo's kinetic energy (``mj_energyVel``, energy flag enabled), then
-    mapped by :func:`mujoco_to_pinocchio`. The Pinocchio model must reproduce MuJoCo's: its
-    joints are matched by name and the kinetic energies of the mapped states must agree to
-    1e-6 (relative), else :class:`RobotError` says where they part.
+    recorded with MuJoCo's kinetic energy (``mj_energyVel``, energy flag enabled) and which
+    named geoms (of bodies other than the world) are in its contact list (within their
+    ``margin``), then mapped by :func:`mujoco_to_pinocchio`. The Pinocchio model must
+    reproduce MuJoCo's: its joints are matched by name and the kinetic energies of the mapped
+    states must agree to 1e-6 (relative), else :class:`RobotError` says where they part.
 
     Parameters
     ----------
@@ -280,14 +289,23 @@ def mujoco_rollout(
     steps = math.ceil(duration / mm.opt.timestep - 1e-9)
     n = steps // every + 1
     t, qp, qv, ke = np.empty(n), np.empty((n, mm.nq)), np.empty((n, mm.nv)), np.empty(n)
+    geoms = [(g, name) for g in range(mm.ngeom)
+             if (name := mujoco.mj_id2name(mm, mujoco.mjtObj.mjOBJ_GEOM, g))
+             and int(mm.geom_bodyid[g]) != 0]
+    column = np.full(mm.ngeom, -1)
+    column[[g for g, _ in geoms]] = np.arange(len(geoms))
+    touching = np.zeros((n, len(geoms)), dtype=bool)
     for k in range(n):
         mujoco.mj_forward(mm, data)
         t[k], qp[k], qv[k], ke[k] = data.time, data.qpos, data.qvel, data.energy[1]
+        listed = column[np.asarray(data.contact.geom[:data.ncon], dtype=int).reshape(-1)]
+        touching[k, listed[listed >= 0]] = True
         if k < n - 1:
             for _ in range(every):
                 mujoco.mj_step(mm, data)
     q, v = mujoco_to_pinocchio(robot, qp, qv)
-    traj = Trajectory(time=t, q=q, v=v, source=f"mujoco:{mjcf}", reference_kinetic=ke)
+    traj = Trajectory(time=t, q=q, v=v, source=f"mujoco:{mjcf}", reference_kinetic=ke,
+                      contact_geoms=tuple(name for _, name in geoms), touching=touching)
     T = kinetic_energy(robot, traj)
     bad = np.abs(T - ke) > 1e-6 * np.maximum(np.abs(ke), 1e-9)
     if np.any(bad):
@@ -427,16 +445,19 @@ def contact_height_history(
 
 
 def detect_touchdowns(
-    heights: ArrayLike, *, ground: float = 0.0, clearance: float = DEFAULT_CLEARANCE
+    heights: ArrayLike, *, ground: float = 0.0, clearance: float = DEFAULT_CLEARANCE,
+    touching: ArrayLike | None = None,
 ) -> list[tuple[int, tuple[int, ...], tuple[int, ...]]]:
     """Samples where contacts touch down, and which contacts are on the ground then.
 
-    A contact touches down between samples ``k`` and ``k + 1`` when its height is above
-    ``ground`` at ``k`` and at or below it at ``k + 1``, and it has risen above
-    ``ground + clearance`` since its last touchdown (or was above ``ground`` at the first
-    sample): a soft contact's chatter around the ground, or a sphere rolling on it, is not a
-    new touchdown. A contact is on the ground from its touchdown until it rises above
-    ``ground + clearance`` (and from the start if it starts at or below ``ground``).
+    A contact is *down* at a sample when its height is at or below ``ground`` (or, given
+    ``touching``, when it is in the simulator's contact list). It touches down between samples
+    ``k`` and ``k + 1`` when it is not down at ``k`` and down at ``k + 1``, and it has risen
+    above ``ground + clearance`` (and, given ``touching``, left the list) since its last
+    touchdown, or was not down at the first sample: a soft contact's chatter around the
+    ground, a sphere rolling on it or a contact list that flickers is not a new touchdown. A
+    contact is on the ground from its touchdown until it rises so (and from the start if it
+    starts down).
 
     Parameters
     ----------
@@ -446,6 +467,8 @@ def detect_touchdowns(
         Ground height (m).
     clearance : float
         Lift (m) above ``ground`` that ends a contact's stay on the ground, >= 0.
+    touching : array_like of bool, shape (N, contacts), optional
+        The simulator's contact flags (:attr:`Trajectory.touching`) as the *down* signal.
 
     Returns
     -------
@@ -457,11 +480,19 @@ def detect_touchdowns(
     h = np.asarray(heights, dtype=float)
     if not (math.isfinite(clearance) and clearance >= 0.0):
         raise RobotError(f"clearance must be >= 0 m, got {clearance!r}")
-    armed = h[0] > ground
+    clear = h > ground + clearance
+    if touching is None:
+        down = h <= ground
+    else:
+        down = np.asarray(touching, dtype=bool)
+        if down.shape != h.shape:
+            raise RobotError(f"touching must be {h.shape} like the heights, got {down.shape}")
+        clear &= ~down
+    armed = ~down[0]
     events = []
     for k in range(h.shape[0] - 1):
-        armed |= h[k] > ground + clearance
-        hit = armed & (h[k] > ground) & (h[k + 1] <= ground)
+        armed |= clear[k]
+        hit = armed & ~down[k] & down[k + 1]
         if hit.any():
             events.append((k, tuple(int(c) for c in np.flatnonzero(hit)),
                            tuple(int(c) for c in np.flatnonzero(~armed))))
@@ -639,6 +670,7 @@ def replay(
     restitution: float = 0.0,
     ground: float = 0.0,
     clearance: float = DEFAULT_CLEARANCE,
+    signal: Signal = "height",
 ) -> ReplayResult:
     """Touchdowns of a recorded motion against the rigid-impact prediction.
 
@@ -672,6 +704,11 @@ def replay(
         ground lies elsewhere by a small offset (penetration of a soft contact).
     clearance : float
         Lift (m) that ends a contact's stay on the ground (:func:`detect_touchdowns`).
+    signal : {"height", "mujoco"}
+        What a touchdown is: the contact point's height crossing ``ground`` (default), or,
+        for a MuJoCo rollout, the geom named like the contact's frame entering MuJoCo's
+        contact list (on the ground until it has left the list and risen ``clearance``
+        above ``ground``; the touchdown time is then the first sample in the list).
 
     Returns
     -------
@@ -688,7 +725,13 @@ def replay(
     T = kinetic_energy(robot, traj)
     V = potential_energy(robot, traj)
     h = contact_height_history(robot, traj, specs)
-    found = detect_touchdowns(h, ground=ground, clearance=clearance)
+    if signal == "height":
+        found = detect_touchdowns(h, ground=ground, clearance=clearance)
+    elif signal == "mujoco":
+        found = detect_touchdowns(h, ground=ground, clearance=clearance,
+                                  touching=_touching(traj, specs))
+    else:
+        raise RobotError(f"signal must be 'height' or 'mujoco', got {signal!r}")
     out = []
     for n, (k, crossing, on_ground) in enumerate(found):
         limit = found[n + 1][0] if n + 1 < len(found) else t.size - 1
@@ -707,7 +750,8 @@ def replay(
             e_eff = np.where(u_pre < -APPROACH_SPEED, -u_post / u_pre, np.nan)
         c0 = crossing[0]
         h0, h1 = h[k, c0], h[k + 1, c0]
-        t_cross = float(t[k] + (t[k + 1] - t[k]) * (h0 - ground) / (h0 - h1))
+        t_cross = float(t[k] + (t[k + 1] - t[k]) * (h0 - ground) / (h0 - h1)) \
+            if signal == "height" else float(t[k + 1])
         out.append(Touchdown(
             time=t_cross, index_pre=int(k), index_post=post, time_pre=float(t[k]),
             time_post=float(t[post]), strike=tuple(s.frame for s in strike),
@@ -749,3 +793,16 @@ def _predict(robot: Robot, q: FloatArray, v: FloatArray, strike: tuple[ContactSp
         "note": "" if not pulling else "kept contact(s) pull on the ground: " + ", ".join(
             f"{f} ({lam:.4g} N s)" for f, lam in pulling),
     }
+
+
+def _touching(traj: Trajectory, specs: Sequence[ContactSpec]) -> NDArray[np.bool_]:
+    """MuJoCo's contact flags (N, contacts) of the geoms named like the contacts' frames."""
+    if traj.touching is None:
+        raise RobotError("signal 'mujoco' needs a MuJoCo rollout (its contact list); a log "
+                         "has none: use signal 'height'")
+    missing = [c.frame for c in specs if c.frame not in traj.contact_geoms]
+    if missing:
+        raise RobotError(f"no geom named {', '.join(map(repr, missing))} in the rollout's "
+                         f"contact list (named geoms: {', '.join(traj.contact_geoms) or 'none'})"
+                         ": name the foot geom like its site")
+    return traj.touching[:, [traj.contact_geoms.index(c.frame) for c in specs]]

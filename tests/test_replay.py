@@ -432,6 +432,9 @@ def test_cli_robot_replay(mujoco, tmp_path, capsys) -> None:
     assert main(["robot", "replay", str(out / "trajectory.npz"), "--contact",
                  "foot:arc:0.005"]) == 2
     assert "needs --model" in capsys.readouterr().err
+    assert main(["robot", "replay", str(path), "--contact", "foot:arc:0.005", "--out",
+                 str(out / "replay.png")]) == 2
+    assert "is not a directory" in capsys.readouterr().err
 
 
 def test_replay_figure_draws_both_losses_and_is_readable(mujoco, tmp_path) -> None:

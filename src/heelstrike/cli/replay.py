@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from heelstrike.cli._common import writable_dir
 from heelstrike.cli._render import print_json
 
 __all__ = ["add_replay_command"]
@@ -101,8 +102,8 @@ def _run_robot_replay(args: argparse.Namespace) -> int:
     model = args.model if args.model is not None else (args.file if is_mjcf else None)
     if model is None:
         raise ValueError("a log needs --model MODEL (a shipped name, a .urdf or an .xml)")
-    if args.out is not None and args.out.exists() and not args.out.is_dir():
-        raise ValueError(f"--out {str(args.out)!r} is a file, not a directory")
+    if args.out is not None:
+        writable_dir(args.out)
     contacts = [parse_contact(c) for c in args.contact]
     robot = _robot(model)
     if is_mjcf:

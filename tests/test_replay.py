@@ -390,7 +390,8 @@ def test_trajectory_refuses_bad_input(tmp_path) -> None:
 def test_missing_mujoco_names_the_extra(tmp_path, monkeypatch) -> None:
     """Without the mujoco package a rollout fails with one line naming the install."""
     monkeypatch.setitem(sys.modules, "mujoco", None)
-    with pytest.raises(MissingExtraError, match=r"pip install 'heelstrike\[mujoco\]'"):
+    with pytest.raises(MissingExtraError,
+                       match=r"the 'mujoco' extra: pip install '\.\[mujoco\]'"):
         mujoco_rollout(_rod_file(tmp_path), duration=0.01)
 
 

@@ -439,13 +439,17 @@ def _try_set(
     Unknowns: ``lambda_n`` of active contacts and ``lambda_t`` of sticking rows; generalized
     directions ``B`` (a sliding row adds ``-s mu`` times its row to the normal one), constrained
     rows ``C`` (normal with target ``tau``, sticking rows with target 0): ``C Y B^T x = tau -
-    C v0``. Sets whose directions ``Y B^T`` are dependent are skipped: by Caratheodory's theorem
-    an outcome with dependent directions is also the outcome of a smaller set.
+    C v0``. Sets whose bounded impulses (normal, and tangential ones of a finite cone) have
+    directions ``Y B^T`` dependent modulo those of the free ones (sticking rows of an
+    unbounded cone) are skipped: by Caratheodory's theorem such an outcome is also that of a
+    smaller set (move along the dependence until an impulse reaches a bound). Redundant free
+    impulses take their least-norm values.
     """
     m3 = u0.shape[0]
     cols_B: list[FloatArray] = []
     rows_C: list[int] = []
     target: list[float] = []
+    free: list[bool] = []  # sticking rows of an unbounded cone: impulse free of any bound
     for i, md in enumerate(modes):
         if md == _SEP:
             continue
@@ -458,6 +462,7 @@ def _try_set(
         cols_B.append(b)
         rows_C.append(3 * i)
         target.append(float(tau[i]))
+        free.append(False)
         for a in (0, 1):
             if md[a] == 0:
                 e = np.zeros(m3)
@@ -465,20 +470,24 @@ def _try_set(
                 cols_B.append(e)
                 rows_C.append(3 * i + 1 + a)
                 target.append(0.0)
+                free.append(bool(np.isinf(mu[i])))
     G = red.G
     if cols_B:
         SB = np.array(cols_B)
         GB = G @ SB.T  # (3m, p)
         H = SB @ GB
-        ev = np.linalg.eigvalsh(0.5 * (H + H.T))
-        if ev[0] <= 1e-10 * max(float(ev[-1]), 1e-300):
-            return None
+        F = np.flatnonzero(free)
+        rank = _rank_psd(H)
+        if rank - _rank_psd(H[np.ix_(F, F)]) < len(free) - F.size:
+            return None  # bounded impulses dependent modulo the free ones: a smaller set
         K = GB[rows_C]
         rhs = np.array(target) - u0[rows_C]
         try:
+            if rank < len(free):
+                raise np.linalg.LinAlgError
             x = np.linalg.solve(K, rhs)
-        except np.linalg.LinAlgError:
-            x = np.linalg.lstsq(K, rhs, rcond=None)[0]
+        except np.linalg.LinAlgError:  # free impulses redundant (least norm: same q_dot+),
+            x = np.linalg.lstsq(K, rhs, rcond=1e-12)[0]  # or a sliding set's K singular
         if not np.all(np.isfinite(x)) or np.max(np.abs(K @ x - rhs), initial=0.0) > vtol:
             return None
         f = SB.T @ x
@@ -502,6 +511,14 @@ def _try_set(
             if s in (1, -1) and s * u_t < -vtol:
                 return None
     return f
+
+
+def _rank_psd(H: FloatArray) -> int:
+    """Numerical rank of a symmetric PSD matrix (eigenvalues above 1e-10 of the largest)."""
+    if H.size == 0:
+        return 0
+    ev = np.linalg.eigvalsh(0.5 * (H + H.T))
+    return int(np.sum(ev > 1e-10 * max(float(ev[-1]), 1e-300)))
 
 
 def _lemke(Q: FloatArray, q: FloatArray, max_pivots: int = 10_000) -> FloatArray | None:

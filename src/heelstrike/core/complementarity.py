@@ -53,6 +53,7 @@ from heelstrike.core.impact import ImpactInputError, ImpactResult, impact
 
 __all__ = [
     "ENUMERATION_BUDGET",
+    "PAINLEVE_FRICTION",
     "CandidateContact",
     "ContactMode",
     "MultiContactImpact",
@@ -334,6 +335,9 @@ RestitutionLaw = Literal["newton", "energetic"]
 ENUMERATION_BUDGET = 20_000
 
 _SEP = -9  # code of a separating contact in an active set
+
+#: Friction coefficient an unbounded cone takes where no stick/separate outcome exists.
+PAINLEVE_FRICTION = 1e4
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -632,7 +636,29 @@ def _inert_phase(
     red: _Reduced, u0: FloatArray, tau: FloatArray, mu: FloatArray, has_t: NDArray[np.bool_],
     budget: int, vscale: float,
 ) -> tuple[list[FloatArray], bool, int]:
-    """Row impulses of every outcome (exhaustive) or of one (Lemke), the flag and the bound."""
+    """Row impulses of every outcome (exhaustive) or of one (Lemke), the flag and the bound.
+
+    An unbounded cone whose stick/separate sets are all inconsistent (sticking would need a
+    pull, separating would pass through: Painleve-type) takes a large finite coefficient,
+    :data:`PAINLEVE_FRICTION` (the contact slides with a normal impulse of order ``1 / mu``
+    and a finite friction impulse: the large-``mu`` limit to about ``1e-4`` relative), as the
+    Gauss-Seidel path takes its large-``mu`` limit.
+    """
+    found = _enumerate(red, u0, tau, mu, has_t, budget, vscale)
+    if found[0] or not np.any(np.isinf(mu)):
+        return found
+    big = np.where(np.isinf(mu), PAINLEVE_FRICTION, mu)
+    found = _enumerate(red, u0, tau, big, has_t, budget, vscale)
+    if found[0]:
+        return found
+    f = _lemke_point_contacts(red, u0, tau, big)  # a large mu strains the enumeration's tests
+    return ([] if f is None else [f]), False, found[2]
+
+
+def _enumerate(
+    red: _Reduced, u0: FloatArray, tau: FloatArray, mu: FloatArray, has_t: NDArray[np.bool_],
+    budget: int, vscale: float,
+) -> tuple[list[FloatArray], bool, int]:
     opts = [_options(float(mu[i]), bool(has_t[i])) for i in range(mu.shape[0])]
     count = int(np.prod([len(o) for o in opts]))
     scale = max(float(np.max(np.abs(u0), initial=0.0)),

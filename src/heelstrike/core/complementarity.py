@@ -31,6 +31,11 @@ modes come first because walkers' feet are assumed not to slip, and ``"slip"`` i
 when no stick/separate assignment is consistent (a Painlevé-type situation of infinite
 friction).
 
+The second solver here, :func:`solve_point_contacts`, is the exact law of striking point
+contacts with Coulomb friction (a pyramid cone), Newton or energetic restitution, rows of any
+rank, and every outcome reported (issue #34); :mod:`heelstrike.core.contact_laws` and the
+robots' sole polygons use it.
+
 Energy: the final active rows ``A`` (bilateral, stick: normal + tangential, slip: normal) define
 the projectors of :func:`heelstrike.core.impact.impact`, so ``q_dot+ = P_a q_dot-`` and the
 decomposition ``T = T_c + T_a``, energy lost ``T_c``, hold for the resolved impact.

@@ -34,12 +34,25 @@ to one scalar secular equation in the multiplier ``beta`` of the disc constraint
 ``||x(beta)|| = mu lambda_n(x(beta))`` with ``x(beta) = -(S + beta I)^-1 c``, solved by Brent's
 method to machine precision. Several striking contacts are coupled by a block (non-smooth)
 Gauss-Seidel iteration over contacts; with one striking contact it is exact in one sweep.
-Uniqueness is not guaranteed for Painlevé-type configurations (the first root is returned).
-A contact with several normal rows (a flat sole) is resolved all rows or none: where holding it
-needs a pull yet releasing it leaves it moving into the ground (an edge or corner landing, which
-these laws do not model), :func:`resolve_contact_impact` raises
-:class:`~heelstrike.core.impact.ImpactInputError` rather than report a contact passing through
-the ground.
+Uniqueness is not checked on this path (Painlevé-type configurations can have several
+outcomes; the first root is returned: ``solutions`` is empty, ``unique`` None).
+A contact with several normal rows (a flat sole held flat) is resolved all rows or none: where
+holding it needs a pull yet releasing it leaves it moving into the ground (an edge or corner
+landing), :func:`resolve_contact_impact` raises :class:`~heelstrike.core.impact.ImpactInputError`
+rather than report a contact passing through the ground: give such a sole as its corners.
+
+Active-set path (issue #34): striking *point* contacts (one normal row, up to two tangential
+rows: a sole's corners, points, arcs) can instead be solved exactly by
+:func:`heelstrike.core.complementarity.solve_point_contacts` (``method="active-set"``; taken
+automatically for rank-deficient rows and for the energetic restitution law): friction is the
+pyramid ``|lambda_t| <= mu lambda_n`` per tangential row, every active set is enumerated (up
+to :data:`~heelstrike.core.complementarity.ENUMERATION_BUDGET`; above it Lemke's method gives
+one outcome), the outcomes found are ``solutions`` (``unique``, ``exhaustive``,
+``active_sets``), and redundant rows (two heel corners, a four-corner sole) give the unique
+``q_dot+`` with the impulses of the smallest consistent active set (Carathéodory) and the kept
+rows' least-norm impulses. Its energy split is the nested one below with pseudo-inverses
+(:func:`energy_split` with ``redundant=True``): rows that repeat earlier ones add nothing, so
+their energy goes to the contacts before them in the stated order.
 
 Energy split (every law)
 ------------------------

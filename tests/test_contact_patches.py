@@ -527,3 +527,46 @@ def test_talos_issue_example_polygon_against_the_bilateral_sole() -> None:
                      keep=[parse_contact("right_sole_link:flat")])
     np.testing.assert_allclose(a.result.velocity_post, b.result.velocity_post, atol=1e-12)
     assert a.result.T_c == pytest.approx(b.result.T_c, rel=1e-10)
+
+
+@pytest.mark.parametrize("law", ["newton", "energetic"])
+def test_cli_sole_polygon_json_and_text(law: str, tmp_path, capsys) -> None:
+    """``impact --robot`` with a FRAME:flat strike lists the corners, the outcome count and
+    the restitution law (JSON keys with units, a text line)."""
+    pytest.importorskip("pinocchio")
+    import json
+
+    from heelstrike.cli import main
+    from heelstrike.robots import load_robot
+    from heelstrike.robots.states import gait_state
+
+    talos = load_robot("talos")
+    q, v = gait_state(talos, 0.3, 0.3)
+    v = np.array(v)
+    v[talos.model.joints[talos.model.getJointId("leg_left_5_joint")].idx_v] -= 5.0
+    state = tmp_path / "state.json"
+    state.write_text(json.dumps({"q": [float(x) for x in q], "v": [float(x) for x in v]}))
+    argv = ["impact", "--robot", "talos", "--state", str(state), "--strike",
+            "left_sole_link:flat:0.1,0.05", "--keep", "right_sole_link:flat", "--friction", "0.8",
+            "--restitution", "0.5", "--restitution-law", law]
+    assert main([*argv, "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    sole = d["contacts"][0]
+    assert sole["type"] == "flat" and len(sole["corners"]) == 4
+    assert min(c["normal_velocity_post"] for c in sole["corners"]) >= -1e-9
+    heel = [c for c in sole["corners"] if c["corner"][0] < 0]
+    assert all(c["normal_velocity_pre"] == pytest.approx(-0.8, abs=1e-6) for c in heel)
+    if law == "newton":
+        assert all(c["normal_velocity_post"] == pytest.approx(-0.5 * c["normal_velocity_pre"],
+                                                              abs=1e-9) for c in heel)
+    else:
+        assert d["T_plus"] <= d["T"] and all(
+            0.0 < c["normal_velocity_post"] <= -0.5 * c["normal_velocity_pre"] for c in heel)
+    assert d["restitution_law"] == law and d["unique"] is True and d["outcomes"] == 1
+    assert d["active_sets"] == 10 ** 4 and len(d["solutions"]) == 1
+    assert len(d["impulse"]) == 4 * 3 + 6 and len(d["units"]["impulse"]) == 18
+    assert set(d["units"]) == set(d) - {"units"}
+    assert set(d["units"]["contacts"]["corners"]) == set(sole["corners"][0])
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert f"unique          yes ({law} restitution)" in out and out.count("corner (") == 4

@@ -570,3 +570,60 @@ def test_cli_sole_polygon_json_and_text(law: str, tmp_path, capsys) -> None:
     assert main(argv) == 0
     out = capsys.readouterr().out
     assert f"unique          yes ({law} restitution)" in out and out.count("corner (") == 4
+
+
+def test_kept_flat_sole_says_when_a_corner_would_pull(tmp_path, capsys) -> None:
+    """A kept (bilateral) flat sole whose ankle spins pushes on the ground with its centre of
+    pressure 0.55 m behind its frame, far off its 0.2 m sole: held flat, a corner would have
+    to pull. It is named (tilting_contacts, a note); struck as a polygon it tilts instead,
+    with no corner moving into the ground."""
+    pytest.importorskip("pinocchio")
+    import json
+
+    from heelstrike.cli import main
+    from heelstrike.robots import load_robot, parse_contact, robot_impact
+    from heelstrike.robots.states import gait_state
+
+    talos = load_robot("talos")
+    q, v = gait_state(talos, 0.3, 0.3)
+    v = np.array(v)
+    v[talos.model.joints[talos.model.getJointId("leg_right_5_joint")].idx_v] -= 5.0
+    left = parse_contact("left_sole_link:flat")
+    kept = robot_impact(talos, q, v, strike=[left], keep=[parse_contact("right_sole_link:flat")])
+    d = kept.to_dict()
+    assert kept.tilting == ("right_sole_link",) and d["tilting_contacts"] == ["right_sole_link"]
+    assert d["admissible"] is True  # its normal impulse pushes: not a pulling contact
+    f_z = d["contacts"][1]["force_impulse"][2]
+    cop = d["contacts"][1]["centre_of_pressure"]
+    assert f_z > 0.1 and cop[0] < -0.5
+    state = tmp_path / "state.json"
+    state.write_text(json.dumps({"q": [float(x) for x in q], "v": [float(x) for x in v]}))
+    assert main(["impact", "--robot", "talos", "--state", str(state), "--strike",
+                 "left_sole_link:flat", "--keep", "right_sole_link:flat-bilateral"]) == 0
+    err = capsys.readouterr().err
+    assert "kept sole right_sole_link is held flat although one of its corners would have to " \
+           "pull" in err and "--strike right_sole_link:flat" in err
+    both = robot_impact(talos, q, v, strike=[left, parse_contact("right_sole_link:flat")])
+    corners = both.to_dict()["contacts"][1]["corners"]
+    assert any(c["mode"] == "separate" for c in corners)  # it tilts
+    assert min(c["normal_velocity_post"] for c in corners) >= -1e-9
+    # a sole whose centre of pressure is on it is not named (the flat landing)
+    q, v = gait_state(talos, 0.3, 0.3)
+    assert robot_impact(talos, q, v, strike=[left],
+                        keep=[parse_contact("right_sole_link:flat")]).tilting == ()
+
+
+def test_parse_sole_polygons() -> None:
+    pytest.importorskip("pinocchio")
+    from heelstrike.robots import parse_contact
+    from heelstrike.robots.contacts import DEFAULT_SOLE
+    from heelstrike.robots.loading import RobotError
+
+    assert parse_contact("foot:flat").sole == DEFAULT_SOLE
+    assert parse_contact("foot:flat:0.12,0.06").sole == (-0.12, 0.12, -0.06, 0.06)
+    s = parse_contact("foot:flat-bilateral:-0.11,0.1,-0.07,0.07")
+    assert s.kind == "flat-bilateral" and s.sole == (-0.11, 0.1, -0.07, 0.07) and s.rows == 6
+    assert s.corners == ((-0.11, -0.07), (0.1, -0.07), (0.1, 0.07), (-0.11, 0.07))
+    for bad in ("foot:flat:0.1", "foot:flat:x,y", "foot:flat:0.1,0.1,0.2,-0.2", "foot:flat:-1,1"):
+        with pytest.raises(RobotError, match="sole"):
+            parse_contact(bad)

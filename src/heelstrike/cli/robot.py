@@ -316,7 +316,10 @@ def add_robot_impact_options(p: argparse.ArgumentParser) -> None:
         "velocity in the base's own frame (not the world's), then the joint rates. Each "
         "contact's T_c_normal and T_c_tangential are nested shares in contact order (the "
         "--strike then --keep order given): their sum, T_c, does not depend on it, the shares "
-        "of contacts that couple through the mass matrix do.")
+        "of contacts that couple through the mass matrix do; a sole's corners come in the "
+        "order of their approach speed (fastest first), so where corners' rows repeat one "
+        "another the energy goes to those that strike hardest (the sole's total does not "
+        "depend on that order).")
     g.add_argument("--robot", default=None, metavar="NAME",
                    help="a shipped robot (see 'heelstrike robot list')")
     g.add_argument("--urdf", default=None, metavar="FILE", help="a URDF robot (floating base)")
@@ -473,7 +476,8 @@ def run_robot_impact(args: argparse.Namespace) -> int:
         print(f"heelstrike: note: the impact adds {d['T_plus'] - d['T']:.6g} J of kinetic "
               f"energy (T_plus {d['T_plus']:.6g} J > T {d['T']:.6g} J): Newton's restitution "
               "with sticking friction can do so (Kane's paradox); the numbers follow that law, "
-              "not an energetic bound", file=sys.stderr)
+              "not an energetic bound (--restitution-law energetic cannot gain energy)",
+              file=sys.stderr)
     if math.isinf(args.friction):
         for c in d["contacts"]:
             if c["role"] == "strike" and c["mode"] == "slip":

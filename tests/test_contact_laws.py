@@ -295,8 +295,14 @@ def test_energy_split_shares_add_up_and_normal_part_is_normal_projection(seed: i
 
 def test_bad_input() -> None:
     M, J, v = _problem(0)
+    # a striking contact repeating a kept one (rank deficient): solved, not refused (issue
+    # #34); the striking rows end at rest with the kept ones and carry no impulse
+    rep = resolve_contact_impact(M, v, [_point(J, bilateral=True), _point(J)])
+    np.testing.assert_allclose(rep.velocity_post, impact(M, J, v).velocity_post, atol=1e-12)
+    assert rep.modes[1] == "separate" and rep.unique
+    # only kept (bilateral) contacts that repeat each other: still refused (the direct path)
     with pytest.raises(ImpactInputError, match="rank deficient"):
-        resolve_contact_impact(M, v, [_point(J, bilateral=True), _point(J)])
+        resolve_contact_impact(M, v, [_point(J, bilateral=True), _point(J, bilateral=True)])
     with pytest.raises(ImpactInputError, match="restitution"):
         ContactLaw(restitution=1.5)
     with pytest.raises(ImpactInputError, match="friction"):

@@ -223,13 +223,21 @@ def test_refused_impacts_say_which_joint_or_contact(tmp_path: Path) -> None:
     heavy = load_urdf(_hopper_urdf(tmp_path / "b.urdf", ankle="revolute", foot_mass=0.1))
     assert robot_impact(heavy, [*DROP_Q, 0.0, 0.0], [*DROP_V, 0.0, 0.0],
                         strike=foot).to_dict()["T"] > 0
-    # the same point twice, and a frame fixed to the world, repeat earlier rows
+    # a frame fixed to the world repeats earlier rows (it has none)
     hop = load_urdf(_hopper_urdf(tmp_path / "c.urdf"))
-    for extra in ("foot:point", "universe:point"):
+    for extra in ("universe:point",):
         with pytest.raises(ImpactInputError,
                            match=rf"the rows of {extra.split(':')[0]} repeat"):
             robot_impact(hop, [*DROP_Q, 0.0], [*DROP_V, 0.0], strike=foot,
                          keep=[parse_contact(extra)])
+    # the same point struck and kept (redundant rows) is solved, not refused (issue #34): the
+    # kept point holds, the struck one ends at rest with it and carries no impulse
+    both = robot_impact(hop, [*DROP_Q, 0.0], [*DROP_V, 0.0], strike=foot,
+                        keep=[parse_contact("foot:point")])
+    kept = robot_impact(hop, [*DROP_Q, 0.0], [*DROP_V, 0.0], keep=[parse_contact("foot:point")])
+    np.testing.assert_allclose(both.result.velocity_post, kept.result.velocity_post,
+                               atol=1e-12)
+    assert both.result.modes[0] == "separate" and both.result.unique
 
 
 def test_parser_errors_give_their_reason(tmp_path: Path) -> None:

@@ -361,7 +361,10 @@ def test_a_frame_name_with_colons_can_strike(tmp_path: Path, capsys: Capture) ->
     assert parse_contact("base:foot:point").frame == "base:foot"
     arc = parse_contact("a:b:arc:0.05")
     assert (arc.frame, arc.kind, arc.radius) == ("a:b", "arc", 0.05)
-    with pytest.raises(RobotError, match=r"the type is read after the last colon"):
+    sole = parse_contact("a:b:flat:0.1,0.05")  # a support polygon's size after the type
+    assert (sole.frame, sole.kind, sole.sole) == ("a:b", "flat", (-0.1, 0.1, -0.05, 0.05))
+    assert parse_contact("a:b:flat-bilateral").frame == "a:b"
+    with pytest.raises(RobotError, match=r"the type is read from the end"):
         parse_contact("foot:round")
     path = _urdf(tmp_path, extra='<link name="leg:sole"/><joint name="sole" type="fixed">'
                  '<parent link="leg"/><child link="leg:sole"/><origin xyz="0 0 -1"/></joint>')

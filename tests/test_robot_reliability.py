@@ -199,8 +199,8 @@ def test_a_flat_strike_never_passes_through_the_ground(tmp_path, capsys) -> None
     bolt = load_robot("bolt")
     q, v = gait_state(bolt, 0.2, 0.3)
     state = _state_file(tmp_path / "bolt.json", q, v)
-    assert main(["impact", "--robot", "bolt", "--state", state, "--strike", "FL_FOOT:flat",
-                 "--json"]) == 2
+    assert main(["impact", "--robot", "bolt", "--state", state, "--strike",
+                 "FL_FOOT:flat-bilateral", "--json"]) == 2
     cap = capsys.readouterr()
     assert cap.out == ""
     assert cap.err.startswith("heelstrike: error: contact 'FL_FOOT': no consistent impact")
@@ -210,6 +210,15 @@ def test_a_flat_strike_never_passes_through_the_ground(tmp_path, capsys) -> None
     d = json.loads(capsys.readouterr().out)
     assert d["contacts"][0]["mode"] == "stick" and d["admissible"] is True
     assert d["contacts"][0]["normal_velocity_post"] == pytest.approx(0.0, abs=1e-12)
+    assert d["T_c"] > 0.0 and d["T"] == pytest.approx(d["T_c"] + d["T_a"], rel=1e-12)
+    # issue #34: as a support polygon (FRAME:flat) it lands on its corners, none of which
+    # ends moving into the ground
+    assert main(["impact", "--robot", "bolt", "--state", state, "--strike", "FL_FOOT:flat",
+                 "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    corners = d["contacts"][0]["corners"]
+    assert len(corners) == 4 and any(c["mode"] != "separate" for c in corners)
+    assert min(c["normal_velocity_post"] for c in corners) >= -1e-12
     assert d["T_c"] > 0.0 and d["T"] == pytest.approx(d["T_c"] + d["T_a"], rel=1e-12)
 
 
@@ -317,8 +326,8 @@ def test_study_and_impact_share_one_admissibility_rule(talos) -> None:
 def test_slip_energy_books(talos, tmp_path, capsys, mu) -> None:
     q, v = gait_state(talos, 0.3, 0.3)
     state = _state_file(tmp_path / "state.json", q, v)
-    argv = ["impact", "--robot", "talos", "--state", state, "--strike", "left_sole_link:flat",
-            "--friction", str(mu)]
+    argv = ["impact", "--robot", "talos", "--state", state, "--strike",
+            "left_sole_link:flat-bilateral", "--friction", str(mu)]
     assert main([*argv, "--json"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert d["contacts"][0]["mode"] == "slip"

@@ -598,9 +598,9 @@ def test_cli_impact_json(robots, tmp_path, capsys) -> None:
     talos = robots["talos"]
     q, v = gait_state(talos, 0.4, 0.3)
     state = _state_file(tmp_path, q, v)
-    argv = ["impact", "--robot", "talos", "--state", state, "--strike", "left_sole_link:flat",
-            "--keep", "right_sole_link:flat", "--friction", "0.7", "--restitution", "0.1",
-            "--json"]
+    argv = ["impact", "--robot", "talos", "--state", state, "--strike",
+            "left_sole_link:flat-bilateral", "--keep", "right_sole_link:flat", "--friction",
+            "0.7", "--restitution", "0.1", "--json"]
     assert main(argv) == 0
     d = json.loads(capsys.readouterr().out)
     assert {"T", "T_c", "T_a", "qdot_plus", "impulse", "contacts"} <= set(d)
@@ -616,7 +616,7 @@ def test_cli_impact_json(robots, tmp_path, capsys) -> None:
     assert u["T_c"] == "J" and set(u["contacts"]) >= set(d["contacts"][0])
     # the contact's own impulse and the global list agree
     np.testing.assert_allclose(d["contacts"][1]["force_impulse"], d["impulse"][6:9])
-    ref = robot_impact(talos, q, v, strike=[parse_contact("left_sole_link:flat")],
+    ref = robot_impact(talos, q, v, strike=[parse_contact("left_sole_link:flat-bilateral")],
                        keep=[parse_contact("right_sole_link:flat")], friction=0.7,
                        restitution=0.1).result
     assert d["T_c"] == pytest.approx(ref.T_c, rel=1e-12)

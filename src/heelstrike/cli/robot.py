@@ -323,33 +323,47 @@ def add_robot_impact_options(p: argparse.ArgumentParser) -> None:
         "energy, loss_beyond_T_c = energy_lost - T_c = T_a - T_plus (with --restitution the "
         "rebound's returned energy is subtracted too). admissible is false, with a note on "
         "stderr, when a --keep contact pulls on the ground (negative normal impulse): pass it "
-        "as --strike (complementarity decides whether it lifts) or drop it. A striking flat "
-        "sole that needs a pull to stay flat, yet would move into the ground if released, "
-        "is refused: it lands on an edge or a corner, which is not modelled (use FRAME:point). "
+        "as --strike (complementarity decides whether it lifts) or drop it. A striking "
+        "FRAME:flat sole is its support polygon (FRAME:flat:HX,HY or :XMIN,XMAX,YMIN,YMAX, m, "
+        "sole frame; default 0.2 m x 0.1 m centred), each corner a unilateral contact with "
+        "its own friction (a pyramid cone) and restitution: heel, toe, edge and flat landings "
+        "alike; its corners are listed in --json. FRAME:flat-bilateral is the 6-row contact "
+        "held flat (kept: also FRAME:flat), and tilting_contacts names the kept soles whose "
+        "centre of pressure leaves the polygon (a corner would pull). Where the law admits "
+        "several outcomes, outcomes/unique/solutions say so (every active set is examined when "
+        "there are few enough; otherwise unique is null and active_sets bounds them). "
         "STATE.json holds q and v in Pinocchio's conventions: the base's linear and angular "
         "velocity in the base's own frame (not the world's), then the joint rates. Each "
         "contact's T_c_normal and T_c_tangential are nested shares in contact order (the "
         "--strike then --keep order given): their sum, T_c, does not depend on it, the shares "
-        "of contacts that couple through the mass matrix do.")
+        "of contacts that couple through the mass matrix do; a sole's corners come in the "
+        "order of their approach speed (fastest first), so where corners' rows repeat one "
+        "another the energy goes to those that strike hardest (the sole's total does not "
+        "depend on that order).")
     g.add_argument("--robot", default=None, metavar="NAME",
                    help="a shipped robot (see 'heelstrike robot list')")
     g.add_argument("--urdf", default=None, metavar="FILE", help="a URDF robot (floating base)")
     g.add_argument("--mjcf", default=None, metavar="FILE", help="an MJCF robot (floating base)")
     g.add_argument("--strike", action="append", default=None,
-                   metavar="FRAME:point|flat|arc:RADIUS",
+                   metavar="FRAME:point|flat[:HX,HY]|flat-bilateral|arc:RADIUS",
                    help="striking contact (repeatable; FRAME:arc:RADIUS: an arc heel of radius "
                    "RADIUS m whose centre is the frame's origin, the contact point RADIUS below "
                    "it along the ground normal; the type is read after the last colon, so a "
                    "FRAME with colons is given as it is: base:foot:point); "
                    "unilateral, with --friction and --restitution, its lift is decided")
     g.add_argument("--keep", action="append", default=None,
-                   metavar="FRAME:point|flat|arc:RADIUS",
+                   metavar="FRAME:point|flat|flat-bilateral|arc:RADIUS",
                    help="persistent contact (repeatable): bilateral and inert, stays fixed; "
                    "with --keep contacts only, the paper's inert impact")
     g.add_argument("--friction", type=float, default=math.inf, metavar="MU",
                    help="Coulomb coefficient of the striking contacts (default inf: an "
                    "unbounded cone; a contact then slips only where sticking would need the "
                    "ground to pull, and says so)")
+    g.add_argument("--restitution-law", choices=("newton", "energetic"), default="newton",
+                   help="newton (default): u_n+ = -e u_n- at each striking contact, which can "
+                   "gain energy with sticking friction (Kane's paradox); energetic: a "
+                   "compression phase (e = 0), then a rebound returning at most e^2 of the "
+                   "energy absorbed, which never gains energy (the same as newton for e = 0)")
 
 
 def robot_requested(args: argparse.Namespace) -> bool:
@@ -413,6 +427,22 @@ def _note_separating_strikes(contacts: list[dict[str, Any]]) -> None:
                   "it strikes nothing (no impulse, no share of T_c)", file=sys.stderr)
 
 
+def _note_outcomes(d: dict[str, Any], keep_text: dict[str, str]) -> None:
+    """Say on stderr when the law has several outcomes and which kept soles would tilt (a
+    corner pulls). Too many active sets to examine is said by the output itself (``unique``
+    null and ``active_sets`` in --json, the line ``unique not checked`` in the text)."""
+    if d["unique"] is False:
+        _print(f"heelstrike: note: the contact law admits {d['outcomes']} outcomes (every one of "
+              f"its {d['active_sets']} active sets examined); the one with the fewest sliding "
+              "and active contacts is reported, all are in --json 'solutions'",
+              file=sys.stderr)
+    for frame in d["tilting_contacts"]:
+        _print(f"heelstrike: note: the kept sole {frame} is held flat although one of its "
+              "corners would have to pull (centre of pressure outside its support polygon): "
+              f"pass it as --strike {frame}:flat (a "
+              "support polygon) to let it tilt", file=sys.stderr)
+
+
 def run_robot_impact(args: argparse.Namespace) -> int:
     """``heelstrike impact --robot NAME | --urdf FILE | --mjcf FILE --state STATE.json ...``."""
     import numpy as np
@@ -431,8 +461,10 @@ def run_robot_impact(args: argparse.Namespace) -> int:
     if not args.strike and not args.keep:
         raise RobotCliError("robots need at least one --strike or --keep "
                             "FRAME:point|flat|arc:RADIUS")
-    if not args.strike and (math.isfinite(args.friction) or args.restitution != 0.0):
-        raise RobotCliError("--friction and --restitution set the laws of --strike contacts; "
+    if not args.strike and (math.isfinite(args.friction) or args.restitution != 0.0
+                            or getattr(args, "restitution_law", "newton") != "newton"):
+        raise RobotCliError("--friction, --restitution and --restitution-law set the laws of "
+                            "--strike contacts; "
                             "an impact with --keep contacts only is inert (the paper's law): "
                             "give a --strike or drop them")
     strike = [parse_contact(s) for s in (args.strike or [])]
@@ -444,7 +476,8 @@ def run_robot_impact(args: argparse.Namespace) -> int:
     violations = _limit_violations(robot, q)
     with np.errstate(all="ignore"):  # overflow is refused below, as one error line
         res = robot_impact(robot, q, v, strike=strike, keep=keep, friction=args.friction,
-                           restitution=args.restitution)
+                           restitution=args.restitution,
+                           restitution_law=getattr(args, "restitution_law", "newton"))
         d = res.to_dict()
     d = {"robot": robot.name, "nq": robot.nq, "nv": robot.nv, **d}
     require_finite(d)
@@ -462,6 +495,7 @@ def run_robot_impact(args: argparse.Namespace) -> int:
               f"{keep_text.get(frame, frame)} (complementarity then decides whether it lifts) "
               "or drop it", file=sys.stderr)
     _note_separating_strikes(d["contacts"])
+    _note_outcomes(d, keep_text)
     for c, z in zip((*strike, *keep), contact_heights(robot, q, (*strike, *keep)), strict=True):
         if abs(z) > GROUND_GAP_TOLERANCE:  # QA sweep 9: computed as touching, silently
             _print(f"heelstrike: note: contact {c.frame} is {abs(z) * 1e3:.3g} mm "
@@ -471,7 +505,8 @@ def run_robot_impact(args: argparse.Namespace) -> int:
         _print(f"heelstrike: note: the impact adds {d['T_plus'] - d['T']:.6g} J of kinetic "
               f"energy (T_plus {d['T_plus']:.6g} J > T {d['T']:.6g} J): Newton's restitution "
               "with sticking friction can do so (Kane's paradox); the numbers follow that law, "
-              "not an energetic bound", file=sys.stderr)
+              "not an energetic bound (--restitution-law energetic cannot gain energy)",
+              file=sys.stderr)
     if math.isinf(args.friction):
         for c in d["contacts"]:
             if c["role"] == "strike" and c["mode"] == "slip":
@@ -480,20 +515,25 @@ def run_robot_impact(args: argparse.Namespace) -> int:
                       "contact slides with a vanishing normal impulse", file=sys.stderr)
     if args.json:
         _, v_units = _joint_units(robot.model)
-        impulse_units = [u for c in res.contacts
-                         for u in ["N s"] * 3 + ["N m s"] * (c.rows - 3)]
+        impulse_units = [u for J in res.result.contact_velocity_pre
+                         for u in ["N s"] * 3 + ["N m s"] * (J.shape[0] - 3)]
         contact_units = {
             "frame": None, "type": None, "role": None, "mode": None, "T_c_normal": "J",
             "T_c_tangential": "J", "force_impulse": "N s", "moment_impulse": "N m s",
             "centre_of_pressure": "m",
             "normal_velocity_pre": "m/s", "normal_velocity_post": "m/s",
             "slip_speed_post": "m/s",
+            "corners": {"corner": "m", "mode": None, "T_c_normal": "J", "T_c_tangential": "J",
+                        "force_impulse": "N s", "normal_velocity_pre": "m/s",
+                        "normal_velocity_post": "m/s", "slip_speed_post": "m/s"},
         }
         units = {
             "robot": None, "nq": "1", "nv": "1", "T": "J", "T_c": "J", "T_a": "J",
             "T_plus": "J", "energy_lost": "J", "loss_beyond_T_c": "J", "qdot_plus": v_units,
             "impulse": impulse_units, "contacts": contact_units, "admissible": None,
             "pulling_contacts": {"frame": None, "normal_impulse": "N s"},
+            "tilting_contacts": None, "restitution_law": None, "outcomes": "1",
+            "unique": None, "active_sets": "1", "solutions": v_units,
         }
         print_json(d, {k: units[k] for k in d})
         return 0
@@ -507,6 +547,10 @@ def run_robot_impact(args: argparse.Namespace) -> int:
         _print(f"  {c['role']:<6} {c['frame']:<24} {c['type']:<5} {c['mode']:<8} "
               f"T_c normal {_joules(c['T_c_normal'])} J, "
               f"tangential {_joules(c['T_c_tangential'])} J")
+        for k in c.get("corners", []):
+            x, y = k["corner"]
+            _print(f"         corner ({x:+.3f}, {y:+.3f}) m {k['mode']:<8} normal velocity "
+                  f"{k['normal_velocity_pre']:+.4f} -> {k['normal_velocity_post']:+.4f} m/s")
         if c.get("centre_of_pressure") is not None:
             x, y = c["centre_of_pressure"]
             _print(f"         centre of pressure ({x:+.4f}, {y:+.4f}) m from the frame origin "
@@ -522,4 +566,8 @@ def run_robot_impact(args: argparse.Namespace) -> int:
         _print(f"  energy_lost - T_c = {extra:+.6f} J (the energy lost is not T_c here): "
               f"{' and '.join(causes) or 'see impact --help'}")
     _print(f"  admissible      {'yes' if d['admissible'] else 'no (a kept contact pulls)'}")
+    unique = {True: "yes", False: f"no ({d['outcomes']} outcomes)",
+              None: f"not checked ({d['active_sets']} active sets)"}[d["unique"]]
+    if d["active_sets"]:
+        _print(f"  unique          {unique} ({d['restitution_law']} restitution)")
     return 0

@@ -34,12 +34,25 @@ to one scalar secular equation in the multiplier ``beta`` of the disc constraint
 ``||x(beta)|| = mu lambda_n(x(beta))`` with ``x(beta) = -(S + beta I)^-1 c``, solved by Brent's
 method to machine precision. Several striking contacts are coupled by a block (non-smooth)
 Gauss-Seidel iteration over contacts; with one striking contact it is exact in one sweep.
-Uniqueness is not guaranteed for Painlevé-type configurations (the first root is returned).
-A contact with several normal rows (a flat sole) is resolved all rows or none: where holding it
-needs a pull yet releasing it leaves it moving into the ground (an edge or corner landing, which
-these laws do not model), :func:`resolve_contact_impact` raises
-:class:`~heelstrike.core.impact.ImpactInputError` rather than report a contact passing through
-the ground.
+Uniqueness is not checked on this path (Painlevé-type configurations can have several
+outcomes; the first root is returned: ``solutions`` is empty, ``unique`` None).
+A contact with several normal rows (a flat sole held flat) is resolved all rows or none: where
+holding it needs a pull yet releasing it leaves it moving into the ground (an edge or corner
+landing), :func:`resolve_contact_impact` raises :class:`~heelstrike.core.impact.ImpactInputError`
+rather than report a contact passing through the ground: give such a sole as its corners.
+
+Active-set path (issue #34): striking *point* contacts (one normal row, up to two tangential
+rows: a sole's corners, points, arcs) can instead be solved exactly by
+:func:`heelstrike.core.complementarity.solve_point_contacts` (``method="active-set"``; taken
+automatically for rank-deficient rows and for the energetic restitution law): friction is the
+pyramid ``|lambda_t| <= mu lambda_n`` per tangential row, every active set is enumerated (up
+to :data:`~heelstrike.core.complementarity.ENUMERATION_BUDGET`; above it Lemke's method gives
+one outcome), the outcomes found are ``solutions`` (``unique``, ``exhaustive``,
+``active_sets``), and redundant rows (two heel corners, a four-corner sole) give the unique
+``q_dot+`` with the impulses of the smallest consistent active set (Carathéodory) and the kept
+rows' least-norm impulses. Its energy split is the nested one below with pseudo-inverses
+(:func:`energy_split` with ``redundant=True``): rows that repeat earlier ones add nothing, so
+their energy goes to the contacts before them in the stated order.
 
 Energy split (every law)
 ------------------------
@@ -82,6 +95,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
+from heelstrike.core.complementarity import RestitutionLaw, _pinv_psd, solve_point_contacts
 from heelstrike.core.impact import ImpactInputError, impact
 
 __all__ = [
@@ -101,6 +115,7 @@ __all__ = [
 ]
 
 ImpactMode = Literal["stick", "slip", "separate"]
+SolverMethod = Literal["auto", "gauss-seidel", "active-set"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -213,7 +228,17 @@ class ContactImpact(ResultDictMixin):
     T_c_normal, T_c_tangential : ndarray, shape (contacts,)
         Per-contact normal and tangential shares of ``T_c`` (J); they add up to ``T_c``.
     iterations : int
-        Gauss-Seidel sweeps used.
+        Gauss-Seidel sweeps used (0 for the exact active-set solver).
+    solutions : tuple of ndarray
+        ``q_dot+`` (n,) of every distinct outcome the law admits, the returned one first, when
+        the active sets were examined (:func:`heelstrike.core.complementarity.
+        solve_point_contacts`); empty when they were not (the Gauss-Seidel path).
+    exhaustive : bool
+        Whether every active set was examined (``solutions`` is then complete).
+    active_sets : int
+        Number of active sets of the law (a bound on the number of outcomes; 0 if unknown).
+    restitution_law : str
+        ``"newton"`` or ``"energetic"``.
     """
 
     velocity_pre: FloatArray
@@ -231,6 +256,20 @@ class ContactImpact(ResultDictMixin):
     T_c_normal: FloatArray
     T_c_tangential: FloatArray
     iterations: int
+    solutions: tuple[FloatArray, ...] = ()
+    exhaustive: bool = False
+    active_sets: int = 0
+    restitution_law: str = "newton"
+
+    @property
+    def outcomes(self) -> int:
+        """Number of distinct outcomes found (1 when the active sets were not examined)."""
+        return max(len(self.solutions), 1)
+
+    @property
+    def unique(self) -> bool | None:
+        """Whether the law has one outcome: None when the active sets were not all examined."""
+        return len(self.solutions) == 1 if self.exhaustive else None
 
 
 def _check_M(M: ArrayLike) -> tuple[FloatArray, tuple[FloatArray, bool]]:
@@ -255,6 +294,7 @@ def energy_split(
     groups: Sequence[ArrayLike],
     *,
     check: bool = True,
+    redundant: bool = False,
 ) -> tuple[float, FloatArray]:
     """Nested M-orthogonal split of the constrained energy over ordered row groups.
 
@@ -268,6 +308,12 @@ def energy_split(
         Row groups in the order of the nesting (``k_j`` may be 0).
     check : bool
         Verify the rank of the stacked rows by an SVD (default True).
+    redundant : bool
+        Accept rows of any rank (default False): the energy of the projection onto the span
+        of the first ``j`` groups is then ``E_j = 1/2 b_j^T W_j^+ b_j`` (``b_j``, ``W_j`` the
+        rows' velocities and Delassus block, ``+`` the pseudo-inverse) and group ``j``'s share
+        ``E_j - E_{j-1} >= 0``. A group whose rows repeat earlier ones gets 0: the groups
+        before it take the energy (the convention the order sets).
 
     Returns
     -------
@@ -280,7 +326,7 @@ def energy_split(
     Raises
     ------
     ImpactInputError
-        If the stacked rows are rank deficient.
+        If the stacked rows are rank deficient (unless ``redundant``).
     """
     M_, cho = _check_M(M)
     v = np.asarray(q_dot, dtype=float)
@@ -294,6 +340,15 @@ def energy_split(
     W = A @ X
     W = 0.5 * (W + W.T)
     b = A @ v
+    if redundant:
+        prev, stop = 0.0, 0
+        for j, g in enumerate(mats):
+            stop += g.shape[0]
+            if g.shape[0]:
+                E = 0.5 * float(b[:stop] @ (_pinv_psd(W[:stop, :stop]) @ b[:stop]))
+                shares[j] = max(E - prev, 0.0)
+                prev = max(E, prev)
+        return float(shares.sum()), shares
     try:
         L = np.linalg.cholesky(W)
     except np.linalg.LinAlgError as exc:
@@ -416,6 +471,8 @@ def resolve_contact_impact(
     *,
     max_sweeps: int = 500,
     tol: float = 1e-13,
+    restitution_law: RestitutionLaw = "newton",
+    method: SolverMethod = "auto",
 ) -> ContactImpact:
     """Resolve an impact with per-contact inert/restitution/friction laws (module doc).
 
@@ -431,6 +488,17 @@ def resolve_contact_impact(
         Maximum Gauss-Seidel sweeps over the unilateral contacts.
     tol : float
         Relative convergence tolerance on the impulses.
+    restitution_law : {"newton", "energetic"}
+        Newton's kinematic law (can gain energy with sticking friction: Kane's paradox) or
+        the energetic two-phase law of :func:`heelstrike.core.complementarity.
+        solve_point_contacts`, which cannot (it uses the active-set solver).
+    method : {"auto", "gauss-seidel", "active-set"}
+        ``"gauss-seidel"``: the block Gauss-Seidel over contacts with round friction cones
+        (full-rank rows only). ``"active-set"``: exact active-set enumeration with pyramid
+        cones (:func:`~heelstrike.core.complementarity.solve_point_contacts`; every striking
+        contact a point: one normal row, at most two tangential rows; any rank; reports every
+        outcome). ``"auto"`` (default): active-set when the rows are rank deficient or the law
+        is energetic, else Gauss-Seidel.
 
     Returns
     -------
@@ -439,7 +507,9 @@ def resolve_contact_impact(
     Raises
     ------
     ImpactInputError
-        On malformed input, rank-deficient contact rows, or no convergence.
+        On malformed input, rank-deficient rows that the active-set solver cannot take (only
+        bilateral contacts, or a striking contact with several normal rows), or no
+        convergence.
     """
     M_, cho = _check_M(M)
     n = M_.shape[0]
@@ -456,10 +526,18 @@ def resolve_contact_impact(
     bil = [i for i, c in enumerate(contacts) if c.bilateral]
     uni = [i for i, c in enumerate(contacts) if not c.bilateral]
     A_all = np.vstack([c.jacobian for c in contacts])
+    sv = np.linalg.svd(A_all, compute_uv=False)
+    deficient = A_all.shape[0] > n or sv[-1] <= 1e-12 * max(A_all.shape) * sv[0]
+    if method not in ("auto", "gauss-seidel", "active-set"):
+        raise ImpactInputError(f"method must be auto, gauss-seidel or active-set, got {method!r}")
+    if uni and (method == "active-set" or (method == "auto" and (
+            deficient or restitution_law == "energetic"))):
+        return _resolve_active_set(M_, v, contacts, restitution_law)
+    if restitution_law != "newton":
+        raise ImpactInputError("the energetic restitution law needs the active-set solver")
     if A_all.shape[0] > n:
         raise ImpactInputError(f"{A_all.shape[0]} contact rows exceed the {n} coordinates")
-    sv = np.linalg.svd(A_all, compute_uv=False)
-    if sv[-1] <= 1e-12 * max(A_all.shape) * sv[0]:
+    if deficient:
         raise ImpactInputError("contact rows are rank deficient (redundant contacts?)")
 
     A_b = (
@@ -574,6 +652,80 @@ def resolve_contact_impact(
         T_c_normal=shares[:m],
         T_c_tangential=shares[m:],
         iterations=sweeps,
+    )
+
+
+def _resolve_active_set(M: FloatArray, v: FloatArray, contacts: Sequence[ContactRows],
+                        law: RestitutionLaw) -> ContactImpact:
+    """:func:`resolve_contact_impact` by exact active sets (pyramid cones, any rank)."""
+    n = M.shape[0]
+    uni = [c for c in contacts if not c.bilateral]
+    for c in uni:
+        if len(c.normal) != 1 or len(c.tangential) > 2:
+            raise ImpactInputError(
+                f"contact {c.name!r}: the active-set solver takes striking point contacts (one "
+                "normal row, at most two tangential rows): give a sole as its corners")
+    m = len(uni)
+    N = np.array([c.jacobian[c.normal[0]] for c in uni])
+    Tt = np.zeros((m, 2, n))
+    for j, c in enumerate(uni):
+        for a, t in enumerate(c.tangential):
+            Tt[j, a] = c.jacobian[t]
+    mu = np.array([c.law.friction if c.tangential else 0.0 for c in uni])
+    e = np.array([c.law.restitution for c in uni])
+    bil = [c.jacobian for c in contacts if c.bilateral]
+    sol = solve_point_contacts(M, v, N, tangential=Tt, bilateral=np.vstack(bil) if bil else None,
+                               friction=mu, restitution=e, law=law)
+    modes: list[ImpactMode] = []
+    lam_parts: list[FloatArray] = []
+    normal_groups: list[FloatArray] = []
+    tangential_groups: list[FloatArray] = []
+    bpos, j = 0, 0
+    for c in contacts:
+        Jn, Jt = c.jacobian[list(c.normal)], c.jacobian[list(c.tangential)]
+        if c.bilateral:
+            lam_parts.append(sol.bilateral_impulse[bpos:bpos + c.rows])
+            bpos += c.rows
+            modes.append("stick")
+        else:
+            lam = np.zeros(c.rows)
+            lam[c.normal[0]] = sol.impulse[j, 0]
+            for a, t in enumerate(c.tangential):
+                lam[t] = sol.impulse[j, 1 + a]
+            lam_parts.append(lam)
+            modes.append(sol.modes[j])
+            if sol.modes[j] == "separate":
+                Jn = Jn[:0]
+            Jt = Jt[[a for a in range(len(c.tangential)) if sol.stick_rows[j, a]]]
+            j += 1
+        normal_groups.append(Jn)
+        tangential_groups.append(Jt)
+    lam_all = np.concatenate(lam_parts)
+    T_c, shares = energy_split(M, v, normal_groups + tangential_groups, redundant=True)
+    v_plus = sol.velocity_post
+    T = 0.5 * float(v @ M @ v)
+    T_post = 0.5 * float(v_plus @ M @ v_plus)
+    k = len(contacts)
+    return ContactImpact(
+        velocity_pre=v,
+        velocity_post=v_plus,
+        impulse=lam_all,
+        generalized_impulse=np.vstack([c.jacobian for c in contacts]).T @ lam_all,
+        modes=tuple(modes),
+        contact_velocity_pre=tuple(c.jacobian @ v for c in contacts),
+        contact_velocity_post=tuple(c.jacobian @ v_plus for c in contacts),
+        T=T,
+        T_c=T_c,
+        T_a=T - T_c,
+        T_post=T_post,
+        energy_lost=T - T_post,
+        T_c_normal=shares[:k],
+        T_c_tangential=shares[k:],
+        iterations=0,
+        solutions=sol.solutions,
+        exhaustive=sol.exhaustive,
+        active_sets=sol.active_sets,
+        restitution_law=law,
     )
 
 

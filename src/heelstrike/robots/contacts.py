@@ -7,10 +7,25 @@ A contact is a frame of the robot and a type:
 ``arc`` (3 rows, radius ``R``)
     an arc heel: the material point a distance ``R`` below the frame origin along the ground
     normal, ``v + omega x (-R e_z)``; the frame sits at the arc's centre. ``R = 0`` is ``point``.
-``flat`` (6 rows)
-    a sole flat on the ground: the frame's linear and angular velocity ``(x, y, z, wx, wy, wz)``;
+``flat`` (a support polygon; kept: 6 bilateral rows)
+    a sole: its support polygon, the corners ``(x, y)`` of a rectangle in the sole frame's own
+    ``x, y`` plane (``sole = (x_min, x_max, y_min, y_max)`` m, default 0.2 m x 0.1 m centred on
+    the frame, which must lie on the sole's surface). Striking, each corner is a unilateral
+    point contact (3 rows ``x, y, z`` of its velocity, ``v + omega x r``) with its own Coulomb
+    friction (a pyramid cone, ``|lambda_x|, |lambda_y| <= mu lambda_z``) and restitution, solved
+    exactly with every active set (:func:`heelstrike.core.complementarity.
+    solve_point_contacts`): heel and toe strikes, edge landings, toe-off and the flat landing
+    are the same law. The four corners are rank deficient (12 rows, rank 6): ``q_dot+`` and
+    ``T_c`` are unique, the corner impulses are the smallest active set's. Kept, a flat sole
+    is the bilateral contact below (it stays flat), and says so when one of its corners would
+    have to pull (centre of pressure outside the polygon: :attr:`RobotImpact.tilting`).
+``flat-bilateral`` (6 rows)
+    a sole held flat: the frame's linear and angular velocity ``(x, y, z, wx, wy, wz)``;
     normal rows ``z, wx, wy`` (the principal one is ``z``), tangential rows ``x, y, wz`` (the
-    twist weighted by ``1 / torsion_radius`` in the friction cone).
+    twist weighted by ``1 / torsion_radius`` in the friction cone). Striking, it is resolved
+    all rows or none with restitution on all three normal rows, so in a heel-first landing
+    with ``e > 0`` it reverses the tilt too and can drive the toe into the ground: strike
+    with ``flat`` unless the sole really lands flat.
 
 All rows come from the frame Jacobian in ``LOCAL_WORLD_ALIGNED`` (origin at the frame, axes of
 the world), so impulses are world-aligned forces (N s) and moments about the frame origin
@@ -28,7 +43,7 @@ striking contact's friction, restitution or separation has to be decided.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -37,6 +52,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
+from heelstrike.core.complementarity import RestitutionLaw
 from heelstrike.core.contact_laws import (
     ContactImpact,
     ContactLaw,
@@ -52,6 +68,7 @@ from heelstrike.core.impact import ImpactInputError, ImpactResult, impact
 from heelstrike.robots.loading import Robot, RobotError, _pin, real_array
 
 __all__ = [
+    "DEFAULT_SOLE",
     "ContactKind",
     "ContactSpec",
     "RobotImpact",
@@ -67,8 +84,14 @@ __all__ = [
     "robot_matrices",
 ]
 
-ContactKind = Literal["point", "flat", "arc"]
-_ROWS = {"point": 3, "arc": 3, "flat": 6}
+ContactKind = Literal["point", "flat", "flat-bilateral", "arc"]
+_ROWS = {"point": 3, "arc": 3, "flat": 6, "flat-bilateral": 6}
+_FLAT = ("flat", "flat-bilateral")
+
+#: Default support polygon of a sole, ``(x_min, x_max, y_min, y_max)`` (m) in the sole frame:
+#: a 0.2 m x 0.1 m rectangle centred on the frame (``FRAME:flat:HX,HY`` or
+#: ``FRAME:flat:XMIN,XMAX,YMIN,YMAX`` give the robot's own).
+DEFAULT_SOLE = (-0.1, 0.1, -0.05, 0.05)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -79,23 +102,34 @@ class ContactSpec:
     ----------
     frame : str
         Frame name in the robot model.
-    kind : {"point", "flat", "arc"}
+    kind : {"point", "flat", "flat-bilateral", "arc"}
         Contact type (module doc).
     radius : float
         Arc heel radius (m), ``kind="arc"`` only, >= 0.
     torsion_radius : float
         Flat contacts: radius (m) of the torsional friction limit, ``|tau_z| <= rho mu f_z``
         on the cone's boundary, > 0.
+    sole : tuple of 4 float
+        Flat contacts: the support polygon, ``(x_min, x_max, y_min, y_max)`` (m) in the sole
+        frame, ``x_min < x_max``, ``y_min < y_max``.
     """
 
     frame: str
     kind: ContactKind = "point"
     radius: float = 0.0
     torsion_radius: float = 0.05
+    sole: tuple[float, float, float, float] = DEFAULT_SOLE
 
     def __post_init__(self) -> None:
         if self.kind not in _ROWS:
-            raise RobotError(f"contact type must be point, flat or arc, got {self.kind!r}")
+            raise RobotError(
+                f"contact type must be point, flat, flat-bilateral or arc, got {self.kind!r}")
+        sole = tuple(float(x) for x in self.sole)
+        if len(sole) != 4 or not all(np.isfinite(sole)) or not (
+                sole[0] < sole[1] and sole[2] < sole[3]):
+            raise RobotError(f"sole must be (x_min, x_max, y_min, y_max) with x_min < x_max and "
+                             f"y_min < y_max (m), got {self.sole!r}")
+        object.__setattr__(self, "sole", sole)
         if not (np.isfinite(self.radius) and self.radius >= 0.0):
             raise RobotError(f"arc radius must be >= 0 m, got {self.radius!r}")
         if not (np.isfinite(self.torsion_radius) and self.torsion_radius > 0.0):
@@ -108,22 +142,33 @@ class ContactSpec:
 
     @property
     def normal(self) -> tuple[int, ...]:
-        """Normal row indices (principal first)."""
-        return (2, 3, 4) if self.kind == "flat" else (2,)
+        """Normal row indices (principal first) of the 6 or 3 rows."""
+        return (2, 3, 4) if self.kind in _FLAT else (2,)
 
     @property
     def tangential(self) -> tuple[int, ...]:
         """Tangential row indices."""
-        return (0, 1, 5) if self.kind == "flat" else (0, 1)
+        return (0, 1, 5) if self.kind in _FLAT else (0, 1)
 
     @property
     def tangential_weights(self) -> tuple[float, ...]:
         """Weights of the tangential rows in the friction norm."""
-        return (1.0, 1.0, 1.0 / self.torsion_radius) if self.kind == "flat" else (1.0, 1.0)
+        return (1.0, 1.0, 1.0 / self.torsion_radius) if self.kind in _FLAT else (1.0, 1.0)
+
+    @property
+    def corners(self) -> tuple[tuple[float, float], ...]:
+        """Support polygon corners ``(x, y)`` (m, sole frame): heel right, toe right, toe left,
+        heel left (``x`` forward, ``y`` left)."""
+        x0, x1, y0, y1 = self.sole
+        return ((x0, y0), (x1, y0), (x1, y1), (x0, y1))
 
 
 def parse_contact(text: str) -> ContactSpec:
-    """Parse ``FRAME:point``, ``FRAME:flat`` or ``FRAME:arc:RADIUS`` (m).
+    """Parse ``FRAME:point``, ``FRAME:flat[:SOLE]``, ``FRAME:flat-bilateral[:SOLE]`` or
+    ``FRAME:arc:RADIUS`` (m).
+
+    ``SOLE`` is ``HX,HY`` (half length and half width, m, a rectangle centred on the frame)
+    or ``XMIN,XMAX,YMIN,YMAX`` (m, sole frame); default :data:`DEFAULT_SOLE`.
 
     The type is read from the end, so a frame name may itself hold colons
     (``base:foot:point`` is the frame ``base:foot``).
@@ -134,20 +179,34 @@ def parse_contact(text: str) -> ContactSpec:
         On a malformed specification.
     """
     if not isinstance(text, str):
-        raise RobotError(f"a contact is a text FRAME:point|flat|arc:RADIUS, got "
+        raise RobotError(f"a contact is a text FRAME:point|flat|flat-bilateral|arc:RADIUS, got "
                          f"{type(text).__name__}")
     frame, _, kind = text.rpartition(":")
-    if kind in ("point", "flat") and frame:
+    if kind in ("point", "flat", "flat-bilateral") and frame:
         return ContactSpec(frame=frame, kind=kind)  # type: ignore[arg-type]
-    frame, _, arc = frame.rpartition(":")
-    if arc == "arc" and frame:
+    frame, _, typ = frame.rpartition(":")
+    if typ in _FLAT and frame:
+        try:
+            dims = [float(x) for x in kind.split(",")]
+        except ValueError:
+            raise RobotError(f"invalid sole size in contact {text!r}") from None
+        if len(dims) == 2 and dims[0] > 0 and dims[1] > 0:
+            sole = (-dims[0], dims[0], -dims[1], dims[1])
+        elif len(dims) == 4:
+            sole = (dims[0], dims[1], dims[2], dims[3])
+        else:
+            raise RobotError(f"invalid sole size in contact {text!r}: give HX,HY (half length, "
+                             "half width, > 0 m) or XMIN,XMAX,YMIN,YMAX (m)")
+        return ContactSpec(frame=frame, kind=typ, sole=sole)  # type: ignore[arg-type]
+    if typ == "arc" and frame:
         try:
             radius = float(kind)
         except ValueError:
             raise RobotError(f"invalid arc radius in contact {text!r}") from None
         return ContactSpec(frame=frame, kind="arc", radius=radius)
-    raise RobotError(f"invalid contact {text!r}: use FRAME:point, FRAME:flat or FRAME:arc:RADIUS"
-                     " (the type is read after the last colon, so FRAME may hold colons)")
+    raise RobotError(f"invalid contact {text!r}: use FRAME:point, FRAME:flat[:HX,HY], "
+                     "FRAME:flat-bilateral or FRAME:arc:RADIUS (the type is read from the end, "
+                     "so FRAME may hold colons)")
 
 
 def _contact_specs(what: str, items: Any) -> tuple[ContactSpec, ...]:
@@ -186,7 +245,7 @@ def contact_jacobian(robot: Robot, data: Any, spec: ContactSpec) -> FloatArray:
     J6 = np.array(
         pin.getFrameJacobian(robot.model, data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
     )
-    if spec.kind == "flat":
+    if spec.kind in _FLAT:
         return J6
     if spec.kind == "arc" and spec.radius > 0.0:
         r = np.array([0.0, 0.0, -spec.radius])
@@ -277,11 +336,27 @@ class RobotImpact(ResultDictMixin):
     bilateral : tuple of bool
         Whether each contact is kept (persistent, bilateral, inert).
     result : ContactImpact
-        The solution of :func:`heelstrike.core.contact_laws.resolve_contact_impact`.
+        The solution of :func:`heelstrike.core.contact_laws.resolve_contact_impact`, whose
+        contacts are the rows actually resolved: a striking ``flat`` sole is its corners.
     M : ndarray, shape (nv, nv)
         Mass matrix at impact.
     jacobians : tuple of ndarray
-        Rows of every contact, shape (k_i, nv).
+        Rows of every contact, shape (k_i, nv); a striking sole's are its corners' rows
+        (3 per corner, in :attr:`corner_order`).
+    members : tuple of tuple of int
+        Per contact, the indices of its rows' contacts in ``result`` (one, or a sole's
+        corners); empty: one each, in order.
+    corner_order : tuple of tuple of int
+        Per contact, the order of its corners (indices into :attr:`ContactSpec.corners`):
+        the nesting order of the energy split, the corner approaching the ground fastest
+        first (ties by index), so that where corners' rows are redundant the energy goes to
+        the corners that strike hardest; empty for other contacts.
+    corner_offsets : tuple of ndarray
+        Per contact, its corners' offsets from the frame origin (m, world axes), shape
+        (corners, 3) in :attr:`corner_order`; empty (0, 3) for other contacts.
+    tilting : tuple of str
+        Kept ``flat``/``flat-bilateral`` soles whose centre of pressure lies outside their
+        support polygon: holding them flat needs a corner to pull (they would tilt).
     """
 
     contacts: tuple[ContactSpec, ...]
@@ -289,6 +364,19 @@ class RobotImpact(ResultDictMixin):
     result: ContactImpact
     M: FloatArray
     jacobians: tuple[FloatArray, ...]
+    members: tuple[tuple[int, ...], ...] = ()
+    corner_order: tuple[tuple[int, ...], ...] = ()
+    corner_offsets: tuple[FloatArray, ...] = ()
+    tilting: tuple[str, ...] = ()
+
+    def _members(self) -> tuple[tuple[int, ...], ...]:
+        return self.members or tuple((i,) for i in range(len(self.contacts)))
+
+    def _offsets(self) -> list[int]:
+        out = [0]
+        for u in self.result.contact_velocity_pre:
+            out.append(out[-1] + u.shape[0])
+        return out
 
     def pulling_contacts(self) -> list[tuple[str, float]]:
         """Kept contacts the ground would have to pull on: ``(frame, normal impulse (N s))``.
@@ -305,11 +393,12 @@ class RobotImpact(ResultDictMixin):
                                  * float(np.max(np.diag(self.M), initial=0.0))))
         scale = max(float(np.max(np.abs(lam), initial=0.0)), momentum)
         out: list[tuple[str, float]] = []
-        start = 0
-        for c, kept in zip(self.contacts, self.bilateral, strict=True):
-            lam_n = float(lam[start + c.normal[0]])
-            start += c.rows
-            if kept and not bool(ground_admissible(lam_n, kept=True, scale=scale)):
+        offs = self._offsets()
+        for c, kept, mem in zip(self.contacts, self.bilateral, self._members(), strict=True):
+            if not kept:
+                continue
+            lam_n = float(lam[offs[mem[0]] + c.normal[0]])
+            if not bool(ground_admissible(lam_n, kept=True, scale=scale)):
                 out.append((c.frame, lam_n))
         return out
 
@@ -324,37 +413,89 @@ class RobotImpact(ResultDictMixin):
         """
         return float(self.result.energy_lost - self.result.T_c)
 
+    def _patch_item(self, i: int, item: dict[str, Any]) -> None:
+        """Fill a striking sole's entry: sums over its corners and a ``corners`` list."""
+        r = self.result
+        offs = self._offsets()
+        spec = self.contacts[i]
+        force, moment = np.zeros(3), np.zeros(3)
+        corners = []
+        modes = []
+        for j, idx, off in zip(self._members()[i], self.corner_order[i],
+                               self.corner_offsets[i], strict=True):
+            lam = r.impulse[offs[j]:offs[j] + 3]
+            force += lam
+            moment += np.cross(off, lam)
+            u_pre, u_post = r.contact_velocity_pre[j], r.contact_velocity_post[j]
+            modes.append(r.modes[j])
+            corners.append({
+                "corner": [float(x) for x in spec.corners[idx]],
+                "mode": r.modes[j],
+                "T_c_normal": float(r.T_c_normal[j]),
+                "T_c_tangential": float(r.T_c_tangential[j]),
+                "force_impulse": [float(x) for x in lam],
+                "normal_velocity_pre": float(u_pre[2]),
+                "normal_velocity_post": float(u_post[2]),
+                "slip_speed_post": float(np.hypot(u_post[0], u_post[1])),
+            })
+        mem = list(self._members()[i])
+        item["mode"] = ("separate" if all(m == "separate" for m in modes)
+                        else "slip" if "slip" in modes else "stick")
+        item["T_c_normal"] = float(r.T_c_normal[mem].sum())
+        item["T_c_tangential"] = float(r.T_c_tangential[mem].sum())
+        item["force_impulse"] = [float(x) for x in force]
+        item["moment_impulse"] = [float(x) for x in moment]
+        item["centre_of_pressure"] = centre_of_pressure(np.concatenate((force, moment)))
+        item["normal_velocity_pre"] = min(c["normal_velocity_pre"] for c in corners)
+        item["normal_velocity_post"] = min(c["normal_velocity_post"] for c in corners)
+        item["slip_speed_post"] = max((c["slip_speed_post"] for c in corners
+                                       if c["mode"] != "separate"), default=0.0)
+        item["corners"] = corners
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary: ``T``, ``T_c``, ``T_a``, ``qdot_plus``, ``impulse``, ``contacts``.
 
         Also ``loss_beyond_T_c`` (J, :attr:`loss_beyond_T_c`), ``admissible`` (no kept contact
-        pulls on the ground) and ``pulling_contacts`` (``frame``, ``normal_impulse`` in N s, of
-        :meth:`pulling_contacts`).
+        pulls on the ground), ``pulling_contacts`` (``frame``, ``normal_impulse`` in N s, of
+        :meth:`pulling_contacts`), ``tilting_contacts`` (:attr:`tilting`), and the outcome
+        count of the law: ``restitution_law``, ``outcomes`` (distinct ``q_dot+`` found),
+        ``unique`` (true/false when every active set was examined, null when not),
+        ``active_sets`` (their number: the bound on ``outcomes``; 0 when not counted) and
+        ``solutions`` (``q_dot+`` of every outcome found, the one reported first).
 
         Per contact: ``frame``, ``type``, ``role`` (strike/keep), ``mode``, ``T_c_normal``,
         ``T_c_tangential`` (J), ``force_impulse`` (N s, world axes), ``moment_impulse`` (N m s
         about the frame origin, flat contacts), ``centre_of_pressure`` (m, flat contacts:
         :func:`centre_of_pressure`), ``normal_velocity_pre``/``_post`` and
-        ``slip_speed_post`` (m/s, of the contact point).
+        ``slip_speed_post`` (m/s, of the contact point; for a striking sole the lowest corner
+        normal velocity and the fastest slipping corner) and, for a striking sole, ``corners``
+        (each corner's ``corner`` position in the sole frame (m), ``mode``, energies,
+        ``force_impulse`` and velocities).
         """
         r = self.result
         pulling = self.pulling_contacts()
         contacts = []
-        start = 0
-        for i, c in enumerate(self.contacts):
-            lam = r.impulse[start : start + c.rows]
-            start += c.rows
-            u_pre, u_post = r.contact_velocity_pre[i], r.contact_velocity_post[i]
+        offs = self._offsets()
+        for i, (c, mem) in enumerate(zip(self.contacts, self._members(), strict=True)):
             item: dict[str, Any] = {
                 "frame": c.frame,
                 "type": c.kind,
                 "role": "keep" if self.bilateral[i] else "strike",
-                "mode": r.modes[i],
-                "T_c_normal": float(r.T_c_normal[i]),
-                "T_c_tangential": float(r.T_c_tangential[i]),
-                "force_impulse": [float(x) for x in lam[:3]],
             }
-            if c.kind == "flat":
+            if self.corner_order and self.corner_order[i]:
+                self._patch_item(i, item)
+                contacts.append(item)
+                continue
+            j = mem[0]
+            lam = r.impulse[offs[j]:offs[j + 1]]
+            u_pre, u_post = r.contact_velocity_pre[j], r.contact_velocity_post[j]
+            item.update({
+                "mode": r.modes[j],
+                "T_c_normal": float(r.T_c_normal[j]),
+                "T_c_tangential": float(r.T_c_tangential[j]),
+                "force_impulse": [float(x) for x in lam[:3]],
+            })
+            if c.kind in _FLAT:
                 item["moment_impulse"] = [float(x) for x in lam[3:6]]
                 item["centre_of_pressure"] = centre_of_pressure(lam)
             item["normal_velocity_pre"] = float(u_pre[2])
@@ -373,6 +514,12 @@ class RobotImpact(ResultDictMixin):
             "contacts": contacts,
             "admissible": not pulling,
             "pulling_contacts": [{"frame": f, "normal_impulse": lam_n} for f, lam_n in pulling],
+            "tilting_contacts": list(self.tilting),
+            "restitution_law": r.restitution_law,
+            "outcomes": r.outcomes,
+            "unique": r.unique,
+            "active_sets": r.active_sets,
+            "solutions": [[float(x) for x in s] for s in (r.solutions or (r.velocity_post,))],
         }
 
 
@@ -416,6 +563,7 @@ def robot_impact(
     keep: Sequence[ContactSpec] = (),
     friction: float = float("inf"),
     restitution: float = 0.0,
+    restitution_law: RestitutionLaw = "newton",
 ) -> RobotImpact:
     """Impact of ``robot`` at ``(q, v-)`` with striking and kept contacts.
 
@@ -427,15 +575,24 @@ def robot_impact(
     v : array_like, shape (nv,)
         Pre-impact velocity ``v-``.
     strike : sequence of ContactSpec
-        Unilateral contacts with ``friction`` and ``restitution`` (their lift is decided).
+        Unilateral contacts with ``friction`` and ``restitution`` (their lift is decided); a
+        ``flat`` sole is its support polygon, each corner a unilateral point contact.
         None (only ``keep``): every contact kept, the paper's inert impact.
     keep : sequence of ContactSpec
-        Persistent bilateral inert contacts.
+        Persistent bilateral inert contacts (a ``flat`` sole: 6 rows, held flat).
     friction : float
         Coulomb coefficient of the striking contacts (``inf``: an unbounded cone; a contact
         then slips only where sticking would need the ground to pull, a Painlevé-type case).
+        Sole corners use the pyramid ``|lambda_x|, |lambda_y| <= mu lambda_z``, other striking
+        contacts the round cone unless a sole strikes too (then all use the pyramid).
     restitution : float
-        Newton coefficient of the striking contacts' normal rows, in [0, 1].
+        Coefficient ``e`` of the striking contacts' normal rows, in [0, 1].
+    restitution_law : {"newton", "energetic"}
+        Newton's kinematic law ``u_n+ = -e u_n-`` (can gain energy with sticking friction:
+        Kane's paradox), or the energetic law that cannot
+        (:func:`heelstrike.core.complementarity.solve_point_contacts`; with ``e = 0`` the two
+        are the same). Either way every active set is examined when there are few enough
+        (``result.unique``, ``result.solutions``).
 
     Returns
     -------
@@ -451,21 +608,88 @@ def robot_impact(
     plan = _row_plan(robot, specs)
     M, A = _matrices(robot, plan, q_)
     jacs = tuple(A[sl] for sl in plan.layout.slices)
+    flats = [i for i, sp in enumerate(specs) if sp.kind in _FLAT]
+    rot: dict[int, FloatArray] = {}
+    if flats:
+        _pin().updateFramePlacements(robot.model, robot.data)
+        rot = {i: np.array(robot.data.oMf[robot.frame_id(specs[i].frame)].rotation)
+               for i in flats}
+    patched = any(sp.kind == "flat" and not b for sp, b in zip(specs, bil, strict=True))
     try:
+        if any(not np.any(J) for J in jacs):  # a frame that does not move: no contact at all
+            raise ImpactInputError("contact rows are rank deficient (redundant contacts?)")
         if not strike:
             # Only persistent contacts: the paper's inert law, solved directly.
             res = inert_contact_impact(M, v_, A, plan.layout)
-            return RobotImpact(contacts=specs, bilateral=bil, result=res, M=M, jacobians=jacs)
-        rows = [
-            ContactRows(jacobian=J, normal=s.normal, tangential=s.tangential,
-                        tangential_weights=s.tangential_weights, bilateral=b, law=law,
-                        name=s.frame)
-            for J, s, b in zip(jacs, specs, bil, strict=True)
-        ]
-        res = resolve_contact_impact(M, v_, rows)
+            return RobotImpact(contacts=specs, bilateral=bil, result=res, M=M, jacobians=jacs,
+                               tilting=_tilting(specs, bil, res, rot, ((i,) for i in
+                                                                     range(len(specs))), M))
+        rows: list[ContactRows] = []
+        members: list[tuple[int, ...]] = []
+        orders: list[tuple[int, ...]] = []
+        offsets: list[FloatArray] = []
+        out_jacs: list[FloatArray] = []
+        for i, (J, sp, b) in enumerate(zip(jacs, specs, bil, strict=True)):
+            if sp.kind == "flat" and not b:
+                offs = np.array([rot[i] @ np.array([x, y, 0.0]) for x, y in sp.corners])
+                Jc = [J[:3] - _skew(r) @ J[3:] for r in offs]
+                order = tuple(sorted(range(len(Jc)), key=lambda k: (float(Jc[k][2] @ v_), k)))
+                members.append(tuple(range(len(rows), len(rows) + len(order))))
+                rows += [ContactRows(jacobian=Jc[k], normal=(2,), tangential=(0, 1), law=law,
+                                     name=f"{sp.frame} corner {k}") for k in order]
+                orders.append(order)
+                offsets.append(offs[list(order)])
+                out_jacs.append(np.vstack([Jc[k] for k in order]))
+                continue
+            members.append((len(rows),))
+            rows.append(ContactRows(jacobian=J, normal=sp.normal, tangential=sp.tangential,
+                                    tangential_weights=sp.tangential_weights, bilateral=b,
+                                    law=law, name=sp.frame))
+            orders.append(())
+            offsets.append(np.zeros((0, 3)))
+            out_jacs.append(J)
+        res = resolve_contact_impact(
+            M, v_, rows, restitution_law=restitution_law,
+            method="active-set" if patched or restitution_law == "energetic" else "auto")
     except ImpactInputError as exc:
         raise ImpactInputError(f"{exc}{_why(robot, M, jacs, specs, str(exc))}") from None
-    return RobotImpact(contacts=specs, bilateral=bil, result=res, M=M, jacobians=jacs)
+    return RobotImpact(contacts=specs, bilateral=bil, result=res, M=M,
+                       jacobians=tuple(out_jacs), members=tuple(members),
+                       corner_order=tuple(orders), corner_offsets=tuple(offsets),
+                       tilting=_tilting(specs, bil, res, rot, members, M))
+
+
+def _tilting(specs: Sequence[ContactSpec], bil: Sequence[bool], res: ContactImpact,
+             rot: dict[int, FloatArray], members: Iterable[tuple[int, ...]],
+             M: FloatArray) -> tuple[str, ...]:
+    """Kept flat soles that push on the ground but whose centre of pressure lies outside
+    their support polygon (to 1e-9 m, in the sole frame).
+
+    Non-negative corner forces can make a flat sole's normal impulse (``F_z`` and the tilt
+    moments) exactly when ``F_z >= 0`` and the centre of pressure lies in the polygon;
+    otherwise a corner would have to pull. A sole whose ``F_z`` pulls is
+    :meth:`RobotImpact.pulling_contacts`' and one with a round-off ``F_z`` (below 1e-9 of the
+    momentum scale ``sqrt(2 T m)``) pushes nowhere: neither is listed.
+    """
+    offs = [0]
+    for u in res.contact_velocity_pre:
+        offs.append(offs[-1] + u.shape[0])
+    momentum = float(np.sqrt(2.0 * max(float(res.T), 0.0)
+                             * float(np.max(np.diag(M), initial=0.0))))
+    out = []
+    for i, (sp, b, mem) in enumerate(zip(specs, bil, members, strict=True)):
+        if not (b and sp.kind in _FLAT):
+            continue
+        lam = res.impulse[offs[mem[0]]:offs[mem[0]] + 6]
+        cop = centre_of_pressure(lam)
+        if cop is None or lam[2] <= 1e-9 * momentum:
+            continue
+        x, y, _ = rot[i].T @ np.array([cop[0], cop[1], 0.0])
+        x0, x1, y0, y1 = sp.sole
+        tol = 1e-9
+        if not (x0 - tol <= x <= x1 + tol and y0 - tol <= y <= y1 + tol):
+            out.append(sp.frame)
+    return tuple(out)
 
 
 def _why(robot: Robot, M: FloatArray, jacs: Sequence[FloatArray],

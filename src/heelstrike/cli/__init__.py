@@ -37,6 +37,7 @@ from heelstrike.cli._common import (
     UnusedParameterWarning,
     parse_angle,
     parse_range,
+    release_claims,
     warnings_as_notes,
 )
 from heelstrike.cli._render import fail, one_line
@@ -110,6 +111,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         hint = "" if os.environ.get("HEELSTRIKE_DEBUG") == "1" else \
             " (set HEELSTRIKE_DEBUG=1 for the traceback)"
         return fail(f"unexpected {type(exc).__name__}: {one_line(exc)}{hint}")
+    finally:
+        release_claims()  # the --out folders this run claimed
     return status
 
 

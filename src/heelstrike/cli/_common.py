@@ -314,12 +314,22 @@ def parse_floats(text: str, option: str, n: int | None = None) -> list[float]:
     return vals
 
 
+#: Output folders claimed by this process (their real path -> the claim), released by
+#: :func:`release_claims` when the command ends.
+_CLAIMS: dict[str, Any] = {}
+
+
 def writable_dir(path: str | os.PathLike[str], option: str = "--out") -> Any:
-    """Create the directory ``path`` if needed and check that a file can be written in it,
-    before any computing; returns it as a :class:`~pathlib.Path`."""
+    """Create the directory ``path`` if needed, check that a file can be written in it and
+    claim it for this run (:func:`heelstrike.io.claim_directory`: a second run on the same
+    folder is refused), before any computing; returns it as a :class:`~pathlib.Path`."""
     import tempfile
     from pathlib import Path
 
+    from heelstrike.io import DirectoryInUseError, claim_directory
+
+    if not str(path).strip():
+        raise CliError(f"{option} is empty: give a directory, e.g. {option} results")
     out = Path(path)
     if out.exists() and not out.is_dir():  # mkdir's own answer would be "File exists"
         raise CliError(f"cannot write to {option} {str(path)!r}: it exists and is not a "
@@ -328,9 +338,21 @@ def writable_dir(path: str | os.PathLike[str], option: str = "--out") -> Any:
         out.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryFile(dir=out):
             pass
+        real = os.path.realpath(out)
+        if real not in _CLAIMS:
+            _CLAIMS[real] = claim_directory(real)
+    except DirectoryInUseError as exc:
+        raise CliError(f"{option}: {exc.strerror}") from None
     except OSError as exc:
         raise CliError(f"cannot write to {option} {str(path)!r}: {exc.strerror or exc}") from None
     return out
+
+
+def release_claims() -> None:
+    """Release the output folders this process claimed (:func:`writable_dir`)."""
+    while _CLAIMS:
+        _, claim = _CLAIMS.popitem()
+        claim.release()
 
 
 def parse_guess(text: str | None) -> list[float] | None:
@@ -345,8 +367,15 @@ def parse_guess(text: str | None) -> list[float] | None:
     return vals
 
 
+def nonempty_path(text: str) -> str:
+    """A path option's value, refused when empty (``--store ''``: no folder named)."""
+    if not str(text).strip():
+        raise argparse.ArgumentTypeError("must name a directory, got an empty string")
+    return str(text)
+
+
 def add_store_option(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--store", metavar="DIR", default=None,
+    p.add_argument("--store", metavar="DIR", default=None, type=nonempty_path,
                    help="keep every finished chunk in this Zarr directory as it is computed; "
                    "after an interruption (Ctrl-C) the same command resumes from it. The "
                    "finished figure and data are still written to --out (as without --store)")
@@ -395,6 +424,7 @@ def run_with_store(store: str | None, compute: Callable[[], Any], out: str | Non
     if store is None:
         return compute()
     from pathlib import Path
+
 
     if out is not None and Path(store).resolve() == Path(out).resolve():
         raise CliError(f"--store and --out are both {store!r}: the store keeps the sweep's "

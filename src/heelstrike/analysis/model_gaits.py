@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
 from heelstrike.analysis._continuation import PARAMETER_STEP, SLOPE_STEP, Point, follow
-from heelstrike.analysis._memory import require_memory
+from heelstrike.analysis._memory import require_budget
 from heelstrike.analysis.heel_strike import loss_per_metre, trailing_foot_lifts
 from heelstrike.analysis.limit_cycle import (
     GaitNotFoundError,
@@ -781,7 +781,10 @@ IMPACT_MAP_BYTES_PER_POINT = 512
 def check_impact_map_memory(nx: int, ny: int) -> None:
     """Raise ``MemoryError`` if an ``nx`` x ``ny`` impact map would not fit in the available
     memory (:data:`IMPACT_MAP_BYTES_PER_POINT` a point); :func:`impact_map` checks it first."""
-    require_memory(nx * ny * IMPACT_MAP_BYTES_PER_POINT, f"a {nx}x{ny} impact map")
+    require_budget(f"a {nx}x{ny} impact map", nx * ny,
+                   bytes_per_point=IMPACT_MAP_BYTES_PER_POINT,
+                   seconds_per_point=IMPACT_MAP_SECONDS_PER_POINT,
+                   hint="give fewer --x or --y values (COUNT)")
 
 
 def impact_map(

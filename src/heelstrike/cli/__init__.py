@@ -107,6 +107,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return fail(f"{exc.strerror or one_line(exc)}{where}")
     except MissingExtraError as exc:  # e.g. a sweep store without heelstrike[scale]
         return fail(one_line(exc))
+    except RecursionError:  # a structure nested past Python's recursion limit
+        return fail("the input is nested too deeply to process (Python's recursion limit): "
+                    "flatten the walker file's expressions or tables")
     except Exception as exc:  # the last resort: one line, never a traceback
         hint = "" if os.environ.get("HEELSTRIKE_DEBUG") == "1" else \
             " (set HEELSTRIKE_DEBUG=1 for the traceback)"

@@ -260,10 +260,16 @@ def model_from_args(args: argparse.Namespace) -> Any:
                 f"directory is not read (give it as ./{model} to use it)"), stacklevel=2)
     elif os.path.exists(model) and not os.path.isfile(model):
         raise CliError(f"--model {model!r} is not a regular file")
+    from heelstrike.models.description import ModelDescriptionError
+
     try:
         description = walker_description(model)
     except OSError as exc:
         raise CliError(f"cannot read model {model!r}: {exc.strerror or exc}") from exc
+    except ModelDescriptionError as exc:  # the field's path: say in which file
+        name = os.path.basename(model)
+        text = str(exc)
+        raise CliError(text if text.startswith((name, model)) else f"{model}: {text}") from exc
     _note_borrowed_name(model, description)
     if description.unused_params:
         idle = ", ".join(sorted(description.unused_params))

@@ -27,6 +27,7 @@ import sys
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from heelstrike._caching import CacheWarning
 from heelstrike._optional import MissingExtraError
 from heelstrike._version import __version__
 from heelstrike.cli import gait, paper, powered, robot
@@ -85,8 +86,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         from heelstrike.analysis.newton import SearchTimeLimitWarning
 
         # a cut search and a file named like a shipped walker are news, said as such
+        # and so are cache fallbacks and numerical warnings: one line each, no source shown
         with warnings_as_notes(SearchTimeLimitWarning, ShippedNameWarning,
-                               UnusedParameterWarning):
+                               UnusedParameterWarning, CacheWarning, RuntimeWarning):
             status = int(args.func(args))
     except CliError as exc:
         return fail(one_line(exc))

@@ -396,13 +396,17 @@ def warnings_as_notes(*categories: type[Warning]) -> Iterator[None]:
     error line only. Each command says its notes again (``main`` called twice in one process,
     as tests and scripts do: Python's default filter would show a repeated warning once)."""
     show = warnings.showwarning
-    notes: list[str] = []
+    notes: dict[str, int] = {}  # each note once, with its count
 
-    def note(message: Any, category: Any, *args: Any, **kwargs: Any) -> None:
+    def note(message: Any, category: Any, filename: Any = "", *args: Any, **kwargs: Any) -> None:
         if isinstance(category, type) and issubclass(category, categories):
-            notes.append(f"heelstrike: note: {message}")
+            text = str(message).removeprefix("heelstrike: ")
+            if issubclass(category, RuntimeWarning):  # numpy's, from generated or own code
+                text = f"numerical warning in {_warning_place(str(filename))}: {text}"
+            line = f"heelstrike: note: {text}"
+            notes[line] = notes.get(line, 0) + 1
         else:
-            show(message, category, *args, **kwargs)
+            show(message, category, filename, *args, **kwargs)
 
     with warnings.catch_warnings():
         for category in categories:
@@ -412,8 +416,26 @@ def warnings_as_notes(*categories: type[Warning]) -> Iterator[None]:
             yield
         finally:
             warnings.showwarning = show
-    for line in notes:  # reached only when the block ended normally
-        print(line, file=sys.stderr)
+    for line, count in notes.items():  # reached only when the block ended normally
+        print(line + (f" ({count} times)" if count > 1 else ""), file=sys.stderr)
+
+
+def _warning_place(filename: str) -> str:
+    """Where a warning arose, said in one phrase: generated model code (the cache), a
+    heelstrike module, or the file's name."""
+    from pathlib import Path
+
+    from heelstrike.models._generated import cache_dir
+
+    path = Path(filename)
+    try:
+        path.resolve().relative_to(cache_dir().resolve())
+        return "the walker's generated model code"
+    except (ValueError, OSError):
+        pass
+    if "heelstrike" in path.parts:
+        return f"heelstrike ({path.name})"
+    return path.name or "an unknown place"
 
 
 class ShippedNameWarning(UserWarning):

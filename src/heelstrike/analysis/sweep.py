@@ -1081,8 +1081,35 @@ def _run_local(
     kwargs: dict[str, Any] = {"scheduler": scheduler, "optimize_graph": False}
     if num_workers is not None:
         kwargs["num_workers"] = num_workers
+    if scheduler in ("processes", "multiprocessing"):  # workers end when this process dies
+        kwargs["initializer"] = functools.partial(_end_with_parent, os.getpid())
     with Callback(posttask=posttask):
         dask.compute(*sinks, **kwargs)
+
+
+#: Seconds between a process-pool worker's checks that its parent is alive.
+_PARENT_POLL = 0.5
+
+
+def _end_with_parent(parent: int) -> None:
+    """Initializer of a sweep's process-pool workers: end the worker when its parent dies.
+
+    A parent killed with SIGKILL cannot stop its pool, and its workers (and with them
+    multiprocessing's resource tracker, which waits for them) would run on. A daemon thread
+    polls :func:`os.getppid` every :data:`_PARENT_POLL` s and ends the worker with
+    :func:`os._exit` once the parent is gone (the worker is re-parented).
+    """
+    import threading
+    import time
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(_PARENT_POLL)
+        os._exit(1)
+
+    if os.getppid() != parent:
+        os._exit(1)
+    threading.Thread(target=watch, name="heelstrike-parent-watch", daemon=True).start()
 
 
 def _run_plain(

@@ -1237,12 +1237,23 @@ def sweep(
         ``CompassGait``, field by field) or lists, tuples and dicts of them, and the values
         of module attributes the code reads as ``module.NAME`` when they are plain data or
         dataclasses (``config.SCALE`` set at run time); and the source text of every module
-        reached. Other objects (third-party functions, locks, caches, instances of plain
-        classes) count by name only. A store of a
+        reached. Objects of the user's own classes (and other objects with instance state,
+        such as a ``SimpleNamespace``) count by their state: all of it when bound (a
+        ``functools.partial`` argument, a closure cell), the attributes the code reads by name
+        when global (``cfg.k``); state that cannot be identified (a lock, a third-party object)
+        is named in ``function.unidentified``, and a store of such a function is not resumed
+        (:class:`SweepError` naming it; ``overwrite=True`` computes afresh). Other objects
+        (third-party functions, heelstrike's models) count by name only. A store of a
         different sweep raises :class:`SweepStoreMismatchError` naming what differs (e.g.
         ``function.closure``), unless ``overwrite=True`` (compute afresh).
-        While the sweep runs it holds an exclusive lock, the sibling file ``<store>.lock``
-        (:mod:`filelock`), so a second sweep on the same store cannot interleave with it.
+        The store is identified by its real path (a symlink to a store is that store). While
+        the sweep runs it holds an exclusive lock, the file ``<store>.lock`` beside the real
+        store (:mod:`filelock`), so a second sweep on the same store cannot interleave with it.
+        Its metadata are verifiable: a checksummed manifest of every ``zarr.json`` restores a
+        damaged or missing one, a record file per finished chunk (its checksum) rebuilds a
+        damaged completion record from the chunks that still verify, and coordinates that no
+        longer match the grid are rewritten from it, each with a
+        :class:`SweepStoreRepairWarning`.
     scheduler : str, distributed.Client or cluster, optional
         ``None`` or ``"threads"`` (default): Dask's local thread pool; ``"processes"``: local
         process pool; ``"sync"``: in the calling thread. A scheduler address

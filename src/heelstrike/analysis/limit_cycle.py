@@ -774,8 +774,11 @@ def find_limit_cycles(
 
 def _closed_books(cycles: list[LimitCycle], pmap: PoincareMap) -> list[LimitCycle]:
     """The passive gaits whose energy books close (:attr:`LimitCycle.energy_books_close`);
-    actuated ones all. Raise :class:`GaitNotFoundError` when none is left, saying why."""
-    if pmap.torque is not None or pmap.push_off is not None:
+    actuated ones all, and those of a step simulator given to the map (a described walker's,
+    whose step may hold knee strikes besides the heel strike of ``collision_loss``: its books
+    are checked by :func:`~heelstrike.analysis.model_gaits.find_model_gaits`). Raise
+    :class:`GaitNotFoundError` when none is left, saying why."""
+    if pmap.torque is not None or pmap.push_off is not None or pmap.simulator is not None:
         return cycles
     kept = [c for c in cycles if c.energy_books_close]
     if kept:

@@ -121,13 +121,8 @@ def test_a_second_claim_on_one_folder_is_refused_naming_it(tmp_path):
 
 
 def test_the_second_run_on_one_out_says_which_folder(tmp_path, capsys):
-    claim = claim_directory(tmp_path / "out")
+    claim = claim_directory(tmp_path / "out")  # this process holds the folder
     try:
-        # a claim of another process: this one's is told apart by PID only through flock, so
-        # hold the folder from a fresh open file description (as another run would)
-        from heelstrike.cli import _common
-
-        _common._CLAIMS.clear()
         code = (
             "import sys\n"
             "from heelstrike.cli import main\n"

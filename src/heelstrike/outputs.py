@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from heelstrike.io import write_csv, write_netcdf
+from heelstrike.io import save_figure, write_csv, write_netcdf
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -127,7 +127,7 @@ def reproduce_paper(
     for name, fig in figures.items():
         for ext in formats:
             path = out / f"{name}.{ext}"
-            fig.savefig(path, dpi=150, metadata=_metadata(ext))
+            save_figure(fig, path, dpi=150, metadata=_metadata(ext))
             paths.append(path)
         paths.append(csvs[name])
     return paths
@@ -204,7 +204,7 @@ def write_bifurcation_files(
             ax.axvspan(gap[0], gap[1], color="0.85", lw=0, zorder=0)
     paths = [out / "bifurcation.png", out / "bifurcation.pdf"]
     for p in paths:
-        fig.savefig(p, metadata=_metadata(p.suffix[1:]))  # no creation date: reproducible bytes
+        save_figure(fig, p, metadata=_metadata(p.suffix[1:]))  # no creation date
     record = diagram.impact_angles.shape[1]
 
     def degrees(slopes: FloatArray) -> list[str]:
@@ -273,7 +273,7 @@ def _figure_and_dataset(
     """Write ``<stem>.png`` (130 dpi) and ``<stem>.nc`` into ``out_dir``."""
     out = _directory(out_dir)
     png = out / f"{stem}.png"
-    fig.savefig(png, dpi=130, metadata=_metadata("png"))
+    save_figure(fig, png, dpi=130, metadata=_metadata("png"))
     return png, write_netcdf(ds, out / f"{stem}.nc")
 
 
@@ -284,7 +284,7 @@ def _write_figures_and_tables(
     paths: list[Path] = []
     for stem, (fig, table) in figures.items():
         png = out / f"{stem}.png"
-        fig.savefig(png, metadata=_metadata("png"))
+        save_figure(fig, png, metadata=_metadata("png"))
         paths += [png, write_csv(table, out / f"{stem}.csv")]
     paths.append(write_csv(impacts, out / "impacts.csv"))
     return paths
@@ -452,7 +452,7 @@ def write_impact_map(
         out / "impact_map.csv",
     )
     png = out / "impact_map.png"
-    impact_map_figure(m, units).savefig(png, dpi=120, metadata=_metadata("png"))
+    save_figure(impact_map_figure(m, units), png, dpi=120, metadata=_metadata("png"))
     return [png, csv_path]
 
 
@@ -488,7 +488,7 @@ def write_powered_energy(
         f"{gait.torque_work:+.4f} J over the step,\npush-off {gait.push_off_work:+.4f} J "
         f"(jump at heel strike){',' if len(impacts) < 2 else chr(10)} {losses}"))
     png = out / "powered_energy.png"
-    fig.savefig(png, metadata=_metadata("png"))
+    save_figure(fig, png, metadata=_metadata("png"))
     return png, write_csv(energy, out / "powered_energy.csv")
 
 
@@ -515,10 +515,11 @@ def write_cost_figures(ds: xr.Dataset, out: str | Path) -> list[Path]:
     for var in ("cost_of_transport", "eta", "actuator_work"):
         if np.any(np.isfinite(ds[var].values)):
             p = d / f"{var}.png"
-            cost_figure(ds, var).savefig(p, dpi=120, metadata=_metadata(p.suffix[1:]))
+            save_figure(cost_figure(ds, var), p, dpi=120, metadata=_metadata(p.suffix[1:]))
             paths.append(p)
     if str(ds.attrs.get("target", "step_length")) == "step_length" and "eta_paper" in ds:
         p = d / "paper_vs_gait.png"
-        paper_comparison_figure(ds).savefig(p, dpi=120, metadata=_metadata(p.suffix[1:]))
+        save_figure(paper_comparison_figure(ds), p, dpi=120,
+                    metadata=_metadata(p.suffix[1:]))
         paths.append(p)
     return paths

@@ -59,6 +59,7 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "step_length", "symmetric_step_length", "trailing_foot_lifts",
     ),
     "limit_cycle": (
+        "ENERGY_BOOKS_RTOL",
         "BifurcationDiagram", "Continuation", "GaitNotFoundError", "LimitCycle", "PoincareMap",
         "bifurcation_diagram", "continue_limit_cycle", "find_limit_cycle", "find_limit_cycles",
         "leg_crossings", "refine_period_doubling",

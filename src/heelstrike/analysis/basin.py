@@ -42,7 +42,7 @@ from numpy.typing import ArrayLike, NDArray
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
 from heelstrike.analysis._defaults import BASIN_STEPS, BASIN_TOLERANCE
-from heelstrike.analysis._memory import available_memory, require_memory
+from heelstrike.analysis._memory import available_memory, require_budget
 from heelstrike.analysis.limit_cycle import LimitCycle, find_limit_cycle
 from heelstrike.dynamics.backends import check_one_walker
 from heelstrike.dynamics.compiled import ensemble_walk
@@ -131,7 +131,8 @@ def basin_memory_estimate(grid: tuple[int, int]) -> int:
 
 
 def _check_memory(grid: tuple[int, int]) -> None:
-    require_memory(basin_memory_estimate(grid), f"a {grid[0]}x{grid[1]} basin")
+    require_budget(f"a {grid[0]}x{grid[1]} basin", int(grid[0]) * int(grid[1]),
+                   bytes_per_point=BYTES_PER_POINT)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -40,7 +40,7 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._typing import FloatArray
-from heelstrike.analysis._memory import require_memory
+from heelstrike.analysis._memory import require_budget
 from heelstrike.analysis.heel_strike import heel_strike_study
 from heelstrike.analysis.powered import (
     ACTUATIONS,
@@ -329,8 +329,9 @@ def cost_study(
 def check_study_memory(n_actuations: int, n_radii: int, n_targets: int) -> None:
     """Raise ``MemoryError`` if a study of this size would not fit in the available memory
     (:data:`STUDY_BYTES_PER_POINT` a point); :func:`cost_study` checks it before computing."""
-    require_memory(n_actuations * n_radii * n_targets * STUDY_BYTES_PER_POINT,
-                   f"a {n_actuations}x{n_radii}x{n_targets} cost study")
+    require_budget(f"a {n_actuations}x{n_radii}x{n_targets} cost study",
+                   n_actuations * n_radii * n_targets, bytes_per_point=STUDY_BYTES_PER_POINT,
+                   hint="give fewer radii or targets (COUNT)")
 
 
 def _check_model(

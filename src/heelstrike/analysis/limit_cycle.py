@@ -40,6 +40,7 @@ if TYPE_CHECKING:
 
 
 __all__ = [
+    "ENERGY_BOOKS_RTOL",
     "BifurcationDiagram",
     "Continuation",
     "GaitNotFoundError",
@@ -349,6 +350,19 @@ class LimitCycle(ResultDictMixin):
         """Largest multiplier modulus."""
         return float(np.max(np.abs(self.multipliers)))
 
+    @property
+    def energy_books_close(self) -> bool:
+        """Whether the step's energy books close: the collision loss equals the potential
+        energy released plus the actuator work, both positive, to within
+        :data:`ENERGY_BOOKS_RTOL` of the larger (a periodic step neither gains nor loses
+        energy). Only passive gaits are checked by the search (a push-off's work is not in
+        ``actuator_work``)."""
+        supplied = self.potential_energy_released + self.actuator_work
+        loss = self.collision_loss
+        if not (np.isfinite(supplied) and np.isfinite(loss) and supplied > 0 and loss > 0):
+            return False
+        return abs(loss - supplied) <= ENERGY_BOOKS_RTOL * max(loss, supplied)
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary (SI units; angles in rad)."""
         return {
@@ -432,6 +446,14 @@ _CONTINUATION_MIN_STEP = 1.0 / 1024.0
 
 #: Two fixed points closer than this (Euclidean norm in section coordinates) are the same gait.
 SAME_GAIT_TOL = 1e-6
+
+#: Relative tolerance of a passive gait's energy books: the collision loss per step must equal
+#: the potential energy released per step to within this fraction of the larger. The books of
+#: the compass gait close to about 1e-7 at 1e-6 rad and to 0.6 % at 1e-9 rad; on slopes so small
+#: that the step's energies reach the round-off of the potential energy (about 1e-14 of
+#: ``m g l``), Newton still converges on "gaits" whose books disagree many times over (40x at
+#: 1e-300 rad): those are no gaits, and are not returned.
+ENERGY_BOOKS_RTOL = 0.05
 
 #: Accuracy of the Floquet multipliers' moduli (central differences of the step map, passive
 #: and powered gaits alike): a largest ``|m|`` within this of 1 says the gait is neutral to that
@@ -724,6 +746,7 @@ def find_limit_cycles(
                                        g.iterations)
                 for g in gaits
             ]
+            cycles = _closed_books(cycles, pmap)
             _warn_if_cut(deadline, time_limit, len(cycles))
             return tuple(sorted(cycles, key=_preference))
     else:
@@ -743,8 +766,30 @@ def find_limit_cycles(
             cycles.append(_characterise(pmap, z, residual, it, fd_step))
     if not cycles:
         raise GaitNotFoundError(str(last) if last else "no period-one gait found")
+    cycles = _closed_books(cycles, pmap)
     _warn_if_cut(deadline, time_limit, len(cycles))
     return tuple(sorted(cycles, key=_preference))
+
+
+def _closed_books(cycles: list[LimitCycle], pmap: PoincareMap) -> list[LimitCycle]:
+    """The passive gaits whose energy books close (:attr:`LimitCycle.energy_books_close`);
+    actuated ones all, and those of a step simulator given to the map (a described walker's,
+    whose step may hold knee strikes besides the heel strike of ``collision_loss``: its books
+    are checked by :func:`~heelstrike.analysis.model_gaits.find_model_gaits`). Raise
+    :class:`GaitNotFoundError` when none is left, saying why."""
+    if pmap.torque is not None or pmap.push_off is not None or pmap.simulator is not None:
+        return cycles
+    kept = [c for c in cycles if c.energy_books_close]
+    if kept:
+        return kept
+    c = cycles[0]
+    raise GaitNotFoundError(
+        f"the {len(cycles)} period-one solution{'s' if len(cycles) > 1 else ''} found at "
+        f"slope {pmap.slope:g} rad do{'es' if len(cycles) == 1 else ''} not close the energy "
+        f"books (collision loss {c.collision_loss:.3g} J, energy released "
+        f"{c.potential_energy_released:.3g} J per step, which must agree within "
+        f"{100 * ENERGY_BOOKS_RTOL:g} %): the step's energies are at the round-off of the "
+        "walker's energy, so these are no gaits; give a larger slope")
 
 
 def _warn_if_cut(deadline: float, time_limit: float, found: int) -> None:
@@ -832,7 +877,7 @@ def find_limit_cycle(
         method=method, simulator=simulator,
     )
     z, residual, it = _newton(pmap, np.asarray(guess, dtype=float), tol, max_iter, fd_step)
-    return _characterise(pmap, z, residual, it, fd_step)
+    return _closed_books([_characterise(pmap, z, residual, it, fd_step)], pmap)[0]
 
 
 def _characterise(

@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
 from heelstrike.analysis._continuation import PARAMETER_STEP, SLOPE_STEP, Point, follow
-from heelstrike.analysis._memory import require_memory
+from heelstrike.analysis._memory import require_budget
 from heelstrike.analysis.heel_strike import loss_per_metre, trailing_foot_lifts
 from heelstrike.analysis.limit_cycle import (
     GaitNotFoundError,
@@ -368,7 +368,35 @@ def find_model_gaits(
         raise GaitNotFoundError(
             f"Newton converged from none of the {len(starts)} most nearly periodic of "
             f"{len(Z)} automatic starts (the last: {last}){finer}{tried}")
-    return tuple(_energy_book(c) for c in sorted(found, key=_preference))
+    gaits = tuple(_energy_book(c) for c in sorted(found, key=_preference))
+    if torque is None and push_off is None:
+        return _closed_model_books(gaits, slope)
+    return gaits
+
+
+def _closed_model_books(gaits: tuple[ModelGait, ...], slope: float) -> tuple[ModelGait, ...]:
+    """The passive gaits whose energy books close: the step's collision losses (every
+    impact's) equal the potential energy released, both positive, to within
+    :data:`~heelstrike.analysis.limit_cycle.ENERGY_BOOKS_RTOL` of the larger; raise
+    :class:`GaitNotFoundError` when none does (solutions at the round-off of the walker's
+    energies on a slope too small to resolve)."""
+    from heelstrike.analysis.limit_cycle import ENERGY_BOOKS_RTOL
+
+    def closes(g: ModelGait) -> bool:
+        loss, supplied = g.collision_loss, g.potential_energy_released + g.actuator_work
+        return bool(np.isfinite(loss) and np.isfinite(supplied) and loss > 0 and supplied > 0
+                    and abs(loss - supplied) <= ENERGY_BOOKS_RTOL * max(loss, supplied))
+
+    kept = tuple(g for g in gaits if closes(g))
+    if kept or not gaits:
+        return kept
+    g = gaits[0]
+    raise GaitNotFoundError(
+        f"the {len(gaits)} period-one solution(s) found at slope {slope:g} rad do not close "
+        f"the energy books (collision loss {g.collision_loss:.3g} J, energy released "
+        f"{g.potential_energy_released:.3g} J per step, which must agree within "
+        f"{100 * ENERGY_BOOKS_RTOL:g} %): the step's energies are at the round-off of the "
+        "walker's energy, so these are no gaits; give a larger slope")
 
 
 def _follow_reference(
@@ -781,7 +809,10 @@ IMPACT_MAP_BYTES_PER_POINT = 512
 def check_impact_map_memory(nx: int, ny: int) -> None:
     """Raise ``MemoryError`` if an ``nx`` x ``ny`` impact map would not fit in the available
     memory (:data:`IMPACT_MAP_BYTES_PER_POINT` a point); :func:`impact_map` checks it first."""
-    require_memory(nx * ny * IMPACT_MAP_BYTES_PER_POINT, f"a {nx}x{ny} impact map")
+    require_budget(f"a {nx}x{ny} impact map", nx * ny,
+                   bytes_per_point=IMPACT_MAP_BYTES_PER_POINT,
+                   seconds_per_point=IMPACT_MAP_SECONDS_PER_POINT,
+                   hint="give fewer --x or --y values (COUNT)")
 
 
 def impact_map(

@@ -33,6 +33,7 @@ Results are identical whatever the scheduler or chunking: each value depends onl
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import functools
 import hashlib
@@ -56,6 +57,7 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._optional import available, require
+from heelstrike.io import write_text
 
 __all__ = [
     "KNOWN_UNITS",
@@ -129,6 +131,12 @@ KNOWN_UNITS: dict[str, str] = {
 
 _STATE_GROUP = "_heelstrike_sweep"
 _IDENTITY_ATTR = "sweep_identity"
+#: Per-chunk completion records (a file of the chunk's SHA-256 each), in the state group's
+#: folder: a damaged ``done`` or ``checksum`` array is rebuilt from them.
+_RECORDS = "records"
+#: The store's metadata manifest: every ``zarr.json`` of the store with its SHA-256 and text,
+#: and the manifest's own checksum; a damaged metadata file is restored from it.
+_MANIFEST = f"{_STATE_GROUP}/manifest.json"
 _LOCAL_SCHEDULERS = ("threads", "threading", "processes", "multiprocessing", "sync",
                      "synchronous", "single-threaded")
 
@@ -303,6 +311,8 @@ class _Identity:
         }
         self.modules: set[str] = set()
         self.seen: set[int] = set()
+        #: objects read whose values cannot be identified (``module.var.attr (type)``)
+        self.unidentified: set[str] = set()
 
     def value(self, obj: Any, depth: int = 0) -> str:
         """Deterministic token of a bound value; follows callables and classes."""
@@ -338,6 +348,9 @@ class _Identity:
         ):
             self.callable(obj)
             return _func_name(obj)
+        if _object_with_state(obj):  # e.g. functools.partial(g, obj=Cfg(k)): its fields
+            return self._object_token(obj, f"an argument of type {type(obj).__qualname__}",
+                                      depth)
         if not isinstance(obj, type) and _user_module(type(obj).__module__):
             self.klass(type(obj))
         text = repr(obj)
@@ -420,7 +433,38 @@ class _Identity:
             elif (token := self._data_token(obj)) is not None:
                 # e.g. a walker, or a list of walkers: field by field, as an argument
                 self.parts["globals"].append(f"{func.__module__}.{var}={token}")
-            # other objects (locks, caches, models): by name, i.e. through the bytecode only
+            elif _object_with_state(obj):
+                # ``cfg.k`` of a global ``cfg``: the attributes the code reads by name
+                token = self._object_token(obj, f"{func.__module__}.{var}", 0, set(names))
+                self.parts["globals"].append(f"{func.__module__}.{var}={token}")
+            # other objects (heelstrike's models, third-party objects): by name, i.e. through
+            # the bytecode only
+
+    def _object_token(
+        self, obj: Any, where: str, depth: int, attrs: set[str] | None = None
+    ) -> str:
+        """Token of an object's instance state (``vars``), or of the attributes ``attrs`` of
+        it the code reads; what cannot be identified (a lock, a third-party object) is
+        recorded in :attr:`unidentified` under ``where``."""
+        cls = type(obj)
+        self.klass(cls)
+        state = dict(vars(obj))
+        if attrs is not None:
+            state = {k: v for k, v in state.items() if k in attrs}
+        parts = []
+        for key in sorted(state):
+            v = state[key]
+            token = self._data_token(v)
+            if token is None and depth < _MAX_DEPTH:
+                if isinstance(v, type | types.ModuleType) or callable(v):
+                    token = self.value(v, depth + 1)
+                elif _object_with_state(v):
+                    token = self._object_token(v, f"{where}.{key}", depth + 1)
+            if token is None:
+                self.unidentified.add(f"{where}.{key} ({type(v).__qualname__})")
+                token = type(v).__qualname__
+            parts.append(f"{key}={token}")
+        return f"{cls.__module__}.{cls.__qualname__}({','.join(parts)})"
 
     def _data_token(self, obj: Any, depth: int = 0) -> str | None:
         """Token of data: plain data, dataclass instances, and lists, tuples and dicts of
@@ -450,10 +494,31 @@ class _Identity:
         out = {
             k: hashlib.sha256("\n".join(v).encode()).hexdigest() for k, v in self.parts.items()
         }
+        if self.unidentified:  # said when a store of this function would be resumed
+            out["unidentified"] = "; ".join(sorted(self.unidentified))
         out["modules"] = hashlib.sha256(
             "\n".join(f"{m}:{_module_digest(m)}" for m in sorted(self.modules)).encode()
         ).hexdigest()
         return out
+
+
+def _object_with_state(obj: Any) -> bool:
+    """Whether ``obj`` is an instance whose state (``vars``) the identity reads: an object of
+    a class defined outside heelstrike (the user's ``Cfg``, a ``SimpleNamespace``), not a
+    class, module, function or dataclass, and not one of heelstrike's own models (identified
+    by their code and the data they are built from)."""
+    if isinstance(obj, type | types.ModuleType) or dataclasses.is_dataclass(obj):
+        return False
+    if isinstance(obj, functools.partial | types.FunctionType | types.MethodType):
+        return False
+    module = type(obj).__module__ or ""
+    if module.split(".")[0] in ("heelstrike", "builtins"):
+        return False
+    try:
+        state = vars(obj)
+    except TypeError:
+        return False
+    return isinstance(state, dict)
 
 
 def _func_name(func: Any) -> str:
@@ -656,7 +721,13 @@ class _Store:
         self.template: dict[str, tuple[np.dtype[Any], tuple[int, ...]]] | None = None
 
     def open_existing(self) -> NDArray[np.bool_] | None:
-        """Validate an existing store; return its completion record (None: start afresh)."""
+        """Validate an existing store; return its completion record (None: start afresh).
+
+        Metadata restored from the manifest (:func:`_restore_metadata`, by the caller),
+        coordinates checked against the grid (rewritten when tampered with), the completion
+        record read from the per-chunk records (or the ``done``/``checksum`` arrays of a store
+        without them) and every finished chunk verified against its checksum.
+        """
         import zarr
 
         root = zarr.open_group(str(self.path), mode="r+")
@@ -672,13 +743,93 @@ class _Store:
             )
         if _STATE_GROUP not in root:
             return None
-        self._bind(root)
-        return self._verify(np.asarray(self.done_array[...], dtype=bool))
+        try:
+            self._bind(root)
+        except Exception as exc:  # metadata damaged and no manifest to restore it from
+            raise SweepError(
+                f"store {str(self.path)!r}: its metadata is damaged ({type(exc).__name__}: "
+                f"{exc}) and it has no intact manifest to restore it from; pass "
+                "overwrite=True to compute afresh, or remove the store") from exc
+        self._check_coordinates(root)
+        records = self._read_records()
+        try:
+            done = np.asarray(self.done_array[...], dtype=bool)
+            sums = np.asarray(self.checksum_array[...], dtype=np.uint8)
+            arrays_ok = done.shape == self.plan.n_chunks
+        except Exception:  # a truncated or undecodable record array
+            arrays_ok = False
+        if records or not arrays_ok:
+            if not arrays_ok:
+                warnings.warn(
+                    f"store {str(self.path)!r}: its completion record is damaged; " + (
+                        "rebuilt from the per-chunk records of the chunks that verify"
+                        if records else
+                        "it keeps no per-chunk records: computing every chunk again"),
+                    SweepStoreRepairWarning, stacklevel=4)
+            done = np.zeros(self.plan.n_chunks, dtype=bool)
+            sums = np.zeros((*self.plan.n_chunks, 32), dtype=np.uint8)
+            for index, digest in records.items():
+                done[index] = True
+                sums[index] = np.frombuffer(digest, dtype=np.uint8)
+        done = self._verify(done, sums)
+        try:  # heal the arrays from what verified (a truncated chunk file is rewritten)
+            self.done_array[...] = done.astype(np.uint8)
+            self.checksum_array[...] = np.where(done[..., None], sums, 0).astype(np.uint8)
+        except Exception as exc:
+            raise SweepError(f"store {str(self.path)!r}: cannot rewrite its completion record: "
+                             f"{exc}") from exc
+        return done
 
-    def _verify(self, done: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    def _check_coordinates(self, root: Any) -> None:
+        """Rewrite coordinate arrays that differ from the grid (the identity's grid digest
+        says which values the store holds), with a :class:`SweepStoreRepairWarning`."""
+        fixed = []
+        for name, vals in zip(self.plan.names, self.plan.values, strict=True):
+            arr: Any = None
+            try:
+                arr = root[name]
+                ok = np.array_equal(np.asarray(arr[...]), vals)
+            except Exception:  # missing, or a chunk file that does not decode
+                ok = False
+            if ok:
+                continue
+            fixed.append(name)
+            if arr is None or tuple(arr.shape) != vals.shape:
+                raise SweepError(
+                    f"store {str(self.path)!r}: coordinate {name!r} is damaged beyond repair "
+                    "(its array is missing or of another length); pass overwrite=True to "
+                    "compute afresh, or remove the store")
+            arr[...] = vals
+        if fixed:
+            warnings.warn(
+                f"store {str(self.path)!r}: coordinate(s) {', '.join(fixed)} did not match the "
+                "sweep's grid (edited or damaged); rewritten from the grid",
+                SweepStoreRepairWarning, stacklevel=5)
+
+    def _record_dir(self) -> Path:
+        return self.path / _STATE_GROUP / _RECORDS
+
+    def _read_records(self) -> dict[tuple[int, ...], bytes]:
+        """The per-chunk records that parse (a damaged one: that chunk is computed again)."""
+        out: dict[tuple[int, ...], bytes] = {}
+        folder = self._record_dir()
+        if not folder.is_dir():
+            return out
+        d = len(self.plan.names)
+        for f in folder.iterdir():
+            try:
+                index = tuple(int(i) for i in f.name.split("_"))
+                digest = bytes.fromhex(f.read_text(encoding="ascii").strip())
+            except (OSError, ValueError, UnicodeDecodeError):
+                continue
+            if (len(index) == d and len(digest) == 32 and all(
+                    0 <= i < n for i, n in zip(index, self.plan.n_chunks, strict=True))):
+                out[index] = digest
+        return out
+
+    def _verify(self, done: NDArray[np.bool_], sums: NDArray[np.uint8]) -> NDArray[np.bool_]:
         """Clear the finished chunks whose data do not match their recorded checksum."""
         assert self.arrays is not None
-        sums = np.asarray(self.checksum_array[...], dtype=np.uint8)
         bad = []
         for index in zip(*np.nonzero(done), strict=True):
             index = tuple(int(i) for i in index)
@@ -697,8 +848,11 @@ class _Store:
                 f"store {str(self.path)!r}: {len(bad)} finished chunk(s) failed checksum "
                 f"verification (data deleted or overwritten: {shown}); computing them again",
                 SweepStoreRepairWarning,
-                stacklevel=4,
+                stacklevel=5,
             )
+            for index in bad:
+                with contextlib.suppress(OSError):
+                    (self._record_dir() / "_".join(map(str, index))).unlink()
         return done
 
     def _bind(self, root: Any) -> None:
@@ -742,6 +896,8 @@ class _Store:
         state.create_array("checksum", shape=(*plan.n_chunks, 32), dtype="uint8",
                            chunks=(*plan.n_chunks, 32), fill_value=0)
         self._bind(root)
+        self._record_dir().mkdir(parents=True, exist_ok=True)
+        _write_manifest(self.path)
 
     def write(self, index: tuple[int, ...], result: Mapping[str, NDArray[Any]]) -> None:
         assert self.arrays is not None
@@ -751,8 +907,75 @@ class _Store:
             self.arrays[name][region] = arr
             stored[name] = np.asarray(arr).astype(self.arrays[name].dtype, copy=False)
         # the record after the data: a half-written chunk is recomputed
-        self.checksum_array[index] = np.frombuffer(_chunk_digest(stored), dtype=np.uint8)
+        digest = _chunk_digest(stored)
+        write_text(digest.hex() + "\n", self._record_dir() / "_".join(map(str, index)))
+        self.checksum_array[index] = np.frombuffer(digest, dtype=np.uint8)
         self.done_array[index] = 1
+
+
+def _metadata_files(path: Path) -> list[Path]:
+    """The store's metadata files (every ``zarr.json``), sorted."""
+    return sorted(path.rglob("zarr.json"))
+
+
+def _manifest_digest(files: Mapping[str, Any]) -> str:
+    return hashlib.sha256(json.dumps(files, sort_keys=True).encode()).hexdigest()
+
+
+def _write_manifest(path: Path) -> None:
+    """Write the store's manifest (:data:`_MANIFEST`) of its current metadata files."""
+    files = {}
+    for f in _metadata_files(path):
+        text = f.read_text(encoding="utf-8")
+        files[f.relative_to(path).as_posix()] = {
+            "sha256": hashlib.sha256(text.encode()).hexdigest(), "text": text}
+    write_text(json.dumps({"files": files, "sha256": _manifest_digest(files)}, sort_keys=True),
+               path / _MANIFEST)
+
+
+def _read_manifest(path: Path) -> dict[str, Any] | None:
+    """The store's manifest if it is intact (its checksum verifies), else None."""
+    try:
+        data = json.loads((path / _MANIFEST).read_text(encoding="utf-8"))
+        files = data["files"]
+        if not isinstance(files, dict) or data["sha256"] != _manifest_digest(files):
+            return None
+        return files
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+
+
+def _restore_metadata(path: Path) -> None:
+    """Restore the store's damaged or missing metadata files from its intact manifest (with a
+    :class:`SweepStoreRepairWarning`); write a manifest for a store without an intact one
+    whose metadata all parse."""
+    files = _read_manifest(path)
+    if files is None:
+        try:
+            for f in _metadata_files(path):
+                json.loads(f.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            return  # damaged and nothing to restore it from: said when the store is opened
+        if (path / "zarr.json").is_file() and (path / _STATE_GROUP).is_dir():
+            _write_manifest(path)
+        return
+    restored = []
+    for rel, entry in files.items():
+        f = path / rel
+        if ".." in Path(rel).parts or Path(rel).name != "zarr.json":
+            continue  # a manifest names the store's own metadata files only
+        try:
+            ok = hashlib.sha256(f.read_bytes()).hexdigest() == entry["sha256"]
+        except OSError:
+            ok = False
+        if not ok:
+            write_text(str(entry["text"]), f)
+            restored.append(rel)
+    if restored:
+        warnings.warn(
+            f"store {str(path)!r}: metadata file(s) {', '.join(restored)} were damaged or "
+            "missing; restored from the store's manifest", SweepStoreRepairWarning,
+            stacklevel=4)
 
 
 def _chunk_digest(data: Mapping[str, NDArray[Any]]) -> bytes:
@@ -858,8 +1081,35 @@ def _run_local(
     kwargs: dict[str, Any] = {"scheduler": scheduler, "optimize_graph": False}
     if num_workers is not None:
         kwargs["num_workers"] = num_workers
+    if scheduler in ("processes", "multiprocessing"):  # workers end when this process dies
+        kwargs["initializer"] = functools.partial(_end_with_parent, os.getpid())
     with Callback(posttask=posttask):
         dask.compute(*sinks, **kwargs)
+
+
+#: Seconds between a process-pool worker's checks that its parent is alive.
+_PARENT_POLL = 0.5
+
+
+def _end_with_parent(parent: int) -> None:
+    """Initializer of a sweep's process-pool workers: end the worker when its parent dies.
+
+    A parent killed with SIGKILL cannot stop its pool, and its workers (and with them
+    multiprocessing's resource tracker, which waits for them) would run on. A daemon thread
+    polls :func:`os.getppid` every :data:`_PARENT_POLL` s and ends the worker with
+    :func:`os._exit` once the parent is gone (the worker is re-parented).
+    """
+    import threading
+    import time
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(_PARENT_POLL)
+        os._exit(1)
+
+    if os.getppid() != parent:
+        os._exit(1)
+    threading.Thread(target=watch, name="heelstrike-parent-watch", daemon=True).start()
 
 
 def _run_plain(
@@ -987,12 +1237,23 @@ def sweep(
         ``CompassGait``, field by field) or lists, tuples and dicts of them, and the values
         of module attributes the code reads as ``module.NAME`` when they are plain data or
         dataclasses (``config.SCALE`` set at run time); and the source text of every module
-        reached. Other objects (third-party functions, locks, caches, instances of plain
-        classes) count by name only. A store of a
+        reached. Objects of the user's own classes (and other objects with instance state,
+        such as a ``SimpleNamespace``) count by their state: all of it when bound (a
+        ``functools.partial`` argument, a closure cell), the attributes the code reads by name
+        when global (``cfg.k``); state that cannot be identified (a lock, a third-party object)
+        is named in ``function.unidentified``, and a store of such a function is not resumed
+        (:class:`SweepError` naming it; ``overwrite=True`` computes afresh). Other objects
+        (third-party functions, heelstrike's models) count by name only. A store of a
         different sweep raises :class:`SweepStoreMismatchError` naming what differs (e.g.
         ``function.closure``), unless ``overwrite=True`` (compute afresh).
-        While the sweep runs it holds an exclusive lock, the sibling file ``<store>.lock``
-        (:mod:`filelock`), so a second sweep on the same store cannot interleave with it.
+        The store is identified by its real path (a symlink to a store is that store). While
+        the sweep runs it holds an exclusive lock, the file ``<store>.lock`` beside the real
+        store (:mod:`filelock`), so a second sweep on the same store cannot interleave with it.
+        Its metadata are verifiable: a checksummed manifest of every ``zarr.json`` restores a
+        damaged or missing one, a record file per finished chunk (its checksum) rebuilds a
+        damaged completion record from the chunks that still verify, and coordinates that no
+        longer match the grid are rewritten from it, each with a
+        :class:`SweepStoreRepairWarning`.
     scheduler : str, distributed.Client or cluster, optional
         ``None`` or ``"threads"`` (default): Dask's local thread pool; ``"processes"``: local
         process pool; ``"sync"``: in the calling thread. A scheduler address
@@ -1042,7 +1303,9 @@ def sweep(
     if store is not None:
         require("zarr", "a sweep store (store=...)")
         require("dask.array", "a sweep store (store=...)")
-        lock = _lock_store(Path(os.fspath(store)), lock_timeout)
+        # the store's real path: a symlink to a store takes the store's own lock
+        store = Path(os.path.realpath(os.fspath(store)))
+        lock = _lock_store(store, lock_timeout)
     try:
         return _sweep(func, grid, chunks=chunks, store=store, scheduler=scheduler,
                       progress=progress, units=units, output_dims=output_dims,
@@ -1067,10 +1330,11 @@ def _sweep(
 ) -> xr.Dataset:
     """:func:`sweep` with the store (if any) locked by the caller."""
     plan = _plan(grid, chunks, dict(units or {}))
+    function = _func_identity(func)
     ident = {
         "format": 2,
         "heelstrike_version": _heelstrike_version(),
-        "function": _func_identity(func),
+        "function": function,
         "grid": {"names": list(plan.names), "sha256": plan.grid_digest()},
         "chunks": list(plan.chunk_sizes),
     }
@@ -1093,6 +1357,8 @@ def _sweep(
         # the store, with whatever it held (QA sweep 13)
         if path.is_dir() and not any(path.iterdir()):
             path.rmdir()  # an empty folder made for the store: the store is made there
+        if path.is_dir() and not overwrite:
+            _restore_metadata(path)
         if path.exists() and not _is_sweep_store(path):
             raise SweepError(
                 f"{str(path)!r} exists and is not a heelstrike sweep store "
@@ -1105,6 +1371,13 @@ def _sweep(
             record = st.open_existing()
             if record is not None:
                 done = record
+            unknown = function.get("unidentified")
+            if unknown and done.any():
+                raise SweepError(
+                    f"store {str(path)!r} cannot be resumed: the sweep function reads objects "
+                    f"whose values cannot be identified ({unknown}), so a change to them would "
+                    "resume stale results; pass overwrite=True to compute afresh, or give the "
+                    "function those values as plain data (numbers, arrays, dataclasses)")
     pending = [i for i in all_chunks if not done[i]]
     if st is not None:
         _log.info("store %s: %d of %d chunks already done, computing %d", st.path,
@@ -1210,6 +1483,9 @@ def sweep_progress(store: str | os.PathLike[str]) -> tuple[int, int]:
     if _STATE_GROUP not in root:
         return 0, 0
     done_array: Any = root[f"{_STATE_GROUP}/done"]
+    records = path / _STATE_GROUP / _RECORDS
+    if records.is_dir():  # the per-chunk records (the array may be damaged)
+        return sum(1 for _ in records.iterdir()), int(np.prod(done_array.shape))
     done = np.asarray(done_array[...])
     return int(done.sum()), int(done.size)
 

@@ -27,6 +27,7 @@ import sys
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from heelstrike._caching import CacheWarning
 from heelstrike._optional import MissingExtraError
 from heelstrike._version import __version__
 from heelstrike.cli import gait, paper, powered, robot
@@ -37,6 +38,7 @@ from heelstrike.cli._common import (
     UnusedParameterWarning,
     parse_angle,
     parse_range,
+    release_claims,
     warnings_as_notes,
 )
 from heelstrike.cli._render import fail, one_line
@@ -84,8 +86,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         from heelstrike.analysis.newton import SearchTimeLimitWarning
 
         # a cut search and a file named like a shipped walker are news, said as such
+        # and so are cache fallbacks and numerical warnings: one line each, no source shown
         with warnings_as_notes(SearchTimeLimitWarning, ShippedNameWarning,
-                               UnusedParameterWarning):
+                               UnusedParameterWarning, CacheWarning, RuntimeWarning):
             status = int(args.func(args))
     except CliError as exc:
         return fail(one_line(exc))
@@ -106,10 +109,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         return fail(f"{exc.strerror or one_line(exc)}{where}")
     except MissingExtraError as exc:  # e.g. a sweep store without heelstrike[scale]
         return fail(one_line(exc))
+    except RecursionError:  # a structure nested past Python's recursion limit
+        return fail("the input is nested too deeply to process (Python's recursion limit): "
+                    "flatten the walker file's expressions or tables")
     except Exception as exc:  # the last resort: one line, never a traceback
         hint = "" if os.environ.get("HEELSTRIKE_DEBUG") == "1" else \
             " (set HEELSTRIKE_DEBUG=1 for the traceback)"
         return fail(f"unexpected {type(exc).__name__}: {one_line(exc)}{hint}")
+    finally:
+        release_claims()  # the --out folders this run claimed
     return status
 
 

@@ -260,10 +260,16 @@ def model_from_args(args: argparse.Namespace) -> Any:
                 f"directory is not read (give it as ./{model} to use it)"), stacklevel=2)
     elif os.path.exists(model) and not os.path.isfile(model):
         raise CliError(f"--model {model!r} is not a regular file")
+    from heelstrike.models.description import ModelDescriptionError
+
     try:
         description = walker_description(model)
     except OSError as exc:
         raise CliError(f"cannot read model {model!r}: {exc.strerror or exc}") from exc
+    except ModelDescriptionError as exc:  # the field's path: say in which file
+        name = os.path.basename(model)
+        text = str(exc)
+        raise CliError(text if text.startswith((name, model)) else f"{model}: {text}") from exc
     _note_borrowed_name(model, description)
     if description.unused_params:
         idle = ", ".join(sorted(description.unused_params))
@@ -314,12 +320,22 @@ def parse_floats(text: str, option: str, n: int | None = None) -> list[float]:
     return vals
 
 
+#: Output folders claimed by this process (their real path -> the claim), released by
+#: :func:`release_claims` when the command ends.
+_CLAIMS: dict[str, Any] = {}
+
+
 def writable_dir(path: str | os.PathLike[str], option: str = "--out") -> Any:
-    """Create the directory ``path`` if needed and check that a file can be written in it,
-    before any computing; returns it as a :class:`~pathlib.Path`."""
+    """Create the directory ``path`` if needed, check that a file can be written in it and
+    claim it for this run (:func:`heelstrike.io.claim_directory`: a second run on the same
+    folder is refused), before any computing; returns it as a :class:`~pathlib.Path`."""
     import tempfile
     from pathlib import Path
 
+    from heelstrike.io import DirectoryInUseError, claim_directory
+
+    if not str(path).strip():
+        raise CliError(f"{option} is empty: give a directory, e.g. {option} results")
     out = Path(path)
     if out.exists() and not out.is_dir():  # mkdir's own answer would be "File exists"
         raise CliError(f"cannot write to {option} {str(path)!r}: it exists and is not a "
@@ -328,9 +344,21 @@ def writable_dir(path: str | os.PathLike[str], option: str = "--out") -> Any:
         out.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryFile(dir=out):
             pass
+        real = os.path.realpath(out)
+        if real not in _CLAIMS:
+            _CLAIMS[real] = claim_directory(real)
+    except DirectoryInUseError as exc:
+        raise CliError(f"{option}: {exc.strerror}") from None
     except OSError as exc:
         raise CliError(f"cannot write to {option} {str(path)!r}: {exc.strerror or exc}") from None
     return out
+
+
+def release_claims() -> None:
+    """Release the output folders this process claimed (:func:`writable_dir`)."""
+    while _CLAIMS:
+        _, claim = _CLAIMS.popitem()
+        claim.release()
 
 
 def parse_guess(text: str | None) -> list[float] | None:
@@ -345,8 +373,15 @@ def parse_guess(text: str | None) -> list[float] | None:
     return vals
 
 
+def nonempty_path(text: str) -> str:
+    """A path option's value, refused when empty (``--store ''``: no folder named)."""
+    if not str(text).strip():
+        raise argparse.ArgumentTypeError("must name a directory, got an empty string")
+    return str(text)
+
+
 def add_store_option(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--store", metavar="DIR", default=None,
+    p.add_argument("--store", metavar="DIR", default=None, type=nonempty_path,
                    help="keep every finished chunk in this Zarr directory as it is computed; "
                    "after an interruption (Ctrl-C) the same command resumes from it. The "
                    "finished figure and data are still written to --out (as without --store)")
@@ -361,13 +396,17 @@ def warnings_as_notes(*categories: type[Warning]) -> Iterator[None]:
     error line only. Each command says its notes again (``main`` called twice in one process,
     as tests and scripts do: Python's default filter would show a repeated warning once)."""
     show = warnings.showwarning
-    notes: list[str] = []
+    notes: dict[str, int] = {}  # each note once, with its count
 
-    def note(message: Any, category: Any, *args: Any, **kwargs: Any) -> None:
+    def note(message: Any, category: Any, filename: Any = "", *args: Any, **kwargs: Any) -> None:
         if isinstance(category, type) and issubclass(category, categories):
-            notes.append(f"heelstrike: note: {message}")
+            text = str(message).removeprefix("heelstrike: ")
+            if issubclass(category, RuntimeWarning):  # numpy's, from generated or own code
+                text = f"numerical warning in {_warning_place(str(filename))}: {text}"
+            line = f"heelstrike: note: {text}"
+            notes[line] = notes.get(line, 0) + 1
         else:
-            show(message, category, *args, **kwargs)
+            show(message, category, filename, *args, **kwargs)
 
     with warnings.catch_warnings():
         for category in categories:
@@ -377,8 +416,26 @@ def warnings_as_notes(*categories: type[Warning]) -> Iterator[None]:
             yield
         finally:
             warnings.showwarning = show
-    for line in notes:  # reached only when the block ended normally
-        print(line, file=sys.stderr)
+    for line, count in notes.items():  # reached only when the block ended normally
+        print(line + (f" ({count} times)" if count > 1 else ""), file=sys.stderr)
+
+
+def _warning_place(filename: str) -> str:
+    """Where a warning arose, said in one phrase: generated model code (the cache), a
+    heelstrike module, or the file's name."""
+    from pathlib import Path
+
+    from heelstrike.models._generated import cache_dir
+
+    path = Path(filename)
+    try:
+        path.resolve().relative_to(cache_dir().resolve())
+        return "the walker's generated model code"
+    except (ValueError, OSError):
+        pass
+    if "heelstrike" in path.parts:
+        return f"heelstrike ({path.name})"
+    return path.name or "an unknown place"
 
 
 class ShippedNameWarning(UserWarning):
@@ -395,6 +452,7 @@ def run_with_store(store: str | None, compute: Callable[[], Any], out: str | Non
     if store is None:
         return compute()
     from pathlib import Path
+
 
     if out is not None and Path(store).resolve() == Path(out).resolve():
         raise CliError(f"--store and --out are both {store!r}: the store keeps the sweep's "

@@ -14,6 +14,13 @@ from heelstrike.analysis._defaults import (
     BIFURCATION_RECORD,
     BIFURCATION_TRANSIENT,
 )
+from heelstrike.analysis._memory import (
+    GAIT_SEARCH_BYTES,
+    GAIT_SEARCH_STEPS,
+    WALKER_STEP_BYTES,
+    WALKER_STEP_SECONDS,
+    require_budget,
+)
 from heelstrike.cli._common import (
     CliError,
     add_backend_option,
@@ -354,6 +361,10 @@ def _run_walk(args: argparse.Namespace) -> int:
             raise CliError("writing .mp4 needs ffmpeg on the PATH; use a .gif file instead")
     if not to_dir and out.is_dir():
         raise CliError(f"--out {args.out!r} is a directory")
+    require_budget(f"a walk of {args.steps:,} steps", args.steps,
+                   bytes_per_point=WALKER_STEP_BYTES,
+                   seconds_per_point=WALKER_STEP_SECONDS[args.backend or "scipy"],
+                   hint="give fewer --steps")
     model = None if args.model is None else model_from_args(args)  # before making --out
     writable_dir(out if to_dir else out.parent)
     if model is not None:
@@ -424,8 +435,16 @@ def _run_bifurcation(args: argparse.Namespace) -> int:
     start, stop, count = args.slope_range
     if not (0 < start < stop or (0 < start == stop and count == 1)):
         raise CliError("--slope-range needs 0 < START < STOP, or one slope > 0")
+    n = count or 45
+    require_budget(
+        f"a bifurcation diagram of {n:,} slopes, {args.transient + args.record:,} steps each",
+        n, bytes_per_point=32 * args.record + GAIT_SEARCH_BYTES,
+        seconds_per_point=(args.transient + args.record + GAIT_SEARCH_STEPS)
+        * WALKER_STEP_SECONDS[args.backend],
+        hint="give fewer slopes (--slope-range START:STOP:COUNT), a shorter --transient or "
+        "fewer --record steps")
     writable_dir(args.out)
-    slopes = np.linspace(start, stop, count or 45)
+    slopes = np.linspace(start, stop, n)
     # the branch over the diagram's slopes, refined where it curves (what the figure draws)
     kw: dict[str, Any] = {"transient": args.transient, "record": args.record,
                           "continuation_points": None, "backend": args.backend}
@@ -580,12 +599,20 @@ def add_basin(sub: Any) -> None:
     p.set_defaults(func=_run_basin)
 
 
-def _basin(args: argparse.Namespace, compute: Any) -> Any:
-    """Check ``--tol`` and ``--out``, then compute the basin (with ``--store``)."""
+def _basin(args: argparse.Namespace, grid: tuple[int, int], compute: Any) -> Any:
+    """Check ``--tol``, the run's size and ``--out``, then compute the basin (with
+    ``--store``)."""
+    from heelstrike.analysis.basin import BYTES_PER_POINT
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
 
-    if not args.tol > 0:
-        raise CliError("--tol must be > 0")
+    if not (math.isfinite(args.tol) and args.tol > 0):
+        raise CliError(f"--tol must be finite and > 0 (a convergence radius in rad and rad/s), "
+                       f"got {args.tol:g}")
+    points = grid[0] * grid[1]
+    require_budget(f"a {grid[0]}x{grid[1]} basin of up to {args.steps:,} steps a start",
+                   points, bytes_per_point=BYTES_PER_POINT,
+                   seconds_per_point=args.steps * WALKER_STEP_SECONDS[args.backend],
+                   hint="use a smaller --grid or fewer --steps")
     writable_dir(args.out)
     try:
         return run_with_store(args.store, compute, out=args.out)
@@ -648,7 +675,7 @@ def _run_basin_model(args: argparse.Namespace) -> int:
         ranges = (args.q3_range[:2], args.q3dot_range[:2])
         if not (ranges[0][0] < ranges[0][1] and ranges[1][0] < ranges[1][1]):
             raise CliError("--q3-range and --q3dot-range need MIN < MAX")
-    basin = _basin(args, lambda: basin_module.model_basin_of_attraction(
+    basin = _basin(args, grid, lambda: basin_module.model_basin_of_attraction(
         walker, args.slope, grid=grid, ranges=ranges, steps=args.steps, tol=args.tol,
         backend=args.backend, progress=sys.stderr.isatty(),
         store=args.store,
@@ -683,7 +710,7 @@ def _run_basin(args: argparse.Namespace) -> int:
     if any(r is not None and not r[0] < r[1] for r in ranges):
         raise CliError("--q3-range and --q3dot-range need MIN < MAX")
     grid = args.grid or (400, 400)
-    basin = _basin(args, lambda: basin_of_attraction(
+    basin = _basin(args, grid, lambda: basin_of_attraction(
         walker, args.slope, grid=grid, ranges=ranges, steps=args.steps,
         tol=args.tol, progress=sys.stderr.isatty(), store=args.store,
         backend=args.backend,
@@ -735,6 +762,17 @@ def _map_slopes(args: argparse.Namespace) -> Any:
     return np.linspace(s0, s1, ns or 21)
 
 
+def _check_map_budget(args: argparse.Namespace, n_values: int, option: str) -> None:
+    """Refuse a map too large for the machine (:func:`require_budget`), before any grid is
+    made: ``n_values`` walkers (``option``) times the ``--slope`` count, a gait search each."""
+    n_slopes = args.slope[2] or 21
+    require_budget(f"a map of {n_values:,} x {n_slopes:,} cells", n_values * n_slopes,
+                   bytes_per_point=GAIT_SEARCH_BYTES,
+                   seconds_per_point=GAIT_SEARCH_STEPS
+                   * WALKER_STEP_SECONDS[args.backend or "compiled"],
+                   hint=f"give fewer {option} or --slope values (COUNT)")
+
+
 def _run_map_model(args: argparse.Namespace) -> int:
     import numpy as np
 
@@ -759,6 +797,7 @@ def _run_map_model(args: argparse.Namespace) -> int:
     if name not in walker.parameters:
         raise CliError(f"unknown parameter {name!r} of model {walker.description.name!r} (its "
                        f"parameters: {', '.join(sorted(walker.parameters))})")
+    _check_map_budget(args, nx or 7, option)
     slopes = _map_slopes(args)
     values = np.linspace(x0, x1, nx or 7)
     for v in values:  # refuse values the walker's constraints reject (never "no gait")
@@ -831,6 +870,7 @@ def _run_map(args: argparse.Namespace) -> int:
     r0, r1, nr = args.radius or (0.0, 0.6, 7)
     if not 0 <= r0 <= r1 <= args.leg_length:
         raise CliError("--radius needs 0 <= START <= STOP <= leg length")
+    _check_map_budget(args, nr or 7, "--radius")
     slopes = _map_slopes(args)
     radii = np.linspace(r0, r1, nr or 7)
     base = walker_from_args(argparse.Namespace(**{**vars(args), "radius": float(radii[0])}))

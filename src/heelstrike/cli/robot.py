@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from heelstrike.cli._render import json_text, print_json
+from heelstrike.io import write_text
 
 __all__ = [
     "RobotCliError",
@@ -261,7 +262,7 @@ def _run_robot_state(args: argparse.Namespace) -> int:
         return 0
     text = json_text({**state, "units": units})
     try:
-        args.out.write_text(text + "\n")
+        write_text(text + "\n", args.out)
     except OSError as exc:
         raise RobotCliError(f"cannot write {str(args.out)!r}: {exc.strerror or exc}") from None
     if args.json:

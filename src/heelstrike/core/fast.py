@@ -24,10 +24,13 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from heelstrike._caching import tolerate_numba_cache_errors
 from heelstrike._results import tuple_dict
 from heelstrike._typing import FloatArray
 from heelstrike.core._parallel import use_parallel
 from heelstrike.core.impact import ImpactInputError
+
+tolerate_numba_cache_errors()  # numba's cache unwritable (full disk): run uncached
 
 __all__ = ["FastImpactResult", "batched_impact", "raise_for_status", "serial_and_parallel",
            "use_parallel"]

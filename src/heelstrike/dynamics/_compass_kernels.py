@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from numba import njit, prange
 
+from heelstrike._caching import tolerate_numba_cache_errors
 from heelstrike._typing import FloatArray, IntArray
 from heelstrike.core.fast import serial_and_parallel
 from heelstrike.dynamics import _dp5 as dp5
@@ -39,6 +40,8 @@ from heelstrike.dynamics.compiled import (
 )
 from heelstrike.models import _contact
 from heelstrike.models.compass_fast import strike
+
+tolerate_numba_cache_errors()  # numba's cache unwritable (full disk): run uncached
 
 track_numba_compiles()  # a search's time limit does not count compiling (see _aot)
 

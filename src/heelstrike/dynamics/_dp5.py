@@ -24,7 +24,10 @@ from typing import Any, NamedTuple
 
 from numba import njit
 
+from heelstrike._caching import tolerate_numba_cache_errors
 from heelstrike._typing import FloatArray
+
+tolerate_numba_cache_errors()  # numba's cache unwritable (full disk): run uncached
 
 # Dormand-Prince 5(4) tableau (autonomous: no nodes): stage weights A, 5th-order weights B
 # (B2 = B7 = 0) and error weights E = B - B* (E2 = 0).

@@ -27,6 +27,7 @@ from numba.core import cgutils
 from numba.core.errors import NumbaExperimentalFeatureWarning
 from numba.extending import intrinsic
 
+from heelstrike._caching import tolerate_numba_cache_errors
 from heelstrike._typing import FloatArray, IntArray
 from heelstrike.dynamics import _dp5 as dp5
 from heelstrike.dynamics._compass_kernels import lift_velocity_scale_jit, lifts_jit
@@ -76,6 +77,8 @@ from heelstrike.dynamics.compiled_phased import (
 )
 from heelstrike.models._codegen_numba import NumbaModel, signatures
 from heelstrike.models._contact import CONTACT_TOLERANCE
+
+tolerate_numba_cache_errors()  # numba's cache unwritable (full disk): run uncached
 
 _SIGNATURES = signatures()
 _DYN_T = nbt.FunctionType(_SIGNATURES["dynamics"])

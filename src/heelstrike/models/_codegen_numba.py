@@ -61,6 +61,7 @@ from heelstrike.models._generated import (
     generator_fingerprint,
     numba_fingerprint,
     read_cached,
+    tolerate_numba_cache_errors,
     verify_source,
     write_cached,
 )
@@ -318,6 +319,7 @@ def _load(source: str, path: Path, key: str, cache: bool) -> dict[str, Any]:
     sys.modules[name] = mod
     import numba
 
+    tolerate_numba_cache_errors()  # a cache that cannot be written: compiled uncached
     return {
         fname: numba.njit(sig, cache=cache, nogil=True)(ns[fname])
         for fname, sig in signatures().items()

@@ -16,6 +16,12 @@ by index. Whatever sits in the cache is still treated as untrusted until checked
   the current user, or writable by group or others; :func:`write_cached` creates the folder
   with mode 0700 and writes files atomically with mode 0600.
 
+Every entry ends with a trailer line holding the length and SHA-256 of what precedes it
+(:func:`write_cached`), so an entry cut short, even at a line boundary where it still parses,
+fails :func:`read_cached`'s check and is rebuilt. A cache that cannot be written (a full disk,
+a read-only folder), this one or numba's (:func:`tolerate_numba_cache_errors`), makes the
+code run uncached, with one :class:`CacheWarning` saying so.
+
 A cache entry that fails any check is not run: the caller rebuilds it and warns
 (:class:`CacheWarning`).
 """
@@ -34,6 +40,8 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
+from heelstrike._caching import CacheWarning, note_uncached, tolerate_numba_cache_errors
+
 __all__ = [
     "CacheWarning",
     "IdentityCache",
@@ -43,6 +51,7 @@ __all__ = [
     "load_source",
     "numba_fingerprint",
     "read_cached",
+    "tolerate_numba_cache_errors",
     "verify_source",
     "write_cached",
 ]
@@ -52,8 +61,6 @@ class UnsafeGeneratedCode(ValueError):
     """Generated (or cached) source contains something the generators never emit."""
 
 
-class CacheWarning(UserWarning):
-    """A cache entry was refused (unsafe permissions, failed verification) and rebuilt."""
 
 
 class IdentityCache:
@@ -401,7 +408,37 @@ def read_cached(path: Path) -> str | None:
             return None
     if st.st_size > 64 << 20:
         return None
-    return path.read_text(encoding="utf-8")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        text = ""
+    body = _checked_body(text)
+    if body is None:
+        warnings.warn(
+            f"heelstrike: cached model code {path} failed verification (incomplete or damaged: "
+            "its length and checksum do not match its trailer); rebuilding it", CacheWarning,
+            stacklevel=3)
+    return body
+
+
+#: The first characters of a cache entry's trailer line (its last line).
+_TRAILER = "# heelstrike-cache-entry "
+
+
+def _trailer(body: str) -> str:
+    data = body.encode("utf-8")
+    return f"{_TRAILER}length={len(data)} sha256={hashlib.sha256(data).hexdigest()}\n"
+
+
+def _checked_body(text: str) -> str | None:
+    """The entry's text before its trailer if the trailer's length and checksum match."""
+    body, sep, last = text.rstrip("\n").rpartition("\n")
+    if not sep or not last.startswith(_TRAILER):
+        return None
+    body += "\n"
+    return body if _trailer(body) == last + "\n" else None
+
+
 
 
 def write_cached(path: Path, text: str) -> Path | None:
@@ -412,12 +449,15 @@ def write_cached(path: Path, text: str) -> Path | None:
             return None
         fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".tmp")
         try:
+            body = text if text.endswith("\n") else text + "\n"
             with os.fdopen(fd, "w", encoding="utf-8") as fh:
-                fh.write(text)
+                fh.write(body + _trailer(body))
             os.replace(tmp, path)  # atomic: concurrent builders never see partial files
         except BaseException:
             Path(tmp).unlink(missing_ok=True)
             raise
         return path
-    except OSError:  # read-only home etc.: still usable, just not cached
+    except OSError as exc:  # full disk, read-only home etc.: still usable, just not cached
+        note_uncached(f"cannot write the model-code cache {path.parent} "
+                       f"({exc.strerror or exc})")
         return None

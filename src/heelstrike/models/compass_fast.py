@@ -39,10 +39,13 @@ import numpy as np
 from numba import njit, prange
 from numpy.typing import ArrayLike, NDArray
 
+from heelstrike._caching import tolerate_numba_cache_errors
 from heelstrike._typing import FloatArray
 from heelstrike.core.fast import FastImpactResult, batched_impact, serial_and_parallel
 from heelstrike.core.impact import ImpactInputError
 from heelstrike.models.compass import CompassGait
+
+tolerate_numba_cache_errors()  # numba's cache unwritable (full disk): run uncached
 
 __all__ = ["HeelStrikeImpact", "heel_strike_impact"]
 

@@ -83,6 +83,10 @@ MAX_EXPRESSION_DEPTH = 24
 MAX_EXPONENT = 16.0
 #: Largest absolute integer literal accepted (beyond it floats lose integers anyway).
 MAX_INTEGER_LITERAL = 2**53
+#: Largest magnitude of a parameter value or an evaluated field (SI units): a walker of
+#: 1e12 kg or 1e12 m is no machine, and its energies (masses times squared lengths and speeds,
+#: their products in the mass matrix's determinant) would leave the floating-point range.
+MAX_FIELD_MAGNITUDE = 1e12
 #: Most links a walker may have (derivation time grows steeply with the tree).
 MAX_LINKS = 16
 #: Largest walker file read (bytes).
@@ -135,13 +139,17 @@ def _number(node: ast.AST) -> float | None:
 
 
 def _check_ast(
-    node: ast.AST, names: Mapping[str, Any] | None, path: str, depth: int = 0
+    node: ast.AST, names: Mapping[str, Any] | None, path: str, depth: int = 0,
+    power: float = 1.0,
 ) -> None:
     """Raise unless ``node`` uses only numbers, known names, + - * / **, sqrt/sin/cos.
 
     The tree is bounded: at most :data:`MAX_EXPRESSION_DEPTH` deep, exponents are numeric
     literals of magnitude at most :data:`MAX_EXPONENT`, integer literals at most
     :data:`MAX_INTEGER_LITERAL` (so ``9**9**9`` and huge literals are refused, not evaluated).
+    Nested powers multiply their exponents: ``power`` is the product of the exponents of the
+    powers ``node`` is inside the base of, and it too must stay within :data:`MAX_EXPONENT`
+    (``((9**16)**16)**16`` is ``9**4096``: refused before evaluation).
     """
     if depth > MAX_EXPRESSION_DEPTH:
         raise ModelDescriptionError(
@@ -149,7 +157,7 @@ def _check_ast(
         )
     sub = depth + 1
     if isinstance(node, ast.Expression):
-        _check_ast(node.body, names, path, sub)
+        _check_ast(node.body, names, path, sub, power)
     elif isinstance(node, ast.Constant):
         if isinstance(node.value, bool) or not isinstance(node.value, int | float):
             raise ModelDescriptionError(f"{path}: only numeric constants are allowed")
@@ -161,6 +169,7 @@ def _check_ast(
         if node.id != "pi" and names is not None and node.id not in names:
             raise ModelDescriptionError(f"{path}: unknown parameter {node.id!r}")
     elif isinstance(node, ast.BinOp) and type(node.op) in _BINOPS:
+        base_power = power
         if isinstance(node.op, ast.Pow):
             k = _number(node.right)
             if k is None or abs(k) > MAX_EXPONENT:
@@ -168,10 +177,15 @@ def _check_ast(
                     f"{path}: exponents must be numbers of magnitude <= {MAX_EXPONENT:g} "
                     "(use sqrt for square roots)"
                 )
-        _check_ast(node.left, names, path, sub)
-        _check_ast(node.right, names, path, sub)
+            base_power = power * max(abs(k), 1.0)
+            if base_power > MAX_EXPONENT:
+                raise ModelDescriptionError(
+                    f"{path}: nested powers raise to a total exponent of {base_power:g} (the "
+                    f"product of the nested exponents); it must be at most {MAX_EXPONENT:g}")
+        _check_ast(node.left, names, path, sub, base_power)
+        _check_ast(node.right, names, path, sub, power)
     elif isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub | ast.UAdd):
-        _check_ast(node.operand, names, path, sub)
+        _check_ast(node.operand, names, path, sub, power)
     elif (
         isinstance(node, ast.Call)
         and isinstance(node.func, ast.Name)
@@ -179,7 +193,7 @@ def _check_ast(
         and len(node.args) == 1
         and not node.keywords
     ):
-        _check_ast(node.args[0], names, path, sub)
+        _check_ast(node.args[0], names, path, sub, power)
     else:
         raise ModelDescriptionError(
             f"{path}: unsupported expression syntax ({type(node).__name__})"
@@ -287,7 +301,15 @@ def evaluate_expression(
         if isinstance(node, ast.Name):
             return pi if node.id == "pi" else names[node.id]
         if isinstance(node, ast.BinOp):
-            return _BINOPS[type(node.op)](ev(node.left), ev(node.right))
+            a, b = ev(node.left), ev(node.right)
+            out = _BINOPS[type(node.op)](a, b)
+            if isinstance(out, int) and abs(out) > MAX_INTEGER_LITERAL:
+                out = float(out)  # exact integers end where floats do (OverflowError beyond)
+            if isinstance(out, float) and math.isinf(out) and not (
+                    (isinstance(a, float) and math.isinf(a))
+                    or (isinstance(b, float) and math.isinf(b))):
+                raise OverflowError(f"{ast.unparse(node)} overflows the floating-point range")
+            return out
         if isinstance(node, ast.UnaryOp):
             v = ev(node.operand)
             return -v if isinstance(node.op, ast.USub) else v
@@ -590,11 +612,13 @@ class WalkerDescription:
             out = np.asarray(evaluate_expression(v, values, path=path), dtype=float)
             if not np.all(np.isfinite(out)):
                 raise ModelDescriptionError(f"{path}: must be finite")
+            _bounded(out, path)
             return out
 
         for k, v in values.items():
             if not np.all(np.isfinite(np.asarray(v, dtype=float))):
                 raise ModelDescriptionError(f"params.{k}: must be finite")
+            _bounded(np.asarray(v, dtype=float), f"params.{k}")
         if not np.all(np.asarray(values["g"], dtype=float) > 0):
             raise ModelDescriptionError("params.g: must be > 0")
         for i, lk in enumerate(self.links):
@@ -639,6 +663,16 @@ class WalkerDescription:
                 raise ModelDescriptionError(
                     f"constraints[{i}]: {text!r} is violated ({shown})"
                 )
+
+
+def _bounded(values: Any, path: str) -> None:
+    """Refuse values of magnitude beyond :data:`MAX_FIELD_MAGNITUDE` (SI units)."""
+    big = np.abs(np.asarray(values, dtype=float))
+    if big.size and float(big.max()) > MAX_FIELD_MAGNITUDE:
+        raise ModelDescriptionError(
+            f"{path}: {float(big.max()):g} is beyond the magnitude {MAX_FIELD_MAGNITUDE:g} "
+            "heelstrike accepts (SI units: kg, m, kg m^2, rad; larger values leave the "
+            "floating-point range of the walker's energies)")
 
 
 def _show(v: Any) -> str:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import time
 
 import pytest
 
@@ -25,13 +24,11 @@ _HUGE = [
 
 @pytest.mark.parametrize("argv", _HUGE, ids=lambda a: " ".join(a[:2]))
 def test_huge_runs_are_refused_before_computing(argv, tmp_path, capsys):
-    start = time.monotonic()
     assert main([*argv, "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
     assert "memory" in err or "hours" in err, err
     assert "--" in err.split("heelstrike: error:")[-1]  # names the options to change
     assert not (tmp_path / "out").exists()  # refused before the output folder is made
-    assert time.monotonic() - start < 60  # generous: nothing was computed
 
 
 def test_the_budget_refuses_by_stated_estimates_not_timings():
@@ -55,10 +52,9 @@ def test_basin_tol_must_be_finite(tmp_path, capsys):
     "sqrt((l**16)**2)",
 ])
 def test_nested_powers_are_bounded_before_evaluation(text):
-    start = time.monotonic()
+    # refused by the exponent bound, before anything is raised to a power
     with pytest.raises(ModelDescriptionError, match="total exponent"):
         evaluate_expression(text, {"m": 1.0, "l": 2.0}, path="link[0].mass")
-    assert time.monotonic() - start < 5
 
 
 def test_huge_integer_products_are_floats_or_refused():

@@ -16,6 +16,7 @@ from heelstrike.analysis._defaults import (
 )
 from heelstrike.cli._common import (
     CliError,
+    DeprecatedAlias,
     add_backend_option,
     add_model_options,
     add_store_option,
@@ -396,10 +397,15 @@ def add_bifurcation(sub: Any) -> None:
     add_backend_option(p, "step simulator of the walks and the period-one branch: compiled "
                        "(default) or the scipy reference (slower: minutes for the compass "
                        "gait's 45 slopes)", "compiled")
-    p.add_argument("--slope-range", default="0.5deg:6deg",
-                   type=lambda t: parse_range(t, parse_slope),
-                   help="START:STOP[:COUNT] slopes, e.g. 0.5deg:6deg:56 (default "
-                   "0.5deg:6deg, count 45)")
+    slopes = p.add_mutually_exclusive_group()
+    slopes.add_argument("--slope", default="0.5deg:6deg",
+                        type=lambda t: parse_range(t, parse_slope),
+                        help="START:STOP[:COUNT] slopes, e.g. 0.5deg:6deg:56 (default "
+                        "0.5deg:6deg, count 45), or one slope, e.g. 3deg (as map --slope)")
+    slopes.add_argument("--slope-range", dest="slope", action=DeprecatedAlias, new="--slope",
+                        type=lambda t: parse_range(t, parse_slope), metavar="SLOPE_RANGE",
+                        help="deprecated: the old name of --slope (still accepted, with a "
+                        "note)")
     p.add_argument("--transient", type=nonnegative_int, default=BIFURCATION_TRANSIENT,
                    help="steps discarded at each slope before recording, 0 or more (default "
                    f"{BIFURCATION_TRANSIENT})")
@@ -421,9 +427,9 @@ def _run_bifurcation(args: argparse.Namespace) -> int:
     from heelstrike.outputs import bifurcation_gap_note, bifurcation_title, write_bifurcation_files
 
     walker = walker_from_args(args) if args.model is None else model_from_args(args)
-    start, stop, count = args.slope_range
+    start, stop, count = args.slope
     if not (0 < start < stop or (0 < start == stop and count == 1)):
-        raise CliError("--slope-range needs 0 < START < STOP, or one slope > 0")
+        raise CliError("--slope needs 0 < START < STOP, or one slope > 0")
     writable_dir(args.out)
     slopes = np.linspace(start, stop, count or 45)
     # the branch over the diagram's slopes, refined where it curves (what the figure draws)

@@ -8,10 +8,13 @@ gait, eq. 14-15 of Font & Kövecses 2008), ``eta = T_c / L`` (eq. 16) and the co
 gaits), so the grid should be ordered and reasonably fine. Several gaits can share a target
 (e.g. push-off gaits with a long, cheap and a short, costly stance at the same speed), and
 continuation can follow a costly branch (it did near McGeer's wheel, ``R = l``): at every grid
-point fresh searches from several seeds are run as well, and the cheapest gait found is kept
-(``branch`` says whether it came from continuation or a fresh search, ``gaits_found`` how many
-distinct gaits were met), an ordinary step before a multi-swing gait (``leg_crossings``: its
-swing foot passes through the ground away from mid-stance, outside the scuffing convention).
+point fresh searches from several seeds are run as well, and a deflated search beside the gaits
+found (a stable gait 1 % from an unstable one, issue 32). The gait kept is the first in the one
+order of gaits (:func:`~heelstrike.analysis._gait_order.gait_order`): the cheapest stable gait,
+else the cheapest unstable one (``stable`` says which; ``branch`` whether it came from
+continuation or a fresh search, ``gaits_found`` how many distinct gaits were met), an ordinary
+step before a multi-swing gait (``leg_crossings``: its swing foot passes through the ground
+away from mid-stance, outside the scuffing convention).
 
 The paper's own measure is evaluated alongside: ``eta`` of the heel strike alone with the
 *imposed* pre-impact velocities of the paper (``q3_dot = 1 rad/s``, ``q4_dot = 0``) at the
@@ -40,6 +43,7 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._typing import FloatArray
+from heelstrike.analysis._gait_order import gait_order
 from heelstrike.analysis._memory import require_memory
 from heelstrike.analysis.heel_strike import heel_strike_study
 from heelstrike.analysis.powered import (
@@ -48,6 +52,7 @@ from heelstrike.analysis.powered import (
     PoweredGaitNotFoundError,
     _count_distinct,
     _fresh_gaits,
+    _other_gaits,
     _seed_walker,
     _solver,
     actuation_family,
@@ -283,7 +288,7 @@ def cost_study(
         "units": "1", "long_name": "1 where a periodic gait was found, 0 where none"})
     ds["failure"] = (dims, failure.astype(str))
     ds["branch"] = (dims, branch, {
-        "units": "1", "long_name": "how the kept (cheapest) gait was found",
+        "units": "1", "long_name": "how the kept (cheapest stable) gait was found",
         "flag_values": "0 1", "flag_meanings": "continuation fresh_search"})
     ds["gaits_found"] = (dims, n_found, {
         "units": "1", "long_name": "distinct periodic gaits found meeting the target"})
@@ -368,10 +373,11 @@ def _model_key(model: Any) -> str:
 #: How each entry of the study was chosen (also on stdout and in the figures).
 BRANCH_NOTE = (
     "Several periodic gaits can meet one target; each entry is the cheapest (least actuator "
-    "work) of all gaits found there: continuation from the neighbouring grid points and fresh "
-    "searches from several seeds ('branch': 0 continuation, 1 fresh search; 'gaits_found'); "
-    "a gait whose legs cross more than once a step only where no other was found "
-    "('leg_crossings')."
+    "work) stable gait of all gaits found there, else, where none is stable, the cheapest "
+    "unstable one ('stable' 0): continuation from the neighbouring grid points, fresh "
+    "searches from several seeds and deflated searches beside the gaits found ('branch': 0 "
+    "continuation, 1 fresh search; 'gaits_found'); a gait whose legs cross more than once a "
+    "step only where no other was found ('leg_crossings')."
 )
 
 _SEED_WIDTH = 16  # longest continuation seed (fixed point and actuation parameter) stored
@@ -485,14 +491,17 @@ def _study_row(
         fresh, exc_fresh = _fresh_gaits(solve, r, _seed_walker(base, model, r), family,
                                         speed, length, kwargs)
         gaits += fresh
+        # and the gaits beside those (issue 32: a stable gait 1 % from an unstable one)
+        gaits += _other_gaits(solve, r, _seed_walker(base, model, r), gaits, speed, length,
+                              kwargs)
         if not gaits and exc_fresh is not None:
             msg = str(exc_fresh).encode()[:_FAILURE_BYTES]
             failure[j, :len(msg)] = np.frombuffer(msg, dtype=np.uint8)
         if gaits:
-            # the cheapest ordinary step; a multi-swing gait (its swing foot through the
-            # ground away from mid-stance: QA sweep 6) only where no other meets the target
-            best = min(range(len(gaits)),
-                       key=lambda k: (gaits[k].multi_swing, gaits[k].actuator_work))
+            # the one order of gaits: the cheapest stable ordinary step, else the cheapest
+            # unstable one; a multi-swing gait (its swing foot through the ground away from
+            # mid-stance: QA sweep 6) only where no other meets the target
+            best = min(range(len(gaits)), key=lambda k: gait_order(gaits[k]))
             g = gaits[best]
             if g.residual > float(kwargs.get("tol", 1e-9)):
                 # a fresh start's looser tolerance: polish it so that its energy book closes

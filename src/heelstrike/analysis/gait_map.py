@@ -37,6 +37,7 @@ from heelstrike.analysis._continuation import (
     follow_both_ways,
 )
 from heelstrike.analysis._defaults import BIFURCATION_RECORD, BIFURCATION_TRANSIENT
+from heelstrike.analysis._gait_order import first_gait
 from heelstrike.analysis.limit_cycle import (
     GaitNotFoundError,
     _smallest_real,
@@ -1081,7 +1082,7 @@ def _diagram_and_branch(
                 break
         if not found:
             raise GaitNotFoundError(f"no period-one gait at slope {slope:g} rad")
-        return min(found, key=lambda c: (not c.stable, c.spectral_radius)).fixed_point
+        return first_gait(found).fixed_point
 
     k0 = int(np.searchsorted(slopes, onset))  # the first slope of the grid with a gait
     diagram = bifurcation_diagram(walker, slopes[k0:],

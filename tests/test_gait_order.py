@@ -97,6 +97,13 @@ def test_study_cost_keeps_the_stable_gait_at_r015_l06(tmp_path: Path, capsys: Ca
         assert float(ds["spectral_radius"].item()) < 1.0 and int(ds["stable"].item()) == 1
         assert int(ds["gaits_found"].item()) == len(gaits)
         assert "stable" in ds.attrs["branch_note"]
+        # every gait found is listed, in the one order, the unstable ones marked
+        listed = ds["gait_actuator_work"].values.ravel()
+        n = int(np.isfinite(listed).sum())
+        assert n == len(gaits)
+        np.testing.assert_allclose(listed[:n], [g.actuator_work for g in gaits], rtol=1e-6)
+        assert ds["gait_stable"].values.ravel()[:n].tolist() == [float(g.stable) for g in gaits]
+        assert np.all(ds["gait_spectral_radius"].values.ravel()[1:n] > 1.0)
     assert main(["powered", "--radius", "0.15", "--step-length", "0.6", "--json"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert d["stable"] and d["actuator_work"] == pytest.approx(first.actuator_work, rel=1e-6)

@@ -53,6 +53,7 @@ from heelstrike.analysis.powered import (
     _count_distinct,
     _fresh_gaits,
     _other_gaits,
+    _same_gait,
     _seed_walker,
     _solver,
     actuation_family,
@@ -200,7 +201,10 @@ def cost_study(
     xarray.Dataset
         Dimensions ``actuation`` x ``radius`` x ``step_length`` (or ``speed``) with the
         :data:`GAIT_VARIABLES` but the target itself (NaN where no gait was found),
-        ``found`` (1 where a gait was found, else 0), ``failure`` messages, ``backend`` (per
+        ``found`` (1 where a gait was found, else 0), every gait found listed over one more
+        dimension ``gait`` (``LISTED_VARIABLES`` as ``gait_<name>``, in the one order of
+        gaits: the kept one first, unstable ones marked by ``gait_stable`` 0), ``failure``
+        messages, ``backend`` (per
         actuation and radius: the step simulator that ran, ``"compiled"`` or ``"scipy"``), and
         the paper's impact-only ``eta_paper`` and ``collision_loss_paper`` over ``radius`` x
         target (only for the compass gait and ``target="step_length"``).
@@ -241,6 +245,7 @@ def cost_study(
     data = {k: np.full(shape, np.nan) for k in GAIT_VARIABLES}
     branch = np.full(shape, np.nan)
     n_found = np.zeros(shape, dtype=np.int64)
+    listed = {k: np.full((*shape, LISTED_GAITS), np.nan) for k in LISTED_VARIABLES}
     failure = np.full(shape, "", dtype=object)
     total = shape[0] * shape[1] * shape[2]
     bar: Any = None
@@ -266,6 +271,8 @@ def cost_study(
             failure[a, i] = [_decode(b) for b in row["failure"]]
             branch[a, i] = row["branch"]
             n_found[a, i] = row["gaits_found"]
+            for k in LISTED_VARIABLES:
+                listed[k][a, i] = row[f"gait_{k}"]
             previous = tuple(tuple(map(float, x[:n])) for x, n in
                              zip(row["seed"], row["seed_size"], strict=True))
             if bar is not None:
@@ -292,6 +299,8 @@ def cost_study(
         "flag_values": "0 1", "flag_meanings": "continuation fresh_search"})
     ds["gaits_found"] = (dims, n_found, {
         "units": "1", "long_name": "distinct periodic gaits found meeting the target"})
+    for k, (unit, meaning) in LISTED_VARIABLES.items():
+        ds[f"gait_{k}"] = ((*dims, "gait"), listed[k], {"units": unit, "long_name": meaning})
     ds["backend"] = (("actuation", "radius"), np.asarray(backends, dtype=str), {
         "long_name": "step simulator of the gaits (compiled or scipy)"})
     ds["parameter_unit"] = (("actuation",), np.asarray(
@@ -381,6 +390,19 @@ BRANCH_NOTE = (
 )
 
 _SEED_WIDTH = 16  # longest continuation seed (fixed point and actuation parameter) stored
+
+#: Gaits listed per grid point (dimension ``gait``), in the one order of gaits: the kept one
+#: first, then the others found there.
+LISTED_GAITS = 8
+
+#: What the study lists of every gait found at a grid point (``gait_<name>``) and its units.
+LISTED_VARIABLES: dict[str, tuple[str, str]] = {
+    "actuator_work": ("J", "actuator work per step of each gait found, in the one order of "
+                           "gaits (the kept one first; NaN past the last)"),
+    "spectral_radius": ("1", "largest Floquet multiplier modulus of each gait found"),
+    "stable": ("1", "1 if that gait is stable, 0 if unstable, NaN past the last"),
+    "leg_crossings": ("1", "times the swing leg crosses the stance leg in a step, each gait"),
+}
 _FAILURE_BYTES = 512  # failure messages are stored as UTF-8, NUL-padded, truncated
 
 
@@ -418,7 +440,7 @@ def _run_row(
     ds = sweep(func, {"target": targets}, chunks=targets.size, store=store, scheduler="sync",
                progress=False, units={"target": "m" if kind == "step_length" else "m s-1"}
                | {k: "1" for k in (*GAIT_VARIABLES, "failure", "seed", "seed_size", "branch",
-                                   "gaits_found")})
+                                   "gaits_found", *(f"gait_{k}" for k in LISTED_VARIABLES))})
     return {str(k): np.asarray(ds[k].values) for k in ds.data_vars}
 
 
@@ -464,6 +486,7 @@ def _study_row(
     seed_size = np.zeros(T.size, dtype=np.int64)
     branch = np.full(T.size, np.nan)
     n_found = np.zeros(T.size, dtype=np.int64)
+    listed = {k: np.full((T.size, LISTED_GAITS), np.nan) for k in LISTED_VARIABLES}
     for j, v in enumerate(T):
         speed = float(v) if kind == "speed" else None
         length = float(v) if kind == "step_length" else None
@@ -516,9 +539,26 @@ def _study_row(
             n_found[j] = _count_distinct(gaits)
             for k, val in _row(g).items():
                 out[k][j] = val
+            _list_gaits(listed, j, g, [gaits[k] for k in range(len(gaits)) if k != best])
             found[(i, j)] = np.append(g.fixed_point, g.parameter)
             n = min(found[(i, j)].size, _SEED_WIDTH)
             seed[j, :n], seed_size[j] = found[(i, j)][:n], n
     rows: dict[str, NDArray[Any]] = dict(out)
     return rows | {"failure": failure, "seed": seed, "seed_size": seed_size,
-                   "branch": branch, "gaits_found": n_found}
+                   "branch": branch, "gaits_found": n_found} | {
+        f"gait_{k}": val for k, val in listed.items()}
+
+
+def _list_gaits(
+    listed: dict[str, FloatArray], j: int, kept: PoweredGait, others: list[PoweredGait],
+) -> None:
+    """Fill row ``j`` of the ``listed`` arrays (``LISTED_VARIABLES``): the ``kept`` gait,
+    then the distinct ``others`` in the one order of gaits, at most ``LISTED_GAITS``."""
+    distinct: list[PoweredGait] = [kept]
+    for g in sorted(others, key=gait_order):
+        if all(not _same_gait(g, d) for d in distinct):
+            distinct.append(g)
+    for n, g in enumerate(distinct[:LISTED_GAITS]):
+        row = _row(g)
+        for k in LISTED_VARIABLES:
+            listed[k][j, n] = row[k]

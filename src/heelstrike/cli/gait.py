@@ -188,14 +188,23 @@ def hanging_text(links: Sequence[str]) -> str:
             f"of mass below {'its' if one else 'their'} joint)")
 
 
+def _first_gait_text(gaits: Sequence[Any]) -> str:
+    """What the first of ``gaits`` is in the one order of gaits (cheapest stable first,
+    :func:`~heelstrike.analysis._gait_order.gait_order`)."""
+    first = gaits[0]
+    if any(g.actuator_work != 0.0 for g in gaits):  # a torque law: the gaits cost work
+        return ("the stable one needing the least actuator work" if first.stable else
+                "none is stable: the one needing the least actuator work")
+    return "the most attracting stable one" if first.stable else "the least unstable"
+
+
 def _print_gait_list(gaits: Sequence[Any], hanging: Sequence[Sequence[str]] = ()) -> None:
     """With several gaits found, one line each (the first is shown in detail); ``hanging``:
     per gait, its links described upright that hang (:func:`hanging_links`)."""
     if len(gaits) < 2:
         return
-    first = gaits[0]
     print(f"{len(gaits)} period-one gaits found (the first, "
-          f"{'the most attracting stable one' if first.stable else 'the least unstable'}, "
+          f"{_first_gait_text(gaits)}, "
           "is shown in detail):")
     for i, c in enumerate(gaits):
         swings = (f", multi-swing: the legs cross {c.leg_crossings} times, the swing foot "

@@ -14,7 +14,8 @@ from typing import Any, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike
 
-__all__ = ["first_gait", "gait_order", "is_stable", "ordered_gaits", "spectral_radius"]
+__all__ = ["first_gait", "gait_order", "is_stable", "ordered_gaits", "spectral_radius",
+           "stable_radius"]
 
 _G = TypeVar("_G")
 
@@ -35,10 +36,17 @@ def spectral_radius(multipliers: ArrayLike) -> float:
     return float(np.max(m)) if m.size else float("nan")
 
 
+def stable_radius(radius: Any) -> Any:
+    """Whether a gait of this spectral radius is stable: ``radius < 1``, every Floquet
+    multiplier strictly inside the unit circle (False for NaN: no gait). Elementwise for
+    arrays (e.g. the ``spectral_radius`` of a map dataset)."""
+    return radius < 1.0
+
+
 def is_stable(multipliers: ArrayLike) -> bool:
-    """Whether a gait with these Floquet multipliers is stable: all strictly inside the unit
-    circle, ``spectral_radius(multipliers) < 1`` (False for none, or a non-finite one)."""
-    return bool(spectral_radius(multipliers) < 1.0)
+    """Whether a gait with these Floquet multipliers is stable (:func:`stable_radius` of their
+    :func:`spectral_radius`; False for none, or a non-finite one)."""
+    return bool(stable_radius(spectral_radius(multipliers)))
 
 
 def gait_order(gait: Any) -> tuple[bool, bool, float, float]:
@@ -58,7 +66,7 @@ def gait_order(gait: Any) -> tuple[bool, bool, float, float]:
         then the most attracting (passive gaits all need no work).
     """
     rho = spectral_radius(gait.multipliers)
-    return (bool(gait.multi_swing), not rho < 1.0, float(gait.actuator_work),
+    return (bool(gait.multi_swing), not stable_radius(rho), float(gait.actuator_work),
             rho if np.isfinite(rho) else float("inf"))
 
 

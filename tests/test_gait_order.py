@@ -152,6 +152,10 @@ def test_the_one_order_of_gaits() -> None:
     assert [g.multipliers[0] for g in ordered_gaits(passive)] == [0.3, 0.8, 1.1]
     assert is_stable([0.999]) and not is_stable([1.0]) and not is_stable([np.nan])
     assert gait_order(_fake(1.0, 1.0))[1] is True  # |m| = 1 is not stable
+    # McGeer's wheel: stability undecided (a neutral family), the cheapest first
+    wheel = [_fake(0.2, 0.999), _fake(0.0, 1.0 + 1e-9)]
+    assert [g.actuator_work for g in ordered_gaits(wheel, undecided=True)] == [0.0, 0.2]
+    assert [g.actuator_work for g in ordered_gaits(wheel)] == [0.2, 0.0]
 
 
 def test_gait_and_map_rank_passive_gaits_by_the_same_order() -> None:

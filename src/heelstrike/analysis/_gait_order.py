@@ -49,7 +49,7 @@ def is_stable(multipliers: ArrayLike) -> bool:
     return bool(stable_radius(spectral_radius(multipliers)))
 
 
-def gait_order(gait: Any) -> tuple[bool, bool, float, float]:
+def gait_order(gait: Any, *, undecided: bool = False) -> tuple[bool, bool, float, float]:
     """Sort key of a gait: cheapest stable first.
 
     Parameters
@@ -57,6 +57,10 @@ def gait_order(gait: Any) -> tuple[bool, bool, float, float]:
     gait : LimitCycle or PoweredGait
         Any gait with ``multipliers``, ``actuator_work`` (J per step; 0 for a passive gait)
         and ``multi_swing``.
+    undecided : bool
+        The gaits' stability is undecided (McGeer's wheel, ``R = l``: its gaits at one target
+        form a neutral family, a multiplier of 1 to round-off): it is not part of the key, the
+        cheapest comes first.
 
     Returns
     -------
@@ -66,27 +70,30 @@ def gait_order(gait: Any) -> tuple[bool, bool, float, float]:
         then the most attracting (passive gaits all need no work).
     """
     rho = spectral_radius(gait.multipliers)
-    return (bool(gait.multi_swing), not stable_radius(rho), float(gait.actuator_work),
+    unstable = False if undecided else not stable_radius(rho)
+    return (bool(gait.multi_swing), unstable, float(gait.actuator_work),
             rho if np.isfinite(rho) else float("inf"))
 
 
-def ordered_gaits(gaits: Iterable[_G]) -> list[_G]:
+def ordered_gaits(gaits: Iterable[_G], *, undecided: bool = False) -> list[_G]:
     """The gaits in the one reporting order (:func:`gait_order`): the first is the one a
     command reports, the cheapest stable gait where there is one.
 
     Parameters
     ----------
     gaits : iterable of LimitCycle or PoweredGait
+    undecided : bool
+        Their stability is undecided (McGeer's wheel): cheapest first (:func:`gait_order`).
 
     Returns
     -------
     list
     """
-    return sorted(gaits, key=gait_order)
+    return sorted(gaits, key=lambda g: gait_order(g, undecided=undecided))
 
 
-def first_gait(gaits: Sequence[_G]) -> _G:
+def first_gait(gaits: Sequence[_G], *, undecided: bool = False) -> _G:
     """The gait a command reports among ``gaits`` (non-empty): ``ordered_gaits(gaits)[0]``."""
     if not gaits:
         raise ValueError("no gaits to choose from")
-    return min(gaits, key=gait_order)
+    return min(gaits, key=lambda g: gait_order(g, undecided=undecided))

@@ -43,7 +43,7 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._typing import FloatArray
-from heelstrike.analysis._gait_order import gait_order
+from heelstrike.analysis._gait_order import gait_order, ordered_gaits
 from heelstrike.analysis._memory import require_memory
 from heelstrike.analysis.heel_strike import heel_strike_study
 from heelstrike.analysis.powered import (
@@ -524,7 +524,9 @@ def _study_row(
             # the one order of gaits: the cheapest stable ordinary step, else the cheapest
             # unstable one; a multi-swing gait (its swing foot through the ground away from
             # mid-stance: QA sweep 6) only where no other meets the target
-            best = min(range(len(gaits)), key=lambda k: gait_order(gaits[k]))
+            # (McGeer's wheel: stability undecided, the cheapest)
+            wheel = bool(_seed_walker(base, model, r).is_wheel)
+            best = min(range(len(gaits)), key=lambda k: gait_order(gaits[k], undecided=wheel))
             g = gaits[best]
             if g.residual > float(kwargs.get("tol", 1e-9)):
                 # a fresh start's looser tolerance: polish it so that its energy book closes
@@ -539,7 +541,7 @@ def _study_row(
             n_found[j] = _count_distinct(gaits)
             for k, val in _row(g).items():
                 out[k][j] = val
-            _list_gaits(listed, j, g, [gaits[k] for k in range(len(gaits)) if k != best])
+            _list_gaits(listed, j, g, [gaits[k] for k in range(len(gaits)) if k != best], wheel)
             found[(i, j)] = np.append(g.fixed_point, g.parameter)
             n = min(found[(i, j)].size, _SEED_WIDTH)
             seed[j, :n], seed_size[j] = found[(i, j)][:n], n
@@ -551,11 +553,13 @@ def _study_row(
 
 def _list_gaits(
     listed: dict[str, FloatArray], j: int, kept: PoweredGait, others: list[PoweredGait],
+    undecided: bool,
 ) -> None:
     """Fill row ``j`` of the ``listed`` arrays (``LISTED_VARIABLES``): the ``kept`` gait,
-    then the distinct ``others`` in the one order of gaits, at most ``LISTED_GAITS``."""
+    then the distinct ``others`` in the one order of gaits (``undecided``: McGeer's wheel,
+    cheapest first), at most ``LISTED_GAITS``."""
     distinct: list[PoweredGait] = [kept]
-    for g in sorted(others, key=gait_order):
+    for g in ordered_gaits(others, undecided=undecided):
         if all(not _same_gait(g, d) for d in distinct):
             distinct.append(g)
     for n, g in enumerate(distinct[:LISTED_GAITS]):

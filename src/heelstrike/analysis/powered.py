@@ -68,7 +68,7 @@ from numpy.typing import ArrayLike, NDArray
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
 from heelstrike._units import UNITS
-from heelstrike.analysis._gait_order import first_gait, gait_order, is_stable
+from heelstrike.analysis._gait_order import first_gait, is_stable, ordered_gaits
 from heelstrike.analysis.heel_strike import loss_per_metre
 from heelstrike.analysis.limit_cycle import leg_crossings
 from heelstrike.analysis.newton import floquet_multipliers
@@ -2258,7 +2258,8 @@ def powered_gaits(
     if not polished:
         assert err is not None
         raise err
-    return sorted(polished, key=gait_order)
+    wheel = bool(_seed_walker(base, model, float(radius)).is_wheel)  # stability undecided
+    return ordered_gaits(polished, undecided=wheel)
 
 
 #: Foot radius (fraction of the leg length) above which :func:`powered_gaits` also continues the
@@ -2344,7 +2345,7 @@ def _gaits_from_anchor_targets(
     return found
 
 
-def preferred_gait(gaits: Sequence[PoweredGait]) -> PoweredGait:
+def preferred_gait(gaits: Sequence[PoweredGait], *, undecided: bool = False) -> PoweredGait:
     """The gait ``heelstrike powered`` and ``study cost`` report among several meeting one
     target: the first in the one order of gaits
     (:func:`~heelstrike.analysis._gait_order.gait_order`), the stable one needing the least
@@ -2359,8 +2360,11 @@ def preferred_gait(gaits: Sequence[PoweredGait]) -> PoweredGait:
     ----------
     gaits : sequence of PoweredGait
         Non-empty, e.g. :func:`powered_gaits`.
+    undecided : bool
+        Their stability is undecided (McGeer's wheel, :data:`WHEEL_FAMILY`): the one needing
+        the least work.
     """
-    return first_gait(gaits)
+    return first_gait(gaits, undecided=undecided)
 
 
 def _same_gait(a: PoweredGait, b: PoweredGait, tol: float = 1e-6) -> bool:

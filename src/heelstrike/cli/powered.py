@@ -170,8 +170,7 @@ def _run_powered(args: argparse.Namespace) -> int:
             f"{declared_note} at R = {radius:g} m: {exc}{hint}"
         ) from exc
     # McGeer's wheel: every gait's stability is undecided (WHEEL_FAMILY), show the cheapest
-    gait = min(gaits, key=lambda g: g.actuator_work) if walker.is_wheel else \
-        preferred_gait(gaits)
+    gait = preferred_gait(gaits, undecided=walker.is_wheel)
     _note_wheel(walker)
     others = [g for g in gaits if g is not gait]
     d = {**gait.to_dict(), "target_speed": speed, "target_step_length": step_length,

@@ -389,7 +389,8 @@ def _run_study(args: argparse.Namespace) -> int:
     print(f"gaits: the cheapest stable one found at each point (else the cheapest unstable "
           f"one, marked), by continuation from neighbours or by fresh searches from several "
           f"seeds ({fresh} point(s) came from a fresh search; "
-          f"up to {int(ds['gaits_found'].max())} distinct gaits met at one point)")
+          f"up to {int(ds['gaits_found'].max())} distinct gaits met at one point; every gait "
+          f"found is listed in {nc.name}: gait_actuator_work, gait_stable over 'gait')")
     print(f"{found} of {ds['cost_of_transport'].size} gaits found", file=sys.stderr)
     from heelstrike.analysis.powered import WHEEL_FAMILY
 

@@ -2218,7 +2218,7 @@ def powered_gaits(
     Returns
     -------
     list of PoweredGait
-        Distinct gaits (fixed point and parameter differing by more than 1e-6): ordinary steps
+        Distinct gaits (fixed point and parameter differing by more than 1e-4): ordinary steps
         first, stable before unstable, each group by actuator work (a multi-swing gait last).
 
     Raises
@@ -2367,8 +2367,10 @@ def preferred_gait(gaits: Sequence[PoweredGait], *, undecided: bool = False) -> 
     return first_gait(gaits, undecided=undecided)
 
 
-def _same_gait(a: PoweredGait, b: PoweredGait, tol: float = 1e-6) -> bool:
-    """Whether two gaits are one (fixed point and parameter within ``tol``)."""
+def _same_gait(a: PoweredGait, b: PoweredGait, tol: float = 1e-4) -> bool:
+    """Whether two gaits are one (fixed point and parameter within ``tol``: the study's fresh
+    starts converge to 1e-7 only, and met one gait 1.1e-6 from its polished self, which was
+    counted twice at 1e-6; the distinct gaits of issue 32 lie 1e-2 apart)."""
     xa, xb = np.append(a.fixed_point, a.parameter), np.append(b.fixed_point, b.parameter)
     return float(np.linalg.norm(xa - xb)) <= tol
 

@@ -9,7 +9,7 @@ state, then the next impact angles and step durations are recorded, with the com
 (:func:`heelstrike.dynamics.compiled.ensemble_walk`); the period-one branch is continued by
 Newton's method to mark where it loses stability
 (:func:`heelstrike.analysis.limit_cycle.continue_limit_cycle`). A small grid keeps this quick;
-``heelstrike bifurcation --slope-range 0.5deg:6deg --out bif`` draws a finer one.
+``heelstrike bifurcation --slope 0.5deg:6deg --out bif`` draws a finer one.
 """
 
 import numpy as np

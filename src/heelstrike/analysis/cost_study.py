@@ -8,10 +8,13 @@ gait, eq. 14-15 of Font & Kövecses 2008), ``eta = T_c / L`` (eq. 16) and the co
 gaits), so the grid should be ordered and reasonably fine. Several gaits can share a target
 (e.g. push-off gaits with a long, cheap and a short, costly stance at the same speed), and
 continuation can follow a costly branch (it did near McGeer's wheel, ``R = l``): at every grid
-point fresh searches from several seeds are run as well, and the cheapest gait found is kept
-(``branch`` says whether it came from continuation or a fresh search, ``gaits_found`` how many
-distinct gaits were met), an ordinary step before a multi-swing gait (``leg_crossings``: its
-swing foot passes through the ground away from mid-stance, outside the scuffing convention).
+point fresh searches from several seeds are run as well, and a deflated search beside the gaits
+found (a stable gait 1 % from an unstable one, issue 32). The gait kept is the first in the one
+order of gaits (:func:`~heelstrike.analysis._gait_order.gait_order`): the cheapest stable gait,
+else the cheapest unstable one (``stable`` says which; ``branch`` whether it came from
+continuation or a fresh search, ``gaits_found`` how many distinct gaits were met), an ordinary
+step before a multi-swing gait (``leg_crossings``: its swing foot passes through the ground
+away from mid-stance, outside the scuffing convention).
 
 The paper's own measure is evaluated alongside: ``eta`` of the heel strike alone with the
 *imposed* pre-impact velocities of the paper (``q3_dot = 1 rad/s``, ``q4_dot = 0``) at the
@@ -40,6 +43,7 @@ import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._typing import FloatArray
+from heelstrike.analysis._gait_order import gait_order, ordered_gaits
 from heelstrike.analysis._memory import require_budget
 from heelstrike.analysis.heel_strike import heel_strike_study
 from heelstrike.analysis.powered import (
@@ -48,6 +52,8 @@ from heelstrike.analysis.powered import (
     PoweredGaitNotFoundError,
     _count_distinct,
     _fresh_gaits,
+    _other_gaits,
+    _same_gait,
     _seed_walker,
     _solver,
     actuation_family,
@@ -195,7 +201,10 @@ def cost_study(
     xarray.Dataset
         Dimensions ``actuation`` x ``radius`` x ``step_length`` (or ``speed``) with the
         :data:`GAIT_VARIABLES` but the target itself (NaN where no gait was found),
-        ``found`` (1 where a gait was found, else 0), ``failure`` messages, ``backend`` (per
+        ``found`` (1 where a gait was found, else 0), every gait found listed over one more
+        dimension ``gait`` (``LISTED_VARIABLES`` as ``gait_<name>``, in the one order of
+        gaits: the kept one first, unstable ones marked by ``gait_stable`` 0), ``failure``
+        messages, ``backend`` (per
         actuation and radius: the step simulator that ran, ``"compiled"`` or ``"scipy"``), and
         the paper's impact-only ``eta_paper`` and ``collision_loss_paper`` over ``radius`` x
         target (only for the compass gait and ``target="step_length"``).
@@ -236,6 +245,7 @@ def cost_study(
     data = {k: np.full(shape, np.nan) for k in GAIT_VARIABLES}
     branch = np.full(shape, np.nan)
     n_found = np.zeros(shape, dtype=np.int64)
+    listed = {k: np.full((*shape, LISTED_GAITS), np.nan) for k in LISTED_VARIABLES}
     failure = np.full(shape, "", dtype=object)
     total = shape[0] * shape[1] * shape[2]
     bar: Any = None
@@ -261,6 +271,8 @@ def cost_study(
             failure[a, i] = [_decode(b) for b in row["failure"]]
             branch[a, i] = row["branch"]
             n_found[a, i] = row["gaits_found"]
+            for k in LISTED_VARIABLES:
+                listed[k][a, i] = row[f"gait_{k}"]
             previous = tuple(tuple(map(float, x[:n])) for x, n in
                              zip(row["seed"], row["seed_size"], strict=True))
             if bar is not None:
@@ -283,10 +295,12 @@ def cost_study(
         "units": "1", "long_name": "1 where a periodic gait was found, 0 where none"})
     ds["failure"] = (dims, failure.astype(str))
     ds["branch"] = (dims, branch, {
-        "units": "1", "long_name": "how the kept (cheapest) gait was found",
+        "units": "1", "long_name": "how the kept (cheapest stable) gait was found",
         "flag_values": "0 1", "flag_meanings": "continuation fresh_search"})
     ds["gaits_found"] = (dims, n_found, {
         "units": "1", "long_name": "distinct periodic gaits found meeting the target"})
+    for k, (unit, meaning) in LISTED_VARIABLES.items():
+        ds[f"gait_{k}"] = ((*dims, "gait"), listed[k], {"units": unit, "long_name": meaning})
     ds["backend"] = (("actuation", "radius"), np.asarray(backends, dtype=str), {
         "long_name": "step simulator of the gaits (compiled or scipy)"})
     ds["parameter_unit"] = (("actuation",), np.asarray(
@@ -369,13 +383,27 @@ def _model_key(model: Any) -> str:
 #: How each entry of the study was chosen (also on stdout and in the figures).
 BRANCH_NOTE = (
     "Several periodic gaits can meet one target; each entry is the cheapest (least actuator "
-    "work) of all gaits found there: continuation from the neighbouring grid points and fresh "
-    "searches from several seeds ('branch': 0 continuation, 1 fresh search; 'gaits_found'); "
-    "a gait whose legs cross more than once a step only where no other was found "
-    "('leg_crossings')."
+    "work) stable gait of all gaits found there, else, where none is stable, the cheapest "
+    "unstable one ('stable' 0): continuation from the neighbouring grid points, fresh "
+    "searches from several seeds and deflated searches beside the gaits found ('branch': 0 "
+    "continuation, 1 fresh search; 'gaits_found'); a gait whose legs cross more than once a "
+    "step only where no other was found ('leg_crossings')."
 )
 
 _SEED_WIDTH = 16  # longest continuation seed (fixed point and actuation parameter) stored
+
+#: Gaits listed per grid point (dimension ``gait``), in the one order of gaits: the kept one
+#: first, then the others found there.
+LISTED_GAITS = 8
+
+#: What the study lists of every gait found at a grid point (``gait_<name>``) and its units.
+LISTED_VARIABLES: dict[str, tuple[str, str]] = {
+    "actuator_work": ("J", "actuator work per step of each gait found, in the one order of "
+                           "gaits (the kept one first; NaN past the last)"),
+    "spectral_radius": ("1", "largest Floquet multiplier modulus of each gait found"),
+    "stable": ("1", "1 if that gait is stable, 0 if unstable, NaN past the last"),
+    "leg_crossings": ("1", "times the swing leg crosses the stance leg in a step, each gait"),
+}
 _FAILURE_BYTES = 512  # failure messages are stored as UTF-8, NUL-padded, truncated
 
 
@@ -413,7 +441,7 @@ def _run_row(
     ds = sweep(func, {"target": targets}, chunks=targets.size, store=store, scheduler="sync",
                progress=False, units={"target": "m" if kind == "step_length" else "m s-1"}
                | {k: "1" for k in (*GAIT_VARIABLES, "failure", "seed", "seed_size", "branch",
-                                   "gaits_found")})
+                                   "gaits_found", *(f"gait_{k}" for k in LISTED_VARIABLES))})
     return {str(k): np.asarray(ds[k].values) for k in ds.data_vars}
 
 
@@ -459,6 +487,7 @@ def _study_row(
     seed_size = np.zeros(T.size, dtype=np.int64)
     branch = np.full(T.size, np.nan)
     n_found = np.zeros(T.size, dtype=np.int64)
+    listed = {k: np.full((T.size, LISTED_GAITS), np.nan) for k in LISTED_VARIABLES}
     for j, v in enumerate(T):
         speed = float(v) if kind == "speed" else None
         length = float(v) if kind == "step_length" else None
@@ -486,14 +515,19 @@ def _study_row(
         fresh, exc_fresh = _fresh_gaits(solve, r, _seed_walker(base, model, r), family,
                                         speed, length, kwargs)
         gaits += fresh
+        # and the gaits beside those (issue 32: a stable gait 1 % from an unstable one)
+        gaits += _other_gaits(solve, r, _seed_walker(base, model, r), gaits, speed, length,
+                              kwargs)
         if not gaits and exc_fresh is not None:
             msg = str(exc_fresh).encode()[:_FAILURE_BYTES]
             failure[j, :len(msg)] = np.frombuffer(msg, dtype=np.uint8)
         if gaits:
-            # the cheapest ordinary step; a multi-swing gait (its swing foot through the
-            # ground away from mid-stance: QA sweep 6) only where no other meets the target
-            best = min(range(len(gaits)),
-                       key=lambda k: (gaits[k].multi_swing, gaits[k].actuator_work))
+            # the one order of gaits: the cheapest stable ordinary step, else the cheapest
+            # unstable one; a multi-swing gait (its swing foot through the ground away from
+            # mid-stance: QA sweep 6) only where no other meets the target
+            # (McGeer's wheel: stability undecided, the cheapest)
+            wheel = bool(_seed_walker(base, model, r).is_wheel)
+            best = min(range(len(gaits)), key=lambda k: gait_order(gaits[k], undecided=wheel))
             g = gaits[best]
             if g.residual > float(kwargs.get("tol", 1e-9)):
                 # a fresh start's looser tolerance: polish it so that its energy book closes
@@ -508,9 +542,28 @@ def _study_row(
             n_found[j] = _count_distinct(gaits)
             for k, val in _row(g).items():
                 out[k][j] = val
+            _list_gaits(listed, j, g, [gaits[k] for k in range(len(gaits)) if k != best], wheel)
             found[(i, j)] = np.append(g.fixed_point, g.parameter)
             n = min(found[(i, j)].size, _SEED_WIDTH)
             seed[j, :n], seed_size[j] = found[(i, j)][:n], n
     rows: dict[str, NDArray[Any]] = dict(out)
     return rows | {"failure": failure, "seed": seed, "seed_size": seed_size,
-                   "branch": branch, "gaits_found": n_found}
+                   "branch": branch, "gaits_found": n_found} | {
+        f"gait_{k}": val for k, val in listed.items()}
+
+
+def _list_gaits(
+    listed: dict[str, FloatArray], j: int, kept: PoweredGait, others: list[PoweredGait],
+    undecided: bool,
+) -> None:
+    """Fill row ``j`` of the ``listed`` arrays (``LISTED_VARIABLES``): the ``kept`` gait,
+    then the distinct ``others`` in the one order of gaits (``undecided``: McGeer's wheel,
+    cheapest first), at most ``LISTED_GAITS``."""
+    distinct: list[PoweredGait] = [kept]
+    for g in ordered_gaits(others, undecided=undecided):
+        if all(not _same_gait(g, d) for d in distinct):
+            distinct.append(g)
+    for n, g in enumerate(distinct[:LISTED_GAITS]):
+        row = _row(g)
+        for k in LISTED_VARIABLES:
+            listed[k][j, n] = row[k]

@@ -37,6 +37,7 @@ from heelstrike.analysis._continuation import (
     follow_both_ways,
 )
 from heelstrike.analysis._defaults import BIFURCATION_RECORD, BIFURCATION_TRANSIENT
+from heelstrike.analysis._gait_order import first_gait, stable_radius
 from heelstrike.analysis.limit_cycle import (
     GaitNotFoundError,
     _smallest_real,
@@ -295,7 +296,7 @@ def _anchor_slope(slopes: FloatArray) -> float:
 def _add_derived(ds: xr.Dataset) -> None:
     """``speed``, ``stable`` and ``gait_found`` of a map dataset, from its gait variables."""
     ds["speed"] = (ds["step_length"] / ds["period"]).assign_attrs(units="m s-1")
-    ds["stable"] = (ds["spectral_radius"] < 1.0).assign_attrs(
+    ds["stable"] = stable_radius(ds["spectral_radius"]).assign_attrs(
         long_name="a stable gait was found: all Floquet multipliers inside the unit circle "
                   "(false also where no gait was found: see gait_found)", units="1")
     ds["smallest_real_multiplier"].attrs["long_name"] = (
@@ -1081,7 +1082,7 @@ def _diagram_and_branch(
                 break
         if not found:
             raise GaitNotFoundError(f"no period-one gait at slope {slope:g} rad")
-        return min(found, key=lambda c: (not c.stable, c.spectral_radius)).fixed_point
+        return first_gait(found).fixed_point
 
     k0 = int(np.searchsorted(slopes, onset))  # the first slope of the grid with a gait
     diagram = bifurcation_diagram(walker, slopes[k0:],

@@ -23,6 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
 from heelstrike.analysis._defaults import BIFURCATION_RECORD, BIFURCATION_TRANSIENT
+from heelstrike.analysis._gait_order import is_stable
 from heelstrike.analysis.heel_strike import loss_per_metre
 from heelstrike.analysis.newton import floquet_multipliers
 from heelstrike.dynamics.backends import (
@@ -649,10 +650,13 @@ def _newton(
     return sol.x[0], float(sol.residual_norm[0]), int(sol.iterations[0])
 
 
-def _preference(c: LimitCycle) -> tuple[bool, int, float]:
-    """Sort key: ordinary steps before multi-swing gaits (:attr:`LimitCycle.multi_swing`),
-    then stable gaits first, most attracting (smallest spectral radius) first."""
-    return (c.multi_swing, 0 if c.stable else 1, c.spectral_radius)
+def _preference(c: LimitCycle) -> tuple[bool, bool, float, float]:
+    """Sort key: the one order of gaits (:func:`~heelstrike.analysis._gait_order.gait_order`):
+    ordinary steps before multi-swing gaits (:attr:`LimitCycle.multi_swing`), stable gaits
+    first, the least actuator work (none for a passive gait), the most attracting first."""
+    from heelstrike.analysis._gait_order import gait_order
+
+    return gait_order(c)
 
 
 def find_limit_cycles(
@@ -923,7 +927,7 @@ def _cycle(
         fixed_point=np.array(z, dtype=float), section_names=pmap.walker.section_names, q=q,
         q_dot=q_dot, period=float(period), step_length=float(step_length),
         speed=float(step_length) / float(period), multipliers=mult,
-        stable=bool(np.all(np.abs(mult) < 1.0)), collision_loss=float(collision_loss),
+        stable=is_stable(mult), collision_loss=float(collision_loss),
         eta=float(loss_per_metre(collision_loss, step_length)), slope=float(pmap.slope),
         iterations=int(iterations), walk=walk, leg_crossings=leg_crossings,
         **{k: float(v) for k, v in values.items()},

@@ -67,6 +67,7 @@ from numpy.typing import ArrayLike, NDArray
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
 from heelstrike._units import UNITS
+from heelstrike.analysis._gait_order import first_gait, is_stable, ordered_gaits
 from heelstrike.analysis.heel_strike import loss_per_metre
 from heelstrike.analysis.limit_cycle import leg_crossings
 from heelstrike.analysis.newton import floquet_multipliers
@@ -620,6 +621,19 @@ SEARCH_FD_STEP = 3e-4
 
 #: Map iterations per seed candidate (see :func:`_seeds`).
 SEED_STEPS = 12
+
+#: Relative offset (of each unknown, times ``max(1, |x_i|)``) of the starts of the deflated
+#: search for another gait near the gaits found (:func:`_deflated_gaits`): from 1 % offsets
+#: the other gaits of issue 32 were reached (a stable 1.356 J gait beside an unstable 1.370 J
+#: one at R = 0.15 m, L = 0.6 m; an unstable gait 21 % cheaper beside the stable one of a
+#: walker with legs of 0.1 kg at 0.5 m/s), from 3 % offsets only one of them, from 10 % none.
+DEFLATION_OFFSET = 0.01
+
+#: Newton iterations of each deflated start (:func:`_deflated_gaits`): the starts that reached
+#: the gaits of issue 32 converged in 8; a start that does not converge costs ``2 n + 1``
+#: steps an iteration (most of the search's added cost: the default compass ``study cost``
+#: took 23 s with the deflated search, 13 s without, on a shared 2-core machine).
+DEFLATION_ITERATIONS = 10
 
 #: Slopes (rad) of the passive gaits the slope homotopy starts from, tried in order (about 2.9,
 #: 4.0 and 2.0 deg; see :func:`_slope_homotopy`): a kneed walker's passive gaits exist only on
@@ -1216,6 +1230,7 @@ def find_powered_gait(
     simulator: Callable[..., WalkResult] | None = None,
     seed_sections: tuple[tuple[float, ...], ...] | None = None,
     passive_gait: Callable[[float], ArrayLike] | None = None,
+    other_than: Sequence[ArrayLike] | None = None,
 ) -> PoweredGait:
     """Find a period-one level-ground gait with a given speed or step length.
 
@@ -1282,6 +1297,12 @@ def find_powered_gait(
         ``PoweredGaitNotFoundError``) if there is none. When no seed gait is found on level
         ground, the search starts a homotopy in the slope from such a gait on one of
         :data:`HOMOTOPY_SLOPES` (see :func:`_slope_homotopy`). None (default): no homotopy.
+    other_than : sequence of array_like, optional
+        Gaits already found at this target, each ``(*fixed_point, parameter)``: the search
+        looks for another one near them instead (:func:`_deflated_gaits`: deflated Newton
+        from small offsets of each, the known gaits divided out of the residual; no seed
+        search, no continuation) and raises :class:`PoweredGaitNotFoundError` if it finds
+        none. :func:`powered_gaits` and the cost study use it to list every gait.
 
     Returns
     -------
@@ -1339,6 +1360,9 @@ def find_powered_gait(
                                    else seed_sections),
                     passive_gait=passive_gait)
     try:
+        if other_than is not None:
+            return _find_other(prob, value, [np.asarray(x, dtype=float) for x in other_than],
+                               tol, max_iter, fd_step)
         return _find(prob, target, value, guess, tol, max_iter, fd_step, max_continuation,
                      fallback)
     finally:
@@ -1526,6 +1550,83 @@ def _find(
         raise ended from exc
 
 
+def _find_other(
+    prob: _Problem, value: float, known: list[FloatArray], tol: float, max_iter: int,
+    fd_step: float,
+) -> PoweredGait:
+    """The ``other_than`` search of :func:`find_powered_gait`: a gait at the target ``value``
+    other than the ``known`` ones (each shape (d + 1,)), by :func:`_deflated_gaits` on the
+    search map, then polished and measured on the accurate map as :func:`_find` does."""
+    search = prob if prob.rtol >= SEARCH_TOLERANCE else prob.at_tolerance(SEARCH_TOLERANCE)
+    s_tol, s_h = max(tol, SEARCH_RESIDUAL), max(fd_step, SEARCH_FD_STEP)
+    for x in _deflated_gaits(search, known, value, s_tol, s_h):
+        try:  # the undeflated Jacobian, for the polish
+            x, _, its, J = _newton(search, x, value, s_tol, max_iter, s_h, forward=True,
+                                   accept=10.0 * s_tol)
+            if min(float(np.linalg.norm(x - k)) for k in known) <= 1e-6:
+                continue
+            x, res, it = _polish(prob, x, value, tol, J, max_iter, fd_step)
+        except SearchLimitError:
+            raise
+        except PoweredGaitNotFoundError:
+            continue
+        gait = _characterise(prob, x, res, its + it, fd_step)
+        return _books_refined(prob, gait, x, value, tol, J, max_iter, fd_step)
+    raise PoweredGaitNotFoundError(
+        f"no other {prob.family.name} gait found near the {len(known)} known one(s) (deflated "
+        f"Newton from offsets of {DEFLATION_OFFSET:g} of each)")
+
+
+def _deflated_gaits(
+    prob: _Problem, known: list[FloatArray], value: float, tol: float, h: float,
+) -> list[FloatArray]:
+    """Other roots of the augmented residual ``F`` near the ``known`` ones, by deflation.
+
+    Newton (central differences, :data:`DEFLATION_ITERATIONS` iterations) solves
+    ``G(x) = F(x) prod_k (1 / |x - x_k|^2 + 1)`` (Farrell, Birkisson and Funke, SIAM J. Sci.
+    Comput. 37, 2015): the known roots ``x_k`` are divided out, so Newton cannot return to
+    them, and ``|F| <= |G|`` elsewhere, so a root of ``G`` is one of ``F``. It starts from
+    every known root offset by ``+-`` :data:`DEFLATION_OFFSET` along each unknown (times
+    ``max(1, |x_i|)``), all starts in one batch. Near an unstable gait a stable one can lie
+    1 % away (and the converse): the attractor seeds and the continuation of :func:`_find`
+    meet only one of them (issue 32).
+
+    Returns
+    -------
+    list of ndarray, shape (d + 1,)
+        The roots found (``|F| <= tol``), distinct, nearest to their start first.
+    """
+    from heelstrike.analysis.newton import newton_solve
+
+    K = np.asarray(known, dtype=float)
+    lower = prob.family.lower
+
+    def deflated(X: FloatArray) -> FloatArray:
+        F = np.stack([prob.residual(x, value) for x in X])
+        d2 = np.sum((X[:, None, :] - K[None, :, :]) ** 2, axis=2)
+        with np.errstate(divide="ignore"):
+            factor = np.prod(1.0 / d2 + 1.0, axis=1)
+        return F * factor[:, None]
+
+    def project(X: FloatArray) -> FloatArray:
+        Y = X.copy()
+        Y[:, -1] = np.maximum(Y[:, -1], lower)
+        return Y
+
+    n = K.shape[1]
+    offsets = np.concatenate([np.eye(n), -np.eye(n)]) * DEFLATION_OFFSET
+    starts = np.concatenate([k + offsets * np.maximum(1.0, np.abs(k)) for k in K])
+    sol = newton_solve(deflated, project(starts), tol=tol, max_iter=DEFLATION_ITERATIONS,
+                       fd_step=h, jacobian="central", jacobian_at_root=False,
+                       line_search="finite", min_step=1e-2, project=project)
+    found: list[FloatArray] = []
+    for i in np.argsort(np.linalg.norm(sol.x - starts, axis=1)):
+        x = sol.x[i]
+        if sol.converged[i] and all(np.linalg.norm(x - y) > 1e-6 for y in found):
+            found.append(x)
+    return found
+
+
 def _rescue(
     prob: _Problem, x0: FloatArray, value: float, tol: float, max_iter: int, h: float,
 ) -> tuple[FloatArray, int, FloatArray] | None:
@@ -1651,7 +1752,7 @@ def _characterise(
         cost_of_transport=rec.actuator_work / (m * g * L),
         eta=float(loss_per_metre(loss, L)),
         multipliers=mult,
-        stable=bool(np.all(np.abs(mult) < 1.0)),
+        stable=is_stable(mult),
         residual=residual,
         iterations=iterations,
         trailing_foot_lift_velocity=rec.trailing_normal_velocity,
@@ -2088,10 +2189,13 @@ def powered_gaits(
     ``R = 0.99 l``. When none of these meets the target, the gaits at :data:`ANCHOR_FACTORS`
     times the target are continued to it (:func:`_gaits_from_anchor_targets`); the study does
     not do this (its grid's neighbours are its anchors; on the kneed walker's default grid the
-    anchors found nothing more, for twice the time). Several gaits can meet one target; the
-    first is the one the study keeps there, the ordinary step (legs crossing once) needing the
-    least actuator work (issue 11, item 8), stable or not. Each gait is polished to ``tol``
-    (default 1e-9).
+    anchors found nothing more, for twice the time). Then other gaits near those are looked
+    for by deflation (:func:`_other_gaits`), as the study does: a stable gait can lie 1 % away
+    from an unstable one that the seeds reach (issue 32). Several gaits can meet one target;
+    they are listed in the one order of gaits
+    (:func:`~heelstrike.analysis._gait_order.gait_order`), the first being the one the study
+    keeps there: the cheapest stable ordinary step (legs crossing once), else the cheapest
+    unstable one. Each gait is polished to ``tol`` (default 1e-9).
 
     Parameters
     ----------
@@ -2115,8 +2219,8 @@ def powered_gaits(
     Returns
     -------
     list of PoweredGait
-        Distinct gaits (fixed point and parameter differing by more than 1e-6), ordinary steps
-        first, each group by actuator work (a multi-swing gait last, as the study keeps it).
+        Distinct gaits (fixed point and parameter differing by more than 1e-4): ordinary steps
+        first, stable before unstable, each group by actuator work (a multi-swing gait last).
 
     Raises
     ------
@@ -2139,6 +2243,8 @@ def powered_gaits(
     if not gaits:
         assert err is not None
         raise err
+    gaits += _other_gaits(solve, float(radius), _seed_walker(base, model, float(radius)),
+                          gaits, speed, step_length, kwargs)
     tol = float(kwargs.get("tol", 1e-9))
     polished: list[PoweredGait] = []
     for g in gaits:
@@ -2153,7 +2259,8 @@ def powered_gaits(
     if not polished:
         assert err is not None
         raise err
-    return sorted(polished, key=lambda g: (g.multi_swing, g.actuator_work))
+    wheel = bool(_seed_walker(base, model, float(radius)).is_wheel)  # stability undecided
+    return ordered_gaits(polished, undecided=wheel)
 
 
 #: Foot radius (fraction of the leg length) above which :func:`powered_gaits` also continues the
@@ -2239,28 +2346,32 @@ def _gaits_from_anchor_targets(
     return found
 
 
-def preferred_gait(gaits: Sequence[PoweredGait]) -> PoweredGait:
-    """The gait ``heelstrike powered`` reports among several meeting one target: the stable one
-    needing the least actuator work, else (none stable) the one needing the least work;
-    among ordinary steps first, a multi-swing gait (:attr:`PoweredGait.multi_swing`, its swing
-    foot through the ground away from mid-stance) only where no other meets the target.
+def preferred_gait(gaits: Sequence[PoweredGait], *, undecided: bool = False) -> PoweredGait:
+    """The gait ``heelstrike powered`` and ``study cost`` report among several meeting one
+    target: the first in the one order of gaits
+    (:func:`~heelstrike.analysis._gait_order.gait_order`), the stable one needing the least
+    actuator work, else (none stable) the one needing the least work; among ordinary steps
+    first, a multi-swing gait (:attr:`PoweredGait.multi_swing`, its swing foot through the
+    ground away from mid-stance) only where no other meets the target.
 
     A stable gait is one the walker walks with this actuation alone (as ``gait`` prefers the
-    most attracting stable passive gait); ``study cost`` maps the cheapest, stable or not, and
-    marks the unstable ones (issue 11, item 8).
+    most attracting stable passive gait); the unstable ones are listed after it, marked.
 
     Parameters
     ----------
     gaits : sequence of PoweredGait
         Non-empty, e.g. :func:`powered_gaits`.
+    undecided : bool
+        Their stability is undecided (McGeer's wheel, :data:`WHEEL_FAMILY`): the one needing
+        the least work.
     """
-    if not gaits:
-        raise ValueError("no gaits to choose from")
-    return min(gaits, key=lambda g: (g.multi_swing, not g.stable, g.actuator_work))
+    return first_gait(gaits, undecided=undecided)
 
 
-def _same_gait(a: PoweredGait, b: PoweredGait, tol: float = 1e-6) -> bool:
-    """Whether two gaits are one (fixed point and parameter within ``tol``)."""
+def _same_gait(a: PoweredGait, b: PoweredGait, tol: float = 1e-4) -> bool:
+    """Whether two gaits are one (fixed point and parameter within ``tol``: the study's fresh
+    starts converge to 1e-7 only, and met one gait 1.1e-6 from its polished self, which was
+    counted twice at 1e-6; the distinct gaits of issue 32 lie 1e-2 apart)."""
     xa, xb = np.append(a.fixed_point, a.parameter), np.append(b.fixed_point, b.parameter)
     return float(np.linalg.norm(xa - xb)) <= tol
 
@@ -2353,6 +2464,32 @@ def _wheel_passive_gaits(
         if float(np.max(np.abs(residual(sol.x)))) < 1e-9:
             return [np.asarray(sol.x, dtype=float)]
     return []
+
+
+#: Rounds of :func:`_other_gaits`: each looks for one more gait beside all those found.
+OTHER_GAIT_ROUNDS = 3
+
+
+def _other_gaits(
+    solve: Callable[..., PoweredGait], r: float, w: Any, gaits: Sequence[PoweredGait],
+    speed: float | None, length: float | None, kwargs: dict[str, Any],
+) -> list[PoweredGait]:
+    """Gaits at radius ``r`` (m) beside the ``gaits`` found, by the deflated search of
+    :func:`find_powered_gait` (``other_than``), one more per round while one is found (at most
+    :data:`OTHER_GAIT_ROUNDS`); none for McGeer's wheel ``w`` (its gaits at one target form a
+    neutral family, :data:`WHEEL_FAMILY`)."""
+    if w.is_wheel or not gaits:
+        return []
+    known = [np.append(g.fixed_point, g.parameter) for g in gaits]
+    found: list[PoweredGait] = []
+    for _ in range(OTHER_GAIT_ROUNDS):
+        try:
+            g = solve(r, speed=speed, step_length=length, other_than=known, **kwargs)
+        except (PoweredGaitNotFoundError, ValueError):
+            break
+        found.append(g)
+        known.append(np.append(g.fixed_point, g.parameter))
+    return found
 
 
 def _count_distinct(gaits: Sequence[PoweredGait]) -> int:

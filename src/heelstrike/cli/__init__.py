@@ -24,6 +24,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import warnings
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -33,6 +34,7 @@ from heelstrike._version import __version__
 from heelstrike.cli import gait, paper, powered, robot
 from heelstrike.cli._common import (
     CliError,
+    DeprecatedOptionWarning,
     Parser,
     ShippedNameWarning,
     UnusedParameterWarning,
@@ -88,7 +90,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         # a cut search and a file named like a shipped walker are news, said as such
         # and so are cache fallbacks and numerical warnings: one line each, no source shown
         with warnings_as_notes(SearchTimeLimitWarning, ShippedNameWarning,
-                               UnusedParameterWarning, CacheWarning, RuntimeWarning):
+                               UnusedParameterWarning, CacheWarning, RuntimeWarning,
+                               DeprecatedOptionWarning):
+            for note in vars(args).get("deprecated", ()):  # old option names (DeprecatedAlias)
+                warnings.warn(note, DeprecatedOptionWarning, stacklevel=1)
             status = int(args.func(args))
     except CliError as exc:
         return fail(one_line(exc))

@@ -20,6 +20,9 @@ class CliError(Exception):
 
 class Parser(argparse.ArgumentParser):
     def __init__(self, *args: Any, **kwargs: Any) -> None:
+        # an option is given by its whole name: an abbreviation is an error, not a guess
+        # (``bifurcation --slope 3deg`` was read as ``--slope-range``: issue 32)
+        kwargs.setdefault("allow_abbrev", False)
         super().__init__(*args, **kwargs)
         # A negative value with a unit or a range (``--angle -20deg``, ``--slope -3deg``,
         # ``--radius -0.1:0.3:3``) is a value, not an option: argparse's own pattern only
@@ -444,6 +447,30 @@ class ShippedNameWarning(UserWarning):
 
 class UnusedParameterWarning(UserWarning):
     """A walker file declares parameters that no field uses (their values change nothing)."""
+
+
+class DeprecatedOptionWarning(UserWarning):
+    """An option was given by an old name that still works (:class:`DeprecatedAlias`)."""
+
+
+class DeprecatedAlias(argparse.Action):
+    """An old option name kept working: it stores its value where the new option does
+    (``dest``) and records a one-line note naming the new option (``new``), which ``main``
+    says as a :class:`DeprecatedOptionWarning` when the command succeeds."""
+
+    def __init__(self, option_strings: Sequence[str], dest: str, *, new: str,
+                 **kwargs: Any) -> None:
+        self.new = new
+        super().__init__(option_strings, dest, **kwargs)
+
+    def __call__(
+        self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+        values: Any, option_string: str | None = None,
+    ) -> None:
+        setattr(namespace, self.dest, values)
+        namespace.deprecated = [*vars(namespace).get("deprecated", ()),
+                                f"{option_string} is deprecated: it is now {self.new} "
+                                "(the same values)"]
 
 
 def run_with_store(store: str | None, compute: Callable[[], Any], out: str | None = None) -> Any:

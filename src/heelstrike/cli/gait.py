@@ -23,6 +23,7 @@ from heelstrike.analysis._memory import (
 )
 from heelstrike.cli._common import (
     CliError,
+    DeprecatedAlias,
     add_backend_option,
     add_model_options,
     add_store_option,
@@ -194,14 +195,23 @@ def hanging_text(links: Sequence[str]) -> str:
             f"of mass below {'its' if one else 'their'} joint)")
 
 
+def _first_gait_text(gaits: Sequence[Any]) -> str:
+    """What the first of ``gaits`` is in the one order of gaits (cheapest stable first,
+    :func:`~heelstrike.analysis._gait_order.gait_order`)."""
+    first = gaits[0]
+    if any(g.actuator_work != 0.0 for g in gaits):  # a torque law: the gaits cost work
+        return ("the stable one needing the least actuator work" if first.stable else
+                "none is stable: the one needing the least actuator work")
+    return "the most attracting stable one" if first.stable else "the least unstable"
+
+
 def _print_gait_list(gaits: Sequence[Any], hanging: Sequence[Sequence[str]] = ()) -> None:
     """With several gaits found, one line each (the first is shown in detail); ``hanging``:
     per gait, its links described upright that hang (:func:`hanging_links`)."""
     if len(gaits) < 2:
         return
-    first = gaits[0]
     print(f"{len(gaits)} period-one gaits found (the first, "
-          f"{'the most attracting stable one' if first.stable else 'the least unstable'}, "
+          f"{_first_gait_text(gaits)}, "
           "is shown in detail):")
     for i, c in enumerate(gaits):
         swings = (f", multi-swing: the legs cross {c.leg_crossings} times, the swing foot "
@@ -407,10 +417,15 @@ def add_bifurcation(sub: Any) -> None:
     add_backend_option(p, "step simulator of the walks and the period-one branch: compiled "
                        "(default) or the scipy reference (slower: minutes for the compass "
                        "gait's 45 slopes)", "compiled")
-    p.add_argument("--slope-range", default="0.5deg:6deg",
-                   type=lambda t: parse_range(t, parse_slope),
-                   help="START:STOP[:COUNT] slopes, e.g. 0.5deg:6deg:56 (default "
-                   "0.5deg:6deg, count 45)")
+    slopes = p.add_mutually_exclusive_group()
+    slopes.add_argument("--slope", default="0.5deg:6deg",
+                        type=lambda t: parse_range(t, parse_slope),
+                        help="START:STOP[:COUNT] slopes, e.g. 0.5deg:6deg:56 (default "
+                        "0.5deg:6deg, count 45), or one slope, e.g. 3deg (as map --slope)")
+    slopes.add_argument("--slope-range", dest="slope", action=DeprecatedAlias, new="--slope",
+                        type=lambda t: parse_range(t, parse_slope), metavar="SLOPE_RANGE",
+                        help="deprecated: the old name of --slope (still accepted, with a "
+                        "note)")
     p.add_argument("--transient", type=nonnegative_int, default=BIFURCATION_TRANSIENT,
                    help="steps discarded at each slope before recording, 0 or more (default "
                    f"{BIFURCATION_TRANSIENT})")
@@ -432,16 +447,16 @@ def _run_bifurcation(args: argparse.Namespace) -> int:
     from heelstrike.outputs import bifurcation_gap_note, bifurcation_title, write_bifurcation_files
 
     walker = walker_from_args(args) if args.model is None else model_from_args(args)
-    start, stop, count = args.slope_range
+    start, stop, count = args.slope
     if not (0 < start < stop or (0 < start == stop and count == 1)):
-        raise CliError("--slope-range needs 0 < START < STOP, or one slope > 0")
+        raise CliError("--slope needs 0 < START < STOP, or one slope > 0")
     n = count or 45
     require_budget(
         f"a bifurcation diagram of {n:,} slopes, {args.transient + args.record:,} steps each",
         n, bytes_per_point=32 * args.record + GAIT_SEARCH_BYTES,
         seconds_per_point=(args.transient + args.record + GAIT_SEARCH_STEPS)
         * WALKER_STEP_SECONDS[args.backend],
-        hint="give fewer slopes (--slope-range START:STOP:COUNT), a shorter --transient or "
+        hint="give fewer slopes (--slope START:STOP:COUNT), a shorter --transient or "
         "fewer --record steps")
     writable_dir(args.out)
     slopes = np.linspace(start, stop, n)

@@ -151,8 +151,8 @@ def _run_powered(args: argparse.Namespace) -> int:
         step_simulator = compass_simulator(walker, family, args.backend)
         backend = "scipy" if step_simulator is None else "compiled"
     try:
-        # the gaits study cost meets at this design point (it keeps the cheapest ordinary
-        # step, issue 11.8)
+        # the gaits study cost meets at this design point, in the one order of gaits (the
+        # cheapest stable first, issue 32)
         gaits = powered_gaits(
             radius, speed=speed, step_length=step_length, actuation=args.actuation,
             walker=walker if args.model is None else None,
@@ -170,7 +170,7 @@ def _run_powered(args: argparse.Namespace) -> int:
             f"{declared_note} at R = {radius:g} m: {exc}{hint}"
         ) from exc
     # McGeer's wheel: every gait's stability is undecided (WHEEL_FAMILY), show the cheapest
-    gait = gaits[0] if walker.is_wheel else preferred_gait(gaits)
+    gait = preferred_gait(gaits, undecided=walker.is_wheel)
     _note_wheel(walker)
     others = [g for g in gaits if g is not gait]
     d = {**gait.to_dict(), "target_speed": speed, "target_step_length": step_length,
@@ -227,7 +227,7 @@ def _run_powered(args: argparse.Namespace) -> int:
                  "this is the stable one needing the least actuator work" if gait.stable else
                  "none is stable: this is the one needing the least actuator work")
         print(f"  note: {len(gaits)} distinct gaits meet this target; {which} (study cost "
-              "keeps the cheapest ordinary step, stable or not); the others:")
+              "keeps the same one); the others:")
         for g in others:
             o = _gait_summary(g)
             print(f"    {g.parameter_name} {g.parameter:.6g} {g.parameter_unit}: actuator work "
@@ -386,9 +386,11 @@ def _run_study(args: argparse.Namespace) -> int:
                        f"data is in {str(nc)!r}); try other step lengths or speeds")
     print_paths(paths)
     fresh = int((ds["branch"] == 1).sum())
-    print(f"gaits: the cheapest found at each point, by continuation from neighbours or by "
-          f"fresh searches from several seeds ({fresh} point(s) came from a fresh search; "
-          f"up to {int(ds['gaits_found'].max())} distinct gaits met at one point)")
+    print(f"gaits: the cheapest stable one found at each point (else the cheapest unstable "
+          f"one, marked), by continuation from neighbours or by fresh searches from several "
+          f"seeds ({fresh} point(s) came from a fresh search; "
+          f"up to {int(ds['gaits_found'].max())} distinct gaits met at one point; every gait "
+          f"found is listed in {nc.name}: gait_actuator_work, gait_stable over 'gait')")
     print(f"{found} of {ds['cost_of_transport'].size} gaits found", file=sys.stderr)
     from heelstrike.analysis.powered import WHEEL_FAMILY
 

@@ -119,3 +119,23 @@ def test_cost_legend_lists_what_is_drawn_radii_first() -> None:
     stable = np.array([[[1.0, 1.0, 0.0], [1.0, 0.0, 1.0]]])
     labels = [t.get_text() for t in cost_figure(_study(stable)).axes[0].get_legend().get_texts()]
     assert labels == ["R = 0 m", "R = 0.3 m", "unstable gait", "R = 0 m: no gait found"]
+
+
+def test_a_gait_of_undecided_stability_is_neither_stable_nor_unstable() -> None:
+    # issue 35: at McGeer's wheel (R = l) the study's flags alternated 1, 0, 1, 0 and the
+    # comparison figure marked the wheel "unstable" where its note says stability is undecided
+    from types import SimpleNamespace
+
+    from heelstrike.analysis.cost_study import _row
+
+    g = SimpleNamespace(
+        cost_of_transport=0.0, eta=0.0, actuator_work=1e-13, push_off_work=1e-13, torque_work=0.0,
+        collision_loss=1e-13, step_length=0.5, period=0.6, speed=0.8, impact_angle=0.25,
+        parameter=0.0, multipliers=np.array([1.0 + 1e-9, 0.3]), stable=False,
+        energy_balance_error=0.0, leg_crossings=1, gains={})
+    assert _row(g)["stable"] == 0.0  # type: ignore[arg-type]
+    assert np.isnan(_row(g, undecided=True)["stable"])  # type: ignore[arg-type]
+    ds = _study(np.ones((1, 2, 3)))
+    ds["stable"][0, 1] = [np.nan, np.nan, np.nan]  # the wheel's row: undecided
+    crosses = [ln for ln in cost_figure(ds).axes[0].get_lines() if ln.get_marker() == "x"]
+    assert all(len(ln.get_xdata()) == 0 for ln in crosses)

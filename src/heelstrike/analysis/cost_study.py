@@ -93,7 +93,8 @@ GAIT_VARIABLES: dict[str, tuple[str, str]] = {
     "impact_angle": ("rad", "stance angle q3 at heel strike"),
     "parameter": ("", "actuation parameter found by Newton (its unit: parameter_unit)"),
     "spectral_radius": ("1", "largest Floquet multiplier modulus"),
-    "stable": ("1", "1 if stable, 0 if unstable, NaN where no gait"),
+    "stable": ("1", "1 if stable, 0 if unstable, NaN where no gait or where stability is "
+               "undecided (McGeer's wheel, R = l: a multiplier of 1)"),
     "energy_balance_error": ("J", "W_act - T_c - change of mechanical energy"),
     "leg_crossings": ("1", "times the swing leg crosses the stance leg in a step (1: an "
                       "ordinary step; more: a multi-swing gait, kept only where no other)"),
@@ -118,7 +119,9 @@ def paper_eta(walker: CompassGait, step_length: float) -> tuple[float, float]:
     return float(st.eta), float(st.energy_lost)
 
 
-def _row(g: PoweredGait) -> dict[str, float]:
+def _row(g: PoweredGait, undecided: bool = False) -> dict[str, float]:
+    """The study's variables of one gait; ``stable`` is NaN where stability is ``undecided``
+    (McGeer's wheel: a neutral family, a multiplier of 1, whose flags would alternate 1, 0)."""
     return {
         "cost_of_transport": g.cost_of_transport,
         "eta": g.eta,
@@ -133,7 +136,7 @@ def _row(g: PoweredGait) -> dict[str, float]:
         "impact_angle": g.impact_angle,
         "parameter": g.parameter,
         "spectral_radius": float(np.max(np.abs(g.multipliers))),
-        "stable": float(g.stable),
+        "stable": np.nan if undecided else float(g.stable),
         "energy_balance_error": g.energy_balance_error,
         "leg_crossings": np.nan if g.leg_crossings is None else float(g.leg_crossings),
         **{k: g.gains.get(k, np.nan) for k in ("gain", "kp", "kd", "max_torque")},
@@ -401,7 +404,8 @@ LISTED_VARIABLES: dict[str, tuple[str, str]] = {
     "actuator_work": ("J", "actuator work per step of each gait found, in the one order of "
                            "gaits (the kept one first; NaN past the last)"),
     "spectral_radius": ("1", "largest Floquet multiplier modulus of each gait found"),
-    "stable": ("1", "1 if that gait is stable, 0 if unstable, NaN past the last"),
+    "stable": ("1", "1 if that gait is stable, 0 if unstable, NaN past the last or where "
+               "stability is undecided (McGeer's wheel)"),
     "leg_crossings": ("1", "times the swing leg crosses the stance leg in a step, each gait"),
 }
 _FAILURE_BYTES = 512  # failure messages are stored as UTF-8, NUL-padded, truncated
@@ -540,7 +544,7 @@ def _study_row(
                     pass
             branch[j] = 0.0 if best < n_continued else 1.0
             n_found[j] = _count_distinct(gaits)
-            for k, val in _row(g).items():
+            for k, val in _row(g, wheel).items():
                 out[k][j] = val
             _list_gaits(listed, j, g, [gaits[k] for k in range(len(gaits)) if k != best], wheel)
             found[(i, j)] = np.append(g.fixed_point, g.parameter)
@@ -564,6 +568,6 @@ def _list_gaits(
         if all(not _same_gait(g, d) for d in distinct):
             distinct.append(g)
     for n, g in enumerate(distinct[:LISTED_GAITS]):
-        row = _row(g)
+        row = _row(g, undecided)
         for k in LISTED_VARIABLES:
             listed[k][j, n] = row[k]

@@ -97,7 +97,7 @@ def _study(work_at_wheel: float, stable_at_wheel: float) -> xr.Dataset:
          "eta_paper": (("radius", "step_length"), np.array([[5.0], [1.5], [1e-32]]))},
         coords={"actuation": ["pushoff"], "radius": R,
                 "step_length": ("step_length", L, {"units": "m"})},
-        attrs={"target": "step_length"},
+        attrs={"target": "step_length", "work_floor_J": 1e-8},
     )
 
 

@@ -26,7 +26,7 @@ RESULT_TYPES = frozenset({
 #: ... and plain constants (names of outcomes, of the impact-angle axis).
 CONSTANTS = frozenset({"ANGLE", "OUTCOMES"})
 #: The :mod:`heelstrike.robots` names ``plots/`` may import: result types only.
-ROBOT_RESULT_TYPES = frozenset({"RobotStudy"})
+ROBOT_RESULT_TYPES = frozenset({"ReplayResult", "RobotStudy"})
 
 #: Attribute calls that write data files; only :mod:`heelstrike.io` may make them.
 DATA_WRITERS = frozenset({"to_csv", "to_netcdf", "savetxt"})

@@ -48,6 +48,7 @@ from heelstrike.analysis._memory import require_budget
 from heelstrike.analysis.heel_strike import heel_strike_study
 from heelstrike.analysis.powered import (
     ACTUATIONS,
+    BOOKS_FLOOR,
     PoweredGait,
     PoweredGaitNotFoundError,
     _count_distinct,
@@ -325,6 +326,8 @@ def cost_study(
     ds.attrs.update(
         title="heelstrike cost-of-transport study (level ground, periodic powered gaits)",
         target=target, branch_note=BRANCH_NOTE,
+        # the integrator's round-off of a step's energy: actuator work at or below it is none
+        work_floor_J=BOOKS_FLOOR,
     )
     if model is None:
         ds.attrs.update(

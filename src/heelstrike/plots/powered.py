@@ -14,7 +14,6 @@ from matplotlib import colormaps
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from heelstrike.analysis.powered import BOOKS_FLOOR
 from heelstrike.plots import _new_figure
 
 __all__ = ["BRANCH_CAPTION", "NO_WORK_LABEL", "cost_figure", "paper_comparison_figure"]
@@ -106,8 +105,9 @@ BRANCH_CAPTION = (
     "gait, a Floquet multiplier |m| > 1; open triangles on the bottom edge: no gait found there)"
 )
 
-#: What the comparison figure draws on its bottom edge where the gait needs no work.
-NO_WORK_LABEL = "no work needed (W_act <= 1e-8 J, round-off)"
+#: What the comparison figure draws on its bottom edge where the gait needs no work (actuator
+#: work per step at or below the study's ``work_floor_J``, the integrator's round-off).
+NO_WORK_LABEL = "no work needed (round-off)"
 
 
 def paper_comparison_figure(ds: xr.Dataset) -> Figure:
@@ -120,6 +120,7 @@ def paper_comparison_figure(ds: xr.Dataset) -> Figure:
     fig = _new_figure(3.4 * len(L) + 2.0, 3.6)
     axes = fig.subplots(1, len(L), squeeze=False, sharey=True)[0]
     R = ds["radius"].values
+    floor = float(ds.attrs.get("work_floor_J", 0.0))  # J per step; 0: every value drawn
     for j, (ax, length) in enumerate(zip(axes, L, strict=True)):
         eta = np.asarray(ds["eta_paper"].isel({tgt: j}).values, dtype=float)
         # at McGeer's wheel (R = l) the paper's loss is zero: its round-off (1e-32 J/m) would
@@ -137,7 +138,7 @@ def paper_comparison_figure(ds: xr.Dataset) -> Figure:
             y = np.asarray(sel["work_per_metre"].values, dtype=float)
             # a gait needing no work (McGeer's wheel) has W_act of round-off (1e-13 J): on the
             # log axis its line dived to 1e-12; drawn as a marker on the bottom edge instead
-            free = np.isfinite(y) & (y * float(length) <= BOOKS_FLOOR)
+            free = np.isfinite(y) & (y * float(length) <= floor)
             (line,) = ax.plot(R, np.where(free, np.nan, y), "o-", ms=3,
                               label=f"{act}: W_act / L")
             if np.any(free):

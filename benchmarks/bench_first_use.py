@@ -7,7 +7,9 @@ estimate and the time its final line reports. The table gives, per command, each
 (estimated s, measured s, ratio measured / estimated), the sum of the estimates and the
 command's whole wall time (imports and the computation after the builds included).
 
-Commands: ``heelstrike gait --radius 0.3 --slope 3deg`` and ``heelstrike gait --model kneed``.
+Commands: ``heelstrike gait --radius 0.3 --slope 3deg``, ``heelstrike gait --model kneed`` and
+``heelstrike gait --model my_walker.toml`` (a copy of ``kneed.toml``: a walker of the user's own,
+run through numba's JIT).
 Slow (minutes): the builds are what it measures. Run
 ``python benchmarks/bench_first_use.py`` (``--quick``: the compass command only; ``--json
 PATH``).
@@ -27,14 +29,17 @@ from typing import Any
 
 from _common import machine, run_main
 
+#: ``{own}`` is a copy of the shipped ``kneed.toml`` in a new folder: a walker file of the
+#: user's own, whose kernels run through numba's JIT.
 COMMANDS: tuple[tuple[str, ...], ...] = (
     ("gait", "--radius", "0.3", "--slope", "3deg"),
     ("gait", "--model", "kneed"),
+    ("gait", "--model", "{own}"),
 )
 
 _DURATION = r"(\d+(?:\.\d+)?) s|(\d+) min (\d+) s"
 _ANNOUNCE = re.compile(rf"^heelstrike: first use: (.*?); estimated (?:{_DURATION}) on this")
-_BUILT = re.compile(rf"^heelstrike: built .*? \((.*)\) in (?:{_DURATION}) \(estimated")
+_BUILT = re.compile(rf"^heelstrike: built .* in (?:{_DURATION}) \(estimated")
 
 
 def seconds(groups: tuple[str | None, ...]) -> float:
@@ -52,16 +57,23 @@ def parse_builds(stderr: str) -> list[dict[str, Any]]:
                            "measured_s": None})
         elif (m := _BUILT.match(line)) is not None:
             for b in builds:
-                if b["what"] == m.group(1) and b["measured_s"] is None:
-                    b["measured_s"] = seconds(m.groups()[1:4])
+                if f"({b['what']}) in " in line and b["measured_s"] is None:
+                    b["measured_s"] = seconds(m.groups()[:3])
                     break
     return builds
 
 
 def run_cold(argv: tuple[str, ...]) -> dict[str, Any]:
     """Run ``heelstrike *argv`` once with empty caches; the builds and the wall time."""
+    import importlib.resources
+
     exe = shutil.which("heelstrike", path=str(Path(sys.executable).parent)) or "heelstrike"
-    with tempfile.TemporaryDirectory() as hc, tempfile.TemporaryDirectory() as nc:
+    with tempfile.TemporaryDirectory() as hc, tempfile.TemporaryDirectory() as nc, \
+            tempfile.TemporaryDirectory() as mine:
+        own = Path(mine) / "my_walker.toml"
+        shipped = importlib.resources.files("heelstrike") / "walkers" / "kneed.toml"
+        own.write_text(shipped.read_text())
+        argv = tuple(a.replace("{own}", str(own)) for a in argv)
         env = {**os.environ, "HEELSTRIKE_CACHE_DIR": hc, "NUMBA_CACHE_DIR": nc}
         env.pop("PYTHONDONTWRITEBYTECODE", None)
         t0 = time.perf_counter()
@@ -70,7 +82,8 @@ def run_cold(argv: tuple[str, ...]) -> dict[str, Any]:
         wall = time.perf_counter() - t0
     builds = parse_builds(proc.stderr)
     return {
-        "command": "heelstrike " + " ".join(argv),
+        "command": "heelstrike " + " ".join(a if not a.endswith("my_walker.toml")
+                                            else "my_walker.toml" for a in argv),
         "returncode": proc.returncode,
         "wall_s": wall,
         "estimated_total_s": sum(b["estimated_s"] for b in builds),

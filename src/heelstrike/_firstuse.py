@@ -94,13 +94,14 @@ class BuildKind:
 
 
 #: Kinds of build. Reference ``k`` measured on a loaded 2-core machine (builds of the shipped
-#: walkers with empty caches, the probe timed beside them): see ``benchmarks/README.md``.
+#: walkers with empty caches, the probe timed beside them; ``benchmarks/README.md``, "first
+#: use: estimate vs measured").
 KINDS: dict[str, BuildKind] = {
     "aot-compass": BuildKind("lines of kernel source", 0.23),
-    "aot-walker": BuildKind("lines of kernel and generated source", 0.9),
-    "derive-numpy": BuildKind("coordinates^3 x bodies", 0.10),
-    "derive-numba": BuildKind("coordinates^3 x bodies", 0.05),
-    "jit": BuildKind("lines of compiled source", 0.4),
+    "aot-walker": BuildKind("lines of kernel and generated source", 0.8),
+    "derive-numpy": BuildKind("coordinates^3 x bodies", 0.13),
+    "derive-numba": BuildKind("coordinates^3 x bodies", 0.07),
+    "jit": BuildKind("lines of compiled source", 0.33),
     "jit-kernel": BuildKind("lines of kernel source", 1.4),
 }
 

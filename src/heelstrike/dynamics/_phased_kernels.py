@@ -909,8 +909,8 @@ _COMPILE_LOCK = threading.RLock()
 def _walk_kernel() -> Any:
     """``_walk_py`` compiled for first-class function arguments (once; numba disk cache).
 
-    Without a numba cache (first use) the compilation takes a minute or two; a one-line note
-    says so on stderr.
+    Without a numba cache (first use) the compilation is announced with an estimate, followed
+    and reported on stderr (:func:`heelstrike._firstuse.first_use`).
     """
     with _COMPILE_LOCK:
         if not _KERNEL:

@@ -14,9 +14,19 @@ def test_estimate_is_size_times_rate_times_probe_reference_first() -> None:
     est = fu.estimate("aot-walker", 2000.0, 0.25, {})
     assert est.seconds == pytest.approx(2000.0 * fu.KINDS["aot-walker"].k * 0.25)
     assert "reference rate" in est.basis and "2000 lines" in est.basis and "250 ms" in est.basis
+    # a loaded machine: the load factor multiplies the time
+    loaded = fu.estimate("aot-walker", 2000.0, 0.25, {}, load=3.0)
+    assert loaded.seconds == pytest.approx(3 * est.seconds) and "load factor 3.0" in loaded.basis
     # twice the size, or a machine twice as slow: twice the time
     assert fu.estimate("aot-walker", 4000.0, 0.25, {}).seconds == pytest.approx(2 * est.seconds)
     assert fu.estimate("aot-walker", 2000.0, 0.5, {}).seconds == pytest.approx(2 * est.seconds)
+
+
+def test_load_factor_is_the_run_queue_per_core_at_least_one() -> None:
+    assert fu.load_factor(7.0, 2) == 4.0  # 7 others and this build on 2 cores
+    assert fu.load_factor(0.2, 2) == 1.0  # an idle machine: never faster than alone
+    assert fu.load_factor(3.0, 1) == 4.0
+    assert fu.load_factor() >= 1.0
 
 
 def test_recorded_builds_replace_the_reference_by_their_median() -> None:
@@ -31,10 +41,13 @@ def test_recorded_builds_replace_the_reference_by_their_median() -> None:
 
 def test_record_writes_the_normalised_rate_and_keeps_the_last_ones(tmp_path: Path) -> None:
     path = tmp_path / "c" / fu.RATES_FILE
-    fu.record(path, "jit", 200.0, 10.0, 0.25)
-    assert fu.read_records(path) == {"jit": [pytest.approx(10.0 / (200.0 * 0.25))]}
-    # the next estimate of the same build on the same machine is the time it took
-    assert fu.estimate("jit", 200.0, 0.25, fu.read_records(path)).seconds == pytest.approx(10.0)
+    fu.record(path, "jit", 200.0, 10.0, 0.25, load=2.0)
+    assert fu.read_records(path) == {"jit": [pytest.approx(10.0 / (200.0 * 0.25 * 2.0))]}
+    # the next estimate of the same build on the same machine under the same load is the time
+    # it took; on an idle machine half of it
+    rec = fu.read_records(path)
+    assert fu.estimate("jit", 200.0, 0.25, rec, load=2.0).seconds == pytest.approx(10.0)
+    assert fu.estimate("jit", 200.0, 0.25, rec).seconds == pytest.approx(5.0)
     for s in range(1, 20):
         fu.record(path, "jit", 1.0, float(s), 1.0)
     kept = fu.read_records(path)["jit"]
@@ -64,6 +77,7 @@ def test_a_build_announces_stages_and_reports_then_records(
 ) -> None:
     monkeypatch.setenv("HEELSTRIKE_CACHE_DIR", str(tmp_path))
     monkeypatch.setattr(fu._PROBE, "seconds", 0.5)
+    monkeypatch.setattr(fu, "load_factor", lambda: 1.0)
     rates = tmp_path / fu.RATES_FILE
     fu.record(rates, "aot-compass", 10.0, 20.0, 0.5)  # k = 4: 10 units, 20 s estimated
     with fu.first_use("the test kernels", kind="aot-compass", size=10.0, cache=tmp_path / "aot",
@@ -102,6 +116,7 @@ def test_small_builds_are_quiet_and_heartbeat_names_what_is_compiled(
 ) -> None:
     monkeypatch.setenv("HEELSTRIKE_CACHE_DIR", str(tmp_path))
     monkeypatch.setattr(fu._PROBE, "seconds", 1e-3)  # estimate far under QUIET_BELOW
+    monkeypatch.setattr(fu, "load_factor", lambda: 1.0)
     with fu.first_use("tiny", kind="jit", size=1.0, cache="c", heartbeat=None) as b:
         assert b.quiet
         b.quiet = False  # heartbeat text on demand, no thread, no clock in the assertion

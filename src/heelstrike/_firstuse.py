@@ -15,13 +15,15 @@ all of them:
 
 The estimate is a model, not a guess::
 
-    seconds = size * k[kind] * probe
+    seconds = size * k[kind] * probe * load
 
 ``size`` measures the build (its :class:`BuildKind` says in what: lines of kernel source
-compiled, or ``coordinates**3 * bodies`` of a derivation); ``probe`` is the time (s) this
-machine takes, now, for a small fixed Python workload (:func:`machine_probe`, timed once a
-process: it tracks the processor and the load beside it); ``k`` is seconds per unit of size per
-second of probe. ``k`` is the median of the builds of that kind recorded on this machine
+compiled, or ``coordinates**3 * bodies`` of a derivation); ``probe`` is the processor time (s)
+this machine takes for a small fixed Python workload (:func:`machine_probe`, timed once a
+process: the speed of one core); ``load`` is how many times slower a build runs because other
+work shares the cores (:func:`load_factor`: the 1-minute load average, our build included, per
+core, at least 1), read as each build starts; ``k`` is seconds per unit of size per second of
+probe. ``k`` is the median of the builds of that kind recorded on this machine
 (:data:`RATES_FILE` in the cache folder, written after every build), else the reference value
 of the kind (:data:`KINDS`, measured on a loaded 2-core machine). ``tests/test_firstuse.py``
 checks the model and the messages; ``benchmarks/bench_first_use.py`` compares estimates with
@@ -59,6 +61,7 @@ __all__ = [
     "coefficient",
     "estimate",
     "first_use",
+    "load_factor",
     "machine_probe",
     "numba_compile_ended",
     "numba_compile_started",
@@ -97,12 +100,13 @@ class BuildKind:
 #: walkers with empty caches, the probe timed beside them; ``benchmarks/README.md``, "first
 #: use: estimate vs measured").
 KINDS: dict[str, BuildKind] = {
-    "aot-compass": BuildKind("lines of kernel source", 0.23),
-    "aot-walker": BuildKind("lines of kernel and generated source", 0.8),
-    "derive-numpy": BuildKind("coordinates^3 x bodies", 0.13),
-    "derive-numba": BuildKind("coordinates^3 x bodies", 0.07),
-    "jit": BuildKind("lines of compiled source", 0.33),
-    "jit-kernel": BuildKind("lines of kernel source", 1.4),
+    "aot-compass": BuildKind("lines of kernel source", 0.42),
+    "aot-walker": BuildKind("lines of kernel and generated source", 1.08),
+    "derive-numpy": BuildKind("coordinates^3 x bodies", 0.19),
+    "derive-numba": BuildKind("coordinates^3 x bodies", 0.11),
+    "jit": BuildKind("lines of compiled source", 0.49),
+    "jit-kernel": BuildKind("lines of kernel source", 2.0),
+    "jit-ensemble": BuildKind("lines of kernel source (its walk kernel compiled)", 0.21),
 }
 
 
@@ -131,13 +135,13 @@ def _probe_once() -> float:
         "    return c if c > 0 else -c"
         for i in range(300)
     )
-    t0 = time.perf_counter()
+    t0 = time.process_time()
     ns: dict[str, Any] = {}
     exec(compile(ast.parse(src), "<probe>", "exec"), ns)
     total = 0.0
     for i in range(300):
         total += ns[f"f{i}"](1.5, 0.5)
-    return time.perf_counter() - t0
+    return time.process_time() - t0
 
 
 class _Probe:
@@ -151,15 +155,39 @@ _PROBE = _Probe()
 
 
 def machine_probe() -> float:
-    """Seconds (wall) this machine takes, now, to parse, compile and run a fixed Python module.
+    """Processor seconds this machine takes to parse, compile and run a fixed Python module.
 
-    The fastest of three runs of a workload of about 0.1 s, timed on the first call of a process
-    and kept: a compile is mostly Python (numba's typing, sympy) and LLVM on one core, so its
-    time scales with this one's, the load of the machine included.
+    The fastest of three runs of a workload of about 20 ms, timed on the first call of a
+    process and kept: a compile is mostly Python (numba's typing, sympy) and LLVM on one core,
+    so its processor time scales with this one's. Processor time, not wall time: the share of
+    the cores other work leaves is :func:`load_factor`'s (a probe this short is often given a
+    whole core on a loaded machine, then its wall time says nothing of the load).
     """
     if _PROBE.seconds is None:
         _PROBE.seconds = min(_probe_once() for _ in range(3))
     return _PROBE.seconds
+
+
+def load_factor(load: float | None = None, cores: int | None = None) -> float:
+    """How many times slower than on an idle machine a one-core build runs now.
+
+    ``(load + 1) / cores``, at least 1: the run queue the build joins (the 1-minute load
+    average, ``os.getloadavg``, plus the build itself) shared by the cores.
+
+    Parameters
+    ----------
+    load : float, optional
+        1-minute load average (default: this machine's now; 0 where unavailable).
+    cores : int, optional
+        Logical cores (default ``os.cpu_count()``).
+    """
+    if load is None:
+        try:
+            load = os.getloadavg()[0]
+        except (AttributeError, OSError):
+            load = 0.0
+    n = cores if cores is not None else (os.cpu_count() or 1)
+    return max(1.0, (load + 1.0) / max(1, n))
 
 
 def read_records(path: Path) -> dict[str, list[float]]:
@@ -187,8 +215,8 @@ def coefficient(kind: str, records: dict[str, list[float]]) -> tuple[float, str]
 
 
 def estimate(kind: str, size: float, probe: float,
-             records: dict[str, list[float]]) -> Estimate:
-    """The estimated time of a build: ``size * k[kind] * probe`` (:func:`coefficient`).
+             records: dict[str, list[float]], load: float = 1.0) -> Estimate:
+    """The estimated time of a build: ``size * k[kind] * probe * load`` (:func:`coefficient`).
 
     Parameters
     ----------
@@ -200,23 +228,27 @@ def estimate(kind: str, size: float, probe: float,
         :func:`machine_probe` (s).
     records : dict
         :func:`read_records` of this machine.
+    load : float
+        :func:`load_factor` (1: an idle machine).
     """
     k, basis = coefficient(kind, records)
-    return Estimate(seconds=size * k * probe,
+    return Estimate(seconds=size * k * probe * load,
                     basis=f"{size:g} {KINDS[kind].unit} at {basis}, "
-                          f"machine probe {probe * 1e3:.0f} ms")
+                          f"machine probe {probe * 1e3:.0f} ms, load factor {load:.1f}")
 
 
-def record(path: Path, kind: str, size: float, seconds: float, probe: float) -> None:
-    """Add a finished build's ``k = seconds / (size * probe)`` to ``path`` (atomic rewrite).
+def record(path: Path, kind: str, size: float, seconds: float, probe: float,
+           load: float = 1.0) -> None:
+    """Add a finished build's ``k = seconds / (size * probe * load)`` to ``path`` (atomic
+    rewrite; ``load`` the :func:`load_factor` over the build).
 
     Unwritable caches are ignored: the record only improves later estimates.
     """
-    if not (size > 0 and probe > 0 and seconds > 0):
+    if not (size > 0 and probe > 0 and seconds > 0 and load > 0):
         return
     records = read_records(path)
     values = records.setdefault(kind, [])
-    values.append(seconds / (size * probe))
+    values.append(seconds / (size * probe * load))
     del values[:-KEEP]
     try:
         path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
@@ -379,7 +411,8 @@ def first_use(what: str, *, kind: str, size: float, cache: Path | str,
 
     rates = cache_dir() / RATES_FILE
     probe = machine_probe()
-    est = estimate(kind, size, probe, read_records(rates))
+    load = load_factor()
+    est = estimate(kind, size, probe, read_records(rates), load)
     with _ACTIVE.lock:
         outer = _ACTIVE.stack[-1] if _ACTIVE.stack else None
         b = Build(what=what, estimate=est, cache=str(cache), stages=stages, built=built or what,
@@ -406,7 +439,8 @@ def first_use(what: str, *, kind: str, size: float, cache: Path | str,
         took = b.elapsed()
         if ok:
             if took >= QUIET_BELOW:  # a tiny compile's overhead says little about a rate
-                record(rates, kind, size, took, probe)
+                # the load over the build: the mean of the factors at its start and end
+                record(rates, kind, size, took, probe, 0.5 * (load + load_factor()))
             b.say(finish_text(what, b.built, took, est, str(cache)))
         else:
             b.say(f"heelstrike: {what}: failed after {_seconds(took)}")

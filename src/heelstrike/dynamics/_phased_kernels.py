@@ -932,7 +932,7 @@ def _compile_walk_kernel() -> None:
     _KERNEL.append(disp)
 
 
-def _announced(disp: Any, what: str, *, quiet: bool) -> Any:
+def _announced(disp: Any, what: str, *, quiet: bool, kind: str = "jit-kernel") -> Any:
     """:func:`heelstrike._firstuse.first_use` for a JIT kernel of this module (size: the lines
     of the modules it compiles; the cache: numba's for this module)."""
     from heelstrike._firstuse import first_use
@@ -942,7 +942,7 @@ def _announced(disp: Any, what: str, *, quiet: bool) -> Any:
         return contextlib.nullcontext()
     cache = getattr(getattr(disp, "_cache", None), "_cache_path", None) or "numba's cache"
     size = _source_lines((__name__, "heelstrike.dynamics._dp5", "heelstrike.models._contact"))
-    return first_use(f"{what}, compiled by numba's JIT", kind="jit-kernel", size=size,
+    return first_use(f"{what}, compiled by numba's JIT", kind=kind, size=size,
                      cache=cache, built=f"{disp.py_func.__name__} (numba JIT)", quiet=quiet)
 
 
@@ -1015,7 +1015,7 @@ def _ensemble_kernel() -> Any:
             except AttributeError:  # pragma: no cover - numba internals moved: stay quiet
                 cached = True
             with _announced(disp, "the ensemble kernel of every described walker",
-                            quiet=cached), warnings.catch_warnings():
+                            quiet=cached, kind="jit-ensemble"), warnings.catch_warnings():
                 warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
                 disp.compile(_ENS_SIG)
             disp.disable_compile()

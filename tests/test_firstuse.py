@@ -126,3 +126,38 @@ def test_small_builds_are_quiet_and_heartbeat_names_what_is_compiled(
         b.beat()
     err = capsys.readouterr().err.splitlines()
     assert "still compiling (now: _integrate, function 2 compiled)" in err[-2]
+
+
+def test_numba_compiles_are_announced_or_named_in_the_build_around_them(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str],
+) -> None:
+    monkeypatch.setenv("HEELSTRIKE_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(fu._PROBE, "seconds", 1.0)
+    monkeypatch.setattr(fu, "load_factor", lambda: 1.0)
+
+    def kernel(x: float) -> float:  # 3 lines of source
+        y = x + 1.0
+        return y
+
+    class Cache:
+        _cache_path = "/numba/cache"
+
+    class Dispatcher:  # what numba's event carries
+        py_func = kernel
+        _cache = Cache()
+
+    # alone: announced as a build of its own (3 lines x k[jit] x 1 s probe), cache named
+    fu.numba_compile_started({"dispatcher": Dispatcher()})
+    fu.numba_compile_ended(None)
+    err = capsys.readouterr().err.splitlines()
+    assert err[0].startswith("heelstrike: first use: numba JIT compile of ")
+    assert "kernel" in err[0] and "/numba/cache" in err[0]
+    assert f"estimated {3 * fu.KINDS['jit'].k:.1f} s" in err[0]
+    assert err[-1].startswith("heelstrike: built ") and err[-1].endswith("cache: /numba/cache")
+    # inside an announced build: named in its heartbeat, nothing announced
+    with fu.first_use("outer", kind="aot-walker", size=10.0, cache="c", heartbeat=None) as b:
+        fu.numba_compile_started({"dispatcher": Dispatcher()})
+        fu.numba_compile_ended(None)
+        assert b.compiled and "kernel" in b.compiled[0]
+    err = capsys.readouterr().err
+    assert "numba JIT compile" not in err and fu.active() is None

@@ -504,15 +504,16 @@ def _numba_started(data: Any) -> None:
     name = getattr(getattr(disp, "py_func", None), "__qualname__", "a function")
     with _ACTIVE.lock:
         _NUMBA.depth += 1
+        _NUMBA.contexts.append(None)  # one entry per event, whatever happens below
+        slot = len(_NUMBA.contexts) - 1
         outer = _ACTIVE.stack[-1] if _ACTIVE.stack else None
         if outer is not None:  # a function of an announced build (or of a JIT compile)
             outer.compiling(name)
-            _NUMBA.contexts.append(None)
             return
     ctx = first_use(f"numba JIT compile of {name}", kind="jit", size=_source_lines(disp),
                     cache=_numba_cache(disp), built=name)
     ctx.__enter__()
-    _NUMBA.contexts.append(ctx)
+    _NUMBA.contexts[slot] = ctx
 
 
 def _numba_ended(exc: BaseException | None) -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -72,12 +73,23 @@ def test_messages_name_the_estimate_the_time_and_the_cache() -> None:
     assert "still compiling" in fu.heartbeat_text("compiling", 30.0, est)
 
 
+@pytest.fixture
+def idle_machine(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Callable[[float], None]:
+    """``idle_machine(probe)``: the cache in ``tmp_path``, the probe ``probe`` s, no load."""
+
+    def setup(probe: float) -> None:
+        monkeypatch.setenv("HEELSTRIKE_CACHE_DIR", str(tmp_path))
+        monkeypatch.setattr(fu._PROBE, "seconds", probe)
+        monkeypatch.setattr(fu, "load_factor", lambda: 1.0)
+
+    return setup
+
+
 def test_a_build_announces_stages_and_reports_then_records(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str],
+        tmp_path: Path, idle_machine: Callable[[float], None],
+        capsys: pytest.CaptureFixture[str],
 ) -> None:
-    monkeypatch.setenv("HEELSTRIKE_CACHE_DIR", str(tmp_path))
-    monkeypatch.setattr(fu._PROBE, "seconds", 0.5)
-    monkeypatch.setattr(fu, "load_factor", lambda: 1.0)
+    idle_machine(0.5)
     rates = tmp_path / fu.RATES_FILE
     fu.record(rates, "aot-compass", 10.0, 20.0, 0.5)  # k = 4: 10 units, 20 s estimated
     with fu.first_use("the test kernels", kind="aot-compass", size=10.0, cache=tmp_path / "aot",
@@ -99,10 +111,10 @@ def test_a_build_announces_stages_and_reports_then_records(
 
 
 def test_a_failed_build_says_so_and_is_not_recorded(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str],
+        tmp_path: Path, idle_machine: Callable[[float], None],
+        capsys: pytest.CaptureFixture[str],
 ) -> None:
-    monkeypatch.setenv("HEELSTRIKE_CACHE_DIR", str(tmp_path))
-    monkeypatch.setattr(fu._PROBE, "seconds", 1.0)
+    idle_machine(1.0)
     with pytest.raises(RuntimeError, match="no compiler"), \
             fu.first_use("k", kind="aot-walker", size=100.0, cache="c", heartbeat=None):
         raise RuntimeError("no compiler")
@@ -112,11 +124,10 @@ def test_a_failed_build_says_so_and_is_not_recorded(
 
 
 def test_small_builds_are_quiet_and_heartbeat_names_what_is_compiled(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str],
+        tmp_path: Path, idle_machine: Callable[[float], None],
+        capsys: pytest.CaptureFixture[str],
 ) -> None:
-    monkeypatch.setenv("HEELSTRIKE_CACHE_DIR", str(tmp_path))
-    monkeypatch.setattr(fu._PROBE, "seconds", 1e-3)  # estimate far under QUIET_BELOW
-    monkeypatch.setattr(fu, "load_factor", lambda: 1.0)
+    idle_machine(1e-3)  # estimate far under QUIET_BELOW
     with fu.first_use("tiny", kind="jit", size=1.0, cache="c", heartbeat=None) as b:
         assert b.quiet
         b.quiet = False  # heartbeat text on demand, no thread, no clock in the assertion
@@ -129,11 +140,10 @@ def test_small_builds_are_quiet_and_heartbeat_names_what_is_compiled(
 
 
 def test_numba_compiles_are_announced_or_named_in_the_build_around_them(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str],
+        tmp_path: Path, idle_machine: Callable[[float], None],
+        capsys: pytest.CaptureFixture[str],
 ) -> None:
-    monkeypatch.setenv("HEELSTRIKE_CACHE_DIR", str(tmp_path))
-    monkeypatch.setattr(fu._PROBE, "seconds", 1.0)
-    monkeypatch.setattr(fu, "load_factor", lambda: 1.0)
+    idle_machine(1.0)
 
     def kernel(x: float) -> float:  # 3 lines of source
         y = x + 1.0

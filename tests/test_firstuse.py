@@ -23,11 +23,11 @@ def test_estimate_is_size_times_rate_times_probe_reference_first() -> None:
     assert fu.estimate("aot-walker", 2000.0, 0.5, {}).seconds == pytest.approx(2 * est.seconds)
 
 
-def test_load_factor_is_the_run_queue_per_core_at_least_one() -> None:
-    assert fu.load_factor(7.0, 2) == 4.0  # 7 others and this build on 2 cores
-    assert fu.load_factor(0.2, 2) == 1.0  # an idle machine: never faster than alone
-    assert fu.load_factor(3.0, 1) == 4.0
-    assert fu.load_factor() >= 1.0
+def test_load_factor_is_the_inverse_share_of_a_core_at_least_one() -> None:
+    assert fu.load_factor(0.25) == 4.0  # a quarter of a core: 4 times slower
+    assert fu.load_factor(1.0) == 1.0
+    assert fu.load_factor(1.7) == 1.0  # never faster than alone
+    assert fu.load_factor(window=0.05) >= 1.0  # measured
 
 
 def test_recorded_builds_replace_the_reference_by_their_median() -> None:

@@ -21,11 +21,11 @@ The estimate is a model, not a guess::
 compiled, or ``coordinates**3 * bodies`` of a derivation); ``probe`` is the processor time (s)
 this machine takes for a small fixed Python workload (:func:`machine_probe`, timed once a
 process: the speed of one core); ``load`` is how many times slower a build runs because other
-work shares the cores (:func:`load_factor`: the 1-minute load average, our build included, per
-core, at least 1), read as each build starts; ``k`` is seconds per unit of size per second of
-probe. ``k`` is the median of the builds of that kind recorded on this machine
-(:data:`RATES_FILE` in the cache folder, written after every build), else the reference value
-of the kind (:data:`KINDS`, measured on a loaded 2-core machine). ``tests/test_firstuse.py``
+work shares the cores (:func:`load_factor`: measured as each build starts, the inverse of the
+share of a core this process gets over half a second, at least 1); ``k`` is seconds per unit
+of size per second of probe. ``k`` is the median of the builds of that kind recorded on this
+machine (:data:`RATES_FILE` in the cache folder, written after every build), else the reference
+value of the kind (:data:`KINDS`, measured on a loaded 2-core machine). ``tests/test_firstuse.py``
 checks the model and the messages; ``benchmarks/bench_first_use.py`` compares estimates with
 measured times (``benchmarks/README.md``).
 
@@ -78,6 +78,8 @@ HEARTBEAT = 15.0
 QUIET_BELOW = 1.0
 #: Recorded builds kept per kind (the estimate uses their median).
 KEEP = 7
+#: Seconds of wall time over which :func:`load_factor` measures this process's share of a core.
+LOAD_WINDOW = 0.5
 
 
 @dataclass(frozen=True)
@@ -100,13 +102,13 @@ class BuildKind:
 #: walkers with empty caches, the probe timed beside them; ``benchmarks/README.md``, "first
 #: use: estimate vs measured").
 KINDS: dict[str, BuildKind] = {
-    "aot-compass": BuildKind("lines of kernel source", 0.42),
-    "aot-walker": BuildKind("lines of kernel and generated source", 1.08),
-    "derive-numpy": BuildKind("coordinates^3 x bodies", 0.19),
-    "derive-numba": BuildKind("coordinates^3 x bodies", 0.11),
-    "jit": BuildKind("lines of compiled source", 0.49),
-    "jit-kernel": BuildKind("lines of kernel source", 2.0),
-    "jit-ensemble": BuildKind("lines of kernel source (its walk kernel compiled)", 0.21),
+    "aot-compass": BuildKind("lines of kernel source", 0.45),
+    "aot-walker": BuildKind("lines of kernel and generated source", 1.3),
+    "derive-numpy": BuildKind("coordinates^3 x bodies", 0.22),
+    "derive-numba": BuildKind("coordinates^3 x bodies", 0.13),
+    "jit": BuildKind("lines of compiled source", 0.7),
+    "jit-kernel": BuildKind("lines of kernel source", 2.6),
+    "jit-ensemble": BuildKind("lines of kernel source (its walk kernel compiled)", 0.25),
 }
 
 
@@ -168,26 +170,27 @@ def machine_probe() -> float:
     return _PROBE.seconds
 
 
-def load_factor(load: float | None = None, cores: int | None = None) -> float:
-    """How many times slower than on an idle machine a one-core build runs now.
+def load_factor(share: float | None = None, window: float = LOAD_WINDOW) -> float:
+    """How many times slower than on an idle machine a one-core build runs now: ``1 / share``.
 
-    ``(load + 1) / cores``, at least 1: the run queue the build joins (the 1-minute load
-    average, ``os.getloadavg``, plus the build itself) shared by the cores.
+    ``share`` is the fraction of one core this process gets, measured: the probe's workload
+    run over ``window`` seconds of wall time, its processor time divided by that wall time
+    (other work on the cores lowers it; a window of half a second spans many of the
+    scheduler's slices, where one 20 ms run is often given a whole core). At least 1.
 
     Parameters
     ----------
-    load : float, optional
-        1-minute load average (default: this machine's now; 0 where unavailable).
-    cores : int, optional
-        Logical cores (default ``os.cpu_count()``).
+    share : float, optional
+        The share (0 to 1) if already known (default: measured now).
+    window : float
+        Seconds of wall time measured.
     """
-    if load is None:
-        try:
-            load = os.getloadavg()[0]
-        except (AttributeError, OSError):
-            load = 0.0
-    n = cores if cores is not None else (os.cpu_count() or 1)
-    return max(1.0, (load + 1.0) / max(1, n))
+    if share is None:
+        cpu0, wall0 = time.process_time(), time.perf_counter()
+        while time.perf_counter() - wall0 < window:
+            _probe_once()
+        share = (time.process_time() - cpu0) / max(time.perf_counter() - wall0, 1e-9)
+    return max(1.0, 1.0 / max(share, 1e-3))
 
 
 def read_records(path: Path) -> dict[str, list[float]]:

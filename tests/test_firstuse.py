@@ -17,7 +17,8 @@ def test_estimate_is_size_times_rate_times_probe_reference_first() -> None:
     assert "reference rate" in est.basis and "2000 lines" in est.basis and "250 ms" in est.basis
     # a loaded machine: the load factor multiplies the time
     loaded = fu.estimate("aot-walker", 2000.0, 0.25, {}, load=3.0)
-    assert loaded.seconds == pytest.approx(3 * est.seconds) and "load factor 3.0" in loaded.basis
+    assert loaded.seconds == pytest.approx(3**fu.LOAD_PERSISTENCE * est.seconds)
+    assert "load factor 3.0" in loaded.basis
     # twice the size, or a machine twice as slow: twice the time
     assert fu.estimate("aot-walker", 4000.0, 0.25, {}).seconds == pytest.approx(2 * est.seconds)
     assert fu.estimate("aot-walker", 2000.0, 0.5, {}).seconds == pytest.approx(2 * est.seconds)
@@ -42,13 +43,14 @@ def test_recorded_builds_replace_the_reference_by_their_median() -> None:
 
 def test_record_writes_the_normalised_rate_and_keeps_the_last_ones(tmp_path: Path) -> None:
     path = tmp_path / "c" / fu.RATES_FILE
-    fu.record(path, "jit", 200.0, 10.0, 0.25, load=2.0)
-    assert fu.read_records(path) == {"jit": [pytest.approx(10.0 / (200.0 * 0.25 * 2.0))]}
+    fu.record(path, "jit", 200.0, 10.0, 0.25, load=4.0)
+    damped = 4.0**fu.LOAD_PERSISTENCE
+    assert fu.read_records(path) == {"jit": [pytest.approx(10.0 / (200.0 * 0.25 * damped))]}
     # the next estimate of the same build on the same machine under the same load is the time
-    # it took; on an idle machine half of it
+    # it took; on an idle machine less
     rec = fu.read_records(path)
-    assert fu.estimate("jit", 200.0, 0.25, rec, load=2.0).seconds == pytest.approx(10.0)
-    assert fu.estimate("jit", 200.0, 0.25, rec).seconds == pytest.approx(5.0)
+    assert fu.estimate("jit", 200.0, 0.25, rec, load=4.0).seconds == pytest.approx(10.0)
+    assert fu.estimate("jit", 200.0, 0.25, rec).seconds == pytest.approx(10.0 / damped)
     for s in range(1, 20):
         fu.record(path, "jit", 1.0, float(s), 1.0)
     kept = fu.read_records(path)["jit"]

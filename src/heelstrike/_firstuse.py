@@ -15,14 +15,15 @@ all of them:
 
 The estimate is a model, not a guess::
 
-    seconds = size * k[kind] * probe * load
+    seconds = size * k[kind] * probe * load**LOAD_PERSISTENCE
 
 ``size`` measures the build (its :class:`BuildKind` says in what: lines of kernel source
 compiled, or ``coordinates**3 * bodies`` of a derivation); ``probe`` is the processor time (s)
 this machine takes for a small fixed Python workload (:func:`machine_probe`, timed once a
 process: the speed of one core); ``load`` is how many times slower a build runs because other
 work shares the cores (:func:`load_factor`: measured as each build starts, the inverse of the
-share of a core this process gets over half a second, at least 1); ``k`` is seconds per unit
+share of a core this process gets over half a second, at least 1; only part of it is
+expected to last through a long build, :data:`LOAD_PERSISTENCE`); ``k`` is seconds per unit
 of size per second of probe. ``k`` is the median of the builds of that kind recorded on this
 machine (:data:`RATES_FILE` in the cache folder, written after every build), else the reference
 value of the kind (:data:`KINDS`, measured on a loaded 2-core machine). ``tests/test_firstuse.py``
@@ -80,6 +81,11 @@ QUIET_BELOW = 1.0
 KEEP = 7
 #: Seconds of wall time over which :func:`load_factor` measures this process's share of a core.
 LOAD_WINDOW = 0.5
+#: Exponent of the load factor in the estimate: the load measured as a build starts on a shared
+#: machine passes or grows during a build of minutes; half of its effect (in logarithm) is
+#: assumed to last (fitted on ``benchmarks/bench_first_use.py``'s runs: the whole factor made
+#: estimates 2-4x too long when a burst of other work ended soon after the build started).
+LOAD_PERSISTENCE = 0.5
 
 
 @dataclass(frozen=True)
@@ -219,7 +225,8 @@ def coefficient(kind: str, records: dict[str, list[float]]) -> tuple[float, str]
 
 def estimate(kind: str, size: float, probe: float,
              records: dict[str, list[float]], load: float = 1.0) -> Estimate:
-    """The estimated time of a build: ``size * k[kind] * probe * load`` (:func:`coefficient`).
+    """The estimated time of a build: ``size * k[kind] * probe * load**LOAD_PERSISTENCE``
+    (:func:`coefficient`).
 
     Parameters
     ----------
@@ -235,15 +242,15 @@ def estimate(kind: str, size: float, probe: float,
         :func:`load_factor` (1: an idle machine).
     """
     k, basis = coefficient(kind, records)
-    return Estimate(seconds=size * k * probe * load,
+    return Estimate(seconds=size * k * probe * load**LOAD_PERSISTENCE,
                     basis=f"{size:g} {KINDS[kind].unit} at {basis}, "
                           f"machine probe {probe * 1e3:.0f} ms, load factor {load:.1f}")
 
 
 def record(path: Path, kind: str, size: float, seconds: float, probe: float,
            load: float = 1.0) -> None:
-    """Add a finished build's ``k = seconds / (size * probe * load)`` to ``path`` (atomic
-    rewrite; ``load`` the :func:`load_factor` over the build).
+    """Add a finished build's ``k = seconds / (size * probe * load**LOAD_PERSISTENCE)`` to
+    ``path`` (atomic rewrite; ``load`` the :func:`load_factor` over the build).
 
     Unwritable caches are ignored: the record only improves later estimates.
     """
@@ -251,7 +258,7 @@ def record(path: Path, kind: str, size: float, seconds: float, probe: float,
         return
     records = read_records(path)
     values = records.setdefault(kind, [])
-    values.append(seconds / (size * probe * load))
+    values.append(seconds / (size * probe * load**LOAD_PERSISTENCE))
     del values[:-KEEP]
     try:
         path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)

@@ -108,13 +108,13 @@ class BuildKind:
 #: walkers with empty caches, the probe timed beside them; ``benchmarks/README.md``, "first
 #: use: estimate vs measured").
 KINDS: dict[str, BuildKind] = {
-    "aot-compass": BuildKind("lines of kernel source", 0.45),
-    "aot-walker": BuildKind("lines of kernel and generated source", 1.3),
-    "derive-numpy": BuildKind("coordinates^3 x bodies", 0.22),
-    "derive-numba": BuildKind("coordinates^3 x bodies", 0.13),
-    "jit": BuildKind("lines of compiled source", 0.7),
-    "jit-kernel": BuildKind("lines of kernel source", 2.6),
-    "jit-ensemble": BuildKind("lines of kernel source (its walk kernel compiled)", 0.25),
+    "aot-compass": BuildKind("lines of kernel source", 0.32),
+    "aot-walker": BuildKind("lines of kernel and generated source", 0.9),
+    "derive-numpy": BuildKind("coordinates^3 x bodies", 0.15),
+    "derive-numba": BuildKind("coordinates^3 x bodies", 0.09),
+    "jit": BuildKind("lines of compiled source", 0.45),
+    "jit-kernel": BuildKind("lines of kernel source", 1.8),
+    "jit-ensemble": BuildKind("lines of kernel source (its walk kernel compiled)", 0.17),
 }
 
 

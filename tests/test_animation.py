@@ -79,3 +79,17 @@ def test_mp4_without_ffmpeg_names_ffmpeg(tmp_path: Path,
     with pytest.raises(ValueError, match="ffmpeg"):
         animate_walk(_frames(3), tmp_path / "walk.mp4", foot_radius=0.2, slope=0.05)
     assert not (tmp_path / "walk.mp4").exists()
+
+
+@pytest.mark.skipif(plots_gait.shutil.which("ffmpeg") is None
+                    or plots_gait.shutil.which("ffprobe") is None,
+                    reason="MP4 needs ffmpeg (and ffprobe to read it back)")
+def test_mp4_has_one_frame_per_row(tmp_path: Path) -> None:
+    import subprocess
+
+    out = animate_walk(_frames(7), tmp_path / "walk.mp4", foot_radius=0.2, slope=0.05, fps=10.0)
+    probe = subprocess.run(
+        ["ffprobe", "-v", "error", "-count_frames", "-select_streams", "v:0", "-show_entries",
+         "stream=nb_read_frames,codec_name,r_frame_rate", "-of", "csv=p=0", str(out)],
+        capture_output=True, text=True, check=True).stdout.strip()
+    assert probe.split(",") == ["h264", "10/1", "7"]

@@ -29,6 +29,8 @@ def test_load_factor_is_the_inverse_share_of_a_core_at_least_one() -> None:
     assert fu.load_factor(1.0) == 1.0
     assert fu.load_factor(1.7) == 1.0  # never faster than alone
     assert fu.load_factor(window=0.05) >= 1.0  # measured
+    first = fu.current_load()
+    assert first >= 1.0 and fu.current_load() == first  # reused, not measured again
 
 
 def test_recorded_builds_replace_the_reference_by_their_median() -> None:
@@ -82,7 +84,7 @@ def idle_machine(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Callable[[f
     def setup(probe: float) -> None:
         monkeypatch.setenv("HEELSTRIKE_CACHE_DIR", str(tmp_path))
         monkeypatch.setattr(fu._PROBE, "seconds", probe)
-        monkeypatch.setattr(fu, "load_factor", lambda: 1.0)
+        monkeypatch.setattr(fu, "current_load", lambda: 1.0)
 
     return setup
 

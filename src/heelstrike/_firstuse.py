@@ -60,6 +60,7 @@ __all__ = [
     "BuildKind",
     "Estimate",
     "coefficient",
+    "current_load",
     "estimate",
     "first_use",
     "load_factor",
@@ -86,6 +87,8 @@ LOAD_WINDOW = 0.5
 #: assumed to last (fitted on ``benchmarks/bench_first_use.py``'s runs: the whole factor made
 #: estimates 2-4x too long when a burst of other work ended soon after the build started).
 LOAD_PERSISTENCE = 0.5
+#: Seconds a measured load factor is reused (:func:`current_load`).
+LOAD_REUSE = 10.0
 
 
 @dataclass(frozen=True)
@@ -153,10 +156,13 @@ def _probe_once() -> float:
 
 
 class _Probe:
-    """The probe's value, timed once a process (an object: a cache)."""
+    """The probe's value, timed once a process, and the last load factor measured with the
+    time it was measured (an object: a cache)."""
 
     def __init__(self) -> None:
         self.seconds: float | None = None
+        self.load: float | None = None
+        self.load_at = 0.0
 
 
 _PROBE = _Probe()
@@ -197,6 +203,15 @@ def load_factor(share: float | None = None, window: float = LOAD_WINDOW) -> floa
             _probe_once()
         share = (time.process_time() - cpu0) / max(time.perf_counter() - wall0, 1e-9)
     return max(1.0, 1.0 / max(share, 1e-3))
+
+
+def current_load() -> float:
+    """:func:`load_factor`, measured at most once every :data:`LOAD_REUSE` seconds (a burst of
+    small compiles does not pay half a second each)."""
+    now = time.monotonic()
+    if _PROBE.load is None or now - _PROBE.load_at > LOAD_REUSE:
+        _PROBE.load, _PROBE.load_at = load_factor(), now
+    return _PROBE.load
 
 
 def read_records(path: Path) -> dict[str, list[float]]:
@@ -421,7 +436,7 @@ def first_use(what: str, *, kind: str, size: float, cache: Path | str,
 
     rates = cache_dir() / RATES_FILE
     probe = machine_probe()
-    load = load_factor()
+    load = current_load()
     est = estimate(kind, size, probe, read_records(rates), load)
     with _ACTIVE.lock:
         outer = _ACTIVE.stack[-1] if _ACTIVE.stack else None
@@ -450,7 +465,7 @@ def first_use(what: str, *, kind: str, size: float, cache: Path | str,
         if ok:
             if took >= QUIET_BELOW:  # a tiny compile's overhead says little about a rate
                 # the load over the build: the mean of the factors at its start and end
-                record(rates, kind, size, took, probe, 0.5 * (load + load_factor()))
+                record(rates, kind, size, took, probe, 0.5 * (load + current_load()))
             b.say(finish_text(what, b.built, took, est, str(cache)))
         else:
             b.say(f"heelstrike: {what}: failed after {_seconds(took)}")

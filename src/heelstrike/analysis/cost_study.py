@@ -69,6 +69,7 @@ __all__ = [
     "BRANCH_NOTE",
     "GAIT_VARIABLES",
     "STUDY_BYTES_PER_POINT",
+    "cheapest_gaits",
     "check_study_memory",
     "cost_study",
     "paper_eta",
@@ -344,6 +345,58 @@ def cost_study(
             **{f"param_{k}": float(v) for k, v in sorted(model.parameters.items()) if k != "R"},
         )
     return ds
+
+
+def cheapest_gaits(ds: xr.Dataset) -> list[dict[str, Any]]:
+    """The cheapest gait of a cost study per actuation, and the cheapest stable one if it differs.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A result of :func:`cost_study` (dimensions ``actuation``, ``radius`` and the target,
+        ``ds.attrs["target"]``: ``step_length`` or ``speed``).
+
+    Returns
+    -------
+    list of dict
+        One row per actuation with at least one gait found (in the order of ``ds.actuation``),
+        followed, when that gait is not stable, by a row for the cheapest stable gait of the
+        same actuation if there is one. Keys: ``actuation``; ``which`` (``"cheapest"`` or
+        ``"cheapest stable"``); ``radius`` (m); ``target`` (``"step_length"`` or ``"speed"``)
+        and ``target_value`` (m or m/s); ``parameter`` and ``parameter_unit`` (the actuation
+        parameter found by Newton); ``cost_of_transport`` (1); ``eta`` (J/m);
+        ``spectral_radius`` (1); ``stable`` (True, False, or None where undecided: the
+        dataset's ``stable`` is NaN); ``found`` and ``points`` (gaits found of grid points,
+        this actuation).
+    """
+    target = str(ds.attrs["target"])
+    rows: list[dict[str, Any]] = []
+    for act in ds["actuation"].values:
+        sub = ds.sel(actuation=act)
+        cot = np.asarray(sub["cost_of_transport"].values, dtype=float)
+        stable = np.asarray(sub["stable"].values, dtype=float)
+        finite = np.isfinite(cot)
+        if not finite.any():
+            continue
+        picks = [("cheapest", finite)]
+        best = np.unravel_index(np.argmin(np.where(finite, cot, np.inf)), cot.shape)
+        if stable[best] != 1.0 and (finite & (stable == 1.0)).any():
+            picks.append(("cheapest stable", finite & (stable == 1.0)))
+        for which, mask in picks:
+            i, j = np.unravel_index(np.argmin(np.where(mask, cot, np.inf)), cot.shape)
+            flag = float(stable[i, j])
+            rows.append({
+                "actuation": str(act), "which": which,
+                "radius": float(sub["radius"].values[i]),
+                "target": target, "target_value": float(sub[target].values[j]),
+                "parameter": float(sub["parameter"].values[i, j]),
+                "parameter_unit": str(sub["parameter_unit"].values),
+                "cost_of_transport": float(cot[i, j]), "eta": float(sub["eta"].values[i, j]),
+                "spectral_radius": float(sub["spectral_radius"].values[i, j]),
+                "stable": None if not np.isfinite(flag) else bool(flag == 1.0),
+                "found": int(finite.sum()), "points": int(cot.size),
+            })
+    return rows
 
 
 def check_study_memory(n_actuations: int, n_radii: int, n_targets: int) -> None:

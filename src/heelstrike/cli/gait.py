@@ -692,7 +692,7 @@ def _run_basin_model(args: argparse.Namespace) -> int:
             raise CliError("--q3-range and --q3dot-range need MIN < MAX")
     basin = _basin(args, grid, lambda: basin_module.model_basin_of_attraction(
         walker, args.slope, grid=grid, ranges=ranges, steps=args.steps, tol=args.tol,
-        backend=args.backend, progress=sys.stderr.isatty(),
+        backend=args.backend, progress=True,
         store=args.store,
     ))
     names = walker.section_names
@@ -727,7 +727,7 @@ def _run_basin(args: argparse.Namespace) -> int:
     grid = args.grid or (400, 400)
     basin = _basin(args, grid, lambda: basin_of_attraction(
         walker, args.slope, grid=grid, ranges=ranges, steps=args.steps,
-        tol=args.tol, progress=sys.stderr.isatty(), store=args.store,
+        tol=args.tol, progress=True, store=args.store,
         backend=args.backend,
     ))
     z = basin.fixed_point
@@ -826,7 +826,7 @@ def _run_map_model(args: argparse.Namespace) -> int:
                            f"{walker.description.name!r}: {exc}{hint}") from None
     writable_dir(args.out)
     gmap = model_gait_map(walker, name, values, slopes, backend=args.backend,
-                          progress=sys.stderr.isatty())
+                          progress=True)
     from heelstrike.models.description import parameter_units
 
     unit = parameter_units(walker.description).get(name)
@@ -892,7 +892,7 @@ def _run_map(args: argparse.Namespace) -> int:
     writable_dir(args.out)
     try:
         gmap = run_with_store(args.store, lambda: gait_map(
-            base, radii, slopes, progress=sys.stderr.isatty(),
+            base, radii, slopes, progress=True,
             store=args.store, backend=args.backend), out=args.out)
     except GaitNotFoundError as exc:
         raise CliError(f"no starting gait found: {exc}") from exc

@@ -359,7 +359,7 @@ def _run_impact_map(args: argparse.Namespace) -> int:
         print(f"impact-map: {n_points} points, about {seconds / 60:.3g} min (about "
               f"{IMPACT_MAP_SECONDS_PER_POINT * 1e3:g} ms a point)", file=sys.stderr)
     m = impact_map(walker, axes[0], axes[1], angle=args.angle, stance_rate=args.q3dot,
-                   progress=sys.stderr.isatty())
+                   progress=True)
     bad = ~np.isfinite(m.T_c) | ~np.isfinite(m.T_a) | ~np.isfinite(m.eta)
     if np.any(bad):
         i, j = (int(k[0]) for k in np.nonzero(bad))

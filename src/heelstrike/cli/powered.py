@@ -384,7 +384,11 @@ def _run_study(args: argparse.Namespace) -> int:
         raise CliError(f"no gait found at any of the {ds['cost_of_transport'].size} points of "
                        f"the grid ({', '.join(acts)} actuation; no figure drawn; the all-NaN "
                        f"data is in {str(nc)!r}); try other step lengths or speeds")
-    print_paths(paths)
+    from heelstrike.analysis.cost_study import cheapest_gaits
+
+    print(_study_table(cheapest_gaits(ds), wheel_from=leg_length))
+    print("files written:")
+    print_paths(f"  {p}" for p in paths)
     fresh = int((ds["branch"] == 1).sum())
     print(f"gaits: the cheapest stable one found at each point (else the cheapest unstable "
           f"one, marked), by continuation from neighbours or by fresh searches from several "
@@ -397,3 +401,32 @@ def _run_study(args: argparse.Namespace) -> int:
     if float(ds["radius"].max()) >= leg_length:  # a wheel's gaits: stability undecided
         print(f"heelstrike: note: {WHEEL_FAMILY}", file=sys.stderr)
     return 0
+
+
+def _study_table(rows: list[dict[str, Any]], *, wheel_from: float) -> str:
+    """The cost study's summary: one line per row of
+    :func:`~heelstrike.analysis.cost_study.cheapest_gaits` (a foot radius ``>= wheel_from``, m,
+    is McGeer's wheel, whose stability is undecided)."""
+    target = rows[0]["target"] if rows else "step_length"
+    tlabel = "step length (m)" if target == "step_length" else "speed (m/s)"
+    head = ["actuation", "gait", "R (m)", tlabel, "parameter", "CoT (1)", "eta (J/m)",
+            "max |mult|", "stable", "found"]
+    table = [head]
+    for r in rows:
+        if r["radius"] >= wheel_from:
+            stable = "undecided (wheel)"
+        else:
+            stable = {True: "yes", False: "no", None: "undecided"}[r["stable"]]
+        table.append([
+            r["actuation"], r["which"], f"{r['radius']:.4g}", f"{r['target_value']:.4g}",
+            f"{r['parameter']:.4g} {r['parameter_unit']}".strip(),
+            f"{r['cost_of_transport']:.4g}", f"{r['eta']:.4g}", f"{r['spectral_radius']:.3g}",
+            stable, f"{r['found']}/{r['points']}",
+        ])
+    widths = [max(len(row[k]) for row in table) for k in range(len(head))]
+    lines = ["cheapest gait per actuation (CoT = W_act / (m_total g L_S); stable: every "
+             "Floquet multiplier inside the unit circle)"]
+    lines += ["  " + "  ".join(c.ljust(w) for c, w in zip(row, widths, strict=True)).rstrip()
+              for row in table]
+    return "\n".join(lines)
+

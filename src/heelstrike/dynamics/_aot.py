@@ -52,6 +52,7 @@ from typing import Any
 
 import numpy as np
 
+from heelstrike._firstuse import HEARTBEAT
 from heelstrike.models._generated import _unsafe, cache_dir, numba_fingerprint
 
 __all__ = [
@@ -134,6 +135,13 @@ class AotLibrary:
         Modules whose source files define the compiled code (their bytes enter the digest).
     key : str
         Further digest input, e.g. the key of a walker's generated code.
+    kind : str
+        Kind of build for the first-use estimate (a key of :data:`heelstrike._firstuse.KINDS`).
+    size : callable or None
+        ``size() -> float``: the build's size in the kind's unit (None: the lines of the
+        source modules).
+    what : str
+        What the build makes, in words (default: "the <name> kernels, compiled ahead of time").
     """
 
     name: str
@@ -141,6 +149,9 @@ class AotLibrary:
     functions: Callable[[], Mapping[str, Any]]
     source_modules: tuple[str, ...]
     key: str = ""
+    kind: str = "aot-compass"
+    size: Callable[[], float] | None = None
+    what: str = ""
 
 
 class _Checked:
@@ -247,40 +258,49 @@ def _import(name: str, path: Path) -> ModuleType:
 def build(lib: AotLibrary, *, quiet: bool = False) -> Path:
     """Compile ``lib`` with numba's ``pycc`` into the cache and return the module's path.
 
+    The build is announced with an estimate from the library's size and this machine's speed,
+    followed stage by stage (kernel k of n) and reported (:func:`heelstrike._firstuse.first_use`);
+    ``quiet`` silences it.
+
     Raises
     ------
     RuntimeError
         If the build fails (the message says why), or the cache folder is unsafe.
     """
+    from heelstrike._firstuse import first_use
+
     path = _path(lib)
     folder = path.parent
     folder.mkdir(parents=True, exist_ok=True, mode=0o700)
     why = _unsafe(os.lstat(folder), directory=True)
     if why is not None:
         raise RuntimeError(f"not building into {folder}: it {why}")
-    if not quiet:
-        took = "about 15 s" if lib.name == "compass" else "1 to 2.5 min"
-        print(f"heelstrike: compiling the {lib.name} kernels ahead of time (first use only, "
-              f"cached afterwards; this takes {took} on a 2-core machine)",
-              file=sys.stderr, flush=True)
-    t0 = time.perf_counter()
-    _CLOCK.start()
-    try:
-        _compile(lib, path, folder)
-    finally:
-        _CLOCK.end()
-    if not quiet:
-        print(f"heelstrike: built {path.name} in {time.perf_counter() - t0:.1f} s",
-              file=sys.stderr, flush=True)
+    size = lib.size() if lib.size is not None else _source_lines(lib.source_modules)
+    what = lib.what or f"the {lib.name} kernels, compiled ahead of time"
+    with first_use(what, kind=lib.kind, size=size, cache=folder, built=path.name,
+                   stages=2 + len(lib.exports), quiet=quiet, heartbeat=HEARTBEAT) as b:
+        _CLOCK.start()
+        try:
+            _compile(lib, path, folder, b.stage)
+        finally:
+            _CLOCK.end()
     return path
 
 
-def _compile(lib: AotLibrary, path: Path, folder: Path) -> None:
-    """The ``pycc`` build of :func:`build` (into a private folder, moved into ``path``)."""
+def _source_lines(modules: tuple[str, ...]) -> int:
+    """Lines of the source files of ``modules``."""
+    return sum(_module_file(m).read_text().count("\n") for m in modules)
+
+
+def _compile(lib: AotLibrary, path: Path, folder: Path, stage: Callable[[str], None]) -> None:
+    """The ``pycc`` build of :func:`build` (into a private folder, moved into ``path``);
+    ``stage(name)`` is called as each stage starts."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # pycc's pending-deprecation notice is ours to handle
         from numba.pycc import CC
+        from numba.pycc import compiler as pycc_compiler
 
+        stage("preparing the functions to compile")
         functions = lib.functions()
         with tempfile.TemporaryDirectory(dir=folder, prefix=".build-") as tmp:
             cc = CC(module_name(lib))
@@ -289,10 +309,26 @@ def _compile(lib: AotLibrary, path: Path, folder: Path) -> None:
             for e in lib.exports:
                 fn = functions[e.name]
                 cc.export(e.name, e.signature)(getattr(fn, "py_func", fn))
+            n = len(lib.exports)
+            original = pycc_compiler.compile_extra
+            done = [0]
+
+            def compile_extra(*args: Any, **kwargs: Any) -> Any:
+                done[0] += 1
+                name = getattr(args[2] if len(args) > 2 else None, "__name__", "?")
+                stage(f"compiling kernel {done[0]} of {n}, {name} (numba typing and LLVM)")
+                result = original(*args, **kwargs)
+                if done[0] == n:
+                    stage("writing the native object and linking the extension module")
+                return result
+
+            pycc_compiler.compile_extra = compile_extra
             try:
                 cc.compile()
             except Exception as exc:  # compiler missing, pycc failure: reported by the caller
                 raise RuntimeError(f"numba.pycc could not build {lib.name}: {exc}") from exc
+            finally:
+                pycc_compiler.compile_extra = original
             built = [p for p in Path(tmp).iterdir() if p.name.endswith(path.suffix)]
             if len(built) != 1:
                 raise RuntimeError(f"numba.pycc built {[p.name for p in built]}, expected one "
@@ -342,10 +378,13 @@ def compile_seconds() -> float:
 
 
 def track_numba_compiles() -> None:
-    """Count numba's JIT compiles (its ``numba:compile`` events) in :func:`compile_seconds`.
+    """Count numba's JIT compiles (its ``numba:compile`` events) in :func:`compile_seconds`,
+    and announce them (:func:`heelstrike._firstuse.numba_compile_started`).
 
     Called by the kernel modules when they import numba; idempotent.
     """
+    from heelstrike._firstuse import numba_compile_ended, numba_compile_started
+
     with _CLOCK.lock:
         if _CLOCK.listening:
             return
@@ -355,9 +394,12 @@ def track_numba_compiles() -> None:
     class _Listener(event.Listener):
         def on_start(self, ev: Any) -> None:
             _CLOCK.start()
+            numba_compile_started(ev.data)
 
         def on_end(self, ev: Any) -> None:
             _CLOCK.end()
+            details = getattr(ev, "_exc_details", None)
+            numba_compile_ended(details[1] if details else None)
 
     event.register("numba:compile", _Listener())
 

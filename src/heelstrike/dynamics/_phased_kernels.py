@@ -12,8 +12,8 @@ the float-configuration and impact-row layouts and the status and event codes ar
 
 from __future__ import annotations
 
+import contextlib
 import math
-import sys
 import threading
 import types
 import warnings
@@ -912,8 +912,8 @@ _COMPILE_LOCK = threading.RLock()
 def _walk_kernel() -> Any:
     """``_walk_py`` compiled for first-class function arguments (once; numba disk cache).
 
-    Without a numba cache (first use) the compilation takes a minute or two; a one-line note
-    says so on stderr.
+    Without a numba cache (first use) the compilation is announced with an estimate, followed
+    and reported on stderr (:func:`heelstrike._firstuse.first_use`).
     """
     with _COMPILE_LOCK:
         if not _KERNEL:
@@ -927,14 +927,26 @@ def _compile_walk_kernel() -> None:
         cached = Path(disp._cache._cache_file._index_path).is_file()
     except AttributeError:  # pragma: no cover - numba internals moved: stay quiet
         cached = True
-    if not cached:
-        print("heelstrike: compiling the simulation kernel (first use only, cached "
-              "afterwards; this takes a minute or two)", file=sys.stderr, flush=True)
-    with warnings.catch_warnings():  # first-class function types are numba's "experimental"
-        warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
-        disp.compile(_WALK_SIG)
+    with _announced(disp, "the walk kernel of every described walker", quiet=cached):
+        with warnings.catch_warnings():  # first-class function types are numba's "experimental"
+            warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
+            disp.compile(_WALK_SIG)
     disp.disable_compile()  # the generated functions convert to the compiled signature
     _KERNEL.append(disp)
+
+
+def _announced(disp: Any, what: str, *, quiet: bool, kind: str = "jit-kernel") -> Any:
+    """:func:`heelstrike._firstuse.first_use` for a JIT kernel of this module (size: the lines
+    of the modules it compiles; the cache: numba's for this module)."""
+    from heelstrike._firstuse import first_use
+    from heelstrike.dynamics._aot import _source_lines
+
+    if quiet:  # loaded from numba's cache: no build, no probe
+        return contextlib.nullcontext()
+    cache = getattr(getattr(disp, "_cache", None), "_cache_path", None) or "numba's cache"
+    size = _source_lines((__name__, "heelstrike.dynamics._dp5", "heelstrike.models._contact"))
+    return first_use(f"{what}, compiled by numba's JIT", kind=kind, size=size,
+                     cache=cache, built=f"{disp.py_func.__name__} (numba JIT)", quiet=quiet)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1001,7 +1013,12 @@ def _ensemble_kernel() -> Any:
         if not _ENS_KERNEL:
             _walk_kernel()
             disp: Any = njit(cache=True, nogil=True)(_ensemble_py)
-            with warnings.catch_warnings():
+            try:
+                cached = Path(disp._cache._cache_file._index_path).is_file()
+            except AttributeError:  # pragma: no cover - numba internals moved: stay quiet
+                cached = True
+            with _announced(disp, "the ensemble kernel of every described walker",
+                            quiet=cached, kind="jit-ensemble"), warnings.catch_warnings():
                 warnings.simplefilter("ignore", NumbaExperimentalFeatureWarning)
                 disp.compile(_ENS_SIG)
             disp.disable_compile()

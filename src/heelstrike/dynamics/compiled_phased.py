@@ -165,9 +165,18 @@ def _library(walker: BuiltWalker) -> AotLibrary:
 
             return bound_functions(build_numba(desc))
 
+        def size() -> float:
+            from heelstrike.dynamics._aot import _source_lines
+
+            generated = build_numba(desc)  # derived first (announced as a build of its own)
+            lines = generated.path.read_text().count("\n") if generated.path else 400
+            return float(_source_lines(_SOURCES) + lines)
+
         lib = _LIBRARIES.by_key[key] = AotLibrary(
             name=f"walker_{desc.name}" if desc.name.isidentifier() else "walker",
             exports=AOT_EXPORTS, functions=functions, source_modules=_SOURCES, key=key,
+            kind="aot-walker", size=size,
+            what=f"the {desc.name!r} walker's kernels, compiled ahead of time",
         )
     return lib
 

@@ -307,6 +307,15 @@ def _numba_cache_safe(path: Path) -> bool:
     return True
 
 
+def _numba_cached(path: Path) -> bool:
+    """Whether numba's disk cache holds an index for the generated module at ``path``."""
+    folder = path.parent / "__pycache__"
+    try:
+        return any(e.name.startswith(path.stem) and e.suffix == ".nbi" for e in folder.iterdir())
+    except OSError:
+        return False
+
+
 def _load(source: str, path: Path, key: str, cache: bool) -> dict[str, Any]:
     """Verify, execute with no builtins (``math`` injected) and jit the three functions."""
     check_source(source)
@@ -359,12 +368,26 @@ def build_numba(desc: WalkerDescription, *, use_cache: bool = True) -> NumbaMode
             )
             source, from_cache = None, False
     written: Path | None = path if from_cache else None
+    from heelstrike._firstuse import first_use
+
     if source is None:
-        source = generate_numba_source(desc)
-        written = write_cached(path, source) if use_cache else None
+        from heelstrike.models.builder import derivation_size
+
+        with first_use(f"the {desc.name!r} walker's equations derived with sympy, numba code "
+                       "generated", kind="derive-numba", size=derivation_size(desc),
+                       cache=path.parent, built=path.name):
+            source = generate_numba_source(desc)
+            written = write_cached(path, source) if use_cache else None
     # numba's disk cache needs the source file on disk (and a folder only we can write)
     numba_cache = written is not None and _numba_cache_safe(path)
-    fns = _load(source, path, key, cache=numba_cache)
+    if numba_cache and _numba_cached(path):
+        fns = _load(source, path, key, cache=numba_cache)
+    else:
+        with first_use(f"the {desc.name!r} walker's {len(signatures())} generated functions "
+                       "compiled by numba", kind="jit", size=source.count("\n"),
+                       cache=path.parent / "__pycache__" if numba_cache else
+                       "nowhere (compiled in every process)", built=path.name):
+            fns = _load(source, path, key, cache=numba_cache)
     model = NumbaModel(
         key=key,
         n=len(desc.coordinate_names),

@@ -180,6 +180,14 @@ def _compile(source: str, path: Path | str) -> dict[str, Any]:
     return load_source(source, str(path), helpers=_HELPERS, functions=GENERATED_FUNCTIONS)
 
 
+def derivation_size(desc: WalkerDescription) -> float:
+    """The size of a walker's derivation for its first-use estimate: ``coordinates**3 * bodies``
+    (:mod:`heelstrike._firstuse`; sympy's work grows with the mass matrix's entries times the
+    terms each body adds to them)."""
+    n = 2 + len(desc.links)
+    return float(n**3 * (len(desc.links) + len(desc.point_masses)))
+
+
 def build(desc: WalkerDescription, *, use_cache: bool = True) -> GeneratedModel:
     """Derive (or fetch from the caches) the numeric functions of a walker structure.
 
@@ -216,12 +224,19 @@ def build(desc: WalkerDescription, *, use_cache: bool = True) -> GeneratedModel:
             )
             _MEMORY[key] = model
             return model
-    from heelstrike.models._codegen import generate_source  # sympy only on a miss
+    from heelstrike._firstuse import first_use
 
-    source = generate_source(desc, key)
-    ns = _compile(source, path)
-    _check_generated(ns, desc)
-    written = write_cached(path, source) if use_cache else None
+    with first_use(f"the {desc.name!r} walker's equations of motion derived with sympy, numpy "
+                   "code generated", kind="derive-numpy", size=derivation_size(desc),
+                   cache=path.parent, built=path.name, stages=2) as b:
+        b.stage("deriving and generating (sympy)")
+        from heelstrike.models._codegen import generate_source  # sympy only on a miss
+
+        source = generate_source(desc, key)
+        b.stage("checking and loading the generated code")
+        ns = _compile(source, path)
+        _check_generated(ns, desc)
+        written = write_cached(path, source) if use_cache else None
     model = GeneratedModel(
         key=key, source=source, namespace=MappingProxyType(ns), path=written, from_cache=False
     )

@@ -77,7 +77,8 @@ nitpicky = True
 nitpick_ignore_regex = [
     # third-party objects: no intersphinx inventories (the build needs no network)
     (r"py:.*", r"(numpy|matplotlib|pandas|scipy|xarray|dask|distributed|zarr|pinocchio|pin"
-               r"|collections\.abc|abc|dataclasses|enum|functools|typing|concurrent\.futures|filelock)"
+               r"|collections\.abc|abc|dataclasses|enum|functools|typing|concurrent\.futures|filelock"
+               r"|os|pathlib|shutil|subprocess|tempfile|mujoco)"
                r"(\..*)?"),
     # private modules (heelstrike.models._generated, ...) and functions are not documented
     (r"py:.*", r"heelstrike(\.\w+)*\._\w+(\..*)?"),

@@ -537,3 +537,14 @@ def test_ignored_or_meaningless_options_are_refused(argv: list[str], needle: str
     line = _one_line_error(*_run(capsys, *argv, "--out", str(out)))
     assert needle in line
     assert not out.exists() or not any(out.iterdir())
+
+
+def test_error_lines_escape_control_characters(tmp_path: Path,
+                                               capsys: pytest.CaptureFixture[str]) -> None:
+    # issue 36: a path holding an ANSI escape was printed raw in the error line
+    bad = tmp_path / "log\x1b[31m.txt"
+    bad.write_text("t,q_0,v_0\n")
+    assert main(["robot", "replay", str(bad), "--model", "talos", "--contact", "a:point"]) == 2
+    err = capsys.readouterr().err
+    assert "\x1b" not in err and "\\x1b[31m" in err
+    assert err.startswith("heelstrike: error:") and err.count("\n") == 1

@@ -134,11 +134,19 @@ def one_line(exc: BaseException) -> str:
     return text or type(exc).__name__
 
 
+def printable(text: str) -> str:
+    """``text`` with every control character but newline and tab written as an escape
+    (``\\x1b``): names from robot files and paths must not drive the terminal."""
+    return "".join(ch if ch in "\n\t" or not (ord(ch) < 32 or 127 <= ord(ch) < 160)
+                   else f"\\x{ord(ch):02x}" for ch in text)
+
+
 def fail(message: str) -> int:
-    """Print the one-line error (after the traceback when ``HEELSTRIKE_DEBUG=1``); status 2."""
+    """Print the one-line error (after the traceback when ``HEELSTRIKE_DEBUG=1``), control
+    characters escaped (a path or a name in it must not drive the terminal); status 2."""
     if os.environ.get("HEELSTRIKE_DEBUG") == "1":
         import traceback
 
         traceback.print_exc()
-    print(f"heelstrike: error: {message}", file=sys.stderr)
+    print(f"heelstrike: error: {printable(message)}", file=sys.stderr)
     return 2

@@ -16,7 +16,7 @@ import textwrap
 from pathlib import Path
 from typing import Any
 
-from heelstrike.cli._render import json_text, print_json
+from heelstrike.cli._render import json_text, print_json, printable
 from heelstrike.io import write_text
 
 __all__ = [
@@ -68,16 +68,9 @@ def _one_joint_units(kind: str, nq: int, nv: int) -> tuple[list[str], list[str]]
     return (["rad"] if nq == nv == 1 else ["1"]) * nq, ["rad/s"] * nv
 
 
-def _printable(text: str) -> str:
-    """``text`` with every control character but newline and tab written as an escape
-    (``\\x1b``): names from robot files and paths must not drive the terminal."""
-    return "".join(ch if ch in "\n\t" or not (ord(ch) < 32 or 127 <= ord(ch) < 160)
-                   else f"\\x{ord(ch):02x}" for ch in text)
-
-
 def _print(text: str = "", *, file: Any = None) -> None:
     """:func:`print` one line (or block) of text output, control characters escaped."""
-    print(_printable(text), file=file)
+    print(printable(text), file=file)
 
 
 def _joules(value: float) -> str:

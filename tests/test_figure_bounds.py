@@ -64,6 +64,10 @@ def assert_figure_is_readable(fig: Figure) -> None:
     for i, (ta, a) in enumerate(texts):
         for tb, b in texts[i + 1:]:
             assert not a.overlaps(b), (ta, tb)
+    for legend in legends:  # a legend covers no title, label or caption either
+        lb = legend.get_window_extent(renderer)
+        for text, bb in texts:
+            assert not lb.overlaps(bb), (text, "under the legend")
 
 
 @pytest.fixture(scope="module")

@@ -71,7 +71,8 @@ def figure2(data: pd.DataFrame) -> Figure:
         ax.grid(alpha=0.3)
     ax_a.set_ylim(bottom=0.0)
     # beside the panels: inside, the R = 0 curve ran under it between 14 and 22 deg
-    fig.legend(*ax_c.get_legend_handles_labels(), fontsize="small", loc="outside right upper")
+    ax_a.legend(*ax_c.get_legend_handles_labels(), fontsize="small", loc="upper left",
+                bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     fig.suptitle(
         "Fig. 2: decomposition of the pre-impact kinetic energy "
         r"($\dot q_3^- = 1$ rad/s, $\dot q_4^- = 0$; admissible impacts only)",

@@ -141,8 +141,8 @@ def paper_comparison_figure(ds: xr.Dataset) -> Figure:
             free = np.isfinite(y) & (y * float(length) <= floor)
             (line,) = ax.plot(R, np.where(free, np.nan, y), "o-", ms=3,
                               label=f"{act}: W_act / L")
-            if np.any(free):
-                ax.plot(R[free], np.full(int(free.sum()), 0.03), "o", ms=6,
+            if np.any(free):  # drawn above the paper's diamond (same edge, same R)
+                ax.plot(R[free], np.full(int(free.sum()), 0.09), "o", ms=6,
                         color=line.get_color(), transform=ax.get_xaxis_transform(),
                         clip_on=False, label=f"{act}: {NO_WORK_LABEL}")
             if "stable" in sel:  # 0: unstable; NaN: no gait, or stability undecided

@@ -542,6 +542,12 @@ def test_ignored_or_meaningless_options_are_refused(argv: list[str], needle: str
 def test_error_lines_escape_control_characters(tmp_path: Path,
                                                capsys: pytest.CaptureFixture[str]) -> None:
     # issue 36: a path holding an ANSI escape was printed raw in the error line
+    from heelstrike.cli._render import fail
+
+    assert fail("cannot read /tmp/a\x1b[31m.json") == 2
+    err = capsys.readouterr().err
+    assert "\x1b" not in err and "\\x1b[31m" in err
+    pytest.importorskip("pinocchio")  # a command that names the path as it is given
     bad = tmp_path / "log\x1b[31m.txt"
     bad.write_text("t,q_0,v_0\n")
     assert main(["robot", "replay", str(bad), "--model", "talos", "--contact", "a:point"]) == 2

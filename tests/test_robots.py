@@ -693,15 +693,22 @@ def test_readme_robot_example_runs(tmp_path) -> None:
     assert "talos" in outputs[0] and (tmp_path / "state.json").is_file()
     d = json.loads(outputs[-1])
     keys = {"robot", "nq", "nv", "T", "T_c", "T_a", "T_plus", "energy_lost", "qdot_plus",
-            "impulse", "contacts", "units", "loss_beyond_T_c", "admissible", "pulling_contacts"}
+            "impulse", "contacts", "units", "loss_beyond_T_c", "admissible", "pulling_contacts",
+            "outcomes", "unique", "active_sets", "solutions", "restitution_law",
+            "tilting_contacts"}
     assert set(d) == keys  # the keys the README lists, no more
     assert d["T"] == pytest.approx(d["T_c"] + d["T_a"], rel=1e-12)
     shares = sum(c["T_c_normal"] + c["T_c_tangential"] for c in d["contacts"])
     assert shares == pytest.approx(d["T_c"], rel=1e-10)
-    assert set(d["contacts"][0]) == {
+    per_contact = {
         "frame", "type", "role", "mode", "T_c_normal", "T_c_tangential", "force_impulse",
         "moment_impulse", "centre_of_pressure", "normal_velocity_pre", "normal_velocity_post",
         "slip_speed_post"}
+    assert set(d["contacts"][0]) == per_contact | {"corners"}  # the striking support polygon
+    assert set(d["contacts"][1]) == per_contact  # the kept sole, held flat
+    assert d["unique"] is True and d["outcomes"] == len(d["solutions"]) == 1
+    corners = d["contacts"][0]["corners"]
+    assert len(corners) == 4 and all(k["normal_velocity_post"] > -1e-9 for k in corners)
 
 
 def test_cli_impact_from_urdf(tmp_path, capsys) -> None:

@@ -46,7 +46,8 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "basin_of_attraction", "default_ranges", "model_basin_of_attraction", "model_slice_axes",
     ),
     "cost_study": (
-        "BRANCH_NOTE", "GAIT_VARIABLES", "STUDY_BYTES_PER_POINT", "check_study_memory", "paper_eta",
+        "BRANCH_NOTE", "GAIT_VARIABLES", "STUDY_BYTES_PER_POINT", "cheapest_gaits",
+        "check_study_memory", "paper_eta",
     ),
     "gait_map": (
         "GaitMap", "NewtonGait", "compass_bifurcation", "model_bifurcation", "model_gait_map",

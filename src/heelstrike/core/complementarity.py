@@ -49,7 +49,6 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._results import ResultDictMixin
@@ -414,6 +413,8 @@ def _pinv_psd(W: FloatArray) -> FloatArray:
 
 
 def _reduce(M: FloatArray, A_b: FloatArray, R: FloatArray) -> _Reduced:
+    import scipy.linalg  # here: a walk's heel strike imports no scipy.linalg (issue 9.6)
+
     n = M.shape[0]
     try:
         cho = scipy.linalg.cho_factor(M)

@@ -454,3 +454,15 @@ def test_declared_constraints_are_checked_on_every_value() -> None:
         data["constraints"] = [bad]
         with pytest.raises(ModelDescriptionError, match=r"^constraints\[0\]"):
             parse_description(data)
+
+
+def test_a_fifo_is_refused_not_waited_on(tmp_path: Path) -> None:
+    # the description reader opened the file before checking its type: a FIFO (no writer)
+    # blocked the open for ever, in the API (the CLI refused it by a check of its own)
+    fifo = tmp_path / "walker.toml"
+    os.mkfifo(fifo)
+    code = ("import sys\nfrom heelstrike.models.description import read_description\n"
+            "try:\n    read_description(sys.argv[1])\nexcept ValueError as e:\n    print(e)\n")
+    res = subprocess.run([sys.executable, "-c", code, str(fifo)], capture_output=True,
+                         text=True, timeout=120, check=False)  # a hang is killed, not waited on
+    assert res.returncode == 0 and "not a regular file" in res.stdout, res.stderr

@@ -261,8 +261,6 @@ def model_from_args(args: argparse.Namespace) -> Any:
             warnings.warn(ShippedNameWarning(
                 f"--model {model} is the shipped walker; the file {model!r} in the working "
                 f"directory is not read (give it as ./{model} to use it)"), stacklevel=2)
-    elif os.path.exists(model) and not os.path.isfile(model):
-        raise CliError(f"--model {model!r} is not a regular file")
     from heelstrike.models.description import ModelDescriptionError
 
     try:

@@ -1133,7 +1133,8 @@ def read_description(path: str | Path) -> WalkerDescription:
         On TOML syntax errors or a malformed description (message names the field).
     """
     p = Path(path)
-    with open(p, "rb") as fh:
+    # opened non-blocking: a FIFO given as the file is refused below instead of hanging the open
+    with os.fdopen(os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0)), "rb") as fh:
         if not stat.S_ISREG(os.fstat(fh.fileno()).st_mode):
             raise ModelDescriptionError(f"{p}: not a regular file")
         raw = fh.read(MAX_DESCRIPTION_BYTES + 1)

@@ -360,6 +360,57 @@ def test_logs_round_trip_in_both_conventions(mujoco, tmp_path) -> None:
                                                                       atol=1e-12)
 
 
+def test_hdf5_logs_round_trip_and_replay_as_the_npz(mujoco, tmp_path, capsys) -> None:
+    """An HDF5 log (root datasets or a named group) reads back to the trajectory written, and
+    ``robot replay LOG.h5`` gives the same touchdown numbers as the NPZ of the same record."""
+    h5py = pytest.importorskip("h5py")
+    path = _rod_file(tmp_path)
+    robot = load_mjcf(path)
+    qpos, qvel = _rod_start()
+    traj = mujoco_rollout(path, duration=0.01, robot=robot, qpos=qpos, qvel=qvel)
+    back = read_trajectory(write_trajectory(traj, tmp_path / "log.h5"), robot)
+    assert np.array_equal(back.time, traj.time)
+    assert np.array_equal(back.q, traj.q) and np.array_equal(back.v, traj.v)
+    with h5py.File(tmp_path / "runs.hdf5", "w") as f:
+        g = f.create_group("trials/run3")
+        for key, arr in (("t", traj.time), ("q", traj.q), ("v", traj.v)):
+            g.create_dataset(key, data=arr)
+    grouped = read_trajectory(f"{tmp_path / 'runs.hdf5'}#/trials/run3", robot)
+    assert np.array_equal(grouped.q, traj.q) and np.array_equal(grouped.v, traj.v)
+    write_trajectory(traj, tmp_path / "log.npz")
+    results = []
+    for name in ("log.npz", "log.h5"):
+        assert main(["robot", "replay", str(tmp_path / name), "--model", str(path),
+                     "--contact", "foot:arc:0.005", "--window", "0.002", "--json"]) == 0
+        results.append(json.loads(capsys.readouterr().out)["touchdowns"])
+    assert len(results[0]) == 1 and results[0] == results[1]
+
+
+def test_hdf5_log_refusals_name_what_is_missing(tmp_path, monkeypatch) -> None:
+    """A missing group or dataset is named with what the file holds; a group in a non-HDF5
+    path is refused; without h5py the message names the 'hdf5' extra."""
+    h5py = pytest.importorskip("h5py")
+    robot = load_mjcf(_rod_file(tmp_path))
+    with h5py.File(tmp_path / "log.h5", "w") as f:
+        f.create_dataset("t", data=np.arange(3.0))
+        f.create_dataset("q", data=np.zeros((3, robot.nq)))
+        f.create_group("other")
+    with pytest.raises(ValueError, match=r"no dataset v \(needs t, q, v; found q, t\)"):
+        read_trajectory(tmp_path / "log.h5", robot)
+    with pytest.raises(ValueError, match=r"no group '/run9' \(groups: /, /other\)"):
+        read_trajectory(f"{tmp_path / 'log.h5'}#/run9", robot)
+    np.savez(tmp_path / "log.npz", t=np.arange(3.0), q=np.zeros((3, robot.nq)),
+             v=np.zeros((3, robot.nv)))
+    with pytest.raises(ValueError, match="does not exist"):
+        read_trajectory(f"{tmp_path / 'log.npz'}#/run", robot)
+    (tmp_path / "bad.h5").write_text("not hdf5")
+    with pytest.raises(ValueError, match="not an HDF5 file"):
+        read_trajectory(tmp_path / "bad.h5", robot)
+    monkeypatch.setitem(sys.modules, "h5py", None)
+    with pytest.raises(MissingExtraError, match=r"the 'hdf5' extra: pip install '\.\[hdf5\]'"):
+        read_trajectory(tmp_path / "log.h5", robot)
+
+
 def test_touchdowns_ignore_chatter_and_keep_the_stance() -> None:
     """A contact hovering around the ground within the clearance touches down once; a second
     contact landing later finds the first on the ground (kept)."""

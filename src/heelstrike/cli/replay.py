@@ -41,11 +41,13 @@ def add_replay_command(rsub: Any) -> None:
         "record did over --window seconds: recorded_loss = T_before - T_after (kinetic), "
         "mechanical_loss the same with the gravitational potential, and each striking "
         "contact's effective restitution -u_after/u_before (vertical velocity). FILE is a log "
-        "(.npz with arrays t (N,), q (N, nq), v (N, nv), or .csv with columns t, q_0.., v_0..; "
+        "(.npz or HDF5 .h5/.hdf5 with arrays t (N,), q (N, nq), v (N, nv), FILE.h5#GROUP for a "
+        "group's, needing the 'hdf5' extra; or .csv with columns t, q_0.., v_0..; "
         "SI units; --convention says whose q/v) or an MJCF (.xml) that MuJoCo simulates for "
         "--duration seconds from its first keyframe or its default state (needs the 'mujoco' "
         "extra).")
-    p.add_argument("file", metavar="FILE", help="trajectory log (.npz, .csv) or MJCF (.xml)")
+    p.add_argument("file", metavar="FILE",
+                   help="trajectory log (.npz, .h5/.hdf5[#GROUP], .csv) or MJCF (.xml)")
     p.add_argument("--model", default=None, metavar="MODEL",
                    help="the robot: a shipped name, a .urdf or an .xml (MJCF) file (default: "
                    "FILE when FILE is an MJCF)")

@@ -351,16 +351,18 @@ def potential_energy(robot: Robot, traj: Trajectory) -> FloatArray:
 def read_trajectory(
     path: str | Path, robot: Robot, *, convention: Convention = "pinocchio"
 ) -> Trajectory:
-    """Read a log: NPZ with arrays ``t`` (N,), ``q`` (N, nq), ``v`` (N, nv), or CSV.
+    """Read a log: NPZ with arrays ``t`` (N,), ``q`` (N, nq), ``v`` (N, nv), HDF5 or CSV.
 
-    The CSV has a header row and one row per sample: a column ``t`` (s), then ``q_0`` ...
-    ``q_{nq-1}``, then ``v_0`` ... ``v_{nv-1}`` (by name; other columns are ignored). Units:
-    s, m, rad, m/s, rad/s (SI).
+    An HDF5 file (``.h5``, ``.hdf5``; needs the ``hdf5`` extra, h5py) holds the same three
+    datasets ``t``, ``q``, ``v`` at its root, or in the group named after ``#`` in the path
+    (``log.h5#/run3``). The CSV has a header row and one row per sample: a column ``t`` (s),
+    then ``q_0`` ... ``q_{nq-1}``, then ``v_0`` ... ``v_{nv-1}`` (by name; other columns are
+    ignored). Units: s, m, rad, m/s, rad/s (SI).
 
     Parameters
     ----------
     path : str or Path
-        ``.npz`` or ``.csv`` file.
+        ``.npz``, ``.h5``/``.hdf5`` (optionally ``FILE#GROUP``) or ``.csv`` file.
     robot : Robot
         The robot the log records (sizes checked).
     convention : {"pinocchio", "mujoco"}
@@ -376,9 +378,11 @@ def read_trajectory(
     RobotError
         A missing file or array/column, wrong sizes, non-finite values.
     """
-    p = Path(path)
+    p, group = _split_group(path)
     if not p.is_file():
         raise RobotError(f"trajectory file {str(p)!r} does not exist")
+    if group is not None and p.suffix.lower() not in _HDF5:
+        raise RobotError(f"{p}: a group ({group!r}) can be named only in an HDF5 file")
     if convention not in ("pinocchio", "mujoco"):
         raise RobotError(f"convention must be 'pinocchio' or 'mujoco', got {convention!r}")
     nq, nv = robot.nq, robot.nv
@@ -391,6 +395,8 @@ def read_trajectory(
                 t, q, v = (np.asarray(z[k], dtype=float) for k in ("t", "q", "v"))
         except (OSError, ValueError) as exc:
             raise RobotError(f"{p}: not an NPZ file ({exc})") from None
+    elif p.suffix.lower() in _HDF5:
+        t, q, v = _read_hdf5(p, group)
     elif p.suffix.lower() == ".csv":
         import pandas as pd
 
@@ -410,7 +416,7 @@ def read_trajectory(
             raise RobotError(f"{p}: non-numeric entries") from None
         t, q, v = arr[:, 0], arr[:, 1:1 + nq], arr[:, 1 + nq:]
     else:
-        raise RobotError(f"{p}: a trajectory is a .npz or .csv file")
+        raise RobotError(f"{p}: a trajectory is a .npz, .h5/.hdf5 or .csv file")
     if q.ndim != 2 or q.shape[1] != nq or v.ndim != 2 or v.shape[1] != nv:
         raise RobotError(f"{p}: q must be (N, nq={nq}) and v (N, nv={nv}), got {q.shape} "
                          f"and {v.shape}")
@@ -419,15 +425,62 @@ def read_trajectory(
     return Trajectory(time=t.reshape(-1), q=q, v=v, source=str(p))
 
 
+_HDF5 = (".h5", ".hdf5")
+
+
+def _split_group(path: str | Path) -> tuple[Path, str | None]:
+    """``"log.h5#/run3"`` -> ``(Path("log.h5"), "/run3")``; a path without ``#`` has no group."""
+    text = str(path)
+    head, sep, group = text.rpartition("#")
+    if sep and Path(head).suffix.lower() in _HDF5:
+        return Path(head), group or "/"
+    return Path(text), None
+
+
+def _read_hdf5(p: Path, group: str | None) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The datasets ``t``, ``q``, ``v`` of HDF5 file ``p`` (in ``group``, default the root)."""
+    h5py = require("h5py", "reading an HDF5 log", extra="hdf5")
+    where = group or "/"
+    try:
+        with h5py.File(p, "r") as f:
+            if where not in f or not isinstance(f[where], h5py.Group):
+                groups: list[str] = []
+                f.visit(lambda name: groups.append("/" + name)
+                        if isinstance(f[name], h5py.Group) else None)
+                raise RobotError(f"{p}: no group {where!r} (groups: "
+                                 f"{', '.join(['/', *groups][:8])})")
+            g = f[where]
+            missing = [k for k in ("t", "q", "v")
+                       if k not in g or not isinstance(g[k], h5py.Dataset)]
+            if missing:
+                found = sorted(k for k in g if isinstance(g[k], h5py.Dataset))
+                raise RobotError(f"{p}{'' if where == '/' else '#' + where}: no dataset "
+                                 f"{', '.join(missing)} (needs t, q, v; found "
+                                 f"{', '.join(found) or 'none'})")
+            try:
+                t, q, v = (np.asarray(g[k][()], dtype=float) for k in ("t", "q", "v"))
+            except (TypeError, ValueError) as exc:
+                raise RobotError(f"{p}: t, q, v must be numeric arrays ({exc})") from None
+    except OSError as exc:
+        raise RobotError(f"{p}: not an HDF5 file ({exc})") from None
+    return t, q, v
+
+
 def write_trajectory(traj: Trajectory, path: str | Path) -> Path:
-    """Write ``traj`` as :func:`read_trajectory` reads it (``.npz`` or ``.csv``, Pinocchio's
-    conventions); returns the path."""
+    """Write ``traj`` as :func:`read_trajectory` reads it (``.npz``, ``.h5``/``.hdf5`` or
+    ``.csv``, Pinocchio's conventions); returns the path."""
     p = Path(path)
     if p.suffix.lower() == ".npz":
         np.savez(p, t=traj.time, q=traj.q, v=traj.v)
         return p
+    if p.suffix.lower() in _HDF5:
+        h5py = require("h5py", "writing an HDF5 log", extra="hdf5")
+        with h5py.File(p, "w") as f:
+            for key, arr in (("t", traj.time), ("q", traj.q), ("v", traj.v)):
+                f.create_dataset(key, data=np.asarray(arr, dtype=float))
+        return p
     if p.suffix.lower() != ".csv":
-        raise RobotError(f"{p}: a trajectory is written as .npz or .csv")
+        raise RobotError(f"{p}: a trajectory is written as .npz, .h5/.hdf5 or .csv")
     from heelstrike.io import write_csv
 
     cols: dict[str, Any] = {"t": traj.time}

@@ -284,3 +284,20 @@ def test_malformed_profile_feet_are_refused(tmp_path: Path, stance: str, message
     path = _compass_with_feet(tmp_path, stance, 'radius = "R"')
     with pytest.raises(ModelDescriptionError, match=message):
         read_description(path)
+
+
+@pytest.mark.slow
+def test_compiled_backend_walks_a_profile_foot_as_scipy_does(tmp_path: Path) -> None:
+    # the generated numba kernel is derived from the same symbolic kinematics
+    from heelstrike.dynamics.backends import simulate as simulate_on
+
+    w = PhasedWalker(walker_description(_compass_with_feet(tmp_path, SOLE, SOLE,
+                                                           extra=SOLE_PARAMS)))
+    q0, qd0 = w.section_to_state(Z0)
+    ref = simulate(w, q0, qd0, slope=SLOPE, steps=1)
+    got = simulate_on(w, q0, qd0, slope=SLOPE, steps=1, backend="compiled")
+    assert ref.status == got.status == "completed"
+    np.testing.assert_allclose(got.final_q, ref.final_q, rtol=0, atol=1e-7)
+    np.testing.assert_allclose(got.final_q_dot, ref.final_q_dot, rtol=0, atol=1e-7)
+    assert got.impacts[0].energy_lost == pytest.approx(ref.impacts[0].energy_lost, abs=1e-8)
+    assert got.impacts[0].step_length == pytest.approx(ref.impacts[0].step_length, abs=1e-8)

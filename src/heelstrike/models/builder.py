@@ -308,7 +308,8 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
     Notes
     -----
     Coordinates: ``q = (x, y, theta_root, joint angles...)`` (:attr:`coordinate_names`);
-    ``x, y`` is the stance foot's arc centre. All methods broadcast over leading axes.
+    ``x, y`` is the stance foot's arc centre (for a profile foot, the centre of its rolling
+    disc: ``docs/walker_files.rst``). All methods broadcast over leading axes.
     """
 
     def __init__(

@@ -1,7 +1,8 @@
 """Declarative descriptions of planar tree-structured walkers.
 
 A walker is a *description*, not a derivation: a tree of rigid links connected by revolute
-joints, two circular-arc feet and optional point masses, with named numeric parameters. The
+joints, two convex feet (circular arcs, or profiles given by their support function) and
+optional point masses, with named numeric parameters. The
 builder (:mod:`heelstrike.models.builder`) derives the equations of motion from it.
 
 The file format (every table and key, types, units, defaults, an example per feature, and the

@@ -301,3 +301,17 @@ def test_compiled_backend_walks_a_profile_foot_as_scipy_does(tmp_path: Path) -> 
     np.testing.assert_allclose(got.final_q_dot, ref.final_q_dot, rtol=0, atol=1e-7)
     assert got.impacts[0].energy_lost == pytest.approx(ref.impacts[0].energy_lost, abs=1e-8)
     assert got.impacts[0].step_length == pytest.approx(ref.impacts[0].step_length, abs=1e-8)
+
+
+@pytest.mark.parametrize(("profile", "message"), [
+    # an ellipse's support function: its integral is elliptic
+    ("sqrt(0.09*sin(phi)**2 + 0.04*cos(phi)**2)", "sympy finds no closed-form antiderivative"),
+    ("R + 0.01*sqrt(1 + phi**2)", "its antiderivative (needed for the rolled distance) uses "
+                                  "asinh, which walker code does not evaluate"),
+])
+def test_profile_without_usable_antiderivative_is_refused(tmp_path: Path, profile: str,
+                                                          message: str) -> None:
+    foot = f'profile = "{profile}"\nphi_range = [-1, 1]'
+    with pytest.raises(ModelDescriptionError, match=r"^stance foot: profile .*: "
+                                                    + re.escape(message)):
+        load_walker(_compass_with_feet(tmp_path, foot, foot), use_cache=False)

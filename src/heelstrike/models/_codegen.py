@@ -74,6 +74,10 @@ class _Printer(NumPyPrinter):
 
 _Fn = Callable[[sp.Expr], sp.Expr]
 
+#: sympy functions the generated code may evaluate (their numpy names are allowed by
+#: :data:`heelstrike.models._generated.ALLOWED_ATTRIBUTES`).
+_PRINTABLE_FUNCTIONS = frozenset({"sin", "cos", "tan", "exp", "log", "Abs"})
+
 
 def _foot_shape(
     ft: FootSpec, P: dict[str, sp.Symbol], ev: Callable[[Expr], sp.Expr]
@@ -100,11 +104,17 @@ def _foot_shape(
     h = sp.sympify(evaluate_expression(ft.profile, {**P, PROFILE_ANGLE: phi}, funcs=funcs,
                                        pi=sp.pi))
     H = sp.integrate(h, phi)
+    where = f"{ft.name} foot: profile {ft.profile!r}"
     if H.has(sp.Integral):
         raise ModelDescriptionError(
-            f"foot {ft.name!r}: profile {ft.profile!r}: sympy finds no closed-form "
-            "antiderivative of it (needed for the rolled distance); use polynomials, sines and "
-            "cosines of phi")
+            f"{where}: sympy finds no closed-form antiderivative of it (needed for the rolled "
+            "distance); use polynomials, sines and cosines of phi")
+    other = sorted({type(f).__name__ for f in H.atoms(sp.Function)} - _PRINTABLE_FUNCTIONS)
+    if other:
+        raise ModelDescriptionError(
+            f"{where}: its antiderivative (needed for the rolled distance) uses "
+            f"{', '.join(other)}, which walker code does not evaluate; use polynomials, sines "
+            "and cosines of phi")
     R0 = (h + sp.diff(h, phi, 2)).subs(phi, 0)
     dh = sp.diff(h, phi)
     return ((lambda th: h.subs(phi, th)), (lambda th: dh.subs(phi, th)),

@@ -123,6 +123,26 @@ def test_arc_as_a_profile_takes_the_arc_walkers_passive_step(tmp_path: Path, for
     np.testing.assert_allclose(b.final_q_dot, a.final_q_dot, rtol=0, atol=1e-10)
 
 
+def test_arc_with_a_forward_offset_written_as_a_profile_is_that_arc(tmp_path: Path) -> None:
+    # the arc centre d forward of the leg: h = R - R cos(phi) + d sin(phi) about the foot end
+    arc = _compass_with_feet(
+        tmp_path, 'radius = "R"\ncentre = "R"\ncentre_offset = "d"',
+        'radius = "R"\ncentre = "l - R"\ncentre_offset = "d"', extra="d = 0.04", name="arc")
+    foot = 'profile = "R - R*cos(phi) + d*sin(phi)"\nphi_range = [-1.2, 1.2]'
+    prof = _compass_with_feet(tmp_path, foot, foot, extra="d = 0.04", name="prof")
+    a, b = load_walker(arc), load_walker(prof)
+    q, qd = _states()
+    for f in ("mass_matrix", "potential_energy"):
+        np.testing.assert_allclose(getattr(b, f)(q), getattr(a, f)(q), rtol=0, atol=1e-10)
+    np.testing.assert_allclose(b.bias_forces(q, qd, SLOPE), a.bias_forces(q, qd, SLOPE),
+                               rtol=0, atol=1e-10)
+    for foot_ in ("right", "left"):
+        np.testing.assert_allclose(b.contact_jacobian(q, foot_), a.contact_jacobian(q, foot_),
+                                   rtol=0, atol=1e-10)
+        np.testing.assert_allclose(b.contact_point(q, foot_), a.contact_point(q, foot_),
+                                   rtol=0, atol=1e-10)
+
+
 # a non-circular convex foot: rho = h + h'' = R + k + 3 k cos(2 phi), > 0 on |phi| <= 1 for
 # -R / 4 < k < 4 R
 OVAL = 'profile = "R - R*cos(phi) + k*(1 - cos(2*phi))"\nphi_range = [-1.0, 1.0]'

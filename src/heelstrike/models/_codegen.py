@@ -15,7 +15,9 @@ sums of coordinates),
 - ``V = -sum m p . g_vec``;
 - rolling-contact Jacobian of a foot with arc centre ``c`` on link ``k``:
   ``A = dc/dq + [R w_k; 0]`` (velocity of the material contact point ``c + (0, -R)``), and
-  ``A_dot q_dot = d(A q_dot)/dq q_dot``;
+  ``A_dot q_dot = d(A q_dot)/dq q_dot``; a profile foot (support function ``h``) is derived
+  the same way with ``c`` its rolling disc's centre and ``R`` its rolling radius
+  (:func:`_foot_shape`), its contact point ``O + (-h'(theta), -h(theta))``;
 - the swap: ``q' = (c_swing, theta'_root, theta'_child - theta'_parent ...)`` with
   ``theta'_k = theta_{mirror(k)}`` and ``q_dot' = (dq'/dq) q_dot``.
 """
@@ -29,7 +31,14 @@ from typing import Any
 import sympy as sp
 from sympy.printing.numpy import NumPyPrinter
 
-from heelstrike.models.description import Expr, WalkerDescription, evaluate_expression
+from heelstrike.models.description import (
+    PROFILE_ANGLE,
+    Expr,
+    FootSpec,
+    ModelDescriptionError,
+    WalkerDescription,
+    evaluate_expression,
+)
 
 __all__ = ["generate_source", "parameter_symbol"]
 
@@ -63,6 +72,55 @@ class _Printer(NumPyPrinter):
         return f"numpy.abs({self._print(expr.args[0])})"
 
 
+_Fn = Callable[[sp.Expr], sp.Expr]
+
+#: sympy functions the generated code may evaluate (their numpy names are allowed by
+#: :data:`heelstrike.models._generated.ALLOWED_ATTRIBUTES`).
+_PRINTABLE_FUNCTIONS = frozenset({"sin", "cos", "tan", "exp", "log", "Abs"})
+
+
+def _foot_shape(
+    ft: FootSpec, P: dict[str, sp.Symbol], ev: Callable[[Expr], sp.Expr]
+) -> tuple[_Fn, _Fn, _Fn, sp.Expr]:
+    """A foot's support function ``h``, ``h'``, the antiderivative ``H`` and rolling radius
+    ``R0``, as functions of the link angle.
+
+    For an arc of radius ``R`` about ``O``: ``h = R``, ``H(phi) = R phi``, ``R0 = R``. For a
+    profile: ``h`` the file's expression, ``H = integrate(h, phi)`` (sympy's antiderivative,
+    no constant) and ``R0 = h(0) + h''(0)``. With the link at absolute angle ``theta`` the
+    contact normal is the ground's, so ``phi = theta``; the contact point is
+    ``O + (-h'(theta), -h(theta))`` and rolling without slip is
+    ``O_x_dot + h(theta) theta_dot = 0``, ``O_y = h(theta)``. In the coordinates of the disc
+    ``C = O + (H(theta) - R0 theta, R0 - h(theta))`` this is ``C_y = R0``,
+    ``C_x_dot = -R0 theta_dot``: the arc's constraint, with ``C`` the arc centre for any arc
+    (``h = R + a cos phi + b sin phi`` gives ``C = O + a D + b F``, the centre).
+    """
+    if ft.profile is None:
+        assert ft.radius is not None
+        R = ev(ft.radius)
+        return (lambda th: R), (lambda th: sp.Integer(0)), (lambda th: R * th), R
+    phi = sp.Symbol(PROFILE_ANGLE, real=True)
+    funcs = {"sqrt": sp.sqrt, "sin": sp.sin, "cos": sp.cos}
+    h = sp.sympify(evaluate_expression(ft.profile, {**P, PROFILE_ANGLE: phi}, funcs=funcs,
+                                       pi=sp.pi))
+    H = sp.integrate(h, phi)
+    where = f"{ft.name} foot: profile {ft.profile!r}"
+    if H.has(sp.Integral):
+        raise ModelDescriptionError(
+            f"{where}: sympy finds no closed-form antiderivative of it (needed for the rolled "
+            "distance); use polynomials, sines and cosines of phi")
+    other = sorted({type(f).__name__ for f in H.atoms(sp.Function)} - _PRINTABLE_FUNCTIONS)
+    if other:
+        raise ModelDescriptionError(
+            f"{where}: its antiderivative (needed for the rolled distance) uses "
+            f"{', '.join(other)}, which walker code does not evaluate; use polynomials, sines "
+            "and cosines of phi")
+    R0 = (h + sp.diff(h, phi, 2)).subs(phi, 0)
+    dh = sp.diff(h, phi)
+    return ((lambda th: h.subs(phi, th)), (lambda th: dh.subs(phi, th)),
+            (lambda th: H.subs(phi, th)), R0)
+
+
 def _derive(desc: WalkerDescription, tick: Callable[[], None] | None = None) -> dict[str, Any]:
     pnames = desc.param_names
     P = {k: sp.Symbol(parameter_symbol(i), real=True) for i, k in enumerate(pnames)}
@@ -91,10 +149,14 @@ def _derive(desc: WalkerDescription, tick: Callable[[], None] | None = None) -> 
 
     root = desc.root
     stance, swing = desc.feet
+    shapes = {ft.name: _foot_shape(ft, P, ev) for ft in desc.feet}
     theta[root.name] = q[2]
     sigma[root.name] = 1 if root.direction == "up" else -1
+    # the stance foot's origin O from the rolling disc's centre (q0, q1): see _foot_shape
+    h_st, _, H_st, R0_st = shapes["stance"]
+    O_st = sp.Matrix([q[0] - H_st(q[2]) + R0_st * q[2], q[1] + h_st(q[2]) - R0_st])
     origin[root.name] = (
-        sp.Matrix([q[0], q[1]])
+        O_st
         - sigma[root.name] * ev(stance.centre) * e(q[2])
         - ev(stance.centre_offset) * fwd(q[2])
     )
@@ -139,16 +201,23 @@ def _derive(desc: WalkerDescription, tick: Callable[[], None] | None = None) -> 
             M += inertia * (w.T * w)
 
     feet = {}
+    discs = {}
     for ft in (stance, swing):
-        c = point(ft.link, ft.centre, ft.centre_offset)
-        R = ev(ft.radius)
-        w = sp.Matrix([theta[ft.link]]).jacobian(q)
-        A = c.jacobian(q)
+        O = point(ft.link, ft.centre, ft.centre_offset)
+        hf, dhf, Hf, R = shapes[ft.name]
+        th = theta[ft.link]
+        # the rolling disc's centre C (the arc centre of an arc foot) and the contact point
+        C = O + sp.Matrix([Hf(th) - R * th, -hf(th) + R])
+        contact = O - sp.Matrix([dhf(th), hf(th)])
+        c = sp.Matrix([contact[0], contact[1] + R])
+        w = sp.Matrix([th]).jacobian(q)
+        A = C.jacobian(q)
         A[0, :] += R * w
         rate = (A * u).jacobian(q) * u
         feet[ft.name] = (c, R, A, rate)
+        discs[ft.name] = C
         points[f"{ft.name}_foot.centre"] = c
-        points[f"{ft.name}_foot.contact"] = c + sp.Matrix([0, -R])
+        points[f"{ft.name}_foot.contact"] = contact
 
     # swap (only if mirrors are declared)
     swap_q = None
@@ -156,7 +225,7 @@ def _derive(desc: WalkerDescription, tick: Callable[[], None] | None = None) -> 
     if root.mirror is not None:
         mirror = {lk.name: (lk.mirror or lk.name) for lk in desc.links}
         new_theta = {lk.name: theta[mirror[lk.name]] for lk in desc.links}
-        c_sw = feet["swing"][0]
+        c_sw = discs["swing"]
         entries = [c_sw[0], c_sw[1], new_theta[root.name]]
         for lk in desc.links[1:]:
             assert lk.parent is not None

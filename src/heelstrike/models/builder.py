@@ -70,6 +70,7 @@ from heelstrike.models.description import (
     WalkerDescription,
     evaluate_expression,
     read_description,
+    rolling_radius,
 )
 from heelstrike.models.schedule import (
     Guard,
@@ -307,7 +308,8 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
     Notes
     -----
     Coordinates: ``q = (x, y, theta_root, joint angles...)`` (:attr:`coordinate_names`);
-    ``x, y`` is the stance foot's arc centre. All methods broadcast over leading axes.
+    ``x, y`` is the stance foot's arc centre (for a profile foot, the centre of its rolling
+    disc: ``docs/walker_files.rst``). All methods broadcast over leading axes.
     """
 
     def __init__(
@@ -492,6 +494,16 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         :attr:`PlanarWalker.scale`), e.g. ``a1 + b1 + a2 + b2`` for the kneed walker.
         """
         measured = super().scale
+        if any(ft.profile is not None for ft in self.description.feet):
+            # the base class extrapolates the swing foot to the hip turned by pi, beyond a
+            # profile's range: measure the hip's height above the swing foot's contact point
+            # with every coordinate zero instead (the same l for an arc foot)
+            hip = self.description.links[self.hip_joint - 2].name
+            q0 = np.zeros(self._n)
+            pos = self.positions(q0)
+            leg = pos[f"{hip}.proximal"][..., 1] - pos["swing_foot.contact"][..., 1]
+            measured = WalkerScale(total_mass=measured.total_mass, gravity=measured.gravity,
+                                   leg_length=np.asarray(leg, dtype=float))
         g = np.asarray(self._values["g"], dtype=float)
         return WalkerScale(
             total_mass=_read_only(np.array(measured.total_mass, dtype=float)),
@@ -501,9 +513,12 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
 
     @functools.cached_property
     def foot_radii(self) -> tuple[FloatArray, FloatArray]:
+        """Rolling radii ``R0`` (m) of the stance and swing foot: an arc foot's radius, a
+        profile foot's radius of curvature at ``phi = 0``
+        (:func:`~heelstrike.models.description.rolling_radius`)."""
         st, sw = self.description.feet
-        return (_read_only(np.array(self._eval(st.radius), dtype=float)),
-                _read_only(np.array(self._eval(sw.radius), dtype=float)))
+        return (_read_only(np.array(rolling_radius(st, self._values), dtype=float)),
+                _read_only(np.array(rolling_radius(sw, self._values), dtype=float)))
 
     def mass_matrix(self, q: ArrayLike) -> FloatArray:
         """Mass matrix ``M(q)`` (kg, kg m, kg m^2), shape (..., n, n)."""
@@ -584,12 +599,15 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         return np.asarray(f(_arr(q, self._n, "q"), _arr(q_dot, self._n, "q_dot"), self._p))
 
     def foot_centre(self, q: ArrayLike, foot: Foot) -> FloatArray:
-        """Arc centre of a foot (m), shape (..., 2)."""
+        """Arc centre of a foot (m), shape (..., 2): the point ``R0`` (:attr:`foot_radii`)
+        above its contact point (for a profile foot, the centre of the circle of that radius
+        touching the ground where the foot would)."""
         f = self.model.fn(f"foot_centre_{self._foot(foot)}")
         return np.asarray(f(_arr(q, self._n, "q"), self._p))
 
     def contact_point(self, q: ArrayLike, foot: Foot) -> FloatArray:
-        """Ground point ``R`` below the foot's arc centre (m), shape (..., 2)."""
+        """Ground point ``R`` below the foot's arc centre (m), shape (..., 2): the point of
+        the foot whose outward normal points down (for a profile foot ``O + (-h', -h)``)."""
         c = self.foot_centre(q, foot)
         R = self.foot_radii[0 if self._foot(foot) == "stance" else 1]
         return np.asarray(c - np.stack(np.broadcast_arrays(np.zeros_like(R), R), axis=-1))
@@ -847,7 +865,7 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         """Check numerically that the leg swap is a symmetry of the walker.
 
         At random states: ``M = J_s^T M(q') J_s``, ``V(q') = V(q)`` at two slopes, the new
-        swing foot centre is the old stance foot centre, and every link's COM maps onto its
+        swing foot's contact point is the old stance foot's, and every link's COM maps onto its
         mirror's.
 
         Raises
@@ -881,10 +899,12 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
                     f"link[{index[lk.name]}].com: after the leg swap the centre of mass of "
                     f"{lk.name!r} is not where {lk.mirror or lk.name!r}'s was (its com, "
                     f"com_offset, attach or direction do not mirror){why}")
-        if not np.allclose(self.foot_centre(q2, "left"), q[..., :2], atol=1e-9):
+        if not np.allclose(self.contact_point(q2, "left"), self.contact_point(q, "right"),
+                           atol=1e-9):
             raise ModelDescriptionError(
-                "foot: after the leg swap the new stance foot's arc centre is not where the "
-                f"old one was (the feet's radius, centre or centre_offset do not mirror){why}")
+                "foot: after the leg swap the new swing foot's contact point is not where the "
+                "old stance foot's was (the feet's radius, profile, centre or centre_offset do "
+                f"not mirror){why}")
         J = self.model.fn("swap_jacobian")(q, self._p)
         M1 = self.mass_matrix(q)
         M2 = np.swapaxes(J, -1, -2) @ self.mass_matrix(q2) @ J

@@ -1,7 +1,8 @@
 """Declarative descriptions of planar tree-structured walkers.
 
 A walker is a *description*, not a derivation: a tree of rigid links connected by revolute
-joints, two circular-arc feet and optional point masses, with named numeric parameters. The
+joints, two convex feet (circular arcs, or profiles given by their support function) and
+optional point masses, with named numeric parameters. The
 builder (:mod:`heelstrike.models.builder`) derives the equations of motion from it.
 
 The file format (every table and key, types, units, defaults, an example per feature, and the
@@ -37,8 +38,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
+
+from heelstrike._typing import FloatArray
 
 __all__ = [
+    "PROFILE_ANGLE",
     "Expr",
     "FootSpec",
     "JointSpec",
@@ -49,11 +54,14 @@ __all__ = [
     "PoweredSpec",
     "WalkerDescription",
     "check_parameter_name",
+    "check_profile",
     "constraint_holds",
     "evaluate_expression",
     "parameter_units",
     "parse_description",
     "read_description",
+    "rolling_radius",
+    "support_function",
 ]
 
 #: A number or an expression string in the walker's parameters.
@@ -394,25 +402,214 @@ class LinkSpec:
 
 @dataclass(frozen=True, kw_only=True)
 class FootSpec:
-    """A circular-arc foot rigidly attached to a link.
+    """A convex foot rigidly attached to a link: a circular arc, or any convex roll-over
+    profile given by its support function.
 
     Attributes
     ----------
     link : str
         The link carrying the foot.
-    radius : float or str
-        Arc radius ``R`` (m), >= 0 (0: point foot).
+    radius : float or str or None
+        Arc radius ``R`` (m), >= 0 (0: point foot); None for a profile foot.
     centre, centre_offset : float or str
-        Arc centre on the link (along, forward offset; m).
+        Arc centre on the link (along, forward offset; m); for a profile foot the origin
+        ``O`` its support function is measured from.
     name : str
         ``"stance"`` (the foot on the root link) or ``"swing"``.
+    profile : float or str or None
+        Support function ``h(phi)`` (m) of a profile foot, an expression in the parameters and
+        the angle ``phi`` (rad): the distance from ``O`` to the foot's tangent line whose
+        outward normal is turned by ``phi`` from the link's downward axis towards its forward
+        side (``"R"`` is a circle of radius ``R`` about ``O``). None for an arc foot.
+    phi_range : tuple of two (float or str)
+        The angles ``phi`` (rad) the profile covers, ``phi_min < 0 < phi_max``; the profile
+        is checked convex there (:func:`check_profile`). Unused for an arc foot.
     """
 
     name: str
     link: str
-    radius: Expr
+    radius: Expr | None
     centre: Expr
     centre_offset: Expr = 0.0
+    profile: Expr | None = None
+    phi_range: tuple[Expr, Expr] = (0.0, 0.0)
+
+    @property
+    def expressions(self) -> tuple[Expr, ...]:
+        """Every expression of the foot (for the parameters it uses)."""
+        shape = (self.radius,) if self.profile is None else (self.profile, *self.phi_range)
+        return (*(e for e in shape if e is not None), self.centre, self.centre_offset)
+
+
+#: Name of the profile angle in a foot's ``profile`` expression (rad).
+PROFILE_ANGLE = "phi"
+#: Points of the grid over ``phi_range`` on which a profile's convexity is checked.
+PROFILE_GRID = 2001
+
+
+class _Jet:
+    """Truncated Taylor series ``(f, f', f'')`` in one variable: exact second derivatives of
+    the safe expressions (numbers, + - * / **, sqrt, sin, cos) without sympy."""
+
+    __slots__ = ("d0", "d1", "d2")
+
+    def __init__(self, d0: Any, d1: Any = 0.0, d2: Any = 0.0) -> None:
+        self.d0, self.d1, self.d2 = d0, d1, d2
+
+    @staticmethod
+    def lift(x: Any) -> _Jet:
+        return x if isinstance(x, _Jet) else _Jet(x)
+
+    def __add__(self, o: Any) -> _Jet:
+        o = _Jet.lift(o)
+        return _Jet(self.d0 + o.d0, self.d1 + o.d1, self.d2 + o.d2)
+
+    __radd__ = __add__
+
+    def __neg__(self) -> _Jet:
+        return _Jet(-self.d0, -self.d1, -self.d2)
+
+    def __pos__(self) -> _Jet:
+        return self
+
+    def __sub__(self, o: Any) -> _Jet:
+        return self + (-_Jet.lift(o))
+
+    def __rsub__(self, o: Any) -> _Jet:
+        return _Jet.lift(o) + (-self)
+
+    def __mul__(self, o: Any) -> _Jet:
+        o = _Jet.lift(o)
+        return _Jet(self.d0 * o.d0, self.d1 * o.d0 + self.d0 * o.d1,
+                    self.d2 * o.d0 + 2.0 * self.d1 * o.d1 + self.d0 * o.d2)
+
+    __rmul__ = __mul__
+
+    def _chain(self, f0: Any, f1: Any, f2: Any) -> _Jet:
+        """``f(self)`` from ``f, f', f''`` at ``self.d0``."""
+        return _Jet(f0, f1 * self.d1, f2 * self.d1**2 + f1 * self.d2)
+
+    def __truediv__(self, o: Any) -> _Jet:
+        return self * _Jet.lift(o) ** -1.0
+
+    def __rtruediv__(self, o: Any) -> _Jet:
+        return _Jet.lift(o) * self**-1.0
+
+    def __pow__(self, k: Any) -> _Jet:
+        k = float(k)
+        if k in (0.0, 1.0):  # exact (the general rule would evaluate 0 ** -1 at x = 0)
+            return self if k else _Jet(self.d0**0.0)
+        x = self.d0
+        return self._chain(x**k, k * x ** (k - 1.0), k * (k - 1.0) * x ** (k - 2.0))
+
+    def sqrt(self) -> _Jet:
+        return self**0.5
+
+    def sin(self) -> _Jet:
+        return self._chain(np.sin(self.d0), np.cos(self.d0), -np.sin(self.d0))
+
+    def cos(self) -> _Jet:
+        return self._chain(np.cos(self.d0), -np.sin(self.d0), -np.cos(self.d0))
+
+
+_JET_FUNCS: Mapping[str, Callable[[Any], Any]] = {
+    name: (lambda f: lambda x: getattr(_Jet.lift(x), f)())(name) for name in _FUNCS
+}
+
+
+def support_function(
+    profile: Expr, phi: ArrayLike, values: Mapping[str, Any], path: str = "<profile>"
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """A profile's support function and its first two derivatives at angles ``phi``.
+
+    Parameters
+    ----------
+    profile : float or str
+        ``h(phi)`` (m), an expression in the parameters and ``phi``.
+    phi : array_like, shape (...)
+        Angles (rad); broadcast against the parameter values.
+    values : mapping
+        Parameter values.
+    path : str
+        Field path for error messages.
+
+    Returns
+    -------
+    h, dh, d2h : ndarray, shape (...)
+        ``h`` (m), ``h'`` (m/rad), ``h''`` (m/rad^2), exact (forward-mode differentiation of
+        the expression), broadcast to the shape of ``phi`` and the values.
+    """
+    x = _Jet(np.asarray(phi, dtype=float), 1.0, 0.0)
+    out = _Jet.lift(evaluate_expression(profile, {**values, PROFILE_ANGLE: x},
+                                        funcs=_JET_FUNCS, path=path))
+    shape = np.broadcast_shapes(*(np.shape(d) for d in (x.d0, out.d0, out.d1, out.d2)))
+    h, dh, d2h = (np.broadcast_to(np.asarray(d, dtype=float), shape) for d in
+                  (out.d0, out.d1, out.d2))
+    return h, dh, d2h
+
+
+def rolling_radius(foot: FootSpec, values: Mapping[str, Any]) -> Any:
+    """The foot's rolling radius ``R0`` (m): its arc radius, or for a profile foot its radius
+    of curvature at ``phi = 0``, ``h(0) + h''(0)`` (the contact point with the link upright).
+
+    The walker's coordinates ``(x, y)`` are those of a disc of this radius rolling with the
+    stance foot (``y = R0``, ``x_dot = -R0 theta_dot``): the arc centre for an arc foot
+    (``docs/walker_files.rst``, "Feet of any convex shape").
+    """
+    if foot.profile is None:
+        assert foot.radius is not None
+        return evaluate_expression(foot.radius, values)
+    h, _, d2h = support_function(foot.profile, 0.0, values)
+    return h + d2h if h.ndim else float(h + d2h)
+
+
+def check_profile(foot: FootSpec, values: Mapping[str, Any], path: str) -> None:
+    """Refuse a profile foot that is not convex or that overlaps itself.
+
+    On :data:`PROFILE_GRID` angles over ``phi_range`` (at the given parameter values) the
+    radius of curvature ``rho = h + h''`` must be ``>= 0`` (a convex contact curve; where it
+    is negative the curve ``p = h n + h' t`` turns back through a cusp), and the range must
+    span less than a full turn (a curve with ``rho >= 0`` turning by ``2 pi`` or more is
+    closed or wraps over itself: self-intersecting). It must also contain ``phi = 0`` (the
+    contact with the link upright).
+
+    Raises
+    ------
+    ModelDescriptionError
+        ``foot[i].profile: not convex ...`` or ``foot[i].phi_range: ...``.
+    """
+    assert foot.profile is not None
+    lo, hi = (np.asarray(evaluate_expression(v, values, path=f"{path}.phi_range"), dtype=float)
+              for v in foot.phi_range)
+    if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
+        raise ModelDescriptionError(f"{path}.phi_range: must be finite")
+    if not np.all((lo < 0.0) & (0.0 < hi)):
+        raise ModelDescriptionError(
+            f"{path}.phi_range: must be [phi_min, phi_max] with phi_min < 0 < phi_max (rad), "
+            f"got [{_show(lo)}, {_show(hi)}]: the profile must contain the contact with the "
+            "link upright (phi = 0)")
+    if not np.all(hi - lo < 2.0 * np.pi):
+        raise ModelDescriptionError(
+            f"{path}.phi_range: the profile turns through {float(np.max(hi - lo)):g} rad, a "
+            "full turn (2 pi) or more, so its contact curve closes on or overlaps itself "
+            "(self-intersecting); give a range shorter than 2 pi")
+    nd = max([np.ndim(v) for v in values.values()] + [lo.ndim, hi.ndim])
+    s = np.linspace(0.0, 1.0, PROFILE_GRID).reshape((-1,) + (1,) * nd)
+    phi = lo + (hi - lo) * s
+    h, _, d2h = support_function(foot.profile, phi, values, path=f"{path}.profile")
+    rho = h + d2h
+    if not np.all(np.isfinite(rho)):
+        raise ModelDescriptionError(
+            f"{path}.profile: must be finite (with its first two derivatives) over phi_range")
+    tol = 1e-12 * max(float(np.max(np.abs(h))), float(np.max(np.abs(d2h))), 1.0)
+    if np.any(rho < -tol):
+        k = np.unravel_index(int(np.argmin(rho)), rho.shape)
+        phi_k = np.broadcast_to(phi, rho.shape)[k]
+        raise ModelDescriptionError(
+            f"{path}.profile: not convex: its radius of curvature h + h'' is "
+            f"{float(rho[k]):.6g} m < 0 at phi = {float(phi_k):.6g} rad (a convex foot has "
+            "h + h'' >= 0 over phi_range; where it is negative the contact curve turns back "
+            "through a cusp and crosses itself)")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -543,7 +740,7 @@ class WalkerDescription:
             exprs += [lk.length, lk.mass, lk.com, lk.com_offset, lk.inertia, lk.attach,
                       lk.attach_offset, lk.joint.lock_angle if lk.joint is not None else None]
         for ft in self.feet:
-            exprs += [ft.radius, ft.centre, ft.centre_offset]
+            exprs += list(ft.expressions)
         for pm in self.point_masses:
             exprs += [pm.at, pm.offset, pm.mass]
         for law in self.control:
@@ -597,6 +794,9 @@ class WalkerDescription:
         d.pop("control")
         d.pop("powered")
         d["params"] = [k for k, _ in self.params]
+        for ft in d["feet"]:
+            if ft["profile"] is None:  # an arc foot: the key it had before profiles existed
+                del ft["profile"], ft["phi_range"]
         return json.dumps(d, sort_keys=True, default=str)
 
     def check_values(self, values: Mapping[str, Any]) -> None:
@@ -638,7 +838,9 @@ class WalkerDescription:
                 ev(lk.joint.lock_angle, f"{p}.joint.lock_angle")
         for i, ft in enumerate(self.feet):
             p = f"foot[{i}]"
-            if not np.all(ev(ft.radius, f"{p}.radius") >= 0):
+            if ft.profile is not None:
+                check_profile(ft, values, p)
+            elif not np.all(ev(ft.radius, f"{p}.radius") >= 0):  # type: ignore[arg-type]
                 raise ModelDescriptionError(f"{p}.radius: must be >= 0")
             ev(ft.centre, f"{p}.centre")
             ev(ft.centre_offset, f"{p}.centre_offset")
@@ -726,7 +928,8 @@ def parameter_units(description: WalkerDescription) -> dict[str, str]:
         if lk.joint is not None:
             uses.append((lk.joint.lock_angle, "rad"))
     for ft in description.feet:
-        uses += [(ft.radius, "m"), (ft.centre, "m"), (ft.centre_offset, "m")]
+        uses += [(ft.radius, "m"), (ft.centre, "m"), (ft.centre_offset, "m"),
+                 (ft.profile, "m"), *((a, "rad") for a in ft.phi_range)]
     for pm in description.point_masses:
         uses += [(pm.at, "m"), (pm.offset, "m"), (pm.mass, "kg")]
     found: dict[str, set[str]] = {"g": {"m/s^2"}}
@@ -755,8 +958,8 @@ _LINK_KEYS = {
 }
 _LINK_REQUIRED = ("name", "length", "mass", "com")
 _JOINT_KEYS = {"name", "actuated", "lockable", "lock_angle"}
-_FOOT_KEYS = {"name", "link", "radius", "centre", "centre_offset"}
-_FOOT_REQUIRED = ("link", "radius")
+_FOOT_KEYS = {"name", "link", "radius", "centre", "centre_offset", "profile", "phi_range"}
+_FOOT_REQUIRED = ("link",)
 _PM_KEYS = {"name", "link", "at", "offset", "mass"}
 _PM_REQUIRED = ("link", "at", "mass")
 _TOP_KEYS = {
@@ -976,20 +1179,56 @@ def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> Wal
             raise ModelDescriptionError(
                 f"{p}.link: exactly one foot must be on the root link {links[roots[0]].name!r}"
             )
-        radius = _expr(tab, "radius", params, p)
         lk = links[index[link_name]]
-        if "centre" in tab:
-            centre = _expr(tab, "centre", params, p)
-        elif role == "stance":
-            centre = radius
+        profile: Expr | None = None
+        phi_range: tuple[Expr, Expr] = (0.0, 0.0)
+        radius: Expr | None = None
+        if "profile" in tab:
+            if "radius" in tab:
+                raise ModelDescriptionError(
+                    f"{p}.radius: a foot is either an arc (radius) or a profile, not both")
+            if PROFILE_ANGLE in params:
+                raise ModelDescriptionError(
+                    f"params.{PROFILE_ANGLE}: {PROFILE_ANGLE!r} is the angle of a foot "
+                    "profile; rename the parameter")
+            profile = _expr(tab, "profile", {**params, PROFILE_ANGLE: 0.0}, p)
+            if "phi_range" not in tab:
+                raise ModelDescriptionError(
+                    f"{p}.phi_range: missing required field (a profile foot gives the angles "
+                    "[phi_min, phi_max] (rad) it covers)")
+            raw_range = tab["phi_range"]
+            if not isinstance(raw_range, list) or len(raw_range) != 2:
+                raise ModelDescriptionError(
+                    f"{p}.phi_range: must be a pair [phi_min, phi_max] (rad)")
+            pr = {"lo": raw_range[0], "hi": raw_range[1]}
+            phi_range = (_expr(pr, "lo", params, f"{p}.phi_range"),
+                         _expr(pr, "hi", params, f"{p}.phi_range"))
+            if "centre" in tab:
+                centre: Expr = _expr(tab, "centre", params, p)
+            else:  # the link's foot end
+                centre = 0.0 if role == "stance" else lk.length
+        elif "radius" not in tab:
+            raise ModelDescriptionError(
+                f"{p}.radius: missing required field (or give a profile)")
         else:
-            centre = f"({lk.length}) - ({radius})"
+            if "phi_range" in tab:
+                raise ModelDescriptionError(
+                    f"{p}.phi_range: only a profile foot has one (this foot is an arc)")
+            radius = _expr(tab, "radius", params, p)
+            if "centre" in tab:
+                centre = _expr(tab, "centre", params, p)
+            elif role == "stance":
+                centre = radius
+            else:
+                centre = f"({lk.length}) - ({radius})"
         feet_by_role[role] = FootSpec(
             name=role,
             link=link_name,
             radius=radius,
             centre=centre,
             centre_offset=_expr(tab, "centre_offset", params, p) if "centre_offset" in tab else 0.0,
+            profile=profile,
+            phi_range=phi_range,
         )
     if "stance" not in feet_by_role:
         raise ModelDescriptionError(

@@ -25,8 +25,8 @@ from heelstrike.dynamics.compiled_phased import simulate_phased_compiled
 from heelstrike.dynamics.hybrid import WalkStatus, heel_strike, simulate
 from heelstrike.dynamics.phased import load_phased_walker
 from heelstrike.models import CompassGait, load_walker
-from heelstrike.models.description import ModelDescriptionError, parse_description
 from heelstrike.models.builder import walker_description
+from heelstrike.models.description import ModelDescriptionError, parse_description
 
 WALKERS = Path(heelstrike.__file__).parent / "walkers"
 SLOPE = np.deg2rad(1.0)
@@ -201,11 +201,11 @@ def test_more_refusals() -> None:
     text = (WALKERS / "compass.toml").read_text()
     # a parameter named like a coordinate, used in the guard, is ambiguous
     clash = text.replace("g = 9.81", "g = 9.81\nx = 1.0") + '\n[events]\nheel_strike = "x + hip"\n'
-    with pytest.raises(ModelDescriptionError, match="^events.heel_strike: 'x' names both"):
+    with pytest.raises(ModelDescriptionError, match=r"^events\.heel_strike: 'x' names both"):
         parse_description(tomllib.loads(clash))
     # without mirrors there is no leg swap to reset by
     plain = text.replace('mirror = "swing_leg"\n', "").replace('mirror = "stance_leg"\n', "")
-    with pytest.raises(ModelDescriptionError, match="^events.reset: 'swap_legs' relabels"):
+    with pytest.raises(ModelDescriptionError, match=r"^events\.reset: 'swap_legs' relabels"):
         parse_description(tomllib.loads(plain + '\n[events]\nheel_strike = "hip"\n'))
     # a guard with coordinate names that still takes one value everywhere: refused when built
     desc = _compass_with_events('heel_strike = "hip - hip + l"\n')

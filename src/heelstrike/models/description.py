@@ -499,8 +499,9 @@ class EventsSpec:
     Drake's idea that a model declares its own events: the guard is an expression in the
     walker's coordinates (:attr:`WalkerDescription.coordinate_names`) and parameters, and the
     heel strike happens when it rises through zero once the stance leg has passed the vertical
-    (with the swing foot touching the ground); :meth:`heelstrike.models.builder.BuiltWalker.step_schedule`
-    runs it instead of the swing foot's clearance.
+    (with the swing foot touching the ground);
+    :meth:`heelstrike.models.builder.BuiltWalker.step_schedule` runs it instead of the swing
+    foot's clearance.
 
     Attributes
     ----------

@@ -220,3 +220,18 @@ def load_walker_from(desc: Any) -> Any:
     from heelstrike.models.builder import BuiltWalker
 
     return BuiltWalker(desc)
+
+
+def test_passive_search_refuses_the_wheel_only_where_its_step_cannot_end() -> None:
+    """CompassGait at R = l keeps the lift rule: its passive step ends with the trailing foot
+    grazing, so there is no passive step map (refused at once). wheel.toml's declared reset
+    accepts the grazing foot: its passive step map exists (the walk above) and is searched."""
+    from heelstrike.analysis.limit_cycle import GaitNotFoundError, _check_passive_slope
+
+    with pytest.raises(GaitNotFoundError, match="McGeer's wheel"):
+        _check_passive_slope(SLOPE, walker=CompassGait(foot_radius=1.0))
+    wheel = load_phased_walker("wheel")
+    assert wheel.is_wheel and wheel.step_schedule().trailing_foot == "lift_or_graze"
+    _check_passive_slope(SLOPE, walker=wheel)  # not refused
+    with pytest.raises(GaitNotFoundError, match="slope must be > 0"):
+        _check_passive_slope(0.0, walker=wheel)  # the slope rule still holds

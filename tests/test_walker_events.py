@@ -235,3 +235,28 @@ def test_passive_search_refuses_the_wheel_only_where_its_step_cannot_end() -> No
     _check_passive_slope(SLOPE, walker=wheel)  # not refused
     with pytest.raises(GaitNotFoundError, match="slope must be > 0"):
         _check_passive_slope(0.0, walker=wheel)  # the slope rule still holds
+
+
+def test_walk_command_walks_the_wheel_file_on_its_backend(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``walk --model wheel`` defaults to the backend the walker runs on (scipy), and its
+    impacts table holds the strikes of the library walk from the same start."""
+    import pandas as pd
+
+    from heelstrike.cli import main
+
+    assert main(["walk", "--model", "wheel", "--slope", "1deg", "--steps", "3",
+                 "--guess=" + ",".join(map(str, Z_WHEEL)), "--fps", "5",
+                 "--out", str(tmp_path)]) == 0
+    out, _ = capsys.readouterr()
+    assert "3 steps, status: completed" in out
+    impacts = pd.read_csv(tmp_path / "impacts.csv")
+    wheel = load_phased_walker("wheel")
+    q, qd = wheel.section_to_state(Z_WHEEL)
+    walk = simulate(wheel, q, qd, slope=SLOPE, steps=3, rtol=1e-9, atol=1e-9, max_step=0.1)
+    assert len(impacts) == 3
+    np.testing.assert_allclose(impacts["time_s"], walk.impact_array("time"), atol=1e-6)
+    np.testing.assert_allclose(impacts["T_c_J"], walk.impact_array("kinetic_energy_constrained"),
+                               atol=1e-6)
+    assert list(impacts["kind"]) == ["heel_strike"] * 3

@@ -103,8 +103,9 @@ class PhasedWalker(BuiltWalker):
     def touchdown_configuration(self, q: ArrayLike) -> FloatArray:
         """``q`` with the eliminated (hip) coordinate solved for zero swing-foot clearance, or
         for the walker file's declared heel-strike guard (``[events] heel_strike``: zero
-        just after the strike too; :meth:`heel_strike_function`, which is minus the
-        clearance otherwise).
+        just after the strike too;
+        :meth:`~heelstrike.models.builder.BuiltWalker.heel_strike_function`, which is minus
+        the clearance otherwise).
 
         Newton's method from the symmetric guess ``hip = -2 q[2]`` (exact for straight
         symmetric legs), so the root found is the swing foot ahead, not the mid-stance one.

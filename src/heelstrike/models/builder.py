@@ -785,7 +785,7 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         penetration of the swing foot is ignored too); for the compass gait it is the same
         event as :meth:`heelstrike.models.CompassGait.heel_strike_function`. A walker file
         declaring its guard (``[events]``) runs it instead: the locked swing is then the
-        compass gait's (:meth:`_declared_strike_phase`), and the trailing foot is decided by
+        compass gait's (midstance, then the declared guard), and the trailing foot is decided by
         the declared rule (``"lifts"``: complementarity; ``"lifts_or_grazes"``: the
         ``"lift_or_graze"`` rule of :data:`~heelstrike.models.schedule.TrailingFootRule`).
         Every stage can end in a fall: forward (stance angle reaching ``pi/2``) or backward

@@ -260,3 +260,38 @@ def test_walk_command_walks_the_wheel_file_on_its_backend(
     np.testing.assert_allclose(impacts["T_c_J"], walk.impact_array("kinetic_energy_constrained"),
                                atol=1e-6)
     assert list(impacts["kind"]) == ["heel_strike"] * 3
+
+
+def test_wheel_walks_passively_on_level_ground_losing_nothing() -> None:
+    """McGeer's wheel has passive gaits on level ground that lose nothing: a step from the
+    symmetric configuration with the swing leg at rest relative to the stance leg
+    (``q4_dot = 0``) that strikes with it at rest again loses ``T_c = 0`` (the striking foot's
+    contact point moves at ``l q4_dot``), and by the reversibility of the passive dynamics (the
+    reflection ``(q3, q4) -> (-q3, -q4)`` with time reversed) every later step repeats it. The
+    start is found on CompassGait's own step (a root of ``q4_dot`` at its first strike in the
+    step angle, at ``q3_dot = 1 rad/s``); wheel.toml's walk from it, on the generated path,
+    must then lose nothing at every one of its strikes and repeat its strike state."""
+    from scipy.optimize import brentq
+
+    compass = CompassGait(foot_radius=1.0)
+
+    def swing_rate_at_strike(a: float) -> float:
+        q, qd = compass.section_to_state([-a, 1.0, 0.0])
+        walk = simulate(compass, q, qd, slope=0.0, steps=1, rtol=1e-12, atol=1e-12)
+        return float(walk.impacts[0].q_dot_minus[3])
+
+    a = brentq(swing_rate_at_strike, 0.3, 0.4, xtol=1e-15, rtol=1e-15)  # 0.34641899640...
+    wheel = load_phased_walker("wheel")
+    q, qd = wheel.section_to_state(wheel.section_point(-a, 1.0, 0.0))
+    steps = 8
+    walk = simulate_entry(wheel, q, qd, slope=0.0, steps=steps, rtol=1e-12, atol=1e-12)
+    assert walk.status is WalkStatus.COMPLETED and walk.n_steps == steps
+    E0 = float(wheel.mechanical_energy(q, qd))
+    for k, imp in enumerate(walk.impacts):
+        what = f"strike {k}"
+        assert imp.kinetic_energy_constrained < 1e-12 * imp.kinetic_energy, what  # T_c = 0
+        assert abs(imp.energy_lost) < 1e-12 * imp.kinetic_energy, what
+        np.testing.assert_allclose(imp.q[2:], [a, -2.0 * a], atol=1e-8, err_msg=what)
+        np.testing.assert_allclose(imp.q_dot_minus[2:], [1.0, 0.0], atol=1e-8, err_msg=what)
+    # nothing lost anywhere: the mechanical energy of the whole walk is the start's
+    np.testing.assert_allclose(walk.mechanical_energy, E0, rtol=1e-9)

@@ -25,7 +25,7 @@ from heelstrike.dynamics.compiled_phased import simulate_phased_compiled
 from heelstrike.dynamics.hybrid import WalkStatus, heel_strike, simulate
 from heelstrike.dynamics.phased import load_phased_walker
 from heelstrike.models import CompassGait, load_walker
-from heelstrike.models.builder import walker_description
+from heelstrike.models.builder import BuiltWalker, walker_description
 from heelstrike.models.description import ModelDescriptionError, parse_description
 
 WALKERS = Path(heelstrike.__file__).parent / "walkers"
@@ -127,14 +127,11 @@ def test_generated_guard_is_the_declared_expression() -> None:
 
 
 def _compass_with_events(events: str) -> Any:
-    text = (WALKERS / "compass.toml").read_text()
-    return tmp_file_walker(text.replace('name = "compass"', 'name = "compass_events"')
-                           + "\n[events]\n" + events)
-
-
-def tmp_file_walker(text: str) -> Any:
+    """compass.toml's description with an ``[events]`` table of the given body."""
     import tomllib
 
+    text = (WALKERS / "compass.toml").read_text()
+    text = text.replace('name = "compass"', 'name = "compass_events"') + "\n[events]\n" + events
     return parse_description(tomllib.loads(text), source="<test>")
 
 
@@ -210,16 +207,10 @@ def test_more_refusals() -> None:
     # a guard with coordinate names that still takes one value everywhere: refused when built
     desc = _compass_with_events('heel_strike = "hip - hip + l"\n')
     with pytest.raises(ModelDescriptionError, match="does not depend on the state"):
-        load_walker_from(desc)
+        BuiltWalker(desc)
     # the guard's parameters count as used: setting them is not refused as idle
     desc = _compass_with_events('heel_strike = "2 * stance_leg + hip + 0 * I"\n')
     assert "I" not in desc.unused_params
-
-
-def load_walker_from(desc: Any) -> Any:
-    from heelstrike.models.builder import BuiltWalker
-
-    return BuiltWalker(desc)
 
 
 def test_passive_search_refuses_the_wheel_only_where_its_step_cannot_end() -> None:

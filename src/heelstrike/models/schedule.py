@@ -14,7 +14,9 @@ loop that runs any schedule; the walker only declares it
   lockable joints, then a locked-swing phase "until armed" and "until the swing foot's clearance
   falls through zero" (a touch with the swing foot not ahead of the stance foot is rejected and
   the strike armed anew), heel strike with the trailing foot as a complementarity candidate
-  (:func:`heelstrike.core.complementarity.resolve_impact`).
+  (:func:`heelstrike.core.complementarity.resolve_impact`); a walker file may declare its own
+  heel-strike guard and trailing-foot rule instead (``[events]``,
+  :class:`heelstrike.models.description.EventsSpec`).
 
 Guards are functions of the configuration and velocities ``(q, q_dot)``, each shape (n,); a
 guard named after a :class:`~heelstrike.dynamics.hybrid.WalkStatus` (``"fell_forward"``...)

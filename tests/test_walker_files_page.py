@@ -51,7 +51,8 @@ def test_page_has_examples_of_each_kind() -> None:
     assert len(REFUSED_BLOCKS) >= 4
     features = "\n".join(ACCEPTED)
     for key in ("lockable", "centre_offset", "com_offset", "[control.", "[powered]",
-                "constraints", "[[point_mass]]", "inertia"):
+                "constraints", "[[point_mass]]", "inertia", "[events]", "heel_strike",
+                "trailing_foot"):
         assert key in features, f"no example on the page uses {key}"
 
 
@@ -90,7 +91,7 @@ def test_page_documents_every_key_the_loader_accepts() -> None:
         "top": desc_module._TOP_KEYS, "link": desc_module._LINK_KEYS,
         "joint": desc_module._JOINT_KEYS, "foot": desc_module._FOOT_KEYS,
         "point_mass": desc_module._PM_KEYS, "control": desc_module._CONTROL_KEYS,
-        "powered": desc_module._POWERED_KEYS,
+        "powered": desc_module._POWERED_KEYS, "events": desc_module._EVENTS_KEYS,
     }
     # a key is documented when it is the first cell of a table row: "   * - ``key``"
     documented = set(re.findall(r"^\s*\* - ``(\w+)``", text, flags=re.M))

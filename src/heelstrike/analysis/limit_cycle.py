@@ -483,8 +483,9 @@ def _check_passive_slope(
     ------
     GaitNotFoundError
         Passive (no torque, no push-off) and ``slope <= 0``, or ``|slope| >= pi/2``; a passive
-        :attr:`~heelstrike.models.base.PlanarWalker.is_wheel` walker (its passive step cannot
-        end: the trailing foot grazes).
+        :attr:`~heelstrike.models.base.PlanarWalker.is_wheel` walker whose heel strike
+        requires the trailing foot to lift (its passive step cannot end: the trailing foot
+        grazes); one whose schedule accepts the grazing foot (``wheel.toml``) is searched.
     """
     if not abs(slope) < np.pi / 2:  # a bare 3 meant as degrees is 172 deg
         raise GaitNotFoundError(
@@ -497,7 +498,8 @@ def _check_passive_slope(
             f"from gravity, so the slope must be > 0 (downhill, e.g. 3 deg = "
             f"{np.deg2rad(3.0):.6g} rad)"
         )
-    if torque is None and push_off is None and walker is not None and walker.is_wheel:
+    if torque is None and push_off is None and walker is not None and walker.is_wheel \
+            and not _accepts_grazing(walker):
         raise GaitNotFoundError(
             "McGeer's wheel (foot radius R = leg length l): its two feet are arcs of one "
             "circle about the hip, so after every heel strike the trailing foot's contact "
@@ -506,6 +508,18 @@ def _check_passive_slope(
             "to search (powered gaits accept this grazing contact, 'heelstrike powered "
             "--radius ...'; for passive gaits take R < l)"
         )
+
+
+def _accepts_grazing(walker: PlanarWalker) -> bool:
+    """Whether the walker's heel strike accepts a trailing foot leaving the ground with zero
+    normal velocity: its declared schedule's ``"lift_or_graze"`` rule (a walker file's
+    ``[events] trailing_foot = "lifts_or_grazes"``, e.g. ``wheel.toml``). Its passive steps
+    then end at the strike, and passive gaits can be searched for. False for a walker that
+    cannot walk at all (whose schedule raises)."""
+    try:
+        return walker.step_schedule().trailing_foot == "lift_or_graze"
+    except ValueError:
+        return False
 
 
 def _compiled_ok(pmap: PoincareMap) -> bool:

@@ -207,7 +207,7 @@ def add_model_options(p: argparse.ArgumentParser, *, required: bool = False) -> 
                              else "described walker (overrides the compass-gait options)")
     g.add_argument("--model", default=None, metavar="FILE_OR_NAME", required=required,
                    help="walker description: a .toml file or a shipped name "
-                   "(compass, kneed, torso)")
+                   "(compass, kneed, torso, wheel)")
     g.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                    help="set a description parameter (SI units), repeatable, e.g. R=0.2")
 

@@ -285,7 +285,8 @@ def add_walk(sub: Any) -> None:
     add_model_options(p)
     add_backend_option(p, "step simulator: compiled (default; the walker file's generated "
                        "kernel, for the compass gait that of compass.toml) or the scipy reference "
-                       "(the default for McGeer's wheel, --radius equal to --leg-length)")
+                       "(the default for McGeer's wheel, --radius equal to --leg-length, and for "
+                       "a walker file declaring its heel strike, --model wheel)")
     p.add_argument("--slope", type=parse_slope, default=parse_angle("3deg"),
                    help="slope angle (default 3deg)")
     p.add_argument("--steps", type=positive_int, default=6, help="number of steps (default 6)")
@@ -322,7 +323,9 @@ def _walk_model(args: argparse.Namespace, walker: Any, out: Any, to_dir: bool) -
     from heelstrike.outputs import write_model_walk_figures
     from heelstrike.plots.gait import animate_model_walk
 
-    backend = args.backend or "compiled"
+    # the default: compiled where the walker runs on it (a walker file declaring its heel
+    # strike, e.g. wheel.toml, runs on the scipy reference only)
+    backend = args.backend or ("compiled" if walker.supports("compiled") else "scipy")
     if args.guess is not None:
         z = parse_floats(args.guess, "--guess", len(walker.section_names))
     else:

@@ -327,6 +327,11 @@ def _configuration(
 ) -> tuple[FloatArray, FloatArray]:
     """The kernel's parameter values ``p`` and float configuration ``cfg`` (``_C_*``)."""
     walker.check_heel_strike_detectable()  # the kernel's guard is the swing foot's clearance
+    if walker.description.events is not None:
+        raise ValueError(
+            f"model {walker.description.name!r} declares its heel-strike guard ([events] "
+            f"heel_strike = {walker.description.events.heel_strike!r}); the compiled kernel's "
+            "guard is the swing foot's clearance: use backend='scipy'")
     values = [np.asarray(walker.parameters[k], dtype=float) for k in walker.description.param_names]
     if any(v.ndim != 0 for v in values):
         raise ValueError("the compiled backend needs scalar parameter values (one walker)")

@@ -49,7 +49,7 @@ from heelstrike.core.complementarity import CandidateContact, resolve_impact
 from heelstrike.core.impact import ImpactResult, impact
 from heelstrike.dynamics.events import Event, to_scipy
 from heelstrike.dynamics.single_support import SingleSupport, TorqueLaw
-from heelstrike.models._contact import lift_velocity_scale, lifts
+from heelstrike.models._contact import grazes, lift_velocity_scale, lifts
 from heelstrike.models.base import PlanarWalker
 from heelstrike.models.schedule import Guard, Stage, StepSchedule
 
@@ -565,7 +565,9 @@ class PhasedImpact(ResultDictMixin):
         knee strike: that of the stance foot (0: it stays rolling).
     trailing_mode : str
         Heel strike: the complementarity decision for the trailing foot (``"separate"``: it
-        lifts). Knee strike: ``"stick"`` (the stance foot is bilateral).
+        lifts), or under the projector's rules ``"separate"`` / ``"penetrating"`` by the sign
+        of its normal velocity, ``"graze"`` when the ``"lift_or_graze"`` rule finds it zero
+        to round-off. Knee strike: ``"stick"`` (the stance foot is bilateral).
     """
 
     kind: ImpactKind
@@ -774,7 +776,7 @@ def simulate(
         joints held (e.g. :class:`~heelstrike.dynamics.actuation.PushOff`).
     restitution : float
         Restitution of the heel strike's constrained velocity (0: the paper's inert impact);
-        only with the ``"lift_rule"`` trailing-foot rule.
+        only with the projector's trailing-foot rules (``"lift_rule"``, ``"lift_or_graze"``).
     friction : float, optional
         Coulomb coefficient; if given, a stance foot needing more friction ends the walk.
     max_step_duration : float
@@ -794,7 +796,7 @@ def simulate(
         Every heel strike in ``impacts``, every impact (knee strikes too) in ``events``.
     """
     schedule = walker.step_schedule(knee_flex_threshold=knee_flex_threshold)
-    if restitution != 0.0 and schedule.trailing_foot != "lift_rule":
+    if restitution != 0.0 and schedule.trailing_foot == "complementarity":
         raise ValueError(
             "restitution is only supported with the lift rule for the trailing foot (walkers "
             "whose heel strike resolves the trailing foot by complementarity are inert)"
@@ -897,6 +899,9 @@ def simulate(
             rows = np.vstack((walker.contact_jacobian(q, "left"), A_lock))
             v_trail = float(v)
             mode = "separate" if v_trail >= 0.0 else "penetrating"
+            if schedule.trailing_foot == "lift_or_graze" and grazes(
+                    v_trail, lift_velocity_scale(leg_length, qd[2:])):
+                mode = "graze"
             foot_impulse = np.asarray(res.constraint_impulse, dtype=float)[:2].copy()
         qd_plus = np.asarray(res.velocity_post)
         events_out.append(_impact_event("heel_strike", k, t, q, qd, res, rows, A_lock, v_trail,
@@ -913,7 +918,7 @@ def simulate(
             )
         )
         lifted = lifts(v_trail, lift_velocity_scale(leg_length, qd[2:]))
-        if mode != "separate" or not lifted:
+        if not (mode == "graze" or (mode == "separate" and lifted)):
             status = WalkStatus.TRAILING_FOOT_STAYS
             qd = qd_plus
             break

@@ -101,7 +101,11 @@ class PhasedWalker(BuiltWalker):
         return tuple(n[i] for i in self._section_q) + tuple(f"{n[i]}_dot" for i in self._section_v)
 
     def touchdown_configuration(self, q: ArrayLike) -> FloatArray:
-        """``q`` with the eliminated (hip) coordinate solved for zero swing-foot clearance.
+        """``q`` with the eliminated (hip) coordinate solved for zero swing-foot clearance, or
+        for the walker file's declared heel-strike guard (``[events] heel_strike``: zero
+        just after the strike too;
+        :meth:`~heelstrike.models.builder.BuiltWalker.heel_strike_function`, which is minus
+        the clearance otherwise).
 
         Newton's method from the symmetric guess ``hip = -2 q[2]`` (exact for straight
         symmetric legs), so the root found is the swing foot ahead, not the mid-stance one.
@@ -118,12 +122,12 @@ class PhasedWalker(BuiltWalker):
         j = self.eliminated
         q_[j] = -2.0 * q_[2]
         for _ in range(50):
-            f = float(self.foot_clearance(q_, "left"))
+            f = float(self.heel_strike_function(q_))
             h = 1e-7
             qp, qm = q_.copy(), q_.copy()
             qp[j] += h
             qm[j] -= h
-            fp, fm = self.foot_clearance(qp, "left"), self.foot_clearance(qm, "left")
+            fp, fm = self.heel_strike_function(qp), self.heel_strike_function(qm)
             df = (float(fp) - float(fm)) / (2 * h)
             if df == 0.0:
                 break

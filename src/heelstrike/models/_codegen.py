@@ -233,6 +233,13 @@ def _derive(desc: WalkerDescription, tick: Callable[[], None] | None = None) -> 
         swap_q = sp.Matrix(entries)
         swap_J = swap_q.jacobian(q)
 
+    # the declared heel-strike guard ([events]): an expression in the coordinates and parameters
+    guard = None
+    if desc.events is not None:
+        names = {**P, **{c: q[i] for i, c in enumerate(desc.coordinate_names)}}
+        guard = sp.sympify(evaluate_expression(desc.events.heel_strike, names, funcs=funcs,
+                                               pi=sp.pi, path="events.heel_strike"))
+
     return {
         "n": n,
         "q": q,
@@ -247,6 +254,7 @@ def _derive(desc: WalkerDescription, tick: Callable[[], None] | None = None) -> 
         "point_names": tuple(points),
         "swap_q": swap_q,
         "swap_J": swap_J,
+        "guard": guard,
     }
 
 
@@ -319,7 +327,8 @@ def generate_source(desc: WalkerDescription, key: str) -> str:
     ``contact_jacobian_<foot>(q, p)``, ``contact_jacobian_rate_<foot>(q, qd, p)``,
     ``foot_centre_<foot>(q, p)``,
     ``points(q, p)`` and, for walkers with mirrors, ``swap_coordinates(q, p)`` and
-    ``swap_jacobian(q, p)``; ``q``, ``qd`` have shape (..., n) and ``p`` is the tuple of
+    ``swap_jacobian(q, p)``, for walkers declaring ``[events]`` ``heel_strike_guard(q, p)``
+    (the declared guard, shape (...)); ``q``, ``qd`` have shape (..., n) and ``p`` is the tuple of
     parameter values in ``desc.param_names`` order (each scalar or broadcastable to the
     batch). ``points`` returns ``desc.point_names`` in order. ``dynamics_terms`` alone takes
     ``q`` and ``qd`` coordinate-first (shape (n, ...), e.g. ``numpy.moveaxis(q, -1, 0)``, or
@@ -332,7 +341,8 @@ def generate_source(desc: WalkerDescription, key: str) -> str:
     if not key or any(c not in "0123456789abcdef" for c in key):
         raise ValueError("key must be a lowercase hexadecimal digest")
     n_bodies = len(desc.links) + len(desc.point_masses)
-    n_funcs = 5 + 3 * 2 + (2 if desc.root.mirror is not None else 0)
+    n_funcs = (5 + 3 * 2 + (2 if desc.root.mirror is not None else 0)
+               + (1 if desc.events is not None else 0))
     with _progress(n_bodies + n_funcs, desc.name) as tick:
         return _generate(desc, key, tick)
 
@@ -500,6 +510,19 @@ def _generate(desc: WalkerDescription, key: str, tick: Callable[[], None]) -> st
                 f"({n}, {n})",
                 pr,
                 "d q' / d q of the leg swap, shape (..., n, n).",
+            )
+        )
+    if d["guard"] is not None:
+        add(
+            _function(
+                "heel_strike_guard",
+                "q, p",
+                uq + up,
+                [("", d["guard"])],
+                pargs,
+                "()",
+                pr,
+                "The declared heel-strike guard ([events] heel_strike), shape (...).",
             )
         )
     return "\n\n".join(src)

@@ -77,6 +77,7 @@ from heelstrike.models.schedule import (
     Phase,
     Stage,
     StepSchedule,
+    TrailingFootRule,
     fell_forward,
 )
 
@@ -105,6 +106,7 @@ GENERATED_FUNCTIONS = frozenset(
         "points",
         "swap_coordinates",
         "swap_jacobian",
+        "heel_strike_guard",
         *(
             f"{kind}_{foot}"
             for kind in ("contact_jacobian", "contact_jacobian_rate", "foot_centre")
@@ -256,7 +258,9 @@ def _check_generated(ns: Mapping[str, Any], desc: WalkerDescription) -> None:
     for name, value in expected.items():
         if ns.get(name) != value:
             raise ModelDescriptionError(f"generated module declares {name}={ns.get(name)!r}")
-    required = GENERATED_FUNCTIONS - {"swap_coordinates", "swap_jacobian"}
+    required = GENERATED_FUNCTIONS - {"swap_coordinates", "swap_jacobian", "heel_strike_guard"}
+    if desc.events is not None:
+        required = required | {"heel_strike_guard"}
     missing = sorted(required - set(ns))
     if missing:
         raise ModelDescriptionError(f"generated module lacks {missing}")
@@ -359,6 +363,8 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         # a batch of walkers does not walk (its parameters broadcast against states instead)
         self._feet_one_circle = not self.is_batched and self._feet_are_one_circle()
         self._check_mass_matrix()
+        if description.events is not None:
+            self._check_guard_depends_on_state()
         if "swap_coordinates" in self.model.namespace and all(
             np.ndim(v) == 0 for v in values.values()
         ):
@@ -397,6 +403,20 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
             f"parameter values: coordinate {name!r} moves no mass and no inertia (give the "
             "links it moves a mass away from the joint or an inertia)")
 
+    def _check_guard_depends_on_state(self) -> None:
+        """Refuse a declared guard that takes one value at every state (``"hip - hip"``): it
+        can never cross zero. Checked at three generic states (one walker; a batch is
+        checked member by member when one is built)."""
+        if self.is_batched:
+            return
+        q, _ = _sample_states(3, self._n, 1)
+        values = np.asarray(self.heel_strike_function(q), dtype=float)
+        if float(np.ptp(values)) == 0.0:
+            guard = self.description.events.heel_strike  # type: ignore[union-attr]
+            raise ModelDescriptionError(
+                f"events.heel_strike: {guard!r} does not depend on the state (it takes one "
+                "value in every configuration), so it can never cross zero")
+
     # -- parameters ---------------------------------------------------------------------------
     def _eval(self, v: Any) -> Any:
         return evaluate_expression(v, self._values)
@@ -416,10 +436,14 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         """``"generated"``: the kernel generated from the description
         (:mod:`heelstrike.dynamics.compiled_phased`).
 
-        None for a subclass that declares another :meth:`step_schedule`: the kernel runs the
-        described walkers' schedule only, so such a walker runs on the scipy reference only.
+        None for a subclass that declares another :meth:`step_schedule`, or a description
+        declaring its heel-strike guard (``[events]``): the kernel runs the described
+        walkers' default schedule only (its guard is the swing foot's clearance), so such a
+        walker runs on the scipy reference only.
         """
-        return "generated" if type(self).step_schedule is BuiltWalker.step_schedule else None
+        default = (type(self).step_schedule is BuiltWalker.step_schedule
+                   and self.description.events is None)
+        return "generated" if default else None
 
     @property
     def powered_speed(self) -> float | None:
@@ -727,23 +751,42 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         return bool(np.all(gap < tol) and abs(float(R_st) - float(R_sw)) < tol)
 
     def check_heel_strike_detectable(self) -> None:
-        """Raise ``ValueError`` if the swing foot's clearance cannot detect its heel strike.
+        """Raise ``ValueError`` if the walker's heel-strike guard cannot detect its heel strike.
 
-        That is so when the two feet are one circle in every posture: equal radii and the
+        That is so when the guard is the swing foot's clearance (no ``[events]`` table) and the
+        two feet are one circle in every posture: equal radii and the
         same arc centre, e.g. McGeer's wheel ``R = l`` of the compass and torso walkers (both
         arcs about the hip). The clearance is then zero to round-off throughout the step, and
         a walk would strike anywhere (the compass walker struck at 0.39 s with its legs nearly
         upright). Decided once, when the walker is built (two generic postures); the
         equations of motion and the impact algebra stay valid there, only walking is refused.
+        A walker file that declares its guard (``[events] heel_strike``, e.g. the shipped
+        ``wheel.toml``) walks whatever its feet.
         """
-        if self._feet_one_circle:
+        if self._feet_one_circle and self.description.events is None:
             raise ValueError(
                 f"model {self.description.name!r} cannot walk with these parameter values: its "
                 "two feet are one circle in every posture (the same radius and arc centre, e.g. "
                 "McGeer's wheel R = l), so the swing foot's clearance is zero throughout a step "
                 "and cannot detect its heel strike (the compass gait without --model, "
-                "--radius 1, walks the wheel: its heel strike is 2 q3 + q4 = 0)"
+                "--radius 1, walks the wheel: its heel strike is 2 q3 + q4 = 0; so does "
+                "--model wheel, whose walker file declares that guard in its [events] table)"
             )
+
+    def heel_strike_function(self, q: ArrayLike) -> FloatArray:
+        """The heel-strike guard, rising through zero at the strike, shape (...).
+
+        The walker file's declared guard (``[events] heel_strike``, generated from the
+        expression), else minus the swing foot's clearance (the default of
+        :meth:`~heelstrike.models.base.PlanarWalker.heel_strike_function`).
+
+        Parameters
+        ----------
+        q : array_like, shape (..., n)
+        """
+        if self.description.events is None:
+            return np.asarray(-self.foot_clearance(q, "left"))
+        return np.asarray(self.model.fn("heel_strike_guard")(_arr(q, self._n, "q"), self._p))
 
     def step_schedule(self, *, knee_flex_threshold: float = 1e-6) -> StepSchedule:
         """The hybrid schedule of one step of a described walker.
@@ -758,7 +801,11 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         is no heel strike: :meth:`strike_not_ahead`, and the strike is armed anew). This
         excludes the mid-stance scuffing root of the clearance (during the knee swing, ground
         penetration of the swing foot is ignored too); for the compass gait it is the same
-        event as :meth:`heelstrike.models.CompassGait.heel_strike_function`.
+        event as :meth:`heelstrike.models.CompassGait.heel_strike_function`. A walker file
+        declaring its guard (``[events]``) runs it instead: the locked swing is then the
+        compass gait's (midstance, then the declared guard), and the trailing foot is decided by
+        the declared rule (``"lifts"``: complementarity; ``"lifts_or_grazes"``: the
+        ``"lift_or_graze"`` rule of :data:`~heelstrike.models.schedule.TrailingFootRule`).
         Every stage can end in a fall: forward (stance angle reaching ``pi/2``) or backward
         (the stance leg stopping before the vertical, or rolling back through it). The heel
         strike decides the trailing foot by complementarity.
@@ -804,6 +851,13 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
                 strike_joints=swing_locks,
                 stages=(Stage(until=flexed, failures=falls), Stage(until=knee, failures=falls)),
             ))
+        events = self.description.events
+        if events is not None:
+            phases.append(self._declared_strike_phase(stance_locks + swing_locks, falls))
+            rule: TrailingFootRule = ("lift_or_graze" if events.trailing_foot == "lifts_or_grazes"
+                                      else "complementarity")
+            return StepSchedule(phases=tuple(phases), lock_angles=tuple(angle.items()),
+                                trailing_foot=rule)
         strike = Guard(name="heel_strike",
                        function=lambda q, qd: float(-self.foot_clearance(q, "left")), direction=1)
         phases.append(Phase(
@@ -816,6 +870,32 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         ))
         return StepSchedule(phases=tuple(phases), lock_angles=tuple(angle.items()),
                             trailing_foot="complementarity")
+
+    def _declared_strike_phase(self, locked: tuple[int, ...], falls: tuple[Guard, ...]) -> Phase:
+        """The locked swing of a walker declaring its heel-strike guard (``[events]``).
+
+        As the compass gait's step (:meth:`PlanarWalker.step_schedule`): first until the
+        stance leg passes the vertical (skipped if it has), then until the declared guard
+        rises through zero. A crossing with the swing foot off the ground
+        (``|clearance| > CONTACT_TOLERANCE l``) is no heel strike: the strike is armed anew.
+        """
+        leg = float(np.asarray(self.scale.leg_length))
+
+        def off_ground(q: FloatArray, qd: FloatArray) -> bool:
+            return bool(abs(float(self.foot_clearance(q, "left"))) > CONTACT_TOLERANCE * leg)
+
+        midstance = Stage(
+            until=Guard(name="midstance", function=lambda q, qd: float(q[2]), direction=1),
+            failures=falls, skip=lambda q, qd: bool(q[2] >= 0.0),
+        )
+        strike = Stage(
+            until=Guard(name="heel_strike",
+                        function=lambda q, qd: float(self.heel_strike_function(q)),
+                        direction=1),
+            failures=falls, reject=off_ground,
+        )
+        return Phase(name="locked_swing", locked=locked, reset="heel_strike",
+                     stages=(midstance, strike))
 
     def swing_foot_ahead(self, q: ArrayLike) -> float:
         """How far (m) the swing ("left") foot's contact point is ahead of the stance foot's,

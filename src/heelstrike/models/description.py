@@ -33,7 +33,7 @@ import re
 import stat
 import tomllib
 from collections.abc import Callable, Mapping
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -44,6 +44,7 @@ from heelstrike._typing import FloatArray
 
 __all__ = [
     "PROFILE_ANGLE",
+    "EventsSpec",
     "Expr",
     "FootSpec",
     "JointSpec",
@@ -681,6 +682,47 @@ class PoweredSpec:
     speed: float
 
 
+#: The heel strike's resets a walker file may declare (``[events] reset``): the striking foot
+#: becomes the stance foot, every link swapped with its mirror (the only one so far).
+EVENT_RESETS = ("swap_legs",)
+#: What the trailing foot may do at a declared heel strike (``[events] trailing_foot``).
+TRAILING_FOOT_RULES = ("lifts", "lifts_or_grazes")
+
+
+@dataclass(frozen=True, kw_only=True)
+class EventsSpec:
+    """The walker's declared heel-strike witness and reset (the ``[events]`` table).
+
+    Drake's idea that a model declares its own events: the guard is an expression in the
+    walker's coordinates (:attr:`WalkerDescription.coordinate_names`) and parameters, and the
+    heel strike happens when it rises through zero once the stance leg has passed the vertical
+    (with the swing foot touching the ground);
+    :meth:`heelstrike.models.builder.BuiltWalker.step_schedule` runs it instead of the swing
+    foot's clearance.
+
+    Attributes
+    ----------
+    heel_strike : str
+        The guard ``g(q)`` (units of what it measures; e.g. ``"2 * stance_leg + hip"``, the
+        symmetric configuration of a compass gait, rad). Just after the heel strike, the legs
+        relabelled, it is zero too: it also places the hip on the Poincare section
+        (:class:`heelstrike.dynamics.phased.PhasedWalker`).
+    reset : str
+        ``"swap_legs"`` (:data:`EVENT_RESETS`): the striking (swing) foot becomes the stance
+        foot and every link is relabelled as its mirror.
+    trailing_foot : str
+        ``"lifts"`` (the default, the described walkers' rule: the trailing foot is a
+        candidate contact of the impact and must separate and lift) or ``"lifts_or_grazes"``
+        (the paper's projector with the striking foot's rows, eq. 13; the trailing foot may
+        also leave with zero normal velocity to round-off, as it does when both feet are arcs
+        of one circle: McGeer's wheel).
+    """
+
+    heel_strike: str
+    reset: str = "swap_legs"
+    trailing_foot: str = "lifts"
+
+
 @dataclass(frozen=True, kw_only=True)
 class WalkerDescription:
     """A validated walker description.
@@ -706,6 +748,9 @@ class WalkerDescription:
     powered : PoweredSpec or None
         The declared default powered target (``[powered]``), or None; not part of the
         derivation.
+    events : EventsSpec or None
+        The declared heel-strike guard and reset (``[events]``), or None: the swing foot's
+        clearance and the default reset.
     source : str
         Where the description came from (file path or ``"<dict>"``); not part of the model.
     """
@@ -718,6 +763,7 @@ class WalkerDescription:
     constraints: tuple[str, ...] = ()
     control: tuple[PostureLawSpec, ...] = ()
     powered: PoweredSpec | None = None
+    events: EventsSpec | None = None
     source: str = field(default="<dict>", compare=False)
 
     @property
@@ -745,6 +791,8 @@ class WalkerDescription:
             exprs += [pm.at, pm.offset, pm.mass]
         for law in self.control:
             exprs += [law.kp, law.kd, law.angle]
+        if self.events is not None:
+            exprs.append(self.events.heel_strike)
         used = {"g"}
         for e in exprs:
             if isinstance(e, str):
@@ -793,6 +841,8 @@ class WalkerDescription:
         d.pop("constraints")
         d.pop("control")
         d.pop("powered")
+        if self.events is None:  # the structure of walkers without [events] as before
+            d.pop("events")
         d["params"] = [k for k, _ in self.params]
         for ft in d["feet"]:
             if ft["profile"] is None:  # an arc foot: the key it had before profiles existed
@@ -973,7 +1023,10 @@ _TOP_KEYS = {
     "reference",
     "control",
     "powered",
+    "events",
 }
+_EVENTS_KEYS = {"heel_strike", "reset", "trailing_foot"}
+_EVENTS_REQUIRED = ("heel_strike",)
 _POWERED_KEYS = {"speed"}
 _POWERED_REQUIRED = ("speed",)
 _CONTROL_KEYS = {"joint", "kp", "kd", "angle"}
@@ -1033,7 +1086,8 @@ def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> Wal
         Top-level keys ``name``, ``params``, ``link`` (list), ``foot`` (list of two) and
         optionally ``point_mass`` (list), ``constraints``, ``control`` (declared posture laws,
         :class:`PostureLawSpec`), ``powered`` (the default powered target,
-        :class:`PoweredSpec`), ``description``, ``reference`` (free text).
+        :class:`PoweredSpec`), ``events`` (the heel-strike guard and reset,
+        :class:`EventsSpec`), ``description``, ``reference`` (free text).
     source : str
         Origin, for messages.
 
@@ -1284,6 +1338,8 @@ def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> Wal
         powered=powered,
         source=source,
     )
+    if "events" in top:
+        desc = replace(desc, events=_parse_events(top["events"], params, desc))
     seen_points: set[str] = set()
     for point_name in desc.point_names:
         if point_name in seen_points:
@@ -1347,6 +1403,50 @@ def _parse_control(
             )
         )
     return tuple(out)
+
+
+def _parse_events(
+    raw: Any, params: Mapping[str, float], desc: WalkerDescription
+) -> EventsSpec:
+    """Validate the optional ``[events]`` table (the declared heel-strike guard and reset)."""
+    tab = _table(raw, "events")
+    _check_keys(tab, _EVENTS_KEYS, _EVENTS_REQUIRED, "events")
+    p = "events.heel_strike"
+    guard = tab["heel_strike"]
+    coords = desc.coordinate_names
+    if not isinstance(guard, str) or not guard.strip():
+        raise ModelDescriptionError(
+            f"{p}: must be an expression string in the coordinates {list(coords)} and the "
+            "parameters (e.g. '2 * stance_leg + hip'); a number cannot cross zero")
+    tree = _parse_expr(guard, p)
+    used = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name) and n.id != "pi"}
+    unknown = sorted(used - set(coords) - set(params) - set(_FUNCS))
+    if unknown:
+        raise ModelDescriptionError(
+            f"{p}: unknown name {unknown[0]!r} (coordinates: {list(coords)}; parameters: "
+            f"{sorted(params)})")
+    both = sorted(used & set(coords) & set(params))
+    if both:
+        raise ModelDescriptionError(
+            f"{p}: {both[0]!r} names both a coordinate and a parameter: rename the parameter")
+    _check_ast(tree, {**params, **dict.fromkeys(coords, 0.0)}, p)
+    if not used & set(coords):
+        raise ModelDescriptionError(
+            f"{p}: {guard!r} does not depend on the state: a guard is an expression in the "
+            f"coordinates {list(coords)} (and the parameters) that crosses zero at the strike")
+    out: dict[str, str] = {"heel_strike": guard}
+    for key, allowed in (("reset", EVENT_RESETS), ("trailing_foot", TRAILING_FOOT_RULES)):
+        if key in tab:
+            v = tab[key]
+            if v not in allowed:
+                raise ModelDescriptionError(
+                    f"events.{key}: must be one of {list(allowed)}, got {v!r}")
+            out[key] = v
+    if desc.root.mirror is None:
+        raise ModelDescriptionError(
+            f"events.reset: 'swap_legs' relabels the links by their mirrors, and the root "
+            f"link {desc.root.name!r} declares no mirror")
+    return EventsSpec(**out)
 
 
 def _parse_powered(raw: Any) -> PoweredSpec:

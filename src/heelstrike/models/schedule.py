@@ -14,7 +14,9 @@ loop that runs any schedule; the walker only declares it
   lockable joints, then a locked-swing phase "until armed" and "until the swing foot's clearance
   falls through zero" (a touch with the swing foot not ahead of the stance foot is rejected and
   the strike armed anew), heel strike with the trailing foot as a complementarity candidate
-  (:func:`heelstrike.core.complementarity.resolve_impact`).
+  (:func:`heelstrike.core.complementarity.resolve_impact`); a walker file may declare its own
+  heel-strike guard and trailing-foot rule instead (``[events]``,
+  :class:`heelstrike.models.description.EventsSpec`).
 
 Guards are functions of the configuration and velocities ``(q, q_dot)``, each shape (n,); a
 guard named after a :class:`~heelstrike.dynamics.hybrid.WalkStatus` (``"fell_forward"``...)
@@ -42,9 +44,12 @@ __all__ = [
 ]
 
 #: How the heel strike decides the trailing foot: ``"lift_rule"`` (the paper's projector with
-#: the striking foot's rows only, then the trailing foot must lift) or ``"complementarity"``
-#: (the trailing foot is a unilateral candidate contact of the impact).
-TrailingFootRule = Literal["lift_rule", "complementarity"]
+#: the striking foot's rows only, then the trailing foot must lift), ``"lift_or_graze"`` (the
+#: same projector; the trailing foot must lift or graze, leaving with zero normal velocity to
+#: :data:`~heelstrike.models._contact.LIFT_TOLERANCE`, as when both feet are arcs of one
+#: circle: McGeer's wheel) or ``"complementarity"`` (the trailing foot is a unilateral
+#: candidate contact of the impact).
+TrailingFootRule = Literal["lift_rule", "lift_or_graze", "complementarity"]
 #: What ends a phase: a knee strike (its ``strike_joints`` lock) or the heel strike.
 ResetKind = Literal["knee_strike", "heel_strike"]
 #: A witness ``g(q, q_dot) -> float``; ``q`` and ``q_dot`` have shape (n,).
@@ -133,7 +138,7 @@ class StepSchedule:
     lock_angles : tuple of (int, float)
         Every lockable joint with its lock angle (rad): locked through the heel strike, and at
         the start of every step.
-    trailing_foot : {"lift_rule", "complementarity"}
+    trailing_foot : {"lift_rule", "lift_or_graze", "complementarity"}
         How the heel strike decides the trailing foot (:data:`TrailingFootRule`).
     """
 

@@ -286,3 +286,16 @@ def test_wheel_walks_passively_on_level_ground_losing_nothing() -> None:
         np.testing.assert_allclose(imp.q_dot_minus[2:], [1.0, 0.0], atol=1e-8, err_msg=what)
     # nothing lost anywhere: the mechanical energy of the whole walk is the start's
     np.testing.assert_allclose(walk.mechanical_energy, E0, rtol=1e-9)
+
+
+def test_gait_of_a_walker_without_a_compiled_kernel_runs_on_scipy(capsys) -> None:
+    """``gait --model wheel`` (no compiled kernel) runs on the scipy reference by default and
+    answers with the physics (no passive wheel gait on a slope), not a backend refusal; an
+    explicit ``--backend compiled`` is still refused with the reason."""
+    from heelstrike.cli import main
+
+    assert main(["gait", "--model", "wheel", "--slope", "1deg", "--guess", "0.2,-1.0,0.0"]) != 0
+    err = capsys.readouterr().err
+    assert "backend" not in err and "gait" in err
+    assert main(["gait", "--model", "wheel", "--backend", "compiled"]) == 2
+    assert "compiled" in capsys.readouterr().err

@@ -218,7 +218,19 @@ def add_backend_option(
     """``--backend compiled|scipy`` with the command's help (what runs on each backend)."""
     from heelstrike.models.base import BACKEND_NAMES
 
-    p.add_argument("--backend", choices=sorted(BACKEND_NAMES), default=default, help=help)
+    p.add_argument("--backend", choices=sorted(BACKEND_NAMES), default=default, help=help,
+                   action=Explicit)
+
+
+def default_backend_for(args: argparse.Namespace, walker: Any) -> None:
+    """A command's default ``--backend`` that ``walker`` does not run on becomes the one it runs
+    on (:attr:`~heelstrike.models.base.PlanarWalker.backends`: McGeer's ``wheel.toml`` has no
+    compiled kernel, so its ``gait`` runs on the scipy reference); a ``--backend`` given on the
+    command line is kept (and refused later if unsupported, with the reason)."""
+    backend = vars(args).get("backend")
+    if backend is None or "backend" in explicit_options(args) or walker.supports(backend):
+        return
+    args.backend = walker.backends[0]
 
 
 def _note_borrowed_name(model: str, description: Any) -> None:
@@ -283,6 +295,7 @@ def model_from_args(args: argparse.Namespace) -> Any:
         raise CliError(f"--param {unknown[0]}: model {description.name!r} has no parameter "
                        f"{unknown[0]!r} (its parameters: {', '.join(names)})")
     walker = PhasedWalker(description)
+    default_backend_for(args, walker)
     known = walker.parameters
     by_option = compass_params()
     for dest in sorted(explicit_options(args) & set(by_option)):

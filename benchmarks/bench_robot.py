@@ -115,8 +115,11 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
             inert_velocity_batch,
             resolve_contact_impact,
         )
+        from _robot_inert_dense import inert_energy_split_batch_dense, robot_impact_dense
+
         from heelstrike.robots import (
             ContactSpec,
+            inert_energy_split,
             inert_energy_split_batch,
             inert_impact_batch,
             load_robot,
@@ -124,6 +127,7 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
             robot_impact,
             robot_matrices,
         )
+        from heelstrike.robots.contacts import _inert_path
     except ImportError:
         return {"skipped": True}
     t_import = time.perf_counter() - t0
@@ -131,7 +135,7 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
     robot = load_robot("talos")
     t_load = time.perf_counter() - t0
     model, data = robot.model, robot.data
-    feet = [ContactSpec(frame=f, kind="flat") for f in robot.feet]
+    feet = tuple(ContactSpec(frame=f, kind="flat") for f in robot.feet)
     fids = [robot.frame_id(f) for f in robot.feet]
     lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
     layout = InertLayout(normal=tuple(c.normal for c in feet),
@@ -155,6 +159,8 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
         "load_robot('talos') (s)": t_load,
         "first pin.impulseDynamics (J given) (s)": first_time(
             lambda: pin.impulseDynamics(model, data, q0, v0, J_first, 0.0, 0.0)),
+        "first heelstrike inert_energy_split (numba kernel from its disk cache) (s)": first_time(
+            lambda: inert_energy_split(robot, q0, v0, feet)),
         "first heelstrike robot_impact (s)": first_time(
             lambda: robot_impact(robot, q0, v0, strike=[], keep=feet)),
         f"first heelstrike inert_energy_split_batch, {n_batch:,} configurations (s)":
@@ -179,6 +185,17 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
         return inert_velocity(M, v, A)[0]
 
     v_only = np.stack([velocity_only(q, v) for q, v in zip(qs, vs, strict=True)])
+    lean = [inert_energy_split(robot, q, v, feet) for q, v in zip(qs, vs, strict=True)]
+    dense = inert_energy_split_batch_dense(robot, qs, vs, feet, chunk=CHUNK)
+    keys = ("T", "T_c", "T_a", "T_post", "energy_lost", "T_c_normal", "T_c_tangential")
+    tree_vs_dense = max(
+        float(np.max(np.abs(np.asarray(getattr(x, key)) - np.asarray(getattr(dense, key)[i]))))
+        / float(dense.T[i])
+        for i, x in enumerate(lean) for key in keys)
+    tree_vs_dense = max(tree_vs_dense, *(
+        float(np.max(np.abs(getattr(batch, key) - getattr(dense, key)) / (
+            dense.T if getattr(dense, key).ndim == 1 else dense.T[:, None])))
+        for key in keys))
     def velocity_only_batch(i: int) -> np.ndarray:
         M, A = mass_matrices_and_jacobians(robot, qs[i:i + CHUNK], feet)
         return inert_velocity_batch(M, vs[i:i + CHUNK], A)[0]
@@ -203,7 +220,11 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
     agreement = {
         "v+ robot_impact vs impulseDynamics": worst_v(np.stack([r.velocity_post
                                                                for r in singles])),
-        "v+ inert_energy_split_batch vs impulseDynamics": worst_v(batch.velocity_post),
+        "v+ inert_energy_split (tree) vs impulseDynamics": worst_v(np.stack(
+            [x.velocity_post for x in lean])),
+        "v+ inert_energy_split_batch (tree) vs impulseDynamics": worst_v(batch.velocity_post),
+        "v+ frozen dense batch vs impulseDynamics": worst_v(dense.velocity_post),
+        "energies (T, T_c, T_a, T+, shares) tree vs frozen dense path, / T": tree_vs_dense,
         "v+ robot_matrices + inert_velocity vs impulseDynamics": worst_v(v_only),
         "v+ inert_velocity_batch vs impulseDynamics": worst_v(v_only_batch),
         "energies (T, T_c, T_a, shares) direct vs reference path, / T": energy_worst,
@@ -216,6 +237,7 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
         paths.append((section, path, work, n, fn))
 
     sl = slice(0, n_single)
+    qs_checked = robot.check_states(qs)
     vplus = "v+, impulses"
     full = "v+, impulses, T, T_c, T_a, T+, normal/tangential T_c per contact"
 
@@ -235,6 +257,18 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
     def hs_single() -> None:
         for q, v in zip(qs[sl], vs[sl], strict=True):
             robot_impact(robot, q, v, strike=[], keep=feet)
+
+    def hs_lean() -> None:
+        for q, v in zip(qs[sl], vs[sl], strict=True):
+            inert_energy_split(robot, q, v, feet)
+
+    def hs_lean_unchecked() -> None:
+        for q, v in zip(qs_checked[sl], vs[sl], strict=True):
+            inert_energy_split(robot, q, v, feet, check=False)
+
+    def hs_single_dense() -> None:
+        for q, v in zip(qs[sl], vs[sl], strict=True):
+            robot_impact_dense(robot, q, v, feet)
 
     def hs_reference() -> None:
         for q, v in zip(qs[:n_ref], vs[:n_ref], strict=True):
@@ -264,6 +298,9 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
     def hs_batch_unchecked() -> None:
         inert_energy_split_batch(robot, qs, vs, feet, chunk=CHUNK, check=False)
 
+    def hs_batch_dense() -> None:
+        inert_energy_split_batch_dense(robot, qs, vs, feet, chunk=CHUNK)
+
     def hs_batch_reference() -> None:
         for i in range(0, n_ref_batch, CHUNK):
             inert_impact_batch(robot, qs[i:min(i + CHUNK, n_ref_batch)],
@@ -273,17 +310,25 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
     add(s1, "pinocchio impulseDynamics (J given)", vplus, n_single, pin_given)
     add(s1, "pinocchio impulseDynamics (J computed: joint + 2 frame Jacobians)", vplus,
         n_single, pin_full)
-    add(s1, "heelstrike robot_matrices + inert_velocity (like-for-like)", vplus, n_single,
-        hs_vplus)
-    add(s1, "heelstrike robot_impact (direct inert path)", full, n_single, hs_single)
+    add(s1, "heelstrike inert_energy_split (tree kernel, checked)", full, n_single, hs_lean)
+    add(s1, "heelstrike inert_energy_split (tree kernel, check=False)", full, n_single,
+        hs_lean_unchecked)
+    add(s1, "heelstrike robot_impact (tree kernel + RobotImpact report)", full, n_single,
+        hs_single)
+    add(s1, "before: robot_impact on the dense LAPACK path (frozen copy)", full, n_single,
+        hs_single_dense)
+    add(s1, "heelstrike robot_matrices + inert_velocity (dense, like-for-like)", vplus,
+        n_single, hs_vplus)
     add(s1, "heelstrike reference path (resolve_contact_impact)", full, n_ref, hs_reference)
     add(s2, "pinocchio impulseDynamics loop (J given)", vplus, n_batch, pin_batch)
     add(s2, "pinocchio impulseDynamics loop (J computed)", vplus, n_batch, pin_batch_full)
-    add(s2, "heelstrike mass_matrices_and_jacobians + inert_velocity_batch (like-for-like)",
-        vplus, n_batch, hs_batch_vplus)
-    add(s2, "heelstrike inert_energy_split_batch (checked)", full, n_batch, hs_batch)
-    add(s2, "heelstrike inert_energy_split_batch (check=False)", full, n_batch,
+    add(s2, "heelstrike inert_energy_split_batch (tree kernel, checked)", full, n_batch, hs_batch)
+    add(s2, "heelstrike inert_energy_split_batch (tree kernel, check=False)", full, n_batch,
         hs_batch_unchecked)
+    add(s2, "before: inert_energy_split_batch on numpy's stacked solvers (frozen copy)", full,
+        n_batch, hs_batch_dense)
+    add(s2, "heelstrike mass_matrices_and_jacobians + inert_velocity_batch (dense, "
+        "like-for-like)", vplus, n_batch, hs_batch_vplus)
     add(s2, "heelstrike reference inert_impact_batch (core.impact, projectors)",
         full + ", P_c, P_a", n_ref_batch, hs_batch_reference)
     # Interleaved rounds: every path once per round (the first round is a warm-up), so that
@@ -341,7 +386,42 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
                 fn(slice(i, i + CHUNK))
         return run_all
 
+    # the tree path's stages: Pinocchio's calls, then the kernel stopped after each stage
+    path = _inert_path(robot, feet)
+    M_t = path.assemble(q_c, path.A)
+    A_t, v_t = path.A, np.ascontiguousarray(v0)
+    world = pin.Convention.WORLD
+
+    def kernel_upto(stage: int, check: bool = False) -> float:
+        return per_call(lambda: path.item(M_t, A_t, v_t, path.tree, path.work, path.out, check,
+                                          stage))
+
+    upto = [kernel_upto(i) for i in range(6)]
+    tree_stages = [
+        ("tree single: crba, world convention (M and the joint Jacobians)",
+         per_call(lambda: pin.crba(model, data, q_c, world))),
+        ("tree single: 2 frame Jacobians into the rows", per_call(
+            lambda: path.plan.fill(data, A_t))),
+        ("tree single: kernel call, returning at once (dispatch, no work)", upto[0]),
+        ("tree single: + rank certificate of A (check=True)",
+         kernel_upto(0, True) - upto[0]),
+        ("tree single: + M = U D U^T, tree-sparse (Pinocchio's cholesky::decompose)",
+         upto[1] - upto[0]),
+        ("tree single: + Y = U^-1 A^T on the contacts' chains", upto[2] - upto[1]),
+        ("tree single: + Delassus W = Y D^-1 Y^T and W = L L^T", upto[3] - upto[2]),
+        ("tree single: + lambda, q_dot+ (two triangular solves, U^-T)", upto[4] - upto[3]),
+        ("tree single: + energy split (T, T+, nested shares) and contact outputs",
+         upto[5] - upto[4]),
+        ("tree single: whole kernel, check=False", upto[5]),
+        ("tree single: result object (InertImpactBatch, copies)",
+         per_call(lambda: path.single(v_t))),
+        ("tree single: inert_energy_split, checked (all of it)",
+         per_call(lambda: inert_energy_split(robot, q0, v0, feet))),
+        ("tree single: inert_energy_split, check=False (all of it)",
+         per_call(lambda: inert_energy_split(robot, q_c, v_t, feet, check=False))),
+    ]
     stages = [
+        *tree_stages,
         ("single: check_state (q, v)", per_call(lambda: robot.check_state(q0, v0))),
         ("single: crba + symmetrise", per_call(lambda: robot._mass_matrix(q_c, data))),
         ("single: robot_matrices (check, crba, joint + 2 frame Jacobians)",

@@ -144,7 +144,8 @@ def out_size(n: int, k: int, groups: int) -> int:
 
 @njit(cache=True)
 def inert_item(M: FloatArray, A: FloatArray, v: FloatArray, tree: IntArray,
-               work: FloatArray, out: FloatArray, check: bool) -> int:  # pragma: no cover
+               work: FloatArray, out: FloatArray, check: bool,
+               upto: int = 5) -> int:  # pragma: no cover
     """Inert impact of one configuration (module doc); returns the status code.
 
     Parameters
@@ -166,6 +167,10 @@ def inert_item(M: FloatArray, A: FloatArray, v: FloatArray, tree: IntArray,
         ``A^T lambda``.
     check : bool
         Test the full-rank certificate of ``A`` (status 3 when it does not hold).
+    upto : int
+        Stop after a stage (for timing the stages; ``out`` is then incomplete): 0 the
+        certificate, 1 ``U D U^T``, 2 ``Y``, 3 ``W = L L^T``, 4 ``lambda`` and ``q_dot+``,
+        5 everything (default).
     """
     # No array views inside the loops: each costs numba two atomic reference-count updates.
     n = tree[0]
@@ -237,6 +242,8 @@ def inert_item(M: FloatArray, A: FloatArray, v: FloatArray, tree: IntArray,
             ok = math.isfinite(denom) and denom * RANK_CERTIFICATE < 1.0
         if not ok:
             status = 3
+    if upto == 0:
+        return status
     # M = U D U^T on the tree (pinocchio::cholesky::decompose); x[:n] holds 1 / D afterwards
     for j in range(n):
         x[j] = M[j, j]
@@ -264,6 +271,8 @@ def inert_item(M: FloatArray, A: FloatArray, v: FloatArray, tree: IntArray,
             i = tree[P + i]
     for j in range(n):
         x[j] = 1.0 / x[j]
+    if upto == 1:
+        return status
     # Y = U^-1 A_p^T (row r nonzero on its chain only), b = A_p v
     for r in range(k):
         ar = tree[OR + r]
@@ -281,6 +290,8 @@ def inert_item(M: FloatArray, A: FloatArray, v: FloatArray, tree: IntArray,
                 c = tree[sr + m]
                 s -= U[j, c] * Y[r, c]
             Y[r, j] = s
+    if upto == 2:
+        return status
     # W = Y D^-1 Y^T = L L^T (the chains of two rows share a prefix from the root)
     for r in range(k):
         sr = CH + tree[CS + r]
@@ -301,6 +312,8 @@ def inert_item(M: FloatArray, A: FloatArray, v: FloatArray, tree: IntArray,
                 L[r, r] = math.sqrt(s)
             else:
                 L[r, c] = s / L[c, c]
+    if upto == 3:
+        return status
     # y = L^-1 b, lambda_p = -L^-T y
     for r in range(k):
         s = x[BB + r]
@@ -330,6 +343,8 @@ def inert_item(M: FloatArray, A: FloatArray, v: FloatArray, tree: IntArray,
         out[j] = s
     for j in range(n):
         out[j] += v[j]
+    if upto == 4:
+        return status
     # outputs in contact order, energies
     t_c = 0.0
     for g in range(ng):

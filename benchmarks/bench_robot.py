@@ -104,6 +104,7 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
     t0 = time.perf_counter()
     try:
         import pinocchio as pin
+        from _robot_inert_dense import inert_energy_split_batch_dense, robot_impact_dense
 
         from heelstrike.core.contact_laws import (
             ContactRows,
@@ -115,8 +116,6 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
             inert_velocity_batch,
             resolve_contact_impact,
         )
-        from _robot_inert_dense import inert_energy_split_batch_dense, robot_impact_dense
-
         from heelstrike.robots import (
             ContactSpec,
             inert_energy_split,

@@ -288,3 +288,41 @@ def test_synthetic_tree_statuses() -> None:
     assert status == 3
     assert np.all(np.isfinite(out))  # ... but solved; the caller runs the reference test
     assert _run(M, near, v, parents, nvsub, chains, layout, check=False)[0] == 0
+
+
+def test_ahead_of_time_kernel_equals_the_jit_bit_for_bit(robots) -> None:
+    """The API calls the kernel's ahead-of-time module (no numba in a new process); it is the
+    same numba code as the JIT's, so the outputs are identical, statuses included."""
+    from heelstrike.dynamics._aot import aot_enabled, load_library
+    from heelstrike.robots.contacts import _inert_library
+
+    if not aot_enabled():
+        pytest.skip("HEELSTRIKE_AOT=0: the JIT is the kernel")
+    aot = load_library(_inert_library())
+    assert aot is not None, "the ahead-of-time module could not be built or loaded"
+    talos = robots["talos"]
+    specs = _contacts(talos, mixed=True)
+    path = _inert_path(talos, specs)
+    for seed in range(3):
+        q, v = _state(talos, 90 + seed)
+        q_, v_ = talos.check_state(q, v)
+        M = path.assemble(q_, path.A)
+        outs = []
+        for fn in (aot.inert_item, kernel.inert_item):
+            out = np.empty_like(path.out)
+            status = fn(M, path.A, v_, path.tree, np.zeros_like(path.work), out, True, 5)
+            outs.append((status, out))
+        assert outs[0][0] == outs[1][0] == 0
+        np.testing.assert_array_equal(outs[0][1], outs[1][1])
+    B = 3
+    Ms = np.stack([M] * B)
+    As = np.stack([path.A] * B)
+    vs = np.stack([v_] * B)
+    results = []
+    for fn in (aot.inert_batch, kernel.inert_batch):
+        out = np.empty((B, path.out.shape[0]))
+        status = np.full(B, -1, dtype=np.int64)
+        fn(Ms, As, vs, path.tree, np.zeros_like(path.work), out, status, True)
+        results.append((status, out))
+    np.testing.assert_array_equal(results[0][0], results[1][0])
+    np.testing.assert_array_equal(results[0][1], results[1][1])

@@ -290,6 +290,60 @@ class _RowPlan:
                 out[start:start + 3] = J6[:3] - skew @ J6[3:]
 
 
+def _inert_library() -> Any:
+    """The inert kernel's ahead-of-time library (:mod:`heelstrike.dynamics._aot`): built once
+    into heelstrike's cache, it loads without numba, so a new process does not pay numba's
+    import and cache loading (about 1 s) for one robot impact."""
+    lib = _AOT.get("library")
+    if lib is None:
+        from heelstrike.dynamics._aot import AotExport, AotLibrary
+
+        def functions() -> dict[str, Any]:
+            from heelstrike.robots import _inert_kernel as kernel
+
+            return {"inert_item": kernel.inert_item, "inert_batch": kernel.inert_batch}
+
+        lib = _AOT["library"] = AotLibrary(
+            name="robot_inert",
+            exports=(
+                AotExport(name="inert_item", args=("f8[:,::1]", "f8[:,::1]", "f8[::1]",
+                                                   "i8[::1]", "f8[::1]", "f8[::1]", "b1", "i8"),
+                          returns="i8"),
+                AotExport(name="inert_batch", args=("f8[:,:,::1]", "f8[:,:,::1]", "f8[:,::1]",
+                                                    "i8[::1]", "f8[::1]", "f8[:,::1]",
+                                                    "i8[::1]", "b1"),
+                          returns="void"),
+            ),
+            functions=functions,
+            source_modules=("heelstrike.robots._inert_kernel", "heelstrike.robots._inert_tree"),
+            kind="aot-robot",
+            what="the robots' inert impact kernel, compiled ahead of time",
+        )
+    return lib
+
+
+_AOT: dict[str, Any] = {}
+
+
+def _inert_kernels() -> tuple[Any, Any]:
+    """``(inert_item, inert_batch)``: the ahead-of-time module's functions (their C-order
+    arguments are guaranteed by :class:`_InertPath`, so they are called unchecked), or numba's
+    JIT when the tier is off or cannot build."""
+    funcs = _AOT.get("functions")
+    if funcs is None:
+        from heelstrike.dynamics._aot import load_library
+
+        aot = load_library(_inert_library())
+        if aot is not None:
+            funcs = (aot.module.inert_item, aot.module.inert_batch)
+        else:
+            from heelstrike.robots import _inert_kernel as kernel
+
+            funcs = (kernel.inert_item, kernel.inert_batch)
+        _AOT["functions"] = funcs
+    return funcs
+
+
 class _InertPath:
     """The compiled inert impact (:mod:`heelstrike.robots._inert_kernel`) of a fixed list of
     kept contacts: the robot's tree as dof arrays, the rows' nesting order, reused work space.
@@ -299,7 +353,7 @@ class _InertPath:
     """
 
     def __init__(self, robot: Robot, contacts: tuple[ContactSpec, ...]) -> None:
-        from heelstrike.robots import _inert_kernel as kernel
+        from heelstrike.robots import _inert_tree as kernel
 
         pin = _pin()
         model = robot.model
@@ -318,7 +372,7 @@ class _InertPath:
         self.work = np.zeros(kernel.work_size(n, k))
         self.out = np.empty(kernel.out_size(n, k, groups))
         self.A = np.empty((k, n))
-        self.item, self.batch = kernel.inert_item, kernel.inert_batch
+        self.item, self.batch = _inert_kernels()
         self.model, self.data = model, robot.data
         self.crba = pin.crba
         # crba in the WORLD convention also leaves the joint Jacobians in data.J (Pinocchio
@@ -341,7 +395,7 @@ class _InertPath:
         if self.jacobians is not None:  # pragma: no cover - Pinocchio without conventions
             self.jacobians(self.model, self.data, q)
         self.plan.fill(self.data, A)
-        return np.asarray(M)
+        return np.ascontiguousarray(M)
 
     def raise_for(self, status: int, rows: Any, where: str = "") -> None:
         """Raise the reference path's error for a kernel status; run the reference rank test
@@ -740,8 +794,8 @@ def robot_impact(
                 raise ImpactInputError(f"{plan.k} contact rows exceed the {robot.nv} "
                                        "coordinates")
             path = _inert_path(robot, specs)
-            path.raise_for(path.item(M, A, v_, path.tree, path.work, path.out, True),
-                           lambda: A)
+            path.raise_for(path.item(np.ascontiguousarray(M), A, np.ascontiguousarray(v_),
+                                     path.tree, path.work, path.out, True, 5), lambda: A)
             res = path.contact_impact(v_)
             return RobotImpact(contacts=specs, bilateral=bil, result=res, M=M, jacobians=jacs,
                                tilting=_tilting(specs, bil, res, rot, ((i,) for i in
@@ -987,16 +1041,18 @@ def inert_energy_split(
             robot.cache["inert_last"] = (contacts, path)
     if check:
         q_, v_ = robot.check_state(q, v)
+        v_ = np.ascontiguousarray(v_)
         if path.k > path.n:
             raise ImpactInputError(f"{path.k} contact rows exceed the {path.n} coordinates")
     else:
-        q_, v_ = np.asarray(q, dtype=float), np.asarray(v, dtype=float)
+        q_ = np.asarray(q, dtype=float)
+        v_ = np.ascontiguousarray(v, dtype=float)
         if v_.shape != (path.n,) or q_.shape != (robot.model.nq,) or path.k > path.n:
             raise RobotError(f"q and v must have nq={robot.model.nq} and nv={path.n} entries "
                              f"(and at most nv contact rows), got {q_.shape}, {v_.shape}")
     A = path.A
     M = path.assemble(q_, A)
-    status = path.item(M, A, v_, path.tree, path.work, path.out, check)
+    status = path.item(M, A, v_, path.tree, path.work, path.out, bool(check), 5)
     if status:
         path.raise_for(status, lambda: A)
     return path.single(v_)
@@ -1079,7 +1135,7 @@ def inert_energy_split_batch(
                 jacobians(model, data, q)
             fill(data, As[b])
         path.batch(Ms, As, v_all[i:i + size], path.tree, path.work, out[i:i + size],
-                   status[i:i + size], check)
+                   status[i:i + size], bool(check))
     for bad in np.flatnonzero(status):
         i = int(bad)
 

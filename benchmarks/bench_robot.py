@@ -158,7 +158,7 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
         "load_robot('talos') (s)": t_load,
         "first pin.impulseDynamics (J given) (s)": first_time(
             lambda: pin.impulseDynamics(model, data, q0, v0, J_first, 0.0, 0.0)),
-        "first heelstrike inert_energy_split (numba kernel from its disk cache) (s)": first_time(
+        "first heelstrike inert_energy_split (loads the kernel module) (s)": first_time(
             lambda: inert_energy_split(robot, q0, v0, feet)),
         "first heelstrike robot_impact (s)": first_time(
             lambda: robot_impact(robot, q0, v0, strike=[], keep=feet)),

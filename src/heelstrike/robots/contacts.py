@@ -387,6 +387,9 @@ class _InertPath:
                      "T": o, "T_post": o + 1, "T_c": o + 2, "energy_lost": o + 3,
                      "u_pre": slice(o + 4, o + 4 + k), "u_post": slice(o + 4 + k, o + 4 + 2 * k),
                      "generalized": slice(o + 4 + 2 * k, o + 4 + 2 * k + n)}
+        cols = self.cols
+        self.single_cols = (cols["velocity_post"], cols["impulse"], cols["T_c_normal"],
+                            cols["T_c_tangential"], o)
 
     def assemble(self, q: FloatArray, A: FloatArray) -> FloatArray:
         """``crba`` at a checked ``q`` (returns Pinocchio's ``M``, upper triangle filled) and
@@ -429,13 +432,12 @@ class _InertPath:
     def single(self, v: FloatArray) -> InertImpactBatch:
         """The last single solve as :class:`InertImpactBatch` of one state (a copy)."""
         out = self.out.copy()
-        c = self.cols
-        T_post = out[c["T_post"]]
+        vp, lam, nrm, tan, o = self.single_cols
+        T_post = out[o + 1]
         return InertImpactBatch(
-            velocity_pre=v, velocity_post=out[c["velocity_post"]], impulse=out[c["impulse"]],
-            T=out[c["T"]], T_c=out[c["T_c"]], T_a=T_post, T_post=T_post,
-            energy_lost=out[c["energy_lost"]], T_c_normal=out[c["T_c_normal"]],
-            T_c_tangential=out[c["T_c_tangential"]])
+            velocity_pre=v, velocity_post=out[vp], impulse=out[lam], T=out[o], T_c=out[o + 2],
+            T_a=T_post, T_post=T_post, energy_lost=out[o + 3], T_c_normal=out[nrm],
+            T_c_tangential=out[tan])
 
     def split(self, out: FloatArray, v: FloatArray) -> InertImpactBatch:
         """Outputs (..., width) as :class:`InertImpactBatch` (views of ``out``)."""

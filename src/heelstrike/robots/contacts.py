@@ -36,7 +36,7 @@ Speed: one ``crba`` and one ``computeJointJacobians`` per configuration, then on
 per contact, on the robot's reused ``Data``. With only persistent contacts (the paper's inert
 law) :func:`robot_impact`, :func:`inert_energy_split` and :func:`inert_energy_split_batch` solve
 on the kinematic tree in one compiled call per configuration or per chunk
-(:mod:`heelstrike.robots._inert_kernel`: Pinocchio's tree-sparse factorisation of ``M``, the
+(``heelstrike.robots._inert_kernel``: Pinocchio's tree-sparse factorisation of ``M``, the
 Delassus matrix of the rows, a small dense Cholesky factorisation; the two lean ones need no
 ``computeJointJacobians``: ``crba`` in the world convention leaves the joint Jacobians); the
 complementarity solver runs only when a striking contact's friction, restitution or separation
@@ -994,8 +994,9 @@ def inert_energy_split(
     The numbers of :func:`robot_impact` with ``keep=contacts`` (and no strike), without its
     report (no ``RobotImpact``: no ``M``, rows, contact velocities or tilting soles): one
     ``crba`` (which leaves the joint Jacobians in the reused ``Data``), one frame Jacobian per
-    contact, then one compiled call on the kinematic tree (:mod:`heelstrike.robots.
-    _inert_kernel`): Pinocchio's tree-sparse factorisation ``M = U D U^T``, the Delassus
+    contact, then one compiled call on the kinematic tree (``heelstrike.robots._inert_kernel``,
+    compiled ahead of time on first use): Pinocchio's tree-sparse factorisation
+    ``M = U D U^T`` (its ``cholesky::decompose`` algorithm), the Delassus
     matrix ``W = A M^-1 A^T`` with the rows in the nesting order of the split, ``W = L L^T``,
     ``y = L^-1 A q_dot-``, ``lambda = -L^-T y``, ``q_dot+ = q_dot- + M^-1 A^T lambda``,
     ``T_c = 1/2 |y|^2`` (nested normal/tangential shares: the squares of ``y``'s segments),
@@ -1011,11 +1012,12 @@ def inert_energy_split(
     contacts : sequence of ContactSpec
         Persistent contacts (bilateral, inert), in report order.
     check : bool
-        Validate the state (:meth:`Robot.check_state`: real, finite, base near the origin,
-        unit blocks normalised) and certify the rank of the rows, with the reference rank test
-        where the certificate does not hold (default True). With False, ``q`` and ``v`` must be
-        float arrays of sizes ``nq`` and ``nv`` (checked) with unit quaternions (not checked);
-        a non-positive-definite ``M`` or rank-deficient rows still raise.
+        Validate the state (:meth:`~heelstrike.robots.Robot.check_state`: real, finite, base
+        near the origin, unit blocks normalised) and certify the rank of the rows, with the
+        reference rank test where the certificate does not hold (default True). With False,
+        ``q`` and ``v`` must be float arrays of sizes ``nq`` and ``nv`` (checked) with unit
+        quaternions (not checked); a non-positive-definite ``M`` or rank-deficient rows still
+        raise.
 
     Returns
     -------
@@ -1074,7 +1076,7 @@ def inert_energy_split_batch(
     The numbers of :func:`inert_energy_split` (and of :func:`robot_impact` with
     ``keep=contacts``) for every configuration, chunk by chunk: Pinocchio fills the mass
     matrices (``crba``) and contact rows of a chunk (one ``Data`` reused), then one compiled
-    call solves the chunk on the kinematic tree (:mod:`heelstrike.robots._inert_kernel`).
+    call solves the chunk on the kinematic tree (``heelstrike.robots._inert_kernel``).
 
     Parameters
     ----------
@@ -1090,8 +1092,8 @@ def inert_energy_split_batch(
     check : bool
         Certify the rank of every configuration's rows, with the reference rank test where the
         certificate does not hold (default True); the states are always checked
-        (:meth:`Robot.check_states`), and a non-positive-definite ``M`` or rank-deficient rows
-        always raise.
+        (:meth:`~heelstrike.robots.Robot.check_states`), and a non-positive-definite ``M`` or
+        rank-deficient rows always raise.
 
     Returns
     -------

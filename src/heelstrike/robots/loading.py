@@ -341,9 +341,9 @@ class Robot:
         v_ = np.zeros(nv) if v is None else real_array(v, "v").reshape(-1)
         if v_.shape != (nv,):
             raise RobotError(f"v has {v_.size} entries, robot {self.name!r} needs nv={nv}")
-        # One sum each decides the common case (finite sums: finite entries); an infinite or
-        # NaN sum (or an overflow) takes the entry-wise test.
-        if not math.isfinite(float(q_.sum()) + float(v_.sum())) and not (
+        # One dot product each decides the common case (finite: finite entries); an infinite
+        # or NaN one (or an overflow) takes the entry-wise test.
+        if not math.isfinite(float(q_.dot(q_)) + float(v_.dot(v_))) and not (
                 np.isfinite(q_).all() and np.isfinite(v_).all()):
             raise RobotError("q and v must be finite")
         base = q_[:3]

@@ -8,27 +8,33 @@ on the ground (two 6-row contacts, 12 constraint rows, bilateral and inert). One
 
 Work done
 ---------
-Pinocchio's ``impulseDynamics`` returns ``v+`` and the impulses only. heelstrike's full path
-(``robot_impact``, ``inert_energy_split_batch``) returns those **and** the energy split
-``T``, ``T_c``, ``T_a``, ``T+`` and the per-contact normal/tangential shares of ``T_c``; the
-like-for-like rows (``robot_matrices`` + ``inert_velocity``, or the batched
-``inert_velocity_batch``) compute ``v+`` and the impulses only, from the same inputs as the
-Pinocchio row "J computed" (``q``, ``v`` and the contact frames: mass matrix and frame
-Jacobians included). "J given" is Pinocchio's best case: the Jacobians precomputed, untimed.
+Pinocchio's ``impulseDynamics`` returns ``v+`` and the impulses only. heelstrike's tree path
+(``inert_energy_split``, ``robot_impact``, ``inert_energy_split_batch``) returns those **and**
+the energy split ``T``, ``T_c``, ``T_a``, ``T+`` and the per-contact normal/tangential shares
+of ``T_c``, from ``q``, ``v`` and the contact frames, as the Pinocchio row "J computed" does
+(mass matrix and frame Jacobians included). "J given" is Pinocchio's best case: the Jacobians
+precomputed, untimed. The dense like-for-like rows (``robot_matrices`` + ``inert_velocity``,
+or the batched ``inert_velocity_batch``) compute ``v+`` and the impulses only.
 
 Paths
 -----
-single calls        one configuration per Python call (300 configurations per timing).
+single calls        one configuration per Python call (300 configurations per timing):
+                    ``inert_energy_split`` checked (state validated, rank certificate) and with
+                    ``check=False`` (states checked beforehand, untimed), ``robot_impact`` (the
+                    same kernel plus its ``RobotImpact`` report).
 batched             10,000 configurations: Pinocchio fills ``M`` and ``J`` configuration by
-                    configuration (one loop of Pinocchio calls), numpy resolves chunks of 256
-                    with its stacked solvers (``inert_energy_split_batch``).
-reference           heelstrike's general machinery as used for this problem before the direct
-                    path existed: the complementarity solver ``resolve_contact_impact`` with the
-                    split by ``core.impact`` (single), and ``inert_impact_batch`` (projectors by
-                    ``core.impact``, batched numpy).
+                    configuration (one loop of Pinocchio calls), one compiled kernel call per
+                    chunk of 256 (``inert_energy_split_batch``).
+before              a frozen copy of the dense path the API took before the tree kernel
+                    (``_robot_inert_dense.py``: LAPACK on the dense ``M`` per call, numpy's
+                    stacked solvers per chunk).
+reference           heelstrike's general machinery: the complementarity solver
+                    ``resolve_contact_impact`` with the split by ``core.impact`` (single), and
+                    ``inert_impact_batch`` (projectors by ``core.impact``, batched numpy).
 
 Accuracy: before timing, ``v+`` of every heelstrike path is compared with ``impulseDynamics``
-on all 10,000 configurations, and the energies of the direct paths with the reference path;
+on all 10,000 configurations, and the energies of the tree path with the frozen dense path and
+of the direct paths with the reference path;
 the achieved agreement is reported. Threads: the measurements run twice, each in a new process:
 once with ``OMP_NUM_THREADS = OPENBLAS_NUM_THREADS = MKL_NUM_THREADS = 1`` (single thread), once
 with the libraries' default (all cores). In each process the first call of each path is timed
@@ -36,7 +42,8 @@ separately (cold: first use after loading the robot) from the warm medians of re
 The paths are timed in interleaved rounds (every path once per round, 7 rounds after a warm-up
 round), so that the paths of a round share the machine's load; a row's rate is the median over
 the rounds, its ratios to Pinocchio the medians of the per-round ratios. Where the time goes:
-each stage of the single call and of the batch timed separately (medians of repeats).
+each stage of the single call and of the batch timed separately (medians of repeats); the tree
+kernel's stages by stopping it after each (its ``upto`` argument), as differences of medians.
 
 Run ``python benchmarks/bench_robot.py`` (``--quick`` for a smoke run, ``--json PATH``).
 """

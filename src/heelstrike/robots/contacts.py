@@ -782,13 +782,13 @@ def robot_impact(
     jacs = tuple(A[sl] for sl in plan.layout.slices)
     flats = [i for i, sp in enumerate(specs) if sp.kind in _FLAT]
     rot: dict[int, FloatArray] = {}
-    if flats:
-        _pin().updateFramePlacements(robot.model, robot.data)
-        rot = {i: np.array(robot.data.oMf[robot.frame_id(specs[i].frame)].rotation)
+    if flats:  # the soles' placements (their frames' ids are the row plan's)
+        place = _pin().updateFramePlacement
+        rot = {i: np.array(place(robot.model, robot.data, plan.items[i][0]).rotation)
                for i in flats}
     patched = any(sp.kind == "flat" and not b for sp, b in zip(specs, bil, strict=True))
     try:
-        if any(not np.any(J) for J in jacs):  # a frame that does not move: no contact at all
+        if any(not J.any() for J in jacs):  # a frame that does not move: no contact at all
             raise ImpactInputError("contact rows are rank deficient (redundant contacts?)")
         if not strike:
             # Only persistent contacts: the paper's inert law, solved directly on the tree.
@@ -853,7 +853,7 @@ def _tilting(specs: Sequence[ContactSpec], bil: Sequence[bool], res: ContactImpa
     for u in res.contact_velocity_pre:
         offs.append(offs[-1] + u.shape[0])
     momentum = float(np.sqrt(2.0 * max(float(res.T), 0.0)
-                             * float(np.max(np.diag(M), initial=0.0))))
+                             * (float(M.diagonal().max()) if M.size else 0.0)))
     out = []
     for i, (sp, b, mem) in enumerate(zip(specs, bil, members, strict=True)):
         if not (b and sp.kind in _FLAT):

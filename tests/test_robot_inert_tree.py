@@ -326,3 +326,43 @@ def test_ahead_of_time_kernel_equals_the_jit_bit_for_bit(robots) -> None:
         results.append((status, out))
     np.testing.assert_array_equal(results[0][0], results[1][0])
     np.testing.assert_array_equal(results[0][1], results[1][1])
+
+
+def test_robot_impact_command_with_the_built_module_imports_no_numba(robots, tmp_path) -> None:
+    """With the kernel's module built, ``impact --robot`` with kept soles runs the tree path
+    in a new process without importing numba (its cold time stays Pinocchio's and Python's)."""
+    import json
+    import subprocess
+    import sys
+
+    from heelstrike.dynamics._aot import ENV, aot_enabled, load_library
+    from heelstrike.robots.contacts import _inert_library
+
+    if not aot_enabled():
+        pytest.skip("HEELSTRIKE_AOT=0: the JIT is the kernel")
+    assert load_library(_inert_library()) is not None
+    talos = robots["talos"]
+    q, v = _state(talos, 3)
+    state = tmp_path / "state.json"
+    state.write_text(json.dumps({"q": q.tolist(), "v": v.tolist()}))
+    argv = ["impact", "--robot", "talos", "--state", str(state), "--keep",
+            f"{talos.feet[0]}:flat", "--keep", f"{talos.feet[1]}:flat", "--json"]
+    code = (
+        "import sys, io, json, contextlib\n"
+        "from heelstrike.cli import main\n"
+        "out = io.StringIO()\n"
+        "with contextlib.redirect_stdout(out):\n"
+        f"    rc = main({argv!r})\n"
+        "print(json.dumps([rc, 'numba' in sys.modules, out.getvalue()]))\n"
+    )
+    env = {k: val for k, val in os.environ.items() if k != ENV}
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                          check=False, timeout=600)
+    assert done.returncode == 0, done.stderr
+    rc, numba_loaded, printed = json.loads(done.stdout.strip().splitlines()[-1])
+    assert (rc, numba_loaded) == (0, False)
+    report = json.loads(printed)
+    ref = inert_energy_split(talos, q, v, _contacts(talos, mixed=False))
+    assert abs(report["T_c"] - float(ref.T_c)) <= 1e-12 * float(ref.T)
+    np.testing.assert_allclose(report["qdot_plus"], ref.velocity_post, rtol=0,
+                               atol=1e-12 * max(1.0, np.abs(ref.velocity_post).max()))

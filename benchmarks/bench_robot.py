@@ -8,27 +8,33 @@ on the ground (two 6-row contacts, 12 constraint rows, bilateral and inert). One
 
 Work done
 ---------
-Pinocchio's ``impulseDynamics`` returns ``v+`` and the impulses only. heelstrike's full path
-(``robot_impact``, ``inert_energy_split_batch``) returns those **and** the energy split
-``T``, ``T_c``, ``T_a``, ``T+`` and the per-contact normal/tangential shares of ``T_c``; the
-like-for-like rows (``robot_matrices`` + ``inert_velocity``, or the batched
-``inert_velocity_batch``) compute ``v+`` and the impulses only, from the same inputs as the
-Pinocchio row "J computed" (``q``, ``v`` and the contact frames: mass matrix and frame
-Jacobians included). "J given" is Pinocchio's best case: the Jacobians precomputed, untimed.
+Pinocchio's ``impulseDynamics`` returns ``v+`` and the impulses only. heelstrike's tree path
+(``inert_energy_split``, ``robot_impact``, ``inert_energy_split_batch``) returns those **and**
+the energy split ``T``, ``T_c``, ``T_a``, ``T+`` and the per-contact normal/tangential shares
+of ``T_c``, from ``q``, ``v`` and the contact frames, as the Pinocchio row "J computed" does
+(mass matrix and frame Jacobians included). "J given" is Pinocchio's best case: the Jacobians
+precomputed, untimed. The dense like-for-like rows (``robot_matrices`` + ``inert_velocity``,
+or the batched ``inert_velocity_batch``) compute ``v+`` and the impulses only.
 
 Paths
 -----
-single calls        one configuration per Python call (300 configurations per timing).
+single calls        one configuration per Python call (300 configurations per timing):
+                    ``inert_energy_split`` checked (state validated, rank certificate) and with
+                    ``check=False`` (states checked beforehand, untimed), ``robot_impact`` (the
+                    same kernel plus its ``RobotImpact`` report).
 batched             10,000 configurations: Pinocchio fills ``M`` and ``J`` configuration by
-                    configuration (one loop of Pinocchio calls), numpy resolves chunks of 256
-                    with its stacked solvers (``inert_energy_split_batch``).
-reference           heelstrike's general machinery as used for this problem before the direct
-                    path existed: the complementarity solver ``resolve_contact_impact`` with the
-                    split by ``core.impact`` (single), and ``inert_impact_batch`` (projectors by
-                    ``core.impact``, batched numpy).
+                    configuration (one loop of Pinocchio calls), one compiled kernel call per
+                    chunk of 256 (``inert_energy_split_batch``).
+before              a frozen copy of the dense path the API took before the tree kernel
+                    (``_robot_inert_dense.py``: LAPACK on the dense ``M`` per call, numpy's
+                    stacked solvers per chunk).
+reference           heelstrike's general machinery: the complementarity solver
+                    ``resolve_contact_impact`` with the split by ``core.impact`` (single), and
+                    ``inert_impact_batch`` (projectors by ``core.impact``, batched numpy).
 
 Accuracy: before timing, ``v+`` of every heelstrike path is compared with ``impulseDynamics``
-on all 10,000 configurations, and the energies of the direct paths with the reference path;
+on all 10,000 configurations, and the energies of the tree path with the frozen dense path and
+of the direct paths with the reference path;
 the achieved agreement is reported. Threads: the measurements run twice, each in a new process:
 once with ``OMP_NUM_THREADS = OPENBLAS_NUM_THREADS = MKL_NUM_THREADS = 1`` (single thread), once
 with the libraries' default (all cores). In each process the first call of each path is timed
@@ -36,7 +42,8 @@ separately (cold: first use after loading the robot) from the warm medians of re
 The paths are timed in interleaved rounds (every path once per round, 7 rounds after a warm-up
 round), so that the paths of a round share the machine's load; a row's rate is the median over
 the rounds, its ratios to Pinocchio the medians of the per-round ratios. Where the time goes:
-each stage of the single call and of the batch timed separately (medians of repeats).
+each stage of the single call and of the batch timed separately (medians of repeats); the tree
+kernel's stages by stopping it after each (its ``upto`` argument), as differences of medians.
 
 Run ``python benchmarks/bench_robot.py`` (``--quick`` for a smoke run, ``--json PATH``).
 """
@@ -104,6 +111,7 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
     t0 = time.perf_counter()
     try:
         import pinocchio as pin
+        from _robot_inert_dense import inert_energy_split_batch_dense, robot_impact_dense
 
         from heelstrike.core.contact_laws import (
             ContactRows,
@@ -117,6 +125,7 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
         )
         from heelstrike.robots import (
             ContactSpec,
+            inert_energy_split,
             inert_energy_split_batch,
             inert_impact_batch,
             load_robot,
@@ -124,6 +133,7 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
             robot_impact,
             robot_matrices,
         )
+        from heelstrike.robots.contacts import _inert_path
     except ImportError:
         return {"skipped": True}
     t_import = time.perf_counter() - t0
@@ -131,7 +141,7 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
     robot = load_robot("talos")
     t_load = time.perf_counter() - t0
     model, data = robot.model, robot.data
-    feet = [ContactSpec(frame=f, kind="flat") for f in robot.feet]
+    feet = tuple(ContactSpec(frame=f, kind="flat") for f in robot.feet)
     fids = [robot.frame_id(f) for f in robot.feet]
     lwa = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
     layout = InertLayout(normal=tuple(c.normal for c in feet),
@@ -155,6 +165,8 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
         "load_robot('talos') (s)": t_load,
         "first pin.impulseDynamics (J given) (s)": first_time(
             lambda: pin.impulseDynamics(model, data, q0, v0, J_first, 0.0, 0.0)),
+        "first heelstrike inert_energy_split (loads the kernel module) (s)": first_time(
+            lambda: inert_energy_split(robot, q0, v0, feet)),
         "first heelstrike robot_impact (s)": first_time(
             lambda: robot_impact(robot, q0, v0, strike=[], keep=feet)),
         f"first heelstrike inert_energy_split_batch, {n_batch:,} configurations (s)":
@@ -179,6 +191,17 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
         return inert_velocity(M, v, A)[0]
 
     v_only = np.stack([velocity_only(q, v) for q, v in zip(qs, vs, strict=True)])
+    lean = [inert_energy_split(robot, q, v, feet) for q, v in zip(qs, vs, strict=True)]
+    dense = inert_energy_split_batch_dense(robot, qs, vs, feet, chunk=CHUNK)
+    keys = ("T", "T_c", "T_a", "T_post", "energy_lost", "T_c_normal", "T_c_tangential")
+    tree_vs_dense = max(
+        float(np.max(np.abs(np.asarray(getattr(x, key)) - np.asarray(getattr(dense, key)[i]))))
+        / float(dense.T[i])
+        for i, x in enumerate(lean) for key in keys)
+    tree_vs_dense = max(tree_vs_dense, *(
+        float(np.max(np.abs(getattr(batch, key) - getattr(dense, key)) / (
+            dense.T if getattr(dense, key).ndim == 1 else dense.T[:, None])))
+        for key in keys))
     def velocity_only_batch(i: int) -> np.ndarray:
         M, A = mass_matrices_and_jacobians(robot, qs[i:i + CHUNK], feet)
         return inert_velocity_batch(M, vs[i:i + CHUNK], A)[0]
@@ -203,7 +226,11 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
     agreement = {
         "v+ robot_impact vs impulseDynamics": worst_v(np.stack([r.velocity_post
                                                                for r in singles])),
-        "v+ inert_energy_split_batch vs impulseDynamics": worst_v(batch.velocity_post),
+        "v+ inert_energy_split (tree) vs impulseDynamics": worst_v(np.stack(
+            [x.velocity_post for x in lean])),
+        "v+ inert_energy_split_batch (tree) vs impulseDynamics": worst_v(batch.velocity_post),
+        "v+ frozen dense batch vs impulseDynamics": worst_v(dense.velocity_post),
+        "energies (T, T_c, T_a, T+, shares) tree vs frozen dense path, / T": tree_vs_dense,
         "v+ robot_matrices + inert_velocity vs impulseDynamics": worst_v(v_only),
         "v+ inert_velocity_batch vs impulseDynamics": worst_v(v_only_batch),
         "energies (T, T_c, T_a, shares) direct vs reference path, / T": energy_worst,
@@ -216,6 +243,7 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
         paths.append((section, path, work, n, fn))
 
     sl = slice(0, n_single)
+    qs_checked = robot.check_states(qs)
     vplus = "v+, impulses"
     full = "v+, impulses, T, T_c, T_a, T+, normal/tangential T_c per contact"
 
@@ -235,6 +263,18 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
     def hs_single() -> None:
         for q, v in zip(qs[sl], vs[sl], strict=True):
             robot_impact(robot, q, v, strike=[], keep=feet)
+
+    def hs_lean() -> None:
+        for q, v in zip(qs[sl], vs[sl], strict=True):
+            inert_energy_split(robot, q, v, feet)
+
+    def hs_lean_unchecked() -> None:
+        for q, v in zip(qs_checked[sl], vs[sl], strict=True):
+            inert_energy_split(robot, q, v, feet, check=False)
+
+    def hs_single_dense() -> None:
+        for q, v in zip(qs[sl], vs[sl], strict=True):
+            robot_impact_dense(robot, q, v, feet)
 
     def hs_reference() -> None:
         for q, v in zip(qs[:n_ref], vs[:n_ref], strict=True):
@@ -264,6 +304,9 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
     def hs_batch_unchecked() -> None:
         inert_energy_split_batch(robot, qs, vs, feet, chunk=CHUNK, check=False)
 
+    def hs_batch_dense() -> None:
+        inert_energy_split_batch_dense(robot, qs, vs, feet, chunk=CHUNK)
+
     def hs_batch_reference() -> None:
         for i in range(0, n_ref_batch, CHUNK):
             inert_impact_batch(robot, qs[i:min(i + CHUNK, n_ref_batch)],
@@ -273,17 +316,25 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
     add(s1, "pinocchio impulseDynamics (J given)", vplus, n_single, pin_given)
     add(s1, "pinocchio impulseDynamics (J computed: joint + 2 frame Jacobians)", vplus,
         n_single, pin_full)
-    add(s1, "heelstrike robot_matrices + inert_velocity (like-for-like)", vplus, n_single,
-        hs_vplus)
-    add(s1, "heelstrike robot_impact (direct inert path)", full, n_single, hs_single)
+    add(s1, "heelstrike inert_energy_split (tree kernel, checked)", full, n_single, hs_lean)
+    add(s1, "heelstrike inert_energy_split (tree kernel, check=False)", full, n_single,
+        hs_lean_unchecked)
+    add(s1, "heelstrike robot_impact (tree kernel + RobotImpact report)", full, n_single,
+        hs_single)
+    add(s1, "before: robot_impact on the dense LAPACK path (frozen copy)", full, n_single,
+        hs_single_dense)
+    add(s1, "heelstrike robot_matrices + inert_velocity (dense, like-for-like)", vplus,
+        n_single, hs_vplus)
     add(s1, "heelstrike reference path (resolve_contact_impact)", full, n_ref, hs_reference)
     add(s2, "pinocchio impulseDynamics loop (J given)", vplus, n_batch, pin_batch)
     add(s2, "pinocchio impulseDynamics loop (J computed)", vplus, n_batch, pin_batch_full)
-    add(s2, "heelstrike mass_matrices_and_jacobians + inert_velocity_batch (like-for-like)",
-        vplus, n_batch, hs_batch_vplus)
-    add(s2, "heelstrike inert_energy_split_batch (checked)", full, n_batch, hs_batch)
-    add(s2, "heelstrike inert_energy_split_batch (check=False)", full, n_batch,
+    add(s2, "heelstrike inert_energy_split_batch (tree kernel, checked)", full, n_batch, hs_batch)
+    add(s2, "heelstrike inert_energy_split_batch (tree kernel, check=False)", full, n_batch,
         hs_batch_unchecked)
+    add(s2, "before: inert_energy_split_batch on numpy's stacked solvers (frozen copy)", full,
+        n_batch, hs_batch_dense)
+    add(s2, "heelstrike mass_matrices_and_jacobians + inert_velocity_batch (dense, "
+        "like-for-like)", vplus, n_batch, hs_batch_vplus)
     add(s2, "heelstrike reference inert_impact_batch (core.impact, projectors)",
         full + ", P_c, P_a", n_ref_batch, hs_batch_reference)
     # Interleaved rounds: every path once per round (the first round is a warm-up), so that
@@ -341,7 +392,52 @@ def worker(quick: bool, threads: str) -> dict[str, Any]:
                 fn(slice(i, i + CHUNK))
         return run_all
 
+    # the tree path's stages: Pinocchio's calls, then the kernel stopped after each stage
+    path = _inert_path(robot, feet)
+    M_t = path.assemble(q_c, path.A)
+    A_t, v_t = path.A, np.ascontiguousarray(v0)
+    world = pin.Convention.WORLD
+
+    # The kernel stopped after each stage, the stops interleaved round by round and the least
+    # time of the rounds kept: differences of a few microseconds survive a loaded machine.
+    stops = [(i, False) for i in range(6)] + [(0, True)]
+    least = [float("inf")] * len(stops)
+    for _ in range(3 * repeats):
+        for j, (stage, check) in enumerate(stops):
+            t0 = time.perf_counter()
+            for _ in range(reps):
+                path.item(M_t, A_t, v_t, path.tree, path.work, path.out, check, stage)
+            least[j] = min(least[j], (time.perf_counter() - t0) / reps)
+    upto = least[:6]
+
+    def kernel_upto(stage: int, check: bool = False) -> float:
+        return least[stops.index((stage, check))]
+
+    tree_stages = [
+        ("tree single: crba, world convention (M and the joint Jacobians)",
+         per_call(lambda: pin.crba(model, data, q_c, world))),
+        ("tree single: 2 frame Jacobians into the rows", per_call(
+            lambda: path.plan.fill(data, A_t))),
+        ("tree single: kernel call, returning at once (dispatch, no work)", upto[0]),
+        ("tree single: + rank certificate of A (check=True)",
+         kernel_upto(0, True) - upto[0]),
+        ("tree single: + M = U D U^T, tree-sparse (Pinocchio's cholesky::decompose)",
+         upto[1] - upto[0]),
+        ("tree single: + Y = U^-1 A^T on the contacts' chains", upto[2] - upto[1]),
+        ("tree single: + Delassus W = Y D^-1 Y^T and W = L L^T", upto[3] - upto[2]),
+        ("tree single: + lambda, q_dot+ (two triangular solves, U^-T)", upto[4] - upto[3]),
+        ("tree single: + energy split (T, T+, nested shares) and contact outputs",
+         upto[5] - upto[4]),
+        ("tree single: whole kernel, check=False", upto[5]),
+        ("tree single: result object (InertImpactBatch, copies)",
+         per_call(lambda: path.single(v_t))),
+        ("tree single: inert_energy_split, checked (all of it)",
+         per_call(lambda: inert_energy_split(robot, q0, v0, feet))),
+        ("tree single: inert_energy_split, check=False (all of it)",
+         per_call(lambda: inert_energy_split(robot, q_c, v_t, feet, check=False))),
+    ]
     stages = [
+        *tree_stages,
         ("single: check_state (q, v)", per_call(lambda: robot.check_state(q0, v0))),
         ("single: crba + symmetrise", per_call(lambda: robot._mass_matrix(q_c, data))),
         ("single: robot_matrices (check, crba, joint + 2 frame Jacobians)",
@@ -451,7 +547,8 @@ def format_table(result: dict[str, Any]) -> str:
         )
     if result.get("stages"):
         lines += ["", "**where the time goes** (single thread; median per single call, or per "
-                  "whole batch)", "", "| stage | median time (s) |", "|---|---:|"]
+                  "whole batch; the tree kernel's stages: least of interleaved rounds, as "
+                  "differences)", "", "| stage | time (s) |", "|---|---:|"]
         for st in result["stages"]:
             lines.append(f"| {st['stage']} | {st['seconds']:.3g} |")
     lines += [""] + [f"- {note}" for note in result["notes"]]

@@ -113,6 +113,7 @@ class BuildKind:
 KINDS: dict[str, BuildKind] = {
     "aot-compass": BuildKind("lines of kernel source", 0.32),
     "aot-walker": BuildKind("lines of kernel and generated source", 0.9),
+    "aot-robot": BuildKind("lines of kernel source", 1.4),
     "derive-numpy": BuildKind("coordinates^3 x bodies", 0.15),
     "derive-numba": BuildKind("coordinates^3 x bodies", 0.09),
     "jit": BuildKind("lines of compiled source", 0.45),

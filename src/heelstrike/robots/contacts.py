@@ -34,15 +34,17 @@ the world), so impulses are world-aligned forces (N s) and moments about the fra
 
 Speed: one ``crba`` and one ``computeJointJacobians`` per configuration, then one frame Jacobian
 per contact, on the robot's reused ``Data``. With only persistent contacts (the paper's inert
-law) :func:`robot_impact` takes the direct path :func:`heelstrike.core.contact_laws.
-inert_contact_impact` (Cholesky factorizations, no complementarity machinery) and
-:func:`inert_energy_split_batch` its batched form; the complementarity solver runs only when a
-striking contact's friction, restitution or separation has to be decided.
+law) :func:`robot_impact`, :func:`inert_energy_split` and :func:`inert_energy_split_batch` solve
+on the kinematic tree in one compiled call per configuration or per chunk
+(``heelstrike.robots._inert_kernel``: Pinocchio's tree-sparse factorisation of ``M``, the
+Delassus matrix of the rows, a small dense Cholesky factorisation; the two lean ones need no
+``computeJointJacobians``: ``crba`` in the world convention leaves the joint Jacobians); the
+complementarity solver runs only when a striking contact's friction, restitution or separation
+has to be decided.
 """
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
@@ -59,9 +61,7 @@ from heelstrike.core.contact_laws import (
     ContactRows,
     InertImpactBatch,
     InertLayout,
-    check_inert_batch,
-    inert_contact_impact,
-    inert_contact_impact_batch,
+    _check_rank_reference,
     resolve_contact_impact,
 )
 from heelstrike.core.impact import ImpactInputError, ImpactResult, impact
@@ -76,6 +76,7 @@ __all__ = [
     "contact_heights",
     "contact_jacobian",
     "ground_admissible",
+    "inert_energy_split",
     "inert_energy_split_batch",
     "inert_impact_batch",
     "mass_matrices_and_jacobians",
@@ -287,6 +288,177 @@ class _RowPlan:
                 out[start:start + 3] = J6[:3]
             else:
                 out[start:start + 3] = J6[:3] - skew @ J6[3:]
+
+
+def _inert_library() -> Any:
+    """The inert kernel's ahead-of-time library (:mod:`heelstrike.dynamics._aot`): built once
+    into heelstrike's cache, it loads without numba, so a new process does not pay numba's
+    import and cache loading (about 1 s) for one robot impact."""
+    lib = _AOT.get("library")
+    if lib is None:
+        from heelstrike.dynamics._aot import AotExport, AotLibrary
+
+        def functions() -> dict[str, Any]:
+            from heelstrike.robots import _inert_kernel as kernel
+
+            return {"inert_item": kernel.inert_item, "inert_batch": kernel.inert_batch}
+
+        lib = _AOT["library"] = AotLibrary(
+            name="robot_inert",
+            exports=(
+                AotExport(name="inert_item", args=("f8[:,::1]", "f8[:,::1]", "f8[::1]",
+                                                   "i8[::1]", "f8[::1]", "f8[::1]", "b1", "i8"),
+                          returns="i8"),
+                AotExport(name="inert_batch", args=("f8[:,:,::1]", "f8[:,:,::1]", "f8[:,::1]",
+                                                    "i8[::1]", "f8[::1]", "f8[:,::1]",
+                                                    "i8[::1]", "b1"),
+                          returns="void"),
+            ),
+            functions=functions,
+            source_modules=("heelstrike.robots._inert_kernel", "heelstrike.robots._inert_tree"),
+            kind="aot-robot",
+            what="the robots' inert impact kernel, compiled ahead of time",
+        )
+    return lib
+
+
+_AOT: dict[str, Any] = {}
+
+
+def _inert_kernels() -> tuple[Any, Any]:
+    """``(inert_item, inert_batch)``: the ahead-of-time module's functions (their C-order
+    arguments are guaranteed by :class:`_InertPath`, so they are called unchecked), or numba's
+    JIT when the tier is off or cannot build."""
+    funcs = _AOT.get("functions")
+    if funcs is None:
+        from heelstrike.dynamics._aot import load_library
+
+        aot = load_library(_inert_library())
+        if aot is not None:
+            funcs = (aot.module.inert_item, aot.module.inert_batch)
+        else:
+            from heelstrike.robots import _inert_kernel as kernel
+
+            funcs = (kernel.inert_item, kernel.inert_batch)
+        _AOT["functions"] = funcs
+    return funcs
+
+
+class _InertPath:
+    """The compiled inert impact (:mod:`heelstrike.robots._inert_kernel`) of a fixed list of
+    kept contacts: the robot's tree as dof arrays, the rows' nesting order, reused work space.
+
+    One per robot and contact list (:func:`_inert_path`), like the robot's ``Data``: not
+    thread-safe.
+    """
+
+    def __init__(self, robot: Robot, contacts: tuple[ContactSpec, ...]) -> None:
+        from heelstrike.robots import _inert_tree as kernel
+
+        pin = _pin()
+        model = robot.model
+        self.plan = plan = _row_plan(robot, contacts)
+        lay = plan.layout
+        n, k, groups = robot.nv, lay.k, len(lay.bounds) - 1
+        tree = ([int(p) for p in model.parents], [int(j.idx_v) for j in model.joints],
+                [int(j.nv) for j in model.joints])
+        parents, nvsub = kernel.tree_arrays(*tree, n)
+        chains = []
+        for c in contacts:  # a contact's rows are zero off the dofs that move its body
+            dofs = kernel.chain(*tree, int(model.frames[robot.frame_id(c.frame)].parentJoint))
+            chains += [dofs] * c.rows
+        self.tree = kernel.tree_layout(parents, nvsub, lay.order, lay.bounds, chains)
+        self.n, self.k, self.m = n, k, len(lay.rows)
+        self.work = np.zeros(kernel.work_size(n, k))
+        self.out = np.empty(kernel.out_size(n, k, groups))
+        self.A = np.empty((k, n))
+        self.item, self.batch = _inert_kernels()
+        self.model, self.data = model, robot.data
+        self.crba = pin.crba
+        # crba in the WORLD convention also leaves the joint Jacobians in data.J (Pinocchio
+        # >= 3), so no computeJointJacobians is needed before the frame Jacobians.
+        convention = getattr(pin, "Convention", None)
+        self.crba_args: tuple[Any, ...] = (convention.WORLD,) if convention else ()
+        self.jacobians = None if convention else pin.computeJointJacobians
+        o = n + k + groups
+        self.cols: dict[str, Any] = {"velocity_post": slice(0, n), "impulse": slice(n, n + k),
+                     "T_c_normal": slice(n + k, n + k + self.m),
+                     "T_c_tangential": slice(n + k + self.m, o),
+                     "T": o, "T_post": o + 1, "T_c": o + 2, "energy_lost": o + 3,
+                     "u_pre": slice(o + 4, o + 4 + k), "u_post": slice(o + 4 + k, o + 4 + 2 * k),
+                     "generalized": slice(o + 4 + 2 * k, o + 4 + 2 * k + n)}
+        cols = self.cols
+        self.single_cols = (cols["velocity_post"], cols["impulse"], cols["T_c_normal"],
+                            cols["T_c_tangential"], o)
+
+    def assemble(self, q: FloatArray, A: FloatArray) -> FloatArray:
+        """``crba`` at a checked ``q`` (returns Pinocchio's ``M``, upper triangle filled) and
+        the contact rows into ``A`` (k, nv)."""
+        M = self.crba(self.model, self.data, q, *self.crba_args)
+        if self.jacobians is not None:  # pragma: no cover - Pinocchio without conventions
+            self.jacobians(self.model, self.data, q)
+        self.plan.fill(self.data, A)
+        return np.ascontiguousarray(M)
+
+    def raise_for(self, status: int, rows: Any, where: str = "") -> None:
+        """Raise the reference path's error for a kernel status; run the reference rank test
+        on ``rows()`` (k, nv) where the certificate did not hold (status 3)."""
+        if status == 1:
+            raise ImpactInputError(f"M is not positive definite{where}")
+        if status == 2:
+            raise ImpactInputError(f"contact rows are rank deficient (redundant contacts?){where}")
+        if status == 3:
+            try:
+                _check_rank_reference(rows())
+            except ImpactInputError as exc:
+                raise ImpactInputError(f"{exc}{where}") from None
+
+    def contact_impact(self, v: FloatArray) -> ContactImpact:
+        """The last single solve as :class:`ContactImpact` (copies of the outputs)."""
+        out, c = self.out.copy(), self.cols
+        u_pre, u_post, slices = out[c["u_pre"]], out[c["u_post"]], self.plan.layout.slices
+        T, T_post = float(out[c["T"]]), float(out[c["T_post"]])
+        return ContactImpact(
+            velocity_pre=v, velocity_post=out[c["velocity_post"]], impulse=out[c["impulse"]],
+            generalized_impulse=out[c["generalized"]],
+            modes=tuple("stick" for _ in range(self.m)),
+            contact_velocity_pre=tuple(u_pre[sl] for sl in slices),
+            contact_velocity_post=tuple(u_post[sl] for sl in slices),
+            T=T, T_c=float(out[c["T_c"]]), T_a=T_post, T_post=T_post,
+            energy_lost=float(out[c["energy_lost"]]),
+            T_c_normal=out[c["T_c_normal"]], T_c_tangential=out[c["T_c_tangential"]],
+            iterations=1)
+
+    def single(self, v: FloatArray) -> InertImpactBatch:
+        """The last single solve as :class:`InertImpactBatch` of one state (a copy)."""
+        out = self.out.copy()
+        vp, lam, nrm, tan, o = self.single_cols
+        T_post = out[o + 1]
+        return InertImpactBatch(
+            velocity_pre=v, velocity_post=out[vp], impulse=out[lam], T=out[o], T_c=out[o + 2],
+            T_a=T_post, T_post=T_post, energy_lost=out[o + 3], T_c_normal=out[nrm],
+            T_c_tangential=out[tan])
+
+    def split(self, out: FloatArray, v: FloatArray) -> InertImpactBatch:
+        """Outputs (..., width) as :class:`InertImpactBatch` (views of ``out``)."""
+        c = self.cols
+        T_post = out[..., c["T_post"]]
+        return InertImpactBatch(
+            velocity_pre=v, velocity_post=out[..., c["velocity_post"]],
+            impulse=out[..., c["impulse"]], T=out[..., c["T"]], T_c=out[..., c["T_c"]],
+            T_a=T_post, T_post=T_post, energy_lost=out[..., c["energy_lost"]],
+            T_c_normal=out[..., c["T_c_normal"]], T_c_tangential=out[..., c["T_c_tangential"]])
+
+
+def _inert_path(robot: Robot, contacts: tuple[ContactSpec, ...]) -> _InertPath:
+    """The compiled inert path of ``contacts``, kept on the robot (as :func:`_row_plan`)."""
+    paths = robot.cache.setdefault("inert_paths", {})
+    path = paths.get(contacts)
+    if path is None:
+        if len(paths) >= 32:
+            paths.clear()
+        path = paths[contacts] = _InertPath(robot, contacts)
+    return path
 
 
 def ground_admissible(
@@ -610,17 +782,23 @@ def robot_impact(
     jacs = tuple(A[sl] for sl in plan.layout.slices)
     flats = [i for i, sp in enumerate(specs) if sp.kind in _FLAT]
     rot: dict[int, FloatArray] = {}
-    if flats:
-        _pin().updateFramePlacements(robot.model, robot.data)
-        rot = {i: np.array(robot.data.oMf[robot.frame_id(specs[i].frame)].rotation)
+    if flats:  # the soles' placements (their frames' ids are the row plan's)
+        place = _pin().updateFramePlacement
+        rot = {i: np.array(place(robot.model, robot.data, plan.items[i][0]).rotation)
                for i in flats}
     patched = any(sp.kind == "flat" and not b for sp, b in zip(specs, bil, strict=True))
     try:
-        if any(not np.any(J) for J in jacs):  # a frame that does not move: no contact at all
+        if any(not J.any() for J in jacs):  # a frame that does not move: no contact at all
             raise ImpactInputError("contact rows are rank deficient (redundant contacts?)")
         if not strike:
-            # Only persistent contacts: the paper's inert law, solved directly.
-            res = inert_contact_impact(M, v_, A, plan.layout)
+            # Only persistent contacts: the paper's inert law, solved directly on the tree.
+            if plan.k > robot.nv:
+                raise ImpactInputError(f"{plan.k} contact rows exceed the {robot.nv} "
+                                       "coordinates")
+            path = _inert_path(robot, specs)
+            path.raise_for(path.item(np.ascontiguousarray(M), A, np.ascontiguousarray(v_),
+                                     path.tree, path.work, path.out, True, 5), lambda: A)
+            res = path.contact_impact(v_)
             return RobotImpact(contacts=specs, bilateral=bil, result=res, M=M, jacobians=jacs,
                                tilting=_tilting(specs, bil, res, rot, ((i,) for i in
                                                                      range(len(specs))), M))
@@ -675,7 +853,7 @@ def _tilting(specs: Sequence[ContactSpec], bil: Sequence[bool], res: ContactImpa
     for u in res.contact_velocity_pre:
         offs.append(offs[-1] + u.shape[0])
     momentum = float(np.sqrt(2.0 * max(float(res.T), 0.0)
-                             * float(np.max(np.diag(M), initial=0.0))))
+                             * (float(M.diagonal().max()) if M.size else 0.0)))
     out = []
     for i, (sp, b, mem) in enumerate(zip(specs, bil, members, strict=True)):
         if not (b and sp.kind in _FLAT):
@@ -803,6 +981,87 @@ def _assemble(robot: Robot, plan: _RowPlan, q_all: FloatArray, Ms: FloatArray,
     Ms[:B, il[0], il[1]] = Ms[:B, il[1], il[0]]
 
 
+def inert_energy_split(
+    robot: Robot,
+    q: ArrayLike,
+    v: ArrayLike,
+    contacts: Sequence[ContactSpec],
+    *,
+    check: bool = True,
+) -> InertImpactBatch:
+    """The paper's inert impact with the energy split at one state: all ``contacts`` bilateral.
+
+    The numbers of :func:`robot_impact` with ``keep=contacts`` (and no strike), without its
+    report (no ``RobotImpact``: no ``M``, rows, contact velocities or tilting soles): one
+    ``crba`` (which leaves the joint Jacobians in the reused ``Data``), one frame Jacobian per
+    contact, then one compiled call on the kinematic tree (``heelstrike.robots._inert_kernel``,
+    compiled ahead of time on first use): Pinocchio's tree-sparse factorisation
+    ``M = U D U^T`` (its ``cholesky::decompose`` algorithm), the Delassus
+    matrix ``W = A M^-1 A^T`` with the rows in the nesting order of the split, ``W = L L^T``,
+    ``y = L^-1 A q_dot-``, ``lambda = -L^-T y``, ``q_dot+ = q_dot- + M^-1 A^T lambda``,
+    ``T_c = 1/2 |y|^2`` (nested normal/tangential shares: the squares of ``y``'s segments),
+    ``T_a = T+ = 1/2 q_dot+^T M q_dot+``.
+
+    Parameters
+    ----------
+    robot : Robot
+    q : array_like, shape (nq,)
+        Configuration at impact.
+    v : array_like, shape (nv,)
+        Pre-impact velocity ``v-`` (m/s, rad/s).
+    contacts : sequence of ContactSpec
+        Persistent contacts (bilateral, inert), in report order.
+    check : bool
+        Validate the state (:meth:`~heelstrike.robots.Robot.check_state`: real, finite, base
+        near the origin, unit blocks normalised) and certify the rank of the rows, with the
+        reference rank test where the certificate does not hold (default True). With False,
+        ``q`` and ``v`` must be float arrays of sizes ``nq`` and ``nv`` (checked) with unit
+        quaternions (not checked); a non-positive-definite ``M`` or rank-deficient rows still
+        raise.
+
+    Returns
+    -------
+    InertImpactBatch
+        With no leading shape: ``velocity_post`` (nv,), ``impulse`` (k,) in contact order,
+        ``T``, ``T_c``, ``T_a``, ``T_post``, ``energy_lost`` numpy scalars (J),
+        ``T_c_normal``, ``T_c_tangential`` (contacts,) (J).
+
+    Raises
+    ------
+    RobotError
+        On a bad state or contact list.
+    ImpactInputError
+        ``M`` not positive definite or rank-deficient rows (e.g. one sole given twice).
+    """
+    last = robot.cache.get("inert_last")
+    if last is not None and contacts is last[0]:  # the same tuple again (immutable)
+        path = last[1]
+    else:
+        specs = _contact_specs("contacts", contacts)
+        if not specs:
+            raise RobotError("give at least one contact")
+        path = _inert_path(robot, specs)
+        if type(contacts) is tuple:
+            robot.cache["inert_last"] = (contacts, path)
+    if check:
+        q_, v_ = robot.check_state(q, v)
+        v_ = np.ascontiguousarray(v_)
+        if path.k > path.n:
+            raise ImpactInputError(f"{path.k} contact rows exceed the {path.n} coordinates")
+    else:
+        q_ = np.asarray(q, dtype=float)
+        v_ = np.ascontiguousarray(v, dtype=float)
+        if v_.shape != (path.n,) or q_.shape != (robot.model.nq,) or path.k > path.n:
+            raise RobotError(f"q and v must have nq={robot.model.nq} and nv={path.n} entries "
+                             f"(and at most nv contact rows), got {q_.shape}, {v_.shape}")
+    A = path.A
+    M = path.assemble(q_, A)
+    status = path.item(M, A, v_, path.tree, path.work, path.out, bool(check), 5)
+    if status:
+        path.raise_for(status, lambda: A)
+    return path.single(v_)
+
+
 def inert_energy_split_batch(
     robot: Robot,
     qs: ArrayLike,
@@ -814,10 +1073,10 @@ def inert_energy_split_batch(
 ) -> InertImpactBatch:
     """The paper's inert impact with the energy split, batched: all ``contacts`` bilateral.
 
-    The numbers of :func:`robot_impact` with ``keep=contacts`` (and no strike) for every
-    configuration, computed chunk by chunk: Pinocchio fills the mass matrices and contact rows
-    of a chunk (one ``Data`` reused), then :func:`heelstrike.core.contact_laws.
-    inert_contact_impact_batch` solves the chunk with numpy's stacked solvers.
+    The numbers of :func:`inert_energy_split` (and of :func:`robot_impact` with
+    ``keep=contacts``) for every configuration, chunk by chunk: Pinocchio fills the mass
+    matrices (``crba``) and contact rows of a chunk (one ``Data`` reused), then one compiled
+    call solves the chunk on the kinematic tree (``heelstrike.robots._inert_kernel``).
 
     Parameters
     ----------
@@ -831,14 +1090,26 @@ def inert_energy_split_batch(
     chunk : int
         Configurations per chunk (bounds memory: ``chunk * nv^2`` floats).
     check : bool
-        Validate ``M`` and the rank of the rows (see the core function).
+        Certify the rank of every configuration's rows, with the reference rank test where the
+        certificate does not hold (default True); the states are always checked
+        (:meth:`~heelstrike.robots.Robot.check_states`), and a non-positive-definite ``M`` or
+        rank-deficient rows always raise.
 
     Returns
     -------
     InertImpactBatch
         Arrays with leading shape ``(B,)``; impulses in contact order.
+
+    Raises
+    ------
+    RobotError
+        On bad states or contacts.
+    ImpactInputError
+        For the first configuration whose ``M`` is not positive definite or whose rows are
+        rank deficient (named).
     """
-    if not _contact_specs("contacts", contacts):
+    specs = _contact_specs("contacts", contacts)
+    if not specs:
         raise RobotError("give at least one contact")
     q_all = robot.check_states(qs)
     v_all = real_array(vs, "velocities")
@@ -848,23 +1119,37 @@ def inert_energy_split_batch(
         )
     if not np.all(np.isfinite(v_all)):
         raise RobotError("q and v must be finite")
-    plan = _row_plan(robot, tuple(contacts))
-    size = max(1, min(int(chunk), q_all.shape[0]))
+    v_all = np.ascontiguousarray(v_all)
+    path = _inert_path(robot, specs)
+    if path.k > path.n:
+        raise ImpactInputError(f"{path.k} contact rows exceed the {path.n} coordinates")
+    B = q_all.shape[0]
+    size = max(1, min(int(chunk), B))
     Ms = np.empty((size, robot.nv, robot.nv))
-    As = np.empty((size, plan.k, robot.nv))
-    parts = []
-    for i in range(0, q_all.shape[0], size):
+    As = np.empty((size, path.k, robot.nv))
+    out = np.empty((B, path.out.shape[0]))
+    status = np.zeros(B, dtype=np.int64)
+    crba, model, data, args = path.crba, path.model, path.data, path.crba_args
+    fill, jacobians = path.plan.fill, path.jacobians
+    for i in range(0, B, size):
         q_c = q_all[i:i + size]
-        B = q_c.shape[0]
-        _assemble(robot, plan, q_c, Ms, As)
-        v_c = v_all[i:i + size]
-        if check:  # M is symmetric by construction
-            check_inert_batch(Ms[:B], v_c, As[:B], symmetric=True)
-        parts.append(inert_contact_impact_batch(Ms[:B], v_c, As[:B], plan.layout, check=False))
-    return InertImpactBatch(**{
-        f.name: np.concatenate([getattr(p, f.name) for p in parts])
-        for f in dataclasses.fields(InertImpactBatch)
-    })
+        for b, q in enumerate(q_c):
+            Ms[b] = crba(model, data, q, *args)
+            if jacobians is not None:  # pragma: no cover - Pinocchio without conventions
+                jacobians(model, data, q)
+            fill(data, As[b])
+        path.batch(Ms, As, v_all[i:i + size], path.tree, path.work, out[i:i + size],
+                   status[i:i + size], bool(check))
+    for bad in np.flatnonzero(status):
+        i = int(bad)
+
+        def rows(i: int = i) -> FloatArray:
+            A = np.empty((path.k, path.n))
+            path.assemble(q_all[i], A)
+            return A
+
+        path.raise_for(int(status[i]), rows, f" (configuration {i})")
+    return path.split(out, v_all)
 
 
 def inert_impact_batch(

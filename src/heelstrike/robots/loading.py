@@ -341,9 +341,14 @@ class Robot:
         v_ = np.zeros(nv) if v is None else real_array(v, "v").reshape(-1)
         if v_.shape != (nv,):
             raise RobotError(f"v has {v_.size} entries, robot {self.name!r} needs nv={nv}")
-        if not (np.isfinite(q_).all() and np.isfinite(v_).all()):
+        # One dot product each decides the common case (finite: finite entries); an infinite
+        # or NaN one (or an overflow) takes the entry-wise test.
+        if not math.isfinite(float(q_.dot(q_)) + float(v_.dot(v_))) and not (
+                np.isfinite(q_).all() and np.isfinite(v_).all()):
             raise RobotError("q and v must be finite")
-        _check_base_position(q_[None, :3])
+        base = q_[:3]
+        if not float(base.dot(base)) <= MAX_BASE_DISTANCE ** 2:  # the exact test decides
+            _check_base_position(q_[None, :3])
         for b in self.unit_blocks:
             block = q_[b.start:b.stop]
             nrm = math.sqrt(float(block.dot(block)))  # np.linalg.norm, without overhead

@@ -44,10 +44,11 @@ from heelstrike.analysis.limit_cycle import (
     find_limit_cycle,
     refine_period_doubling,
 )
-from heelstrike.analysis.newton import floquet_multipliers
+from heelstrike.analysis.newton import NewtonSolution, floquet_multipliers
 from heelstrike.dynamics.compiled import COMPLETED, ensemble_walk
 from heelstrike.models.base import check_backend_name
 from heelstrike.models.compass import CompassGait
+from heelstrike.status import SolveStatus
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -174,7 +175,7 @@ def newton_gaits(
     atol: float = 1e-11,
     deadline: float | None = None,
     backend: str = "compiled",
-) -> list[NewtonGait | str]:
+) -> list[NewtonGait | SolveStatus]:
     """Newton's method for ``P(z) = z`` on the compiled map, from many guesses at once.
 
     Runs the one Newton engine (:func:`~heelstrike.analysis.newton.newton_solve`) on
@@ -206,24 +207,32 @@ def newton_gaits(
 
     Returns
     -------
-    list of NewtonGait or str
-        Per guess, the converged gait or the reason it failed.
+    list of NewtonGait or SolveStatus
+        Per guess, the converged gait or how its start failed (its ``message`` says it).
     """
-    from heelstrike.analysis.newton import NewtonStatus, newton_solve
+    return _newton_gaits(walker, slope, guesses, tol=tol, max_iter=max_iter, fd_step=fd_step,
+                         rtol=rtol, atol=atol, deadline=deadline, backend=backend)[0]
+
+
+def _newton_gaits(
+    walker: CompassGait, slope: float, guesses: ArrayLike, *, tol: float, max_iter: int,
+    fd_step: float, rtol: float, atol: float, deadline: float | None, backend: str,
+) -> tuple[list[NewtonGait | SolveStatus], NewtonSolution]:
+    """:func:`newton_gaits`, and the Newton solution it ran (its per-start messages)."""
+    from heelstrike.analysis.newton import newton_solve
 
     Z = np.atleast_2d(np.asarray(guesses, dtype=float)).reshape(-1, 3)
     sol = newton_solve(lambda X: _map_many(walker, X, slope, rtol, atol, backend)[0] - X, Z,
                        tol=tol, max_iter=max_iter, fd_step=fd_step, deadline=deadline)
-    out: list[NewtonGait | str] = [sol.message(k, walker.section_labels)
-                                   for k in range(Z.shape[0])]
+    out: list[NewtonGait | SolveStatus] = list(sol.status)
     done = np.flatnonzero(sol.converged)
     if done.size == 0:
-        return out
+        return out, sol
     _, res = _map_many(walker, sol.x[done], slope, rtol, atol, backend)  # each gait's step
     for j, k in enumerate(done):
         jac = sol.jacobian[k] + np.eye(3)  # DP = D(P - id) + I
         if not np.all(np.isfinite(jac)):
-            out[k] = NewtonStatus.JACOBIAN_FAILED.message
+            out[k] = SolveStatus.JACOBIAN_FAILED
             continue
         out[k] = NewtonGait(
             z=sol.x[k].copy(),
@@ -235,7 +244,7 @@ def newton_gaits(
             residual=float(sol.residual_norm[k]),
             iterations=int(sol.iterations[k]),
         )
-    return out
+    return out, sol
 
 
 def newton_gait(
@@ -258,19 +267,14 @@ def newton_gait(
     GaitNotFoundError
         If a step fails or Newton does not converge.
     """
-    (result,) = newton_gaits(
-        walker,
-        slope,
-        np.asarray(guess, dtype=float).reshape(1, 3),
-        tol=tol,
-        max_iter=max_iter,
-        fd_step=fd_step,
-        rtol=rtol,
-        atol=atol,
+    (result,), sol = _newton_gaits(
+        walker, slope, np.asarray(guess, dtype=float).reshape(1, 3), tol=tol,
+        max_iter=max_iter, fd_step=fd_step, rtol=rtol, atol=atol, deadline=None,
         backend=backend,
     )
-    if isinstance(result, str):
-        raise GaitNotFoundError(result)
+    if isinstance(result, SolveStatus):
+        raise GaitNotFoundError(sol.message(0, walker.section_labels)
+                                if sol.status[0] is result else result.message)
     return result
 
 

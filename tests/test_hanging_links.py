@@ -96,3 +96,23 @@ def test_bifurcation_basin_and_map_say_which_gait_they_follow(
             assert d["note"].startswith(f"in all {len(found)} gaits found, 'torso' stands "
                                         "above its joint: gaits of the upright link; gaits "
                                         "with it hanging may exist too")
+
+
+@pytest.mark.parametrize(("torso", "hangs"), [(0.2, False), (np.pi + 0.2, True), (1.9, True)])
+def test_a_basin_records_whether_its_gait_hangs_a_link(torso: float, hangs: bool) -> None:
+    """Issue #32, item 5: the basin result says whether the fixed point it is built around
+    carries the torso hanging (the CLI prints the field); checked against the torso's
+    absolute angle (stance leg + torso joint) more than 90 deg from upright."""
+    from heelstrike.analysis.basin import basin_of_attraction, model_basin_of_attraction
+    from heelstrike.models import CompassGait
+
+    z = np.array([-0.2, torso, 1.0, -0.5, 0.0])  # (stance_leg, torso, their rates, hip rate)
+    assert (np.cos(z[0] + z[1]) < 0.0) == hangs
+    basin = model_basin_of_attraction(
+        load_walker("torso"), 0.02, grid=(1, 1), steps=1, fixed_point=z, backend="scipy",
+        ranges=((z[0] - 1e-3, z[0] + 1e-3), (z[2] - 1e-3, z[2] + 1e-3)))
+    assert basin.hanging_links == (("torso",) if hangs else ())
+    compass = basin_of_attraction(CompassGait(), 0.05, grid=(1, 1), steps=1, backend="scipy",
+                                  fixed_point=[-0.27, 1.09, -0.72],
+                                  ranges=((-0.271, -0.269), (1.089, 1.091)))
+    assert compass.hanging_links == ()

@@ -157,6 +157,10 @@ class Basin(ResultDictMixin):
         unstable gait attracts no initial state: its basin is empty (0 % converging).
     spectral_radius : float or None
         Largest ``|multiplier|`` of that gait (1), None if unknown.
+    hanging_links : tuple of str
+        The links described upright that the gait carries hanging at the fixed point
+        (:func:`~heelstrike.analysis.model_gaits.hanging_links`): the basin is then that of a
+        gait of the hanging link. Empty for the compass gait and walkers without such links.
     """
 
     dataset: xr.Dataset
@@ -167,6 +171,7 @@ class Basin(ResultDictMixin):
     walker_steps: int = 0
     gait_stable: bool | None = None
     spectral_radius: float | None = None
+    hanging_links: tuple[str, ...] = ()
 
     def fractions(self) -> dict[str, float]:
         """Fraction of the grid in every outcome (keys: the :data:`OUTCOMES`, in order)."""
@@ -216,11 +221,12 @@ def _make_basin(
     coords: dict[str, Any], attrs: dict[str, Any], outcome: NDArray[np.int8],
     taken: NDArray[np.int64], dist: FloatArray, zstar: FloatArray, elapsed: float,
     axes: tuple[int, int] = (0, 1), gait: LimitCycle | None = None,
+    hanging: tuple[str, ...] = (),
 ) -> Basin:
     """The :class:`Basin` of a walked slice (compass and described walkers alike); ``gait``:
     the period-one gait found at ``zstar`` (its stability goes into the result and the
     dataset's ``gait_stable`` (0/1) and ``gait_spectral_radius`` attributes), None if the
-    fixed point was given."""
+    fixed point was given; ``hanging``: :attr:`Basin.hanging_links`."""
     dims = tuple(coords)
     shape = tuple(len(coords[d][1]) for d in dims)
     from heelstrike.analysis.sweep import _attribute_units
@@ -259,7 +265,7 @@ def _make_basin(
         ds.attrs.update(gait_stable_units="1", gait_spectral_radius_units="1")
     return Basin(dataset=ds, fixed_point=zstar, converging_fraction=frac, elapsed=elapsed,
                  axes=axes, walker_steps=int(taken.sum()), gait_stable=stable,
-                 spectral_radius=rho)
+                 spectral_radius=rho, hanging_links=hanging)
 
 
 def _walk_chunk(
@@ -593,8 +599,11 @@ def model_basin_of_attraction(
                       "long_name": f"post-heel-strike stance angular velocity {yn}",
                       "label": f"post-impact stance velocity {yn} (rad/s)"}),
     }
+    from heelstrike.analysis.model_gaits import hanging_links
+
+    hanging = hanging_links(w, w.section_to_state(zstar)[0], float(slope))
     return _make_basin(coords, attrs, outcome, taken, dist, zstar, elapsed, axes=(ia, ib),
-                       gait=gait)
+                       gait=gait, hanging=hanging)
 
 
 def _model_basin_chunk(

@@ -95,6 +95,10 @@ class ModelGait(ResultDictMixin):
         Potential energy released per step (J).
     energy_residual : float
         ``actuator_work + potential_energy_released - collision_loss`` (J); ~0 on the gait.
+    hanging_links : tuple of str
+        The links described upright that the gait carries hanging, at its post-impact
+        configuration (:func:`hanging_links`): a gait of the hanging link, not of the upright
+        one. Empty for walkers without such links.
     """
 
     cycle: LimitCycle
@@ -103,6 +107,7 @@ class ModelGait(ResultDictMixin):
     actuator_work: float
     potential_energy_released: float
     energy_residual: float
+    hanging_links: tuple[str, ...] = ()
 
     @property
     def eta(self) -> float:
@@ -165,8 +170,9 @@ ATTRACTOR_SEEDS, ATTRACTOR_STEPS = 40, 50
 REFERENCE_SLOPE = float(np.deg2rad(3.0))
 
 
-def _energy_book(cycle: LimitCycle) -> ModelGait:
-    """The gait's energy book from its one-step walk (every impact of the period)."""
+def _energy_book(cycle: LimitCycle, walker: PlanarWalker) -> ModelGait:
+    """The gait's energy book from its one-step walk (every impact of the period), and the
+    ``walker``'s links it carries hanging."""
     walk = cycle.walk
     assert isinstance(walk, PhasedWalkResult)
     impacts = walk.events
@@ -179,6 +185,7 @@ def _energy_book(cycle: LimitCycle) -> ModelGait:
         actuator_work=rec.actuator_work,
         potential_energy_released=rec.potential_energy_released,
         energy_residual=rec.actuator_work + rec.potential_energy_released - loss,
+        hanging_links=hanging_links(walker, cycle.q, cycle.slope),
     )
 
 
@@ -368,7 +375,7 @@ def find_model_gaits(
         raise GaitNotFoundError(
             f"Newton converged from none of the {len(starts)} most nearly periodic of "
             f"{len(Z)} automatic starts (the last: {last}){finer}{tried}")
-    gaits = tuple(_energy_book(c) for c in sorted(found, key=_preference))
+    gaits = tuple(_energy_book(c, w) for c in sorted(found, key=_preference))
     if torque is None and push_off is None:
         return _closed_model_books(gaits, slope)
     return gaits

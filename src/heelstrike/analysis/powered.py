@@ -547,6 +547,18 @@ class PoweredGait(ResultDictMixin):
         """Work of the hip torque during single support (J); 0 if the torque acts elsewhere."""
         return self.torque_work if self.torque_joint == "hip" else 0.0
 
+    @property
+    def books_gap(self) -> float:
+        """How far the gait's energy books are from closing, relative to their size
+        (:func:`books_gap`); a report notes it above :data:`BOOKS_NOTE`."""
+        return books_gap(self)
+
+    @property
+    def books_noted(self) -> bool:
+        """Whether :attr:`books_gap` exceeds :data:`BOOKS_NOTE`: the gait is resolved no
+        better than that (a report says so)."""
+        return self.books_gap > BOOKS_NOTE
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary (SI units)."""
         return {

@@ -89,7 +89,6 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     from heelstrike.analysis.model_gaits import (
         REFERENCE_SLOPE,
         find_model_gaits,
-        hanging_links,
         lock_torque_ranges,
         two_sided_locks,
     )
@@ -108,8 +107,8 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     gait = gaits[0]
     d = gait.to_dict()
     d["model"] = walker.description.name
-    hanging = [hanging_links(walker, g.cycle.q, args.slope) for g in gaits]
-    d["hanging_links"] = list(hanging[0])
+    hanging = [g.hanging_links for g in gaits]
+    d["hanging_links"] = list(gait.hanging_links)
     locks = lock_torque_ranges(walker, gait.cycle, backend=args.backend)
     d["lock_torque_range"] = {k: list(v) for k, v in locks.items()}
     two_sided = two_sided_locks(walker, locks)  # a one-sided knee stop could not hold them
@@ -697,9 +696,7 @@ def _run_basin_model(args: argparse.Namespace) -> int:
     ))
     names = walker.section_names
     ia, ib = basin.axes
-    from heelstrike.analysis.model_gaits import hanging_links
-
-    hang = hanging_links(walker, walker.section_to_state(basin.fixed_point)[0], args.slope)
+    hang = basin.hanging_links
     if hang:
         print(f"heelstrike: note: in the gait the basin is built around, {hanging_text(hang)}: "
               "a gait of the hanging link, not of the upright one", file=sys.stderr)

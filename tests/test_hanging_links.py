@@ -116,3 +116,19 @@ def test_a_basin_records_whether_its_gait_hangs_a_link(torso: float, hangs: bool
                                   fixed_point=[-0.27, 1.09, -0.72],
                                   ranges=((-0.271, -0.269), (1.089, 1.091)))
     assert compass.hanging_links == ()
+
+
+def test_a_model_map_counts_the_gaits_that_hang_a_link() -> None:
+    """Issue #32, item 5: the map result counts its gaits that carry the torso hanging (the
+    CLI prints the fields); checked cell by cell from the fixed points' torso angle (stance
+    leg + torso joint more than 90 deg from upright). On 1-2 deg the torso walker's gaits at
+    R = 0 and 0.3 m all hang it (the slow CLI test above: 4 of 4)."""
+    from heelstrike.analysis.gait_map import model_gait_map
+
+    gmap = model_gait_map(load_walker("torso"), "R", [0.0, 0.3], np.deg2rad([1.0, 2.0]))
+    z = gmap.dataset["fixed_point"].values.reshape(-1, 5)
+    found = z[np.isfinite(z[:, 0])]
+    down = int(np.sum(np.cos(found[:, 0] + found[:, 1]) < 0.0))
+    assert gmap.hanging_cells == down == len(found) == 4
+    assert gmap.hanging_links == ("torso",)
+    assert gmap.upright_links == ("torso",)

@@ -462,9 +462,22 @@ class GaitMap(ResultDictMixin):
         (rad), ``fixed_point`` (+ ``section`` dim), ``smallest_real_multiplier``; over
         ``foot_radius``: ``period_doubling_slope`` (rad, NaN if none in range). NaN where no
         period-one gait was found, and ``gait_found`` (bool) False there.
+    hanging_cells : int
+        Described walkers (:func:`model_gait_map`): the number of cells whose gait carries a
+        link described upright hanging
+        (:attr:`~heelstrike.analysis.model_gaits.ModelGait.hanging_links`); 0 otherwise.
+    hanging_links : tuple of str
+        The links those gaits carry hanging (sorted; empty if none).
+    upright_links : tuple of str
+        The walker's links described upright
+        (:func:`~heelstrike.analysis.model_gaits.upright_links`): with no hanging cell, every
+        gait of the map carries them upright.
     """
 
     dataset: xr.Dataset
+    hanging_cells: int = 0
+    hanging_links: tuple[str, ...] = ()
+    upright_links: tuple[str, ...] = ()
 
     @property
     def period_doubling_slope(self) -> FloatArray:
@@ -714,7 +727,7 @@ def model_gait_map(
 
     import xarray as xr
 
-    from heelstrike.analysis.model_gaits import find_model_gait
+    from heelstrike.analysis.model_gaits import find_model_gait, upright_links
     from heelstrike.dynamics.phased import PhasedWalker
 
     w0 = PhasedWalker.from_built(walker)
@@ -736,6 +749,7 @@ def model_gait_map(
     shape = (P.size, S.size)
     out = {k: np.full(shape, np.nan) for k in _UNITS}
     fixed = np.full((*shape, d), np.nan)
+    hanging: dict[tuple[int, int], tuple[str, ...]] = {}  # cell -> links its gait hangs
     pd = np.full(P.size, np.nan)
     s_a = _anchor_slope(S)
     # further anchor slopes where the branch has no gait at s_a: about every 1 deg of the range
@@ -826,6 +840,7 @@ def model_gait_map(
                 out["impact_angle"][i, j] = g.cycle.impact_angle
                 out["smallest_real_multiplier"][i, j] = at.mnr
                 fixed[i, j] = g.cycle.fixed_point
+                hanging[i, j] = g.hanging_links
             prev = (value, points)
             bracket = _pd_bracket(points, any_sign=False)
             if bracket is not None:
@@ -860,7 +875,9 @@ def model_gait_map(
                      "anchor_slope": s_a}
                     | {f"param_{k}": float(np.asarray(v)) for k, v in w0.parameters.items()
                        if k != parameter})
-    return GaitMap(dataset=ds)
+    return GaitMap(dataset=ds, hanging_cells=sum(1 for h in hanging.values() if h),
+                   hanging_links=tuple(sorted({n for h in hanging.values() for n in h})),
+                   upright_links=upright_links(w0))
 
 
 #: Most slopes of the coarse scan for the first gait of a bifurcation range (when there is no

@@ -833,40 +833,24 @@ def _run_map_model(args: argparse.Namespace) -> int:
         gmap, args, head,
         f"stable passive gaits of '{walker.description.name}'", f"({name}, slope)",
         [f"{name} = {v:8.4g}{'' if unit is None else ' ' + unit}" for v in values],
-        note=_hanging_cells_note(walker, name, values, gmap.dataset))
+        note=_hanging_cells_note(gmap))
 
 
-def _hanging_cells_note(walker: Any, name: str, values: Any, ds: Any) -> str | None:
+def _hanging_cells_note(gmap: Any) -> str | None:
     """Where the map's gaits carry a link described upright hanging (QA sweep 13: the torso
     walker's map followed its upright gaits, its bifurcation diagram a hanging-torso gait):
     a note, or None."""
     import numpy as np
 
-    from heelstrike.analysis.model_gaits import hanging_links, upright_links
-
-    fixed = ds["fixed_point"].values  # (values, slopes, section)
-    slopes = ds["slope"].values
-    links: set[str] = set()
-    cells = 0
-    for i, v in enumerate(values):
-        w = walker.replace(**{name: float(v)})
-        for j, slope in enumerate(slopes):
-            z = fixed[i, j]
-            if not np.all(np.isfinite(z)):
-                continue
-            hang = hanging_links(w, w.section_to_state(z)[0], float(slope))
-            if hang:
-                cells += 1
-                links.update(hang)
-    found = int(np.isfinite(fixed[..., 0]).sum())
-    if not cells:
-        upright = upright_links(walker)
-        if not (upright and found):
+    found = int(np.isfinite(gmap.dataset["fixed_point"].values[..., 0]).sum())
+    if not gmap.hanging_cells:
+        if not (gmap.upright_links and found):
             return None
-        return (f"in all {found} gaits found, {upright_text(upright)}: gaits of the upright "
-                f"link; {OTHER_POSTURE}")
-    return (f"in {cells} of the {found} gaits found, {hanging_text(sorted(links))}: gaits of "
-            "the hanging link, not of the upright one")
+        return (f"in all {found} gaits found, {upright_text(gmap.upright_links)}: gaits of "
+                f"the upright link; {OTHER_POSTURE}")
+    return (f"in {gmap.hanging_cells} of the {found} gaits found, "
+            f"{hanging_text(gmap.hanging_links)}: gaits of the hanging link, not of the upright "
+            "one")
 
 
 def _run_map(args: argparse.Namespace) -> int:

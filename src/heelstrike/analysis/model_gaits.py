@@ -57,12 +57,14 @@ __all__ = [
     "LOCK_TORQUE_SAMPLES",
     "REFERENCE_SLOPE",
     "TWO_SIDED_FLOOR",
+    "GaitLocks",
     "ImpactMap",
     "ModelGait",
     "ModelHeelStrike",
     "check_impact_map_memory",
     "find_model_gait",
     "find_model_gaits",
+    "gait_locks",
     "hanging_links",
     "impact_map",
     "lock_torque_ranges",
@@ -612,6 +614,45 @@ def two_sided_locks(
     sc = walker.scale
     floor = TWO_SIDED_FLOOR * float(sc.total_mass * sc.gravity * sc.leg_length)
     return {k: v for k, v in ranges.items() if v[0] < -floor and v[1] > floor}
+
+
+@dataclass(frozen=True, kw_only=True)
+class GaitLocks(ResultDictMixin):
+    """The torques a gait's locks exert over one step (:func:`gait_locks`).
+
+    Attributes
+    ----------
+    ranges : dict of str to (float, float)
+        Per lockable joint (coordinate name): ``(min, max)`` of its holding torque (N m) while
+        locked (:func:`lock_torque_ranges`); empty for a walker without locks.
+    two_sided : dict of str to (float, float)
+        The locks among them that must pull as well as push (:func:`two_sided_locks`): a
+        one-sided stop could not hold them.
+    """
+
+    ranges: dict[str, tuple[float, float]]
+    two_sided: dict[str, tuple[float, float]]
+
+
+def gait_locks(walker: PlanarWalker, cycle: LimitCycle, *, backend: str = "compiled") -> GaitLocks:
+    """The torques the locks of ``walker`` exert over one step of its gait ``cycle``, and which
+    of them are two-sided (:func:`lock_torque_ranges`, :func:`two_sided_locks`).
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+        A described walker (without lockable joints: no ranges).
+    cycle : LimitCycle
+        Its gait.
+    backend : {"compiled", "scipy"}
+        Where to walk the step.
+
+    Returns
+    -------
+    GaitLocks
+    """
+    ranges = lock_torque_ranges(walker, cycle, backend=backend)
+    return GaitLocks(ranges=ranges, two_sided=two_sided_locks(walker, ranges))
 
 
 def symmetric_heel_strike_state(

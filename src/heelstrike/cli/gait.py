@@ -86,12 +86,7 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     import numpy as np
 
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
-    from heelstrike.analysis.model_gaits import (
-        REFERENCE_SLOPE,
-        find_model_gaits,
-        lock_torque_ranges,
-        two_sided_locks,
-    )
+    from heelstrike.analysis.model_gaits import REFERENCE_SLOPE, find_model_gaits, gait_locks
 
     walker = model_from_args(args)
     guess = None
@@ -109,9 +104,8 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     d["model"] = walker.description.name
     hanging = [g.hanging_links for g in gaits]
     d["hanging_links"] = list(gait.hanging_links)
-    locks = lock_torque_ranges(walker, gait.cycle, backend=args.backend)
-    d["lock_torque_range"] = {k: list(v) for k, v in locks.items()}
-    two_sided = two_sided_locks(walker, locks)  # a one-sided knee stop could not hold them
+    locks = gait_locks(walker, gait.cycle, backend=args.backend)
+    d["lock_torque_range"] = {k: list(v) for k, v in locks.ranges.items()}
     # each gait's collision loss is its step's total (knee strikes included), as in d
     d["gaits"] = [_gait_summary(g.cycle) | {"collision_loss": g.collision_loss,
                                             "hanging_links": list(h)}
@@ -128,7 +122,7 @@ def _run_gait_model(args: argparse.Namespace) -> int:
                     "parameters and slope")
         print(f"heelstrike: note: no stable period-one gait found (not by the automatic "
               f"search{followed}); the least unstable gait found is shown", file=sys.stderr)
-    for name, (lo, hi) in two_sided.items():
+    for name, (lo, hi) in locks.two_sided.items():  # a one-sided knee stop could not hold
         print(f"heelstrike: note: the lock of '{name}' holds it with torques of both signs over "
               f"the step ({lo:+.4g} to {hi:+.4g} N m): the walker file's locks are two-sided "
               "latches; a knee stop that can only push could not hold it, and the knee would "

@@ -11,12 +11,15 @@ import xarray as xr
 from heelstrike.analysis.basin import OUTCOMES, basin_of_attraction
 from heelstrike.analysis.gait_map import gait_map, newton_gait
 from heelstrike.cli import main
-from heelstrike.dynamics.hybrid import simulate
+from heelstrike.dynamics.hybrid import WalkStatus, simulate
 from heelstrike.models.compass import CompassGait
 from heelstrike.outputs import write_basin
 
 SLOPE3 = np.deg2rad(3.0)
 Z3 = np.array([-0.27102868, 1.09238359, -0.71500964])
+CONVERGED = WalkStatus.CONVERGED.code
+#: The outcomes only a basin gives (a walk completed or was not started).
+BASIN_ONLY = {WalkStatus.CONVERGED, WalkStatus.KEEPS_WALKING, WalkStatus.INADMISSIBLE_START}
 
 
 def _sinks(walker, z, dt=1e-6):
@@ -41,15 +44,15 @@ def test_basin_dataset_and_classification(basin, tmp_path):
     assert ds["outcome"].shape == (31, 29)
     assert ds["q3"].attrs["units"] == "rad" and ds["q3_dot"].attrs["units"] == "rad s-1"
     assert 0.0 < basin.converging_fraction < 0.5
-    assert basin.converging_fraction == pytest.approx(float(np.mean(ds["outcome"] == 0)))
+    assert basin.converging_fraction == pytest.approx(float(np.mean(ds["outcome"] == CONVERGED)))
     assert sum(basin.fractions().values()) == pytest.approx(1.0)
     # the grid point nearest the fixed point converges; slow launches fall backward
-    assert int(ds["outcome"].sel(q3=Z3[0], q3_dot=Z3[1], method="nearest")) == 0
+    assert int(ds["outcome"].sel(q3=Z3[0], q3_dot=Z3[1], method="nearest")) == CONVERGED
     slow = int(ds["outcome"].sel(q3=-0.5, q3_dot=0.4, method="nearest"))
-    assert OUTCOMES[slow] == "fell_backward"
+    assert WalkStatus.from_code(slow) == "fell_backward"
     # slower still, the trailing foot starts moving into the ground: not a post-impact state
     slowest = int(ds["outcome"].sel(q3=-0.5, q3_dot=0.3, method="nearest"))
-    assert OUTCOMES[slowest] == "inadmissible_start"
+    assert WalkStatus.from_code(slowest) == "inadmissible_start"
     assert _sinks(CompassGait(), np.array([-0.5, 0.3, Z3[2]]))
     png, nc = write_basin(basin, tmp_path)
     assert png.stat().st_size > 10_000
@@ -71,7 +74,7 @@ def test_basin_outcomes_agree_with_reference_simulation(basin):
     for i, j in picks:
         z = np.array([ds["q3"].values[i], ds["q3_dot"].values[j], Z3[2]])
         q, qd = walker.section_to_state(z)
-        name = OUTCOMES[codes[i, j]]
+        name = WalkStatus.from_code(codes[i, j])
         steps = int(ds["steps"].values[i, j])
         assert _sinks(walker, z) == (name == "inadmissible_start")
         if name == "inadmissible_start":
@@ -174,24 +177,50 @@ def test_gait_map_figure_draws_no_stability_line_along_the_no_gait_region():
 
 def test_every_walk_status_has_its_own_basin_outcome() -> None:
     # QA sweep 6 (layout audit): slipped, no_consistent_assignment and no_leg_swap were
-    # counted as integration_failed, and the colours matched the outcomes by position
+    # counted as integration_failed, and the colours matched the outcomes by position.
+    # Issue #32: the basin's outcomes are WalkStatus members and the dataset stores their
+    # codes, so a code means the same in a basin as in every walk result.
     from heelstrike.analysis import basin as basin_module
-    from heelstrike.dynamics.hybrid import WalkStatus
     from heelstrike.plots import gait as gait_plots
 
-    others = [s for s in WalkStatus if s is not WalkStatus.COMPLETED]
-    assert {s.value for s in others} <= set(OUTCOMES)
+    assert all(isinstance(s, WalkStatus) for s in OUTCOMES)
+    assert set(OUTCOMES) == set(WalkStatus) - {WalkStatus.COMPLETED}
     assert len(set(OUTCOMES)) == len(OUTCOMES)
-    # the codes stored in earlier basin files keep their meaning
-    assert OUTCOMES[:8] == ("converged", "keeps_walking", "fell_forward", "fell_backward",
-                            "trailing_foot_stays", "lost_contact", "no_heel_strike",
-                            "integration_failed")
-    codes = np.array([s.code for s in others] + [WalkStatus.COMPLETED.code] * 2)
-    dist = np.array([0.0] * len(others) + [1e-5, 1.0])
+    # the report order (JSON "fractions", the text lines) is the one it always was
+    assert [s.value for s in OUTCOMES] == [
+        "converged", "keeps_walking", "fell_forward", "fell_backward", "trailing_foot_stays",
+        "lost_contact", "no_heel_strike", "integration_failed", "slipped",
+        "no_consistent_assignment", "no_leg_swap", "inadmissible_start"]
+    ended = [s for s in OUTCOMES if s not in BASIN_ONLY]  # what a walk itself can end with
+    codes = np.array([s.code for s in ended] + [WalkStatus.COMPLETED.code] * 2
+                     + [WalkStatus.INADMISSIBLE_START.code])
+    dist = np.array([0.0] * len(ended) + [1e-5, 1.0, 0.0])
     out = basin_module._classify(codes, dist, 1e-3)
-    assert [OUTCOMES[k] for k in out] == [s.value for s in others] + ["converged",
-                                                                        "keeps_walking"]
+    assert [WalkStatus.from_code(k) for k in out] == [
+        *ended, WalkStatus.CONVERGED, WalkStatus.KEEPS_WALKING, WalkStatus.INADMISSIBLE_START]
+    assert WalkStatus.COMPLETED.code not in out  # a basin never reports a bare completion
     assert set(gait_plots._COLOURS) == set(OUTCOMES)
+    assert all(len(s.message) > 10 for s in OUTCOMES)
+
+
+def test_basin_dataset_flags_are_walk_status_codes() -> None:
+    """The dataset's CF flags name the members whose codes it stores (3x2 grid, scipy, no
+    fixed-point search), and fractions() counts each member's code."""
+    b = basin_of_attraction(CompassGait(), SLOPE3, grid=(3, 2), steps=3, fixed_point=Z3,
+                            ranges=((-0.5, Z3[0]), (0.3, Z3[1])), backend="scipy")
+    attrs = b.dataset["outcome"].attrs
+    names = attrs["flag_meanings"].split()
+    assert [WalkStatus.from_code(c) for c in attrs["flag_values"]] == names
+    assert names == [s.value for s in OUTCOMES]
+    codes = b.dataset["outcome"].values
+    assert set(codes.ravel().tolist()) <= {s.code for s in OUTCOMES}
+    assert WalkStatus.from_code(codes[-1, -1]) is WalkStatus.CONVERGED  # z* itself
+    assert WalkStatus.from_code(codes[0, 0]) is WalkStatus.INADMISSIBLE_START  # q3_dot = 0.3
+    fr = b.fractions()
+    assert list(fr) == names
+    for s in OUTCOMES:
+        assert fr[s] == pytest.approx(float(np.mean(codes == s.code)))
+    assert b.converging_fraction == fr["converged"] > 0
 
 
 @pytest.mark.parametrize("model", ["compass", "kneed", "torso"])

@@ -96,3 +96,39 @@ def test_bifurcation_basin_and_map_say_which_gait_they_follow(
             assert d["note"].startswith(f"in all {len(found)} gaits found, 'torso' stands "
                                         "above its joint: gaits of the upright link; gaits "
                                         "with it hanging may exist too")
+
+
+@pytest.mark.parametrize(("torso", "hangs"), [(0.2, False), (np.pi + 0.2, True), (1.9, True)])
+def test_a_basin_records_whether_its_gait_hangs_a_link(torso: float, hangs: bool) -> None:
+    """Issue #32, item 5: the basin result says whether the fixed point it is built around
+    carries the torso hanging (the CLI prints the field); checked against the torso's
+    absolute angle (stance leg + torso joint) more than 90 deg from upright."""
+    from heelstrike.analysis.basin import basin_of_attraction, model_basin_of_attraction
+    from heelstrike.models import CompassGait
+
+    z = np.array([-0.2, torso, 1.0, -0.5, 0.0])  # (stance_leg, torso, their rates, hip rate)
+    assert (np.cos(z[0] + z[1]) < 0.0) == hangs
+    basin = model_basin_of_attraction(
+        load_walker("torso"), 0.02, grid=(1, 1), steps=1, fixed_point=z, backend="scipy",
+        ranges=((z[0] - 1e-3, z[0] + 1e-3), (z[2] - 1e-3, z[2] + 1e-3)))
+    assert basin.hanging_links == (("torso",) if hangs else ())
+    compass = basin_of_attraction(CompassGait(), 0.05, grid=(1, 1), steps=1, backend="scipy",
+                                  fixed_point=[-0.27, 1.09, -0.72],
+                                  ranges=((-0.271, -0.269), (1.089, 1.091)))
+    assert compass.hanging_links == ()
+
+
+def test_a_model_map_counts_the_gaits_that_hang_a_link() -> None:
+    """Issue #32, item 5: the map result counts its gaits that carry the torso hanging (the
+    CLI prints the fields); checked cell by cell from the fixed points' torso angle (stance
+    leg + torso joint more than 90 deg from upright). On 1-2 deg the torso walker's gaits at
+    R = 0 and 0.3 m all hang it (the slow CLI test above: 4 of 4)."""
+    from heelstrike.analysis.gait_map import model_gait_map
+
+    gmap = model_gait_map(load_walker("torso"), "R", [0.0, 0.3], np.deg2rad([1.0, 2.0]))
+    z = gmap.dataset["fixed_point"].values.reshape(-1, 5)
+    found = z[np.isfinite(z[:, 0])]
+    down = int(np.sum(np.cos(found[:, 0] + found[:, 1]) < 0.0))
+    assert gmap.hanging_cells == down == len(found) == 4
+    assert gmap.hanging_links == ("torso",)
+    assert gmap.upright_links == ("torso",)

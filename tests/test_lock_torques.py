@@ -14,6 +14,7 @@ import pytest
 
 from heelstrike.analysis.model_gaits import (
     find_model_gaits,
+    gait_locks,
     lock_torque_ranges,
     two_sided_locks,
 )
@@ -72,3 +73,21 @@ def test_walkers_without_locks_have_no_lock_torques() -> None:
     walker = load_walker("compass")
     gait = find_model_gaits(walker, slope=SLOPE)[0].cycle
     assert lock_torque_ranges(walker, gait) == {}
+
+
+def test_gait_locks_names_the_stance_knee_two_sided() -> None:
+    """Issue #32, item 5: the result the gait command prints. On the kneed walker's 3 deg gait
+    the stance knee's lock holds it with -0.18 to +0.22 N m (the values of the test above and
+    of QA sweep 13), the swing knee's with one sign only; the compass walker has no locks."""
+    walker = load_walker("kneed")
+    gait = find_model_gaits(walker, slope=SLOPE)[0].cycle
+    locks = gait_locks(walker, gait, backend="scipy")
+    assert set(locks.ranges) == {"stance_knee", "swing_knee"}
+    lo, hi = locks.ranges["stance_knee"]
+    assert lo == pytest.approx(-0.1755, abs=2e-3) and hi == pytest.approx(0.2201, abs=2e-3)
+    s_lo, s_hi = locks.ranges["swing_knee"]
+    assert 0 < s_lo <= s_hi
+    assert locks.two_sided == {"stance_knee": (lo, hi)}
+    compass = load_walker("compass")
+    none = gait_locks(compass, find_model_gaits(compass, slope=SLOPE)[0].cycle)
+    assert none.ranges == {} and none.two_sided == {}

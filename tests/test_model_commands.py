@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from heelstrike.analysis.basin import OUTCOMES, model_basin_of_attraction
+from heelstrike.analysis.basin import model_basin_of_attraction
 from heelstrike.analysis.model_gaits import ModelGait, find_model_gait
 from heelstrike.cli import main
 from heelstrike.dynamics.compiled_phased import (
@@ -24,6 +24,7 @@ from heelstrike.dynamics.compiled_phased import (
     section_states,
     simulate_phased_compiled,
 )
+from heelstrike.dynamics.hybrid import WalkStatus
 from heelstrike.dynamics.phased import PhasedWalker, load_phased_walker, simulate_phased
 
 SLOPE = math.radians(3.0)
@@ -121,25 +122,25 @@ def test_model_basin_fixed_point_converges_far_point_falls(
     assert ds["stance_shank"].attrs["units"] == "rad"
     assert ds["stance_shank_dot"].attrs["units"] == "rad s-1"
     out = ds["outcome"].values
-    assert OUTCOMES[out[1, 1]] == "converged"  # the fixed point itself
+    assert WalkStatus.from_code(out[1, 1]) == "converged"  # the fixed point itself
     assert ds["steps"].values[1, 1] == 1
-    assert OUTCOMES[out[2, 2]] in ("fell_forward", "fell_backward", "lost_contact",
+    assert WalkStatus.from_code(out[2, 2]) in ("fell_forward", "fell_backward", "lost_contact",
                                    "trailing_foot_stays")  # far off: a fall
     # 0.9 rad/s slower, the trailing foot starts moving into the ground (QA11 #5)
-    assert [OUTCOMES[c] for c in out[:, 0]] == ["inadmissible_start"] * 3
+    assert [WalkStatus.from_code(c) for c in out[:, 0]] == ["inadmissible_start"] * 3
     # every grid point's fate is the single walker's
     for i, a in enumerate(ds["stance_shank"].values):
         for j, b in enumerate(ds["stance_shank_dot"].values):
             q, qd = kneed.section_to_state([a, b, z[2]])
-            walks = OUTCOMES[out[i, j]] in ("converged", "keeps_walking")
+            walks = WalkStatus.from_code(out[i, j]) in ("converged", "keeps_walking")
             taken = int(ds["steps"].values[i, j])
-            assert _sinks(kneed, q, qd) == (OUTCOMES[out[i, j]] == "inadmissible_start")
-            if OUTCOMES[out[i, j]] == "inadmissible_start":
+            assert _sinks(kneed, q, qd) == (WalkStatus.from_code(out[i, j]) == "inadmissible_start")
+            if WalkStatus.from_code(out[i, j]) == "inadmissible_start":
                 assert taken == 0
                 continue
             one = simulate_phased_compiled(kneed, q, qd, slope=SLOPE, rtol=1e-8, atol=1e-9,
                                            steps=taken if walks else taken + 1)
-            assert one.status.value == ("completed" if walks else OUTCOMES[out[i, j]])
+            assert one.status.value == ("completed" if walks else WalkStatus.from_code(out[i, j]))
             assert one.n_steps == taken
 
 
@@ -164,7 +165,7 @@ def test_model_basin_flags_starts_whose_trailing_foot_sinks(
     np.testing.assert_allclose(ds["stance_shank"].values[[0, -1]], ranges[0], rtol=1e-12)
     np.testing.assert_allclose(ds["stance_shank_dot"].values[[0, -1]], ranges[1], rtol=1e-12)
     out = ds["outcome"].values
-    flagged = out == OUTCOMES.index("inadmissible_start")
+    flagged = out == WalkStatus.INADMISSIBLE_START.code
     sinks = np.array([[_sinks(kneed, *kneed.section_to_state([a, b, z[2]]))
                        for b in ds["stance_shank_dot"].values]
                       for a in ds["stance_shank"].values])

@@ -8,7 +8,8 @@ import json
 import numpy as np
 import pytest
 
-from heelstrike.analysis.newton import NewtonStatus, floquet_multipliers, newton_solve
+from heelstrike.analysis.newton import floquet_multipliers, newton_solve
+from heelstrike.status import SolveStatus
 
 
 def _circle_line(X: np.ndarray) -> np.ndarray:
@@ -29,12 +30,12 @@ def test_batched_starts_end_each_in_its_own_way() -> None:
     starts = np.array([[1.0, 0.5], [-1.0, -3.0], [-6.0, 0.0], [0.0, 0.0]])
     sol = newton_solve(residual, starts, tol=1e-12)
     r2 = np.sqrt(2.0)
-    assert sol.status[0] is NewtonStatus.CONVERGED
+    assert sol.status[0] is SolveStatus.CONVERGED
     np.testing.assert_allclose(sol.x[0], [r2, r2], atol=1e-12)
-    assert sol.status[1] is NewtonStatus.CONVERGED
+    assert sol.status[1] is SolveStatus.CONVERGED
     np.testing.assert_allclose(sol.x[1], [-r2, -r2], atol=1e-12)
-    assert sol.status[2] is NewtonStatus.STEP_FAILED  # F is NaN at the start
-    assert sol.status[3] is NewtonStatus.SINGULAR  # J = [[0, 0], [-1, 1]] at the origin
+    assert sol.status[2] is SolveStatus.STEP_FAILED  # F is NaN at the start
+    assert sol.status[3] is SolveStatus.SINGULAR  # J = [[0, 0], [-1, 1]] at the origin
     assert list(sol.converged) == [True, True, False, False]
     assert np.all(sol.residual_norm[:2] < 1e-12)
     # the converged Jacobian is F's (central differences): [[2x, 2y], [-1, 1]]
@@ -50,10 +51,10 @@ def test_batched_starts_end_each_in_its_own_way() -> None:
 
 def test_max_iterations_and_time_limit() -> None:
     sol = newton_solve(_circle_line, [3.0, 1.0], tol=1e-14, max_iter=1)
-    assert sol.status == (NewtonStatus.MAX_ITERATIONS,)
+    assert sol.status == (SolveStatus.MAX_ITERATIONS,)
     assert sol.iterations[0] == 2  # the start and one Newton step were evaluated
     sol = newton_solve(_circle_line, [3.0, 1.0], tol=1e-14, deadline=0.0)
-    assert sol.status == (NewtonStatus.TIME_LIMIT,)
+    assert sol.status == (SolveStatus.TIME_LIMIT,)
 
 
 def test_finite_line_search_halves_until_the_walker_steps() -> None:
@@ -80,16 +81,16 @@ def test_broyden_with_decrease_and_projection() -> None:
 
     sol = newton_solve(residual, [1.5, 0.6], tol=1e-12, jacobian="broyden",
                        line_search="decrease", min_rate=1.0, project=project, max_iter=50)
-    assert sol.status == (NewtonStatus.CONVERGED,)
+    assert sol.status == (SolveStatus.CONVERGED,)
     np.testing.assert_allclose(sol.x[0], [2.0, 1.0], atol=1e-10)
     # a stalled search below the noise floor counts as converged (accept), above it does not
     flat = newton_solve(lambda X: np.abs(X) + 1e-9, [1.0], tol=1e-12, line_search="decrease",
                         accept=1e-6, max_iter=50)
-    assert flat.status == (NewtonStatus.CONVERGED,)
+    assert flat.status == (SolveStatus.CONVERGED,)
     assert flat.residual_norm[0] < 1e-6
     stall = newton_solve(lambda X: np.abs(X) + 1e-3, [1.0], tol=1e-12, line_search="decrease",
                          accept=1e-6, max_iter=50)
-    assert stall.status[0] in (NewtonStatus.STALLED, NewtonStatus.SLOW)
+    assert stall.status[0] in (SolveStatus.STALLED, SolveStatus.SLOW)
 
 
 def test_lazy_jacobian_skips_the_neighbours_at_the_root() -> None:
@@ -124,7 +125,7 @@ def test_chord_reuses_a_good_jacobian_and_replaces_a_bad_one_once() -> None:
     x0 = root + np.array([1e-3, -2e-3])
     sol = newton_solve(residual, x0, tol=1e-13, jacobian="chord", jacobian0=J_root[None],
                        jacobian_at_root=False)
-    assert sol.status[0] is NewtonStatus.CONVERGED
+    assert sol.status[0] is SolveStatus.CONVERGED
     np.testing.assert_allclose(sol.x[0], root, atol=1e-13)
     assert sum(calls) == sol.iterations[0]  # one evaluation per iteration, no differences
     # a poor Jacobian (wrong sign of a column): replaced once by forward differences
@@ -132,14 +133,14 @@ def test_chord_reuses_a_good_jacobian_and_replaces_a_bad_one_once() -> None:
     bad = J_root * np.array([[1.0, -1.0], [1.0, -1.0]])
     sol = newton_solve(residual, x0, tol=1e-12, jacobian="chord", jacobian0=bad[None],
                        fd_step=1e-7, jacobian_at_root=False)
-    assert sol.status[0] is NewtonStatus.CONVERGED
+    assert sol.status[0] is SolveStatus.CONVERGED
     assert calls.count(2) == 1  # the one forward-difference Jacobian (n = 2 points)
     # a residual no chord step can reduce (|F| grows away from a saddle): STALLED, not a loop
     calls.clear()
     sol = newton_solve(lambda X: np.stack((X[:, 0] ** 2 + 1.0, X[:, 1]), axis=1),
                        np.array([0.3, 0.0]), tol=1e-12, jacobian="chord",
                        jacobian0=np.eye(2)[None], jacobian_at_root=False)
-    assert sol.status[0] is NewtonStatus.STALLED
+    assert sol.status[0] is SolveStatus.STALLED
     assert sol.iterations[0] < 20
 
 
@@ -158,7 +159,7 @@ def test_compass_fixed_point_matches_the_step_map() -> None:
         return np.where((res.status == COMPLETED)[:, None], res.z, np.nan)
 
     sol = newton_solve(lambda Z: P(Z) - Z, [-0.37, 1.4, -0.95], tol=1e-10)
-    assert sol.status == (NewtonStatus.CONVERGED,), sol.status[0].message
+    assert sol.status == (SolveStatus.CONVERGED,), sol.status[0].message
     z = sol.x[0]
     assert np.linalg.norm(P(z[None, :])[0] - z) < 1e-10
     h = 1e-6

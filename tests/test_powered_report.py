@@ -258,6 +258,7 @@ def test_slow_gaits_books_close_relative_to_their_size(capsys: Capture) -> None:
     for g in gaits:
         # a period-one gait on level ground: push-off work = collision loss, no change of E
         assert books_gap(g) < 1e-4
+        assert g.books_gap == books_gap(g) and not g.books_noted  # what the report reads
         assert g.actuator_work == pytest.approx(g.collision_loss, rel=1e-4)
         assert abs(g.energy_change) < 1e-4 * g.actuator_work
         assert g.speed == pytest.approx(0.02, rel=1e-9)

@@ -170,8 +170,8 @@ def test_basin_without_netcdf4_writes_classic_netcdf(
 
         outcome = ds["outcome"].values
         assert outcome.shape == (6, 5)
-        for code, name in enumerate(OUTCOMES):  # the file holds what the command reported
-            assert np.mean(outcome == code) == pytest.approx(d["fractions"][name])
+        for s in OUTCOMES:  # the file holds what the command reported (walk-status codes)
+            assert np.mean(outcome == s.code) == pytest.approx(d["fractions"][s.value])
         assert len(set(outcome.ravel().tolist())) > 1
         assert ds.attrs["max_steps"] == 10
     _check_units(d)

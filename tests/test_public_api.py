@@ -33,15 +33,25 @@ def test_every_analysis_name_resolves_to_its_definition(name: str) -> None:
     assert value is getattr(importlib.import_module(f"heelstrike.analysis.{owners[0]}"), name)
 
 
-def test_analysis_all_is_the_union_of_its_submodules_all() -> None:
+def test_analysis_all_is_a_short_list_of_its_submodules_public_names() -> None:
+    """Issue #32, item 6: the package exports at most 40 names, entry points, results and
+    errors, no tuning constants; each is public in its submodule, and every other public name
+    of a submodule is importable there only."""
     union: set[str] = set()
     for m in _submodules(heelstrike.analysis):
         union |= set(importlib.import_module(f"heelstrike.analysis.{m}").__all__)
     # a function named like its submodule (gait_map, sweep, cost_study) stays the submodule
     union -= set(_submodules(heelstrike.analysis))
-    assert {"find_limit_cycle", "heel_strike_study", "find_powered_gait"} <= union
-    assert set(heelstrike.analysis.__all__) == union
-    assert len(heelstrike.analysis.__all__) == len(union)
+    names = heelstrike.analysis.__all__
+    assert {"find_limit_cycle", "heel_strike_study", "find_powered_gait"} <= set(names)
+    assert set(names) <= union
+    assert len(names) == len(set(names)) <= 40
+    constants = [n for n in names if n.isupper()]  # ALL_CAPS: a constant
+    assert constants == []
+    for name in sorted(union - set(names)):  # e.g. OUTCOMES, BYTES_PER_POINT, hanging_links
+        with pytest.raises(AttributeError, match=name):
+            getattr(heelstrike.analysis, name)
+    assert {"OUTCOMES", "BYTES_PER_POINT", "ENERGY_BOOKS_RTOL"} <= union - set(names)
 
 
 @pytest.mark.parametrize("name", ["gait_map", "sweep", "cost_study"])

@@ -28,6 +28,7 @@ from heelstrike.analysis.sweep import (
     sweep,
     sweep_progress,
 )
+from heelstrike.dynamics.hybrid import WalkStatus
 
 pytestmark = pytest.mark.scale  # stores need zarr and filelock
 zarr = pytest.importorskip("zarr")
@@ -528,7 +529,7 @@ def test_basin_command_resumes_from_store(tmp_path: Path, monkeypatch: pytest.Mo
     resumed, a, b = _resume_check(argv, "a", tmp_path, monkeypatch, capsys, 2, "basin.nc")
     assert resumed == [(2, 6, 4)]  # one chunk per q3 row; two were kept
     xr.testing.assert_identical(a, b)
-    assert (a["outcome"] == 0).any()  # some states converge: a real basin
+    assert (a["outcome"] == WalkStatus.CONVERGED.code).any()  # some converge: a real basin
 
 
 def test_map_command_resumes_from_store(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,

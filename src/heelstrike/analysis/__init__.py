@@ -24,10 +24,14 @@ Main entry points:
   walkers;
 - :func:`~heelstrike.analysis.sweep.sweep`: parameter sweeps with a resumable store;
 - :func:`~heelstrike.analysis.newton.newton_solve`: the one Newton engine every gait search
-  runs (batched starts, per-start :class:`~heelstrike.analysis.newton.NewtonStatus`).
+  runs (batched starts, per-start :class:`~heelstrike.status.SolveStatus`);
 - :func:`~heelstrike.analysis.walk_tables.walk_energy_table` and the other tables of
   :mod:`~heelstrike.analysis.walk_tables`: a simulated walk as DataFrames (what the walk's
   figures draw).
+
+Only these entry points, their result types and errors are importable from here (at most 40
+names); tuning constants and helpers are imported from their submodules
+(``from heelstrike.analysis.basin import OUTCOMES``).
 
 ``gait_map``, ``sweep`` and ``cost_study`` name both a submodule and its main function; here
 they stay the submodules (``from heelstrike.analysis import sweep`` gives the module, as it
@@ -39,66 +43,32 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-#: Public names of each submodule (its ``__all__``, less the name of the submodule itself).
+#: The package-level API: each submodule's main entry points, result types and errors (at most
+#: 40 names, no tuning constants). Every other public name (constants, helpers) is imported from
+#: its submodule: ``from heelstrike.analysis.basin import OUTCOMES``.
 _PUBLIC: dict[str, tuple[str, ...]] = {
-    "basin": (
-        "BYTES_PER_POINT", "OUTCOMES", "Basin", "available_memory", "basin_memory_estimate",
-        "basin_of_attraction", "default_ranges", "model_basin_of_attraction", "model_slice_axes",
-    ),
-    "cost_study": (
-        "BRANCH_NOTE", "GAIT_VARIABLES", "STUDY_BYTES_PER_POINT", "cheapest_gaits",
-        "check_study_memory", "paper_eta",
-    ),
+    "basin": ("Basin", "basin_of_attraction", "model_basin_of_attraction"),
+    "cost_study": ("cheapest_gaits",),
     "gait_map": (
         "GaitMap", "NewtonGait", "compass_bifurcation", "model_bifurcation", "model_gait_map",
-        "newton_gait", "newton_gaits",
+        "newton_gait",
     ),
-    "heel_strike": (
-        "CONTACT_TOLERANCE", "LIFT_TOLERANCE", "HeelStrikeStudy", "NotAHeelStrikeError",
-        "check_heel_strike_state", "check_stance_foot_rolls",
-        "check_striking_foot_approaches", "heel_strike_study", "loss_per_metre",
-        "step_length", "symmetric_step_length", "trailing_foot_lifts",
-    ),
+    "heel_strike": ("HeelStrikeStudy", "NotAHeelStrikeError", "heel_strike_study"),
     "limit_cycle": (
-        "ENERGY_BOOKS_RTOL",
         "BifurcationDiagram", "Continuation", "GaitNotFoundError", "LimitCycle", "PoincareMap",
         "bifurcation_diagram", "continue_limit_cycle", "find_limit_cycle", "find_limit_cycles",
-        "leg_crossings", "refine_period_doubling",
     ),
     "model_gaits": (
-        "ANGLE", "IMPACT_MAP_BYTES_PER_POINT", "IMPACT_MAP_SECONDS_PER_POINT", "ImpactMap",
-        "LOCK_TORQUE_SAMPLES", "TWO_SIDED_FLOOR",
-        "check_impact_map_memory",
-        "ModelGait", "ModelHeelStrike", "REFERENCE_SLOPE", "find_model_gait",
-        "find_model_gaits", "hanging_links", "impact_map", "lock_torque_ranges",
-        "model_heel_strike",
-        "symmetric_heel_strike_state", "two_sided_locks", "upright_links",
+        "ImpactMap", "ModelGait", "ModelHeelStrike", "find_model_gait", "find_model_gaits",
+        "impact_map", "model_heel_strike",
     ),
-    "newton": ("NewtonSolution", "NewtonStatus", "SearchTimeLimitWarning", "floquet_multipliers",
-               "newton_solve"),
-    "paper": (
-        "FIGURE_RADII", "MAX_IMPACT_ANGLE", "Figure3bData", "PaperFigureData", "figure2_data",
-        "figure3a_data", "figure3b_data", "heel_strike_table", "impact_angle_grid",
-        "paper_figure_data",
-    ),
+    "newton": ("NewtonSolution", "newton_solve"),
+    "paper": ("PaperFigureData", "paper_figure_data"),
     "powered": (
-        "ACTUATIONS", "WHEEL_FAMILY", "ActuationFamily", "PoweredGait", "PoweredGaitNotFoundError",
-        "SearchLimitError", "actuation_family", "books_gap", "check_model_actuation",
-        "declared_posture_law",
-        "energy_book_tables", "family_simulator",
-        "find_model_powered_gait", "find_powered_gait", "impact_angle_for_step_length",
-        "law_gains", "max_walking_speed", "powered_gaits",
-        "passive_gait_finder", "powered_step", "preferred_gait",
+        "PoweredGait", "PoweredGaitNotFoundError", "find_model_powered_gait",
+        "find_powered_gait", "max_walking_speed",
     ),
-    "sweep": (
-        "KNOWN_UNITS", "SweepError", "SweepFunction", "SweepStoreLockedError",
-        "SweepStoreMismatchError", "SweepStoreRepairWarning", "sweep_progress",
-    ),
-    "walk_tables": (
-        "WalkResult", "model_phase_portrait_table", "model_strobe_table", "model_walk_frames",
-        "phase_portrait_table", "resample_walk", "step_table", "strobe_table",
-        "walk_energy_table", "walk_frames", "walk_impact_table",
-    ),
+    "walk_tables": ("WalkResult", "walk_energy_table"),
 }
 _SUBMODULE = {name: module for module, names in _PUBLIC.items() for name in names}
 

@@ -67,31 +67,26 @@ __all__ = [
     "model_slice_axes",
 ]
 
-#: Outcome codes of the basin (``flag_values`` / ``flag_meanings`` of the dataset): a walk that
-#: took every step ends ``converged`` (within the tolerance of the gait) or ``keeps_walking``;
-#: any other ends as its :class:`~heelstrike.dynamics.hybrid.WalkStatus`, each of which has its
-#: own code (``slipped``, ``no_consistent_assignment`` and ``no_leg_swap`` were counted as
-#: ``integration_failed``: QA sweep 6). Codes never change meaning; new ones are appended.
-OUTCOMES: tuple[str, ...] = (
-    "converged",
-    "keeps_walking",
-    "fell_forward",
-    "fell_backward",
-    "trailing_foot_stays",
-    "lost_contact",
-    "no_heel_strike",
-    "integration_failed",
-    "slipped",
-    "no_consistent_assignment",
-    "no_leg_swap",
-    "inadmissible_start",
+#: The outcomes of a basin, in report order: members of
+#: :class:`~heelstrike.dynamics.hybrid.WalkStatus`, the one walk vocabulary. A walk that took
+#: every step is ``CONVERGED`` (within the tolerance of the gait) or ``KEEPS_WALKING``; any other
+#: ends with the status of its failure; a start that is not walked is ``INADMISSIBLE_START``. The
+#: dataset's ``outcome`` holds the members' codes (``flag_values`` / ``flag_meanings``), so code 0
+#: (``completed``, which a basin never reports) means what it means for every walk.
+OUTCOMES: tuple[WalkStatus, ...] = (
+    WalkStatus.CONVERGED,
+    WalkStatus.KEEPS_WALKING,
+    WalkStatus.FELL_FORWARD,
+    WalkStatus.FELL_BACKWARD,
+    WalkStatus.TRAILING_FOOT_STAYS,
+    WalkStatus.LOST_CONTACT,
+    WalkStatus.NO_HEEL_STRIKE,
+    WalkStatus.INTEGRATION_FAILED,
+    WalkStatus.SLIPPED,
+    WalkStatus.NO_CONSISTENT_ASSIGNMENT,
+    WalkStatus.NO_LEG_SWAP,
+    WalkStatus.INADMISSIBLE_START,
 )
-
-#: Status code (none of :class:`~heelstrike.dynamics.hybrid.WalkStatus`'s) of an initial state
-#: that is not walked: its trailing foot is on the ground and moving into it
-#: (:meth:`~heelstrike.models.base.PlanarWalker.trailing_foot_presses`), so it is the state
-#: after no heel strike; its outcome is ``inadmissible_start`` (QA11 #5).
-_INADMISSIBLE_START = -1
 
 #: Default window of the slice: ``q3`` (rad) and ``q3_dot`` (rad/s) ranges (widened where
 #: needed to hold the fixed point with :data:`DEFAULT_MARGINS` to spare).
@@ -142,7 +137,8 @@ class Basin(ResultDictMixin):
     Attributes
     ----------
     dataset : xarray.Dataset
-        ``outcome`` (int8 codes of :data:`OUTCOMES`), ``steps`` (heel strikes taken) and
+        ``outcome`` (int8 :class:`~heelstrike.dynamics.hybrid.WalkStatus` codes, one of
+        :data:`OUTCOMES` each), ``steps`` (heel strikes taken) and
         ``distance`` (final distance to the fixed point) over coordinates ``q3`` (rad) and
         ``q3_dot`` (rad/s); the fixed point, slope and walker parameters as attributes.
     fixed_point : ndarray, shape (3,)
@@ -161,6 +157,10 @@ class Basin(ResultDictMixin):
         unstable gait attracts no initial state: its basin is empty (0 % converging).
     spectral_radius : float or None
         Largest ``|multiplier|`` of that gait (1), None if unknown.
+    hanging_links : tuple of str
+        The links described upright that the gait carries hanging at the fixed point
+        (:func:`~heelstrike.analysis.model_gaits.hanging_links`): the basin is then that of a
+        gait of the hanging link. Empty for the compass gait and walkers without such links.
     """
 
     dataset: xr.Dataset
@@ -171,11 +171,12 @@ class Basin(ResultDictMixin):
     walker_steps: int = 0
     gait_stable: bool | None = None
     spectral_radius: float | None = None
+    hanging_links: tuple[str, ...] = ()
 
     def fractions(self) -> dict[str, float]:
-        """Fraction of the grid in every outcome."""
+        """Fraction of the grid in every outcome (keys: the :data:`OUTCOMES`, in order)."""
         codes = self.dataset["outcome"].values.ravel()
-        return {name: float(np.mean(codes == i)) for i, name in enumerate(OUTCOMES)}
+        return {s.value: float(np.mean(codes == s.code)) for s in OUTCOMES}
 
 
 def _check_grid(grid: tuple[int, int], steps: int) -> tuple[int, int]:
@@ -220,11 +221,12 @@ def _make_basin(
     coords: dict[str, Any], attrs: dict[str, Any], outcome: NDArray[np.int8],
     taken: NDArray[np.int64], dist: FloatArray, zstar: FloatArray, elapsed: float,
     axes: tuple[int, int] = (0, 1), gait: LimitCycle | None = None,
+    hanging: tuple[str, ...] = (),
 ) -> Basin:
     """The :class:`Basin` of a walked slice (compass and described walkers alike); ``gait``:
     the period-one gait found at ``zstar`` (its stability goes into the result and the
     dataset's ``gait_stable`` (0/1) and ``gait_spectral_radius`` attributes), None if the
-    fixed point was given."""
+    fixed point was given; ``hanging``: :attr:`Basin.hanging_links`."""
     dims = tuple(coords)
     shape = tuple(len(coords[d][1]) for d in dims)
     from heelstrike.analysis.sweep import _attribute_units
@@ -235,7 +237,7 @@ def _make_basin(
         {
             "outcome": (dims, np.asarray(outcome).reshape(shape), {
                 "long_name": "fate of the initial state",
-                "flag_values": np.arange(len(OUTCOMES), dtype=np.int8),
+                "flag_values": np.array([s.code for s in OUTCOMES], dtype=np.int8),
                 "flag_meanings": " ".join(OUTCOMES),
             }),
             "steps": (dims, np.asarray(taken).reshape(shape).astype(np.int32), {
@@ -252,7 +254,7 @@ def _make_basin(
         coords=coords,
         attrs=attrs,
     )
-    frac = float(np.mean(outcome == 0))
+    frac = float(np.mean(outcome == WalkStatus.CONVERGED.code))
     ds.attrs["converging_fraction"] = frac
     ds.attrs["converging_fraction_units"] = "1"
     stable = rho = None
@@ -263,7 +265,7 @@ def _make_basin(
         ds.attrs.update(gait_stable_units="1", gait_spectral_radius_units="1")
     return Basin(dataset=ds, fixed_point=zstar, converging_fraction=frac, elapsed=elapsed,
                  axes=axes, walker_steps=int(taken.sum()), gait_stable=stable,
-                 spectral_radius=rho)
+                 spectral_radius=rho, hanging_links=hanging)
 
 
 def _walk_chunk(
@@ -277,14 +279,14 @@ def _walk_chunk(
     ``steps`` (int64, shape ``(n_a, n_b)``) and ``z`` (shape ``(n_a, n_b, d)``).
 
     Points whose state (``states(Z)``: ``(q, q_dot)``, each ``(n, n_q)``) has the ``walker``'s
-    trailing foot pressing into the ground are not walked: status ``_INADMISSIBLE_START``,
+    trailing foot pressing into the ground are not walked: status ``INADMISSIBLE_START``,
     no steps, final point the start."""
     A, B = np.broadcast_arrays(np.asarray(a, dtype=float), np.asarray(b, dtype=float))
     Z = np.tile(np.asarray(zstar), (A.size, 1))
     Z[:, axes[0]] = A.ravel()
     Z[:, axes[1]] = B.ravel()
     inadmissible = walker.trailing_foot_presses(*states(Z))
-    status = np.full(A.size, _INADMISSIBLE_START, dtype=np.int64)
+    status = np.full(A.size, WalkStatus.INADMISSIBLE_START.code, dtype=np.int64)
     taken = np.zeros(A.size, dtype=np.int64)
     zf = Z.copy()
     if not np.all(inadmissible):
@@ -421,15 +423,13 @@ def basin_of_attraction(
 
 
 def _classify(status: NDArray[np.int64], dist: FloatArray, tol: float) -> NDArray[np.int8]:
-    """Outcome codes (:data:`OUTCOMES`) from walk status codes and final distances."""
+    """Outcome codes (:data:`OUTCOMES`' :class:`~heelstrike.dynamics.hybrid.WalkStatus` codes)
+    from walk status codes and final distances: a completed walk is ``CONVERGED`` if it ended
+    within ``tol`` of the fixed point, else ``KEEPS_WALKING``; every other status is itself."""
     completed = status == WalkStatus.COMPLETED.code
-    outcome = np.full(status.size, OUTCOMES.index("integration_failed"), dtype=np.int8)
-    for st in WalkStatus:
-        if st is not WalkStatus.COMPLETED:  # every status has its outcome (a test checks)
-            outcome[status == st.code] = OUTCOMES.index(st.value)
-    outcome[status == _INADMISSIBLE_START] = OUTCOMES.index("inadmissible_start")
-    outcome[completed] = OUTCOMES.index("keeps_walking")
-    outcome[completed & (dist < tol)] = OUTCOMES.index("converged")
+    outcome = status.astype(np.int8)
+    outcome[completed] = WalkStatus.KEEPS_WALKING.code
+    outcome[completed & (dist < tol)] = WalkStatus.CONVERGED.code
     return outcome
 
 
@@ -599,8 +599,11 @@ def model_basin_of_attraction(
                       "long_name": f"post-heel-strike stance angular velocity {yn}",
                       "label": f"post-impact stance velocity {yn} (rad/s)"}),
     }
+    from heelstrike.analysis.model_gaits import hanging_links
+
+    hanging = hanging_links(w, w.section_to_state(zstar)[0], float(slope))
     return _make_basin(coords, attrs, outcome, taken, dist, zstar, elapsed, axes=(ia, ib),
-                       gait=gait)
+                       gait=gait, hanging=hanging)
 
 
 def _model_basin_chunk(

@@ -44,10 +44,11 @@ from heelstrike.analysis.limit_cycle import (
     find_limit_cycle,
     refine_period_doubling,
 )
-from heelstrike.analysis.newton import floquet_multipliers
+from heelstrike.analysis.newton import NewtonSolution, floquet_multipliers
 from heelstrike.dynamics.compiled import COMPLETED, ensemble_walk
 from heelstrike.models.base import check_backend_name
 from heelstrike.models.compass import CompassGait
+from heelstrike.status import SolveStatus
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -174,7 +175,7 @@ def newton_gaits(
     atol: float = 1e-11,
     deadline: float | None = None,
     backend: str = "compiled",
-) -> list[NewtonGait | str]:
+) -> list[NewtonGait | SolveStatus]:
     """Newton's method for ``P(z) = z`` on the compiled map, from many guesses at once.
 
     Runs the one Newton engine (:func:`~heelstrike.analysis.newton.newton_solve`) on
@@ -206,24 +207,32 @@ def newton_gaits(
 
     Returns
     -------
-    list of NewtonGait or str
-        Per guess, the converged gait or the reason it failed.
+    list of NewtonGait or SolveStatus
+        Per guess, the converged gait or how its start failed (its ``message`` says it).
     """
-    from heelstrike.analysis.newton import NewtonStatus, newton_solve
+    return _newton_gaits(walker, slope, guesses, tol=tol, max_iter=max_iter, fd_step=fd_step,
+                         rtol=rtol, atol=atol, deadline=deadline, backend=backend)[0]
+
+
+def _newton_gaits(
+    walker: CompassGait, slope: float, guesses: ArrayLike, *, tol: float, max_iter: int,
+    fd_step: float, rtol: float, atol: float, deadline: float | None, backend: str,
+) -> tuple[list[NewtonGait | SolveStatus], NewtonSolution]:
+    """:func:`newton_gaits`, and the Newton solution it ran (its per-start messages)."""
+    from heelstrike.analysis.newton import newton_solve
 
     Z = np.atleast_2d(np.asarray(guesses, dtype=float)).reshape(-1, 3)
     sol = newton_solve(lambda X: _map_many(walker, X, slope, rtol, atol, backend)[0] - X, Z,
                        tol=tol, max_iter=max_iter, fd_step=fd_step, deadline=deadline)
-    out: list[NewtonGait | str] = [sol.message(k, walker.section_labels)
-                                   for k in range(Z.shape[0])]
+    out: list[NewtonGait | SolveStatus] = list(sol.status)
     done = np.flatnonzero(sol.converged)
     if done.size == 0:
-        return out
+        return out, sol
     _, res = _map_many(walker, sol.x[done], slope, rtol, atol, backend)  # each gait's step
     for j, k in enumerate(done):
         jac = sol.jacobian[k] + np.eye(3)  # DP = D(P - id) + I
         if not np.all(np.isfinite(jac)):
-            out[k] = NewtonStatus.JACOBIAN_FAILED.message
+            out[k] = SolveStatus.JACOBIAN_FAILED
             continue
         out[k] = NewtonGait(
             z=sol.x[k].copy(),
@@ -235,7 +244,7 @@ def newton_gaits(
             residual=float(sol.residual_norm[k]),
             iterations=int(sol.iterations[k]),
         )
-    return out
+    return out, sol
 
 
 def newton_gait(
@@ -258,19 +267,14 @@ def newton_gait(
     GaitNotFoundError
         If a step fails or Newton does not converge.
     """
-    (result,) = newton_gaits(
-        walker,
-        slope,
-        np.asarray(guess, dtype=float).reshape(1, 3),
-        tol=tol,
-        max_iter=max_iter,
-        fd_step=fd_step,
-        rtol=rtol,
-        atol=atol,
+    (result,), sol = _newton_gaits(
+        walker, slope, np.asarray(guess, dtype=float).reshape(1, 3), tol=tol,
+        max_iter=max_iter, fd_step=fd_step, rtol=rtol, atol=atol, deadline=None,
         backend=backend,
     )
-    if isinstance(result, str):
-        raise GaitNotFoundError(result)
+    if isinstance(result, SolveStatus):
+        raise GaitNotFoundError(sol.message(0, walker.section_labels)
+                                if sol.status[0] is result else result.message)
     return result
 
 
@@ -458,9 +462,22 @@ class GaitMap(ResultDictMixin):
         (rad), ``fixed_point`` (+ ``section`` dim), ``smallest_real_multiplier``; over
         ``foot_radius``: ``period_doubling_slope`` (rad, NaN if none in range). NaN where no
         period-one gait was found, and ``gait_found`` (bool) False there.
+    hanging_cells : int
+        Described walkers (:func:`model_gait_map`): the number of cells whose gait carries a
+        link described upright hanging
+        (:attr:`~heelstrike.analysis.model_gaits.ModelGait.hanging_links`); 0 otherwise.
+    hanging_links : tuple of str
+        The links those gaits carry hanging (sorted; empty if none).
+    upright_links : tuple of str
+        The walker's links described upright
+        (:func:`~heelstrike.analysis.model_gaits.upright_links`): with no hanging cell, every
+        gait of the map carries them upright.
     """
 
     dataset: xr.Dataset
+    hanging_cells: int = 0
+    hanging_links: tuple[str, ...] = ()
+    upright_links: tuple[str, ...] = ()
 
     @property
     def period_doubling_slope(self) -> FloatArray:
@@ -710,7 +727,7 @@ def model_gait_map(
 
     import xarray as xr
 
-    from heelstrike.analysis.model_gaits import find_model_gait
+    from heelstrike.analysis.model_gaits import find_model_gait, upright_links
     from heelstrike.dynamics.phased import PhasedWalker
 
     w0 = PhasedWalker.from_built(walker)
@@ -732,6 +749,7 @@ def model_gait_map(
     shape = (P.size, S.size)
     out = {k: np.full(shape, np.nan) for k in _UNITS}
     fixed = np.full((*shape, d), np.nan)
+    hanging: dict[tuple[int, int], tuple[str, ...]] = {}  # cell -> links its gait hangs
     pd = np.full(P.size, np.nan)
     s_a = _anchor_slope(S)
     # further anchor slopes where the branch has no gait at s_a: about every 1 deg of the range
@@ -822,6 +840,7 @@ def model_gait_map(
                 out["impact_angle"][i, j] = g.cycle.impact_angle
                 out["smallest_real_multiplier"][i, j] = at.mnr
                 fixed[i, j] = g.cycle.fixed_point
+                hanging[i, j] = g.hanging_links
             prev = (value, points)
             bracket = _pd_bracket(points, any_sign=False)
             if bracket is not None:
@@ -856,7 +875,9 @@ def model_gait_map(
                      "anchor_slope": s_a}
                     | {f"param_{k}": float(np.asarray(v)) for k, v in w0.parameters.items()
                        if k != parameter})
-    return GaitMap(dataset=ds)
+    return GaitMap(dataset=ds, hanging_cells=sum(1 for h in hanging.values() if h),
+                   hanging_links=tuple(sorted({n for h in hanging.values() for n in h})),
+                   upright_links=upright_links(w0))
 
 
 #: Most slopes of the coarse scan for the first gait of a bifurcation range (when there is no

@@ -57,12 +57,14 @@ __all__ = [
     "LOCK_TORQUE_SAMPLES",
     "REFERENCE_SLOPE",
     "TWO_SIDED_FLOOR",
+    "GaitLocks",
     "ImpactMap",
     "ModelGait",
     "ModelHeelStrike",
     "check_impact_map_memory",
     "find_model_gait",
     "find_model_gaits",
+    "gait_locks",
     "hanging_links",
     "impact_map",
     "lock_torque_ranges",
@@ -95,6 +97,10 @@ class ModelGait(ResultDictMixin):
         Potential energy released per step (J).
     energy_residual : float
         ``actuator_work + potential_energy_released - collision_loss`` (J); ~0 on the gait.
+    hanging_links : tuple of str
+        The links described upright that the gait carries hanging, at its post-impact
+        configuration (:func:`hanging_links`): a gait of the hanging link, not of the upright
+        one. Empty for walkers without such links.
     """
 
     cycle: LimitCycle
@@ -103,6 +109,7 @@ class ModelGait(ResultDictMixin):
     actuator_work: float
     potential_energy_released: float
     energy_residual: float
+    hanging_links: tuple[str, ...] = ()
 
     @property
     def eta(self) -> float:
@@ -165,8 +172,9 @@ ATTRACTOR_SEEDS, ATTRACTOR_STEPS = 40, 50
 REFERENCE_SLOPE = float(np.deg2rad(3.0))
 
 
-def _energy_book(cycle: LimitCycle) -> ModelGait:
-    """The gait's energy book from its one-step walk (every impact of the period)."""
+def _energy_book(cycle: LimitCycle, walker: PlanarWalker) -> ModelGait:
+    """The gait's energy book from its one-step walk (every impact of the period), and the
+    ``walker``'s links it carries hanging."""
     walk = cycle.walk
     assert isinstance(walk, PhasedWalkResult)
     impacts = walk.events
@@ -179,6 +187,7 @@ def _energy_book(cycle: LimitCycle) -> ModelGait:
         actuator_work=rec.actuator_work,
         potential_energy_released=rec.potential_energy_released,
         energy_residual=rec.actuator_work + rec.potential_energy_released - loss,
+        hanging_links=hanging_links(walker, cycle.q, cycle.slope),
     )
 
 
@@ -368,7 +377,7 @@ def find_model_gaits(
         raise GaitNotFoundError(
             f"Newton converged from none of the {len(starts)} most nearly periodic of "
             f"{len(Z)} automatic starts (the last: {last}){finer}{tried}")
-    gaits = tuple(_energy_book(c) for c in sorted(found, key=_preference))
+    gaits = tuple(_energy_book(c, w) for c in sorted(found, key=_preference))
     if torque is None and push_off is None:
         return _closed_model_books(gaits, slope)
     return gaits
@@ -605,6 +614,45 @@ def two_sided_locks(
     sc = walker.scale
     floor = TWO_SIDED_FLOOR * float(sc.total_mass * sc.gravity * sc.leg_length)
     return {k: v for k, v in ranges.items() if v[0] < -floor and v[1] > floor}
+
+
+@dataclass(frozen=True, kw_only=True)
+class GaitLocks(ResultDictMixin):
+    """The torques a gait's locks exert over one step (:func:`gait_locks`).
+
+    Attributes
+    ----------
+    ranges : dict of str to (float, float)
+        Per lockable joint (coordinate name): ``(min, max)`` of its holding torque (N m) while
+        locked (:func:`lock_torque_ranges`); empty for a walker without locks.
+    two_sided : dict of str to (float, float)
+        The locks among them that must pull as well as push (:func:`two_sided_locks`): a
+        one-sided stop could not hold them.
+    """
+
+    ranges: dict[str, tuple[float, float]]
+    two_sided: dict[str, tuple[float, float]]
+
+
+def gait_locks(walker: PlanarWalker, cycle: LimitCycle, *, backend: str = "compiled") -> GaitLocks:
+    """The torques the locks of ``walker`` exert over one step of its gait ``cycle``, and which
+    of them are two-sided (:func:`lock_torque_ranges`, :func:`two_sided_locks`).
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+        A described walker (without lockable joints: no ranges).
+    cycle : LimitCycle
+        Its gait.
+    backend : {"compiled", "scipy"}
+        Where to walk the step.
+
+    Returns
+    -------
+    GaitLocks
+    """
+    ranges = lock_torque_ranges(walker, cycle, backend=backend)
+    return GaitLocks(ranges=ranges, two_sided=two_sided_locks(walker, ranges))
 
 
 def symmetric_heel_strike_state(

@@ -9,13 +9,12 @@ steps: the passive period-one gait ``P(z) - z = 0`` (:mod:`~heelstrike.analysis.
   values, with a row of NaN where the walker fails to take a step. All pending iterates and
   their finite-difference neighbours go to the residual in one call per iteration, so a
   compiled ensemble evaluates them in one kernel launch;
-- failures are returned per start (diffrax's idea), never raised: :class:`NewtonStatus` says
-  what happened and carries its message.
+- failures are returned per start (diffrax's idea), never raised: a
+  :class:`~heelstrike.status.SolveStatus` says what happened and carries its message.
 """
 
 from __future__ import annotations
 
-import enum
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -26,10 +25,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
+from heelstrike.status import SolveStatus
 
 __all__ = [
-    "NewtonSolution", "NewtonStatus", "SearchTimeLimitWarning", "floquet_multipliers",
-    "newton_solve",
+    "NewtonSolution", "SearchTimeLimitWarning", "floquet_multipliers", "newton_solve",
 ]
 
 Residual = Callable[[FloatArray], FloatArray]
@@ -38,36 +37,6 @@ Residual = Callable[[FloatArray], FloatArray]
 class SearchTimeLimitWarning(UserWarning):
     """A search reached its time limit: what it found by then is returned, and it may have
     missed solutions (e.g. :func:`heelstrike.analysis.find_limit_cycles`)."""
-
-
-class NewtonStatus(enum.Enum):
-    """How a Newton start ended; ``.message`` says it in words."""
-
-    CONVERGED = "converged"
-    STEP_FAILED = "step_failed"
-    JACOBIAN_FAILED = "jacobian_failed"
-    SINGULAR = "singular"
-    STALLED = "stalled"
-    SLOW = "slow"
-    MAX_ITERATIONS = "max_iterations"
-    TIME_LIMIT = "time_limit"
-
-    @property
-    def message(self) -> str:
-        """One line for users."""
-        return _MESSAGES[self]
-
-
-_MESSAGES = {
-    NewtonStatus.CONVERGED: "converged",
-    NewtonStatus.STEP_FAILED: "the walker fails to take a step from the Newton iterate",
-    NewtonStatus.JACOBIAN_FAILED: "a step failed while estimating the Jacobian",
-    NewtonStatus.SINGULAR: "singular Newton system (for a fixed point: a multiplier equals 1)",
-    NewtonStatus.STALLED: "Newton stalled (the line search found no better point)",
-    NewtonStatus.SLOW: "Newton converges too slowly",
-    NewtonStatus.MAX_ITERATIONS: "Newton did not converge in the allowed iterations",
-    NewtonStatus.TIME_LIMIT: "time limit reached",
-}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -90,7 +59,7 @@ class NewtonSolution(ResultDictMixin):
         eigenvalues of ``jacobian + I``. With ``"broyden"`` it is the updated Broyden matrix.
     iterations : ndarray of int, shape (K,)
         Residual evaluations at an iterate (1 when the start already solves ``F = 0``).
-    status : tuple of NewtonStatus, length K
+    status : tuple of SolveStatus, length K
         How each start ended.
     max_iter : int
         The iteration limit the solve ran with.
@@ -101,7 +70,7 @@ class NewtonSolution(ResultDictMixin):
     residual_norm: FloatArray
     jacobian: FloatArray
     iterations: NDArray[np.int_]
-    status: tuple[NewtonStatus, ...]
+    status: tuple[SolveStatus, ...]
     max_iter: int
 
     def message(self, k: int, labels: Sequence[tuple[str, str]] | None = None) -> str:
@@ -111,23 +80,23 @@ class NewtonSolution(ResultDictMixin):
         instead of a bare array.
         """
         s, r = self.status[k], float(self.residual_norm[k])
-        if s is NewtonStatus.STEP_FAILED:
+        if s is SolveStatus.STEP_FAILED:
             x = self.x[k]
             if labels is not None and len(labels) == x.size:
                 pairs = ", ".join(f"{n} = {v:.6g} {u}"
                                   for (n, u), v in zip(labels, x, strict=True))
                 return f"{s.message} ({pairs})"
             return f"{s.message} {np.round(x, 6)}"
-        if s is NewtonStatus.MAX_ITERATIONS:
+        if s is SolveStatus.MAX_ITERATIONS:
             return f"Newton did not converge in {self.max_iter} iterations (residual {r:.2e})"
-        if s in (NewtonStatus.STALLED, NewtonStatus.SLOW):
+        if s in (SolveStatus.STALLED, SolveStatus.SLOW):
             return f"{s.message} (residual {r:.2e})"
         return s.message
 
     @property
     def converged(self) -> NDArray[np.bool_]:
         """``status is CONVERGED`` per start, shape (K,)."""
-        return np.array([s is NewtonStatus.CONVERGED for s in self.status], dtype=bool)
+        return np.array([s is SolveStatus.CONVERGED for s in self.status], dtype=bool)
 
 
 def floquet_multipliers(jacobian: ArrayLike) -> NDArray[np.complex128]:
@@ -213,8 +182,8 @@ def newton_solve(
         ``x - J^-1 F(x)``, one evaluation each: a step is taken if it reduces ``|F|``; the
         Jacobian is kept while a step reduces ``|F|`` at least ``1 / contraction``-fold, else it
         is replaced once by forward differences; a second replacement ends the start
-        :attr:`NewtonStatus.STALLED` (no line search; for a good Jacobian of a nearby point,
-        e.g. a coarse stage's, on an expensive accurate residual).
+        :attr:`~heelstrike.status.SolveStatus.STALLED` (no line search; for a good Jacobian of
+        a nearby point, e.g. a coarse stage's, on an expensive accurate residual).
     jacobian0 : array_like, shape (K, n, n), optional
         Initial Jacobians (``broyden``, ``chord``); a non-finite one is computed instead.
     contraction : float
@@ -227,7 +196,8 @@ def newton_solve(
     line_search : {"finite", "decrease"}
         ``finite``: the first ``lam`` at which the walker takes a step (the step is taken even
         if ``lam`` reaches ``min_step``). ``decrease``: the first ``lam >= min_step`` with
-        ``|F(x + lam dx)| < (1 - lam / 4) |F(x)|``; none is :attr:`NewtonStatus.STALLED`.
+        ``|F(x + lam dx)| < (1 - lam / 4) |F(x)|``; none is
+        :attr:`~heelstrike.status.SolveStatus.STALLED`.
     min_step : float
         Smallest ``lam``.
     accept : float, optional
@@ -235,7 +205,7 @@ def newton_solve(
         floor) counts as converged. Default ``10 tol``.
     min_rate : float, optional
         With ``line_search="decrease"``: a step must reduce ``|F|`` at least ``1 / min_rate``
-        fold while ``|F| >= accept`` (else :attr:`NewtonStatus.SLOW`).
+        fold while ``|F| >= accept`` (else :attr:`~heelstrike.status.SolveStatus.SLOW`).
     project : callable, optional
         Applied to each trial point ``(B, n) -> (B, n)`` (e.g. a bound on a parameter).
     deadline : float, optional
@@ -251,7 +221,7 @@ def newton_solve(
     K, n = X.shape
     floor = 10.0 * tol if accept is None else accept
     central = jacobian == "central"
-    status: list[NewtonStatus] = [NewtonStatus.MAX_ITERATIONS] * K
+    status: list[SolveStatus] = [SolveStatus.MAX_ITERATIONS] * K
     F_all = np.full((K, n), np.nan)
     J_all = np.full((K, n, n), np.nan)
     iters = np.zeros(K, dtype=int)
@@ -271,7 +241,7 @@ def newton_solve(
         it += 1
         if deadline is not None and time.monotonic() > deadline:
             for k in active:
-                status[k] = NewtonStatus.TIME_LIMIT
+                status[k] = SolveStatus.TIME_LIMIT
             break
         x = X[active]
         new_F = ~have_F[active]
@@ -309,15 +279,15 @@ def newton_solve(
             F_all[k] = F[a]
             Jk = J_cur[k]
             if not np.all(np.isfinite(F[a])):
-                status[k], keep[a] = NewtonStatus.STEP_FAILED, False
+                status[k], keep[a] = SolveStatus.STEP_FAILED, False
             elif res[a] < tol:
-                status[k], keep[a] = NewtonStatus.CONVERGED, False
+                status[k], keep[a] = SolveStatus.CONVERGED, False
             elif it > max_iter:
                 keep[a] = False
             elif Jk is None:
-                status[k], keep[a] = (NewtonStatus.STALLED if chord else status[k]), False
+                status[k], keep[a] = (SolveStatus.STALLED if chord else status[k]), False
             elif not np.all(np.isfinite(Jk)):
-                status[k], keep[a] = NewtonStatus.JACOBIAN_FAILED, False
+                status[k], keep[a] = SolveStatus.JACOBIAN_FAILED, False
             else:
                 try:
                     step[a] = np.linalg.solve(Jk, -F[a])
@@ -325,7 +295,7 @@ def newton_solve(
                     if chord:
                         J_cur[k], retry[a] = None, True
                     else:
-                        status[k], keep[a] = NewtonStatus.SINGULAR, False
+                        status[k], keep[a] = SolveStatus.SINGULAR, False
         lam = np.ones(active.size)
         pending = keep & ~retry
         ok = np.zeros(active.size, dtype=bool)
@@ -376,13 +346,13 @@ def newton_solve(
                     J_cur[k] = None  # a stale Broyden Jacobian: recompute and retry
                     continue
                 if res[a] < floor:
-                    status[k], keep[a] = NewtonStatus.CONVERGED, False
+                    status[k], keep[a] = SolveStatus.CONVERGED, False
                 else:
-                    status[k], keep[a] = NewtonStatus.STALLED, False
+                    status[k], keep[a] = SolveStatus.STALLED, False
                 continue
             new_res = float(np.linalg.norm(F_try[a]))
             if min_rate is not None and new_res > min_rate * res[a] and res[a] >= floor:
-                status[k], keep[a] = NewtonStatus.SLOW, False
+                status[k], keep[a] = SolveStatus.SLOW, False
                 continue
             x_new = x[a] + lam[a] * step[a]
             if project is not None:

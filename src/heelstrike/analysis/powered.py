@@ -547,6 +547,18 @@ class PoweredGait(ResultDictMixin):
         """Work of the hip torque during single support (J); 0 if the torque acts elsewhere."""
         return self.torque_work if self.torque_joint == "hip" else 0.0
 
+    @property
+    def books_gap(self) -> float:
+        """How far the gait's energy books are from closing, relative to their size
+        (:func:`books_gap`); a report notes it above :data:`BOOKS_NOTE`."""
+        return books_gap(self)
+
+    @property
+    def books_noted(self) -> bool:
+        """Whether :attr:`books_gap` exceeds :data:`BOOKS_NOTE`: the gait is resolved no
+        better than that (a report says so)."""
+        return self.books_gap > BOOKS_NOTE
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary (SI units)."""
         return {
@@ -842,7 +854,8 @@ def _polish(
     accurate map (``n`` steps, relative step ``sqrt(rtol)``, which balances truncation and
     integration noise); if that fails too, damped Newton with central differences takes over.
     """
-    from heelstrike.analysis.newton import NewtonStatus, newton_solve
+    from heelstrike.analysis.newton import newton_solve
+    from heelstrike.status import SolveStatus
 
     def residual(X: FloatArray) -> FloatArray:
         return np.stack([prob.residual(x, value) for x in X])
@@ -851,7 +864,7 @@ def _polish(
         residual, x0, tol=tol, max_iter=max_iter, fd_step=max(h, float(np.sqrt(prob.rtol))),
         jacobian="chord", jacobian0=J0[None], contraction=0.2, jacobian_at_root=False,
     )
-    if sol.status[0] is NewtonStatus.STEP_FAILED and sol.iterations[0] == 1:
+    if sol.status[0] is SolveStatus.STEP_FAILED and sol.iterations[0] == 1:
         raise PoweredGaitNotFoundError("the walker fails to take a step from the search's gait")
     if sol.converged[0]:
         return sol.x[0], float(sol.residual_norm[0]), int(sol.iterations[0])

@@ -86,13 +86,7 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     import numpy as np
 
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
-    from heelstrike.analysis.model_gaits import (
-        REFERENCE_SLOPE,
-        find_model_gaits,
-        hanging_links,
-        lock_torque_ranges,
-        two_sided_locks,
-    )
+    from heelstrike.analysis.model_gaits import REFERENCE_SLOPE, find_model_gaits, gait_locks
 
     walker = model_from_args(args)
     guess = None
@@ -108,11 +102,10 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     gait = gaits[0]
     d = gait.to_dict()
     d["model"] = walker.description.name
-    hanging = [hanging_links(walker, g.cycle.q, args.slope) for g in gaits]
-    d["hanging_links"] = list(hanging[0])
-    locks = lock_torque_ranges(walker, gait.cycle, backend=args.backend)
-    d["lock_torque_range"] = {k: list(v) for k, v in locks.items()}
-    two_sided = two_sided_locks(walker, locks)  # a one-sided knee stop could not hold them
+    hanging = [g.hanging_links for g in gaits]
+    d["hanging_links"] = list(gait.hanging_links)
+    locks = gait_locks(walker, gait.cycle, backend=args.backend)
+    d["lock_torque_range"] = {k: list(v) for k, v in locks.ranges.items()}
     # each gait's collision loss is its step's total (knee strikes included), as in d
     d["gaits"] = [_gait_summary(g.cycle) | {"collision_loss": g.collision_loss,
                                             "hanging_links": list(h)}
@@ -129,7 +122,7 @@ def _run_gait_model(args: argparse.Namespace) -> int:
                     "parameters and slope")
         print(f"heelstrike: note: no stable period-one gait found (not by the automatic "
               f"search{followed}); the least unstable gait found is shown", file=sys.stderr)
-    for name, (lo, hi) in two_sided.items():
+    for name, (lo, hi) in locks.two_sided.items():  # a one-sided knee stop could not hold
         print(f"heelstrike: note: the lock of '{name}' holds it with torques of both signs over "
               f"the step ({lo:+.4g} to {hi:+.4g} N m): the walker file's locks are two-sided "
               "latches; a knee stop that can only push could not hold it, and the knee would "
@@ -700,9 +693,7 @@ def _run_basin_model(args: argparse.Namespace) -> int:
     ))
     names = walker.section_names
     ia, ib = basin.axes
-    from heelstrike.analysis.model_gaits import hanging_links
-
-    hang = hanging_links(walker, walker.section_to_state(basin.fixed_point)[0], args.slope)
+    hang = basin.hanging_links
     if hang:
         print(f"heelstrike: note: in the gait the basin is built around, {hanging_text(hang)}: "
               "a gait of the hanging link, not of the upright one", file=sys.stderr)
@@ -839,40 +830,24 @@ def _run_map_model(args: argparse.Namespace) -> int:
         gmap, args, head,
         f"stable passive gaits of '{walker.description.name}'", f"({name}, slope)",
         [f"{name} = {v:8.4g}{'' if unit is None else ' ' + unit}" for v in values],
-        note=_hanging_cells_note(walker, name, values, gmap.dataset))
+        note=_hanging_cells_note(gmap))
 
 
-def _hanging_cells_note(walker: Any, name: str, values: Any, ds: Any) -> str | None:
+def _hanging_cells_note(gmap: Any) -> str | None:
     """Where the map's gaits carry a link described upright hanging (QA sweep 13: the torso
     walker's map followed its upright gaits, its bifurcation diagram a hanging-torso gait):
     a note, or None."""
     import numpy as np
 
-    from heelstrike.analysis.model_gaits import hanging_links, upright_links
-
-    fixed = ds["fixed_point"].values  # (values, slopes, section)
-    slopes = ds["slope"].values
-    links: set[str] = set()
-    cells = 0
-    for i, v in enumerate(values):
-        w = walker.replace(**{name: float(v)})
-        for j, slope in enumerate(slopes):
-            z = fixed[i, j]
-            if not np.all(np.isfinite(z)):
-                continue
-            hang = hanging_links(w, w.section_to_state(z)[0], float(slope))
-            if hang:
-                cells += 1
-                links.update(hang)
-    found = int(np.isfinite(fixed[..., 0]).sum())
-    if not cells:
-        upright = upright_links(walker)
-        if not (upright and found):
+    found = int(np.isfinite(gmap.dataset["fixed_point"].values[..., 0]).sum())
+    if not gmap.hanging_cells:
+        if not (gmap.upright_links and found):
             return None
-        return (f"in all {found} gaits found, {upright_text(upright)}: gaits of the upright "
-                f"link; {OTHER_POSTURE}")
-    return (f"in {cells} of the {found} gaits found, {hanging_text(sorted(links))}: gaits of "
-            "the hanging link, not of the upright one")
+        return (f"in all {found} gaits found, {upright_text(gmap.upright_links)}: gaits of "
+                f"the upright link; {OTHER_POSTURE}")
+    return (f"in {gmap.hanging_cells} of the {found} gaits found, "
+            f"{hanging_text(gmap.hanging_links)}: gaits of the hanging link, not of the upright "
+            "one")
 
 
 def _run_map(args: argparse.Namespace) -> int:

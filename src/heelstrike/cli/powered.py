@@ -192,7 +192,7 @@ def _run_powered(args: argparse.Namespace) -> int:
     unit = "m/s" if target == "speed" else "m"
     given = "the walker's declared target" if source == "walker" else source
     print(f"  target          {target.replace('_', ' ')} {value:g} {unit} ({given})")
-    from heelstrike.analysis.powered import BOOKS_NOTE, actuation_family, books_gap
+    from heelstrike.analysis.powered import actuation_family
 
     print(f"  {gait.parameter_name:15s} {gait.parameter:10.6g} {gait.parameter_unit} "
           f"({actuation_family(gait.actuation).parameter_meaning})")
@@ -214,10 +214,9 @@ def _run_powered(args: argparse.Namespace) -> int:
     print(f"    collision loss  {gait.collision_loss:12.6g} J (T_c{split})")
     print(f"    change of T + V {gait.energy_change:12.3e} J")
     print(f"    imbalance       {gait.energy_balance_error:12.3e} J")
-    gap = books_gap(gait)
-    if gap > BOOKS_NOTE:
-        print(f"  note: the books close to {gap:.1e} of the work only (change of T + V and "
-              "imbalance): the gait is resolved no better than that; tighter tolerances "
+    if gait.books_noted:
+        print(f"  note: the books close to {gait.books_gap:.1e} of the work only (change of "
+              "T + V and imbalance): the gait is resolved no better than that; tighter tolerances "
               "(find_powered_gait's tol, rtol, atol) would resolve it further")
     print(f"  cost of transport {gait.cost_of_transport:10.6g} (net actuator work / (m g L))")
     print(f"  eta             {gait.eta:10.6g} J/m")

@@ -86,6 +86,11 @@ class WalkStatus(StrEnum):
 
     ``NO_CONSISTENT_ASSIGNMENT`` and ``NO_LEG_SWAP`` are reported by the compiled phased
     kernels only and raised as errors by their Python wrappers, as the scipy backend does.
+
+    ``CONVERGED``, ``KEEPS_WALKING`` and ``INADMISSIBLE_START`` are the outcomes a basin of
+    attraction (:mod:`heelstrike.analysis.basin`) gives where a walk completed or was not
+    started; no simulation returns them. A basin stores the member codes, so code 0
+    (``COMPLETED``) means the same everywhere.
     """
 
     code: int
@@ -133,6 +138,20 @@ class WalkStatus(StrEnum):
     )
     NO_LEG_SWAP = ("no_leg_swap", 9, "no leg swap: the walker declares no link mirrors "
                    "(link.mirror), which a walk past its first heel strike needs")
+    CONVERGED = (
+        "converged", 10,
+        "came within the tolerance of the gait's fixed point (the walk stops there)",
+    )
+    KEEPS_WALKING = (
+        "keeps_walking", 11,
+        "took every step without coming within the tolerance of the gait's fixed point "
+        "(another attractor, or slow convergence)",
+    )
+    INADMISSIBLE_START = (
+        "inadmissible_start", 12,
+        "not walked: the trailing foot is on the ground and moving into it, a state no heel "
+        "strike leaves",
+    )
 
     @classmethod
     def from_code(cls, code: int) -> WalkStatus:

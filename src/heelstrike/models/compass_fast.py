@@ -44,30 +44,23 @@ from heelstrike._typing import FloatArray
 from heelstrike.core.fast import FastImpactResult, batched_impact, serial_and_parallel
 from heelstrike.core.impact import ImpactInputError
 from heelstrike.models.compass import CompassGait
+from heelstrike.status import SolveStatus
 
 tolerate_numba_cache_errors()  # numba's cache unwritable (full disk): run uncached
 
 __all__ = ["HeelStrikeImpact", "heel_strike_impact"]
 
 
-_OK = 0
-_NOT_FINITE = 1
-_BAD_MASS = 2
-_BAD_LENGTH = 3
-_BAD_COM = 4
-_BAD_RADIUS = 5
-_BAD_INERTIA = 6
-_SINGULAR = 7
-
-_MESSAGES = {
-    _NOT_FINITE: "an input contains non-finite values (nan or inf)",
-    _BAD_MASS: "hip_mass and leg_mass must be > 0 (kg)",
-    _BAD_LENGTH: "leg_length must be > 0 (m)",
-    _BAD_COM: "leg_com_from_hip must satisfy 0 < b < leg_length (m)",
-    _BAD_RADIUS: "foot_radius must satisfy 0 <= R <= leg_length (m)",
-    _BAD_INERTIA: "leg_inertia must be >= 0 (kg m^2)",
-    _SINGULAR: "reduced mass matrix is singular",
-}
+# Status codes the kernel writes: the codes of :class:`~heelstrike.status.SolveStatus` (plain
+# ints, compile-time constants for numba).
+_OK = SolveStatus.CONVERGED.code
+_NOT_FINITE = SolveStatus.NOT_FINITE.code
+_BAD_MASS = SolveStatus.BAD_MASS.code
+_BAD_LENGTH = SolveStatus.BAD_LENGTH.code
+_BAD_COM = SolveStatus.BAD_COM.code
+_BAD_RADIUS = SolveStatus.BAD_RADIUS.code
+_BAD_INERTIA = SolveStatus.BAD_INERTIA.code
+_SINGULAR = SolveStatus.SINGULAR_MASS_MATRIX.code
 
 # Order of the per-item inputs in the kernel's argument list.
 _INPUTS = (
@@ -385,5 +378,5 @@ def heel_strike_impact(
     ]
     return HeelStrikeImpact._make(
         batched_impact(_KERNELS, (*flat, q1_dot is None), batch, e, parallel,
-                       lambda _: _MESSAGES)
+                       lambda _: SolveStatus.messages_by_code())
     )

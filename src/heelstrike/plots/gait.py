@@ -384,7 +384,8 @@ def bifurcation_figure(
 
 
 # -- basin of attraction and stable-gait map ----------------------------------------------------
-#: Colour of each basin outcome, by name (:data:`~heelstrike.analysis.basin.OUTCOMES`).
+#: Colour of each basin outcome, by name (:data:`~heelstrike.analysis.basin.OUTCOMES`; the
+#: dataset holds their walk-status codes).
 _COLOURS = {
     "converged": "#1a9850",
     "keeps_walking": "#91cf60",
@@ -420,8 +421,14 @@ def basin_figure(basin: Basin) -> Figure:
     q3, q3d = ds[xname].values, ds[yname].values
     fig = _new_figure(7.5, 5.5)
     ax = fig.add_subplot()
-    cmap = ListedColormap([_COLOURS[name] for name in OUTCOMES])
-    norm = BoundaryNorm(np.arange(len(OUTCOMES) + 1) - 0.5, cmap.N)
+    # the dataset holds walk-status codes: colour each outcome's code (a code no basin gives,
+    # such as 0 = completed, is never drawn)
+    n_codes = max(s.code for s in OUTCOMES) + 1
+    colours = ["#ffffff"] * n_codes
+    for s in OUTCOMES:
+        colours[s.code] = _COLOURS[s]
+    cmap = ListedColormap(colours)
+    norm = BoundaryNorm(np.arange(n_codes + 1) - 0.5, cmap.N)
     # half a cell; a one-point axis gets a cell of 1 % of its value (or 0.01) to be visible
     dx = (q3[-1] - q3[0]) / max(len(q3) - 1, 1) / 2 or 0.01 * max(abs(float(q3[0])), 1.0)
     dy = (q3d[-1] - q3d[0]) / max(len(q3d) - 1, 1) / 2 or 0.01 * max(abs(float(q3d[0])), 1.0)

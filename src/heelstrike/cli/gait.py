@@ -77,7 +77,9 @@ def add_gait(sub: Any) -> None:
                    "write --guess=-0.27,1.09,-0.72 when Q3 is negative (with --model: the "
                    "walker's section coordinates)")
     add_backend_option(p, "step simulator: compiled numba kernels (default; generated from the "
-                       "walker file with --model) or the scipy reference", "compiled")
+                       "walker file with --model) or the scipy reference (the default for a "
+                       "walker file whose legs differ: its stride alternates two parameter "
+                       "sets)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=_run_gait)
 
@@ -95,14 +97,15 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     )
 
     walker = model_from_args(args)
+    backend = args.backend or ("compiled" if walker.supports("compiled") else "scipy")
     guess = None
     if args.guess is not None:
         guess = parse_floats(args.guess, "--guess", len(walker.section_names))
     try:
         # every start on the compiled backend, as the compass search (QA sweep 9: --model
         # compass listed 1 of its 2 gaits); the scipy reference's steps cost ~1000x more
-        gaits = find_model_gaits(walker, slope=args.slope, guess=guess, backend=args.backend,
-                                 every_start=args.backend == "compiled")
+        gaits = find_model_gaits(walker, slope=args.slope, guess=guess, backend=backend,
+                                 every_start=backend == "compiled")
     except GaitNotFoundError as exc:
         raise _no_gait(args.slope, exc) from exc
     gait = gaits[0]
@@ -110,7 +113,7 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     d["model"] = walker.description.name
     hanging = [hanging_links(walker, g.cycle.q, args.slope) for g in gaits]
     d["hanging_links"] = list(hanging[0])
-    locks = lock_torque_ranges(walker, gait.cycle, backend=args.backend)
+    locks = lock_torque_ranges(walker, gait.cycle, backend=backend)
     d["lock_torque_range"] = {k: list(v) for k, v in locks.items()}
     two_sided = two_sided_locks(walker, locks)  # a one-sided knee stop could not hold them
     # each gait's collision loss is its step's total (knee strikes included), as in d
@@ -147,10 +150,19 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     print_step_lines(c)
     print_impact_angle_line(c)
     print_stability_lines(c)
+    per = "step" if len(gait.steps) <= 1 else "stride"
+    if per == "stride":
+        print(f"  period: a stride of {len(gait.steps)} steps (the legs differ)")
     for imp in d["impacts"]:
-        print(f"  {imp['kind']:<15} T_c = {imp['T_c']:.6f} J")
-    print(f"  collision loss  {energy_text(gait.collision_loss)} J/step (sum of T_c)")
-    print(f"  energy released {energy_text(gait.potential_energy_released)} J/step (gravity)")
+        at = f" (step {imp['step']})" if per == "stride" else ""
+        print(f"  {imp['kind']:<15} T_c = {imp['T_c']:.6f} J{at}")
+    if per == "stride":
+        for b in gait.steps:
+            print(f"  step {b.step}: collision loss {energy_text(b.collision_loss)} J, energy "
+                  f"released {energy_text(b.potential_energy_released)} J, kinetic energy "
+                  f"gained {energy_text(b.kinetic_energy_gained)} J")
+    print(f"  collision loss  {energy_text(gait.collision_loss)} J/{per} (sum of T_c)")
+    print(f"  energy released {energy_text(gait.potential_energy_released)} J/{per} (gravity)")
     print(f"  eta             {energy_text(gait.eta)} J/m")
     return 0
 
@@ -246,11 +258,11 @@ def _run_gait(args: argparse.Namespace) -> int:
     try:
         if guess is None:
             gaits = find_limit_cycles(
-                walker, slope=args.slope, method=args.backend, progress=True
+                walker, slope=args.slope, method=args.backend or "compiled", progress=True
             )
         else:
             gaits = (find_limit_cycle(walker, slope=args.slope, guess=guess,
-                                      method=args.backend),)
+                                      method=args.backend or "compiled"),)
     except GaitNotFoundError as exc:
         raise _no_gait(args.slope, exc) from exc
     cycle = gaits[0]

@@ -816,6 +816,11 @@ def simulate(
     events_out: list[PhasedImpact] = []
     t, work, stance = 0.0, 0.0, 0
     status = WalkStatus.COMPLETED
+    # a walker whose legs differ alternates with the walker after its leg swap
+    # (PlanarWalker.after_swap); each step's samples keep the energy of the step's walker
+    alternating = walker.after_swap() is not walker
+    schedules = {id(walker): schedule}
+    energy_s: list[FloatArray] = []
 
     for k in range(steps):
         t_step, work_start = t, work
@@ -851,6 +856,9 @@ def simulate(
                 q_s.append(qs[first:])
                 qd_s.append(qds[first:])
                 w_s.append(raw.x[first:, -1])
+                if alternating:
+                    energy_s.append(np.asarray(walker.mechanical_energy(
+                        qs[first:], qds[first:], slope)))
                 leg_s.append(np.full(len(raw.t) - first, stance))
                 step_s.append(np.full(len(raw.t) - first, k))
                 phase_s.append(np.full(len(raw.t) - first, phase.name))
@@ -918,6 +926,15 @@ def simulate(
             qd = qd_plus
             break
         q, qd = walker.swap_legs(q, qd_plus)
+        next_walker = walker.after_swap()
+        if next_walker is not walker:
+            walker = next_walker
+            if id(walker) not in schedules:
+                schedules[id(walker)] = walker.step_schedule(
+                    knee_flex_threshold=knee_flex_threshold)
+            schedule = schedules[id(walker)]
+            leg_length = float(walker.scale.leg_length)
+            lock_angle = dict(schedule.lock_angles)
         for j, a in schedule.lock_angles:  # exact lock angles after relabelling (swap round-off)
             q[j] = a
             qd[j] = 0.0
@@ -940,5 +957,6 @@ def simulate(
         slope=float(slope),
         events=tuple(events_out),
         phase=np.concatenate(phase_s),
-        mechanical_energy=np.asarray(walker.mechanical_energy(q_all, qd_all, slope)),
+        mechanical_energy=(np.concatenate(energy_s) if alternating
+                           else np.asarray(walker.mechanical_energy(q_all, qd_all, slope))),
     )

@@ -362,7 +362,9 @@ class LinkSpec:
     length : float or str
         Distance (m) from the proximal to the distal point, > 0.
     mass : float or str
-        Mass (kg), > 0.
+        Mass (kg), >= 0: a massless link (a rod carrying a point mass) is accepted where the
+        mass matrix stays positive definite
+        (:meth:`~heelstrike.models.builder.BuiltWalker.check_mass_matrix`).
     com, com_offset : float or str
         Centre of mass along the link from the proximal point and forward offset (m).
     inertia : float or str
@@ -509,6 +511,11 @@ class WalkerDescription:
     powered : PoweredSpec or None
         The declared default powered target (``[powered]``), or None; not part of the
         derivation.
+    swap : tuple of (str, str)
+        The ``[swap]`` table of a walker whose legs differ: pairs ``(k, j)``, sorted, meaning
+        that after the leg swap parameter ``k`` takes the value ``j`` had (the stance leg's
+        parameters become the swing leg's and back; an involution, listed both ways). Empty
+        when the leg swap is a symmetry of the walker as written. Not part of the derivation.
     source : str
         Where the description came from (file path or ``"<dict>"``); not part of the model.
     """
@@ -521,6 +528,7 @@ class WalkerDescription:
     constraints: tuple[str, ...] = ()
     control: tuple[PostureLawSpec, ...] = ()
     powered: PoweredSpec | None = None
+    swap: tuple[tuple[str, str], ...] = ()
     source: str = field(default="<dict>", compare=False)
 
     @property
@@ -596,6 +604,7 @@ class WalkerDescription:
         d.pop("constraints")
         d.pop("control")
         d.pop("powered")
+        d.pop("swap")
         d["params"] = [k for k, _ in self.params]
         return json.dumps(d, sort_keys=True, default=str)
 
@@ -623,8 +632,10 @@ class WalkerDescription:
             raise ModelDescriptionError("params.g: must be > 0")
         for i, lk in enumerate(self.links):
             p = f"link[{i}]"
-            if not np.all(ev(lk.mass, f"{p}.mass") > 0):
-                raise ModelDescriptionError(f"{p}.mass: must be > 0")
+            if not np.all(ev(lk.mass, f"{p}.mass") >= 0):
+                raise ModelDescriptionError(
+                    f"{p}.mass: must be > 0, or 0 for a massless link (a rod carrying a point "
+                    "mass)")
             if not np.all(ev(lk.length, f"{p}.length") > 0):
                 raise ModelDescriptionError(f"{p}.length: must be > 0")
             if not np.all(ev(lk.inertia, f"{p}.inertia") >= 0):
@@ -770,6 +781,7 @@ _TOP_KEYS = {
     "reference",
     "control",
     "powered",
+    "swap",
 }
 _POWERED_KEYS = {"speed"}
 _POWERED_REQUIRED = ("speed",)
@@ -830,7 +842,8 @@ def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> Wal
         Top-level keys ``name``, ``params``, ``link`` (list), ``foot`` (list of two) and
         optionally ``point_mass`` (list), ``constraints``, ``control`` (declared posture laws,
         :class:`PostureLawSpec`), ``powered`` (the default powered target,
-        :class:`PoweredSpec`), ``description``, ``reference`` (free text).
+        :class:`PoweredSpec`), ``swap`` (the parameters the leg swap exchanges, for a walker
+        whose legs differ), ``description``, ``reference`` (free text).
     source : str
         Origin, for messages.
 
@@ -1033,6 +1046,7 @@ def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> Wal
 
     control = _parse_control(top.get("control", {}), params, links, roots[0])
     powered = _parse_powered(top["powered"]) if "powered" in top else None
+    swap = _parse_swap(top.get("swap", {}), params, links)
 
     desc = WalkerDescription(
         name=name,
@@ -1043,6 +1057,7 @@ def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> Wal
         constraints=constraints,
         control=control,
         powered=powered,
+        swap=swap,
         source=source,
     )
     seen_points: set[str] = set()
@@ -1108,6 +1123,37 @@ def _parse_control(
             )
         )
     return tuple(out)
+
+
+def _parse_swap(
+    raw: Any, params: Mapping[str, float], links: list[LinkSpec]
+) -> tuple[tuple[str, str], ...]:
+    """Validate the optional ``[swap]`` table: ``k = "j"`` says that after the leg swap the
+    parameter ``k`` takes the value ``j`` had. A pair given one way is completed the other way
+    (the swap is an involution); both must be parameters, and mirrors must be declared."""
+    tab = _table(raw, "swap")
+    pairs: dict[str, str] = {}
+    for k, v in tab.items():
+        p = f"swap.{k}"
+        if k not in params:
+            raise ModelDescriptionError(f"{p}: unknown parameter {k!r}")
+        if not isinstance(v, str) or v not in params:
+            raise ModelDescriptionError(
+                f"{p}: must name the parameter whose value {k!r} takes after the leg swap "
+                f"(one of {sorted(params)}), got {v!r}")
+        if k == "g" or v == "g":
+            raise ModelDescriptionError(f"{p}: gravity 'g' belongs to no leg")
+        for a, b in ((k, v), (v, k)):
+            if pairs.get(a, b) != b:
+                raise ModelDescriptionError(
+                    f"{p}: {a!r} is swapped with both {pairs[a]!r} and {b!r} (the swap "
+                    "exchanges parameters in pairs)")
+            pairs[a] = b
+    if pairs and not any(lk.mirror is not None for lk in links):
+        raise ModelDescriptionError(
+            "swap: the walker declares no link mirrors, so it has no leg swap to exchange "
+            "parameters at")
+    return tuple(sorted((k, v) for k, v in pairs.items() if k != v))
 
 
 def _parse_powered(raw: Any) -> PoweredSpec:

@@ -147,12 +147,13 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     if hanging[0]:
         print(f"  note: {hanging_text(hanging[0])} in this gait: a gait of the hanging link, "
               "not of the upright one")
+    per = "step" if len(gait.steps) <= 1 else "stride"
+    if per == "stride":
+        print(f"  the period is a stride of {len(gait.steps)} steps (the legs differ): period, "
+              "step length and speed are the stride's, the impact angle its first step's")
     print_step_lines(c)
     print_impact_angle_line(c)
     print_stability_lines(c)
-    per = "step" if len(gait.steps) <= 1 else "stride"
-    if per == "stride":
-        print(f"  period: a stride of {len(gait.steps)} steps (the legs differ)")
     for imp in d["impacts"]:
         at = f" (step {imp['step']})" if per == "stride" else ""
         print(f"  {imp['kind']:<15} T_c = {imp['T_c']:.6f} J{at}")
@@ -334,7 +335,9 @@ def _walk_model(args: argparse.Namespace, walker: Any, out: Any, to_dir: bool) -
     from heelstrike.outputs import write_model_walk_figures
     from heelstrike.plots.gait import animate_model_walk
 
-    backend = args.backend or "compiled"
+    # compiled by default; a walker whose legs differ (its stride alternates two parameter
+    # sets) runs on the scipy reference only
+    backend = args.backend or ("compiled" if walker.supports("compiled") else "scipy")
     if args.guess is not None:
         z = parse_floats(args.guess, "--guess", len(walker.section_names))
     else:

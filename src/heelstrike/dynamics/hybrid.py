@@ -754,7 +754,10 @@ def simulate(
     stage by stage until the stage's guard fires, the knee strikes (an inert impact with
     ``A = [A_R; lock rows]``) and the heel strike (``[A_L; lock rows]`` by the paper's
     projector, eq. 13, with the trailing foot decided by the schedule's rule); then the legs
-    are relabelled and the locks reset exactly.
+    are relabelled and the locks reset exactly. The next step is taken by
+    :meth:`walker.after_swap() <heelstrike.models.base.PlanarWalker.after_swap>`: the walker
+    itself, or for a walker whose legs differ the walker with the other leg in stance (the two
+    alternate; each sample's ``mechanical_energy`` is that of the walker taking its step).
 
     Parameters
     ----------

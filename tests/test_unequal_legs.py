@@ -244,3 +244,18 @@ def test_walk_tables_use_the_walker_of_each_step(amputee_gait: ModelGait) -> Non
     odd = np.asarray(walk.step) == 1
     wrong = w.mechanical_energy(walk.q[odd], walk.q_dot[odd], SLOPE)
     assert np.ptp(wrong) > 1e-3 * scale
+
+
+def test_the_docs_page_shows_the_example_file(tmp_path: Path) -> None:
+    """docs/walker_files.rst shows examples/walkers/amputee.toml (comments aside): the same
+    parameters, links, feet, point masses and swap."""
+    from heelstrike.models.description import read_description
+
+    page = (AMPUTEE.parents[2] / "docs" / "walker_files.rst").read_text(encoding="utf-8")
+    start = page.index('    name = "amputee"')
+    block = page[start:page.index("\nWhat is refused", start)]
+    shown = tmp_path / "amputee.toml"
+    shown.write_text("\n".join(line[4:] for line in block.splitlines()), encoding="utf-8")
+    a, b = read_description(shown), read_description(AMPUTEE)
+    assert (a.params, a.links, a.feet, a.point_masses, a.swap, a.constraints) == \
+        (b.params, b.links, b.feet, b.point_masses, b.swap, b.constraints)

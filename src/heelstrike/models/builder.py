@@ -479,7 +479,6 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         """The named parameter vector (read-only), in the description's parameter order."""
         return MappingProxyType({k: self._values[k] for k in self.description.param_names})
 
-
     @property
     def powered_speed(self) -> float | None:
         """The walker file's ``[powered] speed`` (m/s), or None if it declares none."""

@@ -183,7 +183,8 @@ def test_cli_gait_model_walks_the_stride(capsys: pytest.CaptureFixture[str]) -> 
     assert d["steps_per_period"] == 2 and len(d["steps"]) == 2
     assert abs(d["collision_loss"] - d["potential_energy_released"]) < 1e-7
     assert main(["gait", "--model", str(AMPUTEE), "--backend", "compiled"]) == 2
-    assert "'scipy'" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "'scipy'" in err and "its legs differ" in err
 
 
 # -- refused files ------------------------------------------------------------------------------
@@ -259,3 +260,16 @@ def test_the_docs_page_shows_the_example_file(tmp_path: Path) -> None:
     a, b = read_description(shown), read_description(AMPUTEE)
     assert (a.params, a.links, a.feet, a.point_masses, a.swap, a.constraints) == \
         (b.params, b.links, b.feet, b.point_masses, b.swap, b.constraints)
+
+
+def test_powered_gaits_of_a_stride_walker_are_refused() -> None:
+    """The powered step map is one step of one walker: for a walker whose legs differ its
+    fixed point would be no gait (the next step is another walker's), so it is refused."""
+    from heelstrike.analysis.powered import powered_step
+
+    w = load_phased_walker(AMPUTEE)
+    with pytest.raises(ValueError, match=r"^powered gaits of a walker whose legs differ"):
+        powered_step(w, [-0.27, 1.09, -0.72], None, None)
+    same = load_phased_walker(AMPUTEE, **EQUAL)
+    step = powered_step(same, [-0.27, 1.09, -0.72], None, None, slope=SLOPE)
+    assert np.all(np.isfinite(step.z_next))

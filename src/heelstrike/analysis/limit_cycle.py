@@ -80,6 +80,13 @@ class PoincareMap:
         ``"scipy"``: :func:`~heelstrike.dynamics.hybrid.simulate` (any walker, actuation);
         ``"compiled"``: :func:`~heelstrike.dynamics.compiled.step_map_compiled` for ``P(z)``
         (passive :class:`~heelstrike.models.CompassGait` only; ``walk`` still uses scipy).
+
+    Notes
+    -----
+    ``P`` maps one period: :attr:`~heelstrike.models.base.PlanarWalker.steps_per_period`
+    steps, one for a walker whose leg swap is a symmetry, two (the stride map: a step on each
+    leg, the walker alternating with :meth:`~heelstrike.models.base.PlanarWalker.after_swap`)
+    for a walker whose legs differ.
     """
 
     walker: PlanarWalker
@@ -98,6 +105,10 @@ class PoincareMap:
     def __post_init__(self) -> None:
         check_backend_name(self.method, "method")
         check_one_walker(self.walker)
+        if self.method == "compiled" and self.walker.steps_per_period != 1:
+            raise ValueError(
+                "method='compiled' maps one step of one walker; this walker's legs differ "
+                "(steps_per_period 2: its map is the stride map): use method='scipy'")
         object.__setattr__(self, "slope", check_slope(self.slope))
         check_tolerances(self.rtol, self.atol)
         if self.method == "compiled" and (self.torque is not None or self.push_off is not None):
@@ -134,7 +145,7 @@ class PoincareMap:
                 atol=self.atol,
                 max_step_duration=self.max_step_duration,
             ).z
-        res = self.walk(z, 1)
+        res = self.walk(z, self.walker.steps_per_period)
         if not res.ok:
             return np.full(np.shape(z), np.nan)
         return np.asarray(self.walker.state_to_section(res.final_q, res.final_q_dot))
@@ -217,13 +228,13 @@ class _WalkField:
 
 @dataclass(frozen=True, kw_only=True)
 class _OneStep:
-    """``pmap.walk(z, 1)`` deferred (picklable, unlike a closure)."""
+    """``pmap.walk(z, steps_per_period)`` deferred (picklable, unlike a closure)."""
 
     pmap: PoincareMap
     z: FloatArray
 
     def __call__(self) -> WalkResult:
-        return self.pmap.walk(self.z, 1)
+        return self.pmap.walk(self.z, self.pmap.walker.steps_per_period)
 
 
 #: Fewest samples of a step's walk from which :func:`leg_crossings` counts. The samples are the
@@ -246,7 +257,8 @@ def leg_crossings(walker: PlanarWalker, walk: WalkResult) -> int | None:
     ----------
     walker : PlanarWalker
     walk : WalkResult
-        One step, sampled (``walk.q``, shape (N, n)).
+        One step, sampled (``walk.q``, shape (N, n)); for a walk of several steps (the stride
+        of a walker whose legs differ) the most crossings of any one step.
 
     Returns
     -------
@@ -256,7 +268,13 @@ def leg_crossings(walker: PlanarWalker, walk: WalkResult) -> int | None:
     q = np.asarray(walk.q, dtype=float)
     if q.ndim != 2:
         return None
-    return _sign_changes(q[:, walker.hip_joint])
+    step = getattr(walk, "step", None)
+    if step is None or np.size(step) != q.shape[0] or np.unique(step).size < 2:
+        return _sign_changes(q[:, walker.hip_joint])
+    # a stride (a walker whose legs differ): the most crossings of any of its steps
+    counts = [_sign_changes(q[np.asarray(step) == k, walker.hip_joint])
+              for k in np.unique(step)]
+    return None if any(c is None for c in counts) else max(cast(list[int], counts))
 
 
 def _sign_changes(hip_angles: ArrayLike) -> int | None:
@@ -280,7 +298,11 @@ class LimitCycle(ResultDictMixin):
     q, q_dot : ndarray, shape (n,)
         Full post-impact state (stance contact at x = 0).
     period : float
-        Step duration (s).
+        Step duration (s): the duration of the period of
+        :attr:`~heelstrike.models.base.PlanarWalker.steps_per_period` steps (the stride, two
+        steps, for a walker whose legs differ; then ``step_length``, the energies of the
+        step and ``collision_loss`` are the stride's too, and ``impact_angle``, ``T`` and
+        ``T_a`` those of its first heel strike).
     step_length : float
         Distance walked along the ground per step (m).
     speed : float
@@ -913,16 +935,18 @@ def _characterise(
             max_step_duration=pmap.max_step_duration,
         )
         return _characterise_compiled(pmap, z, step.step_time, mult, residual, iterations)
-    walk = pmap.walk(z, 1)
-    rec = walk.impacts[0]
+    walk = pmap.walk(z, walker.steps_per_period)
+    recs = walk.impacts
+    rec = recs[0]
     return _cycle(
-        pmap, z, mult, period=rec.step_duration, step_length=rec.step_length,
-        impact_angle=rec.impact_angle, collision_loss=rec.energy_lost,
+        pmap, z, mult, period=sum(r.step_duration for r in recs),
+        step_length=sum(r.step_length for r in recs),
+        impact_angle=rec.impact_angle, collision_loss=sum(r.energy_lost for r in recs),
         kinetic_energy_pre=rec.kinetic_energy,
         kinetic_energy_admissible=rec.kinetic_energy_admissible,
-        potential_energy_released=rec.potential_energy_released,
-        actuator_work=rec.actuator_work, residual=residual, iterations=iterations, walk=walk,
-        leg_crossings=leg_crossings(walker, walk),
+        potential_energy_released=sum(r.potential_energy_released for r in recs),
+        actuator_work=sum(r.actuator_work for r in recs), residual=residual,
+        iterations=iterations, walk=walk, leg_crossings=leg_crossings(walker, walk),
     )
 
 

@@ -61,6 +61,7 @@ __all__ = [
     "ImpactMap",
     "ModelGait",
     "ModelHeelStrike",
+    "StepBook",
     "check_impact_map_memory",
     "find_model_gait",
     "find_model_gaits",
@@ -80,27 +81,68 @@ ANGLE = "angle"
 
 # -- gaits --------------------------------------------------------------------------------------
 @dataclass(frozen=True, kw_only=True)
+class StepBook(ResultDictMixin):
+    """The energy book of one step of a gait's period (Font & Kövecses 2008, eqs. 14-15).
+
+    Attributes
+    ----------
+    step : int
+        Step index in the period (0-based; 0 and 1 for the stride of a walker whose legs
+        differ, leg A then leg B in stance).
+    duration : float
+        Step duration (s).
+    step_length : float
+        Distance walked along the ground (m).
+    collision_loss : float
+        Sum of ``T_c`` over the step's impacts (knee strikes and its heel strike) (J).
+    potential_energy_released : float
+        Potential energy released from the step's start to its heel strike (J).
+    actuator_work : float
+        Actuator work in the step, push-off included (J).
+    kinetic_energy_gained : float
+        ``actuator_work + potential_energy_released - collision_loss`` (J): the kinetic
+        energy the step hands on to the next (just after its heel strike minus just after the
+        previous one); zero on each step of a symmetric walker's gait, opposite on the two
+        steps of a stride.
+    """
+
+    step: int
+    duration: float
+    step_length: float
+    collision_loss: float
+    potential_energy_released: float
+    actuator_work: float
+    kinetic_energy_gained: float
+
+
+@dataclass(frozen=True, kw_only=True)
 class ModelGait(ResultDictMixin):
     """A period-one gait of a described walker with its energy book.
+
+    The period is :attr:`~heelstrike.models.base.PlanarWalker.steps_per_period` steps: one,
+    or for a walker whose legs differ the stride (a step on each leg), whose totals are given
+    here and each step's book in ``steps``.
 
     Attributes
     ----------
     cycle : LimitCycle
-        Fixed point, period, multipliers... (``cycle.collision_loss`` is the heel strike's only).
+        Fixed point, period, multipliers... (``cycle.collision_loss`` is the heel strikes' only).
     impacts : tuple of PhasedImpact
-        Every impact of one period (knee strikes, then the heel strike).
+        Every impact of one period (knee strikes, then the heel strike, step by step).
     collision_loss : float
-        Sum of ``T_c`` over the step's impacts (J).
+        Sum of ``T_c`` over the period's impacts (J).
     actuator_work : float
-        Actuator work per step, push-off included (J).
+        Actuator work per period, push-off included (J).
     potential_energy_released : float
-        Potential energy released per step (J).
+        Potential energy released per period (J).
     energy_residual : float
         ``actuator_work + potential_energy_released - collision_loss`` (J); ~0 on the gait.
     hanging_links : tuple of str
         The links described upright that the gait carries hanging, at its post-impact
         configuration (:func:`hanging_links`): a gait of the hanging link, not of the upright
         one. Empty for walkers without such links.
+    steps : tuple of StepBook
+        The energy book of each step of the period.
     """
 
     cycle: LimitCycle
@@ -110,6 +152,7 @@ class ModelGait(ResultDictMixin):
     potential_energy_released: float
     energy_residual: float
     hanging_links: tuple[str, ...] = ()
+    steps: tuple[StepBook, ...] = ()
 
     @property
     def eta(self) -> float:
@@ -132,9 +175,12 @@ class ModelGait(ResultDictMixin):
                 "T_c": e.kinetic_energy_constrained,
                 "T_a": e.kinetic_energy_admissible,
                 "time": e.time,
+                "step": e.step,
             }
             for e in self.impacts
         ]
+        d["steps_per_period"] = len(self.steps)
+        d["steps"] = [b.to_dict() for b in self.steps]
         return d
 
 
@@ -178,16 +224,28 @@ def _energy_book(cycle: LimitCycle, walker: PlanarWalker) -> ModelGait:
     walk = cycle.walk
     assert isinstance(walk, PhasedWalkResult)
     impacts = walk.events
-    loss = float(sum(e.kinetic_energy_constrained for e in impacts))
-    rec = walk.impacts[0]
+    books = []
+    for rec in walk.impacts:
+        lost = float(sum(e.kinetic_energy_constrained for e in impacts if e.step == rec.step))
+        books.append(StepBook(
+            step=int(rec.step), duration=float(rec.step_duration),
+            step_length=float(rec.step_length), collision_loss=lost,
+            potential_energy_released=float(rec.potential_energy_released),
+            actuator_work=float(rec.actuator_work),
+            kinetic_energy_gained=float(rec.actuator_work + rec.potential_energy_released
+                                        - lost)))
+    loss = float(sum(b.collision_loss for b in books))
+    work = float(sum(b.actuator_work for b in books))
+    released = float(sum(b.potential_energy_released for b in books))
     return ModelGait(
         cycle=cycle,
         impacts=impacts,
         collision_loss=loss,
-        actuator_work=rec.actuator_work,
-        potential_energy_released=rec.potential_energy_released,
-        energy_residual=rec.actuator_work + rec.potential_energy_released - loss,
+        actuator_work=work,
+        potential_energy_released=released,
+        energy_residual=work + released - loss,
         hanging_links=hanging_links(walker, cycle.q, cycle.slope),
+        steps=tuple(books),
     )
 
 

@@ -407,7 +407,20 @@ def powered_step(
     (to round-off) trailing-foot velocity is accepted only when ``R = l``. ``simulator`` is a
     step simulator with :func:`~heelstrike.dynamics.hybrid.simulate`'s signature (None: that
     function), e.g. :func:`~heelstrike.dynamics.phased.simulate_phased` for described walkers.
+
+    Raises
+    ------
+    ValueError
+        For a walker whose legs differ
+        (:attr:`~heelstrike.models.base.PlanarWalker.steps_per_period` 2): its powered gait
+        would be a stride of two differently actuated steps, which this step map does not
+        model.
     """
+    if walker.steps_per_period != 1:
+        raise ValueError(
+            "powered gaits of a walker whose legs differ (steps_per_period 2) are not "
+            "supported: the powered map is one step of one walker; its passive gaits on a "
+            "slope are (heelstrike gait --model FILE)")
     z_ = np.asarray(z, dtype=float)
     q, qd = walker.section_to_state(z_)
     E0 = float(mechanical_energy(walker, q, qd))

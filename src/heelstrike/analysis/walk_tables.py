@@ -49,6 +49,27 @@ def _check_walk(walk: WalkResult, step: int | None = None) -> None:
         raise ValueError(f"the walk has no samples in step {step} (steps 0..{walk.step.max()})")
 
 
+def _walker_of_step(walker: PlanarWalker, step: int) -> PlanarWalker:
+    """The walker that takes step ``step`` of a walk started by ``walker``: itself, or for a
+    walker whose legs differ the walker after its leg swap on odd steps
+    (:meth:`~heelstrike.models.base.PlanarWalker.after_swap`)."""
+    return walker if step % 2 == 0 else walker.after_swap()
+
+
+def _sample_energies(walker: PlanarWalker, walk: WalkResult) -> tuple[FloatArray, FloatArray]:
+    """Kinetic and potential energy (J) of every sample of ``walk``, each with the walker
+    taking the sample's step, shapes (N,)."""
+    q, qd = walk.q, walk.q_dot
+    T = np.array(walker.kinetic_energy(q, qd), dtype=float)
+    U = np.array(walker.potential_energy(q, walk.slope), dtype=float)
+    other = walker.after_swap()
+    if other is not walker:
+        odd = np.asarray(walk.step) % 2 == 1
+        T[odd] = other.kinetic_energy(q[odd], qd[odd])
+        U[odd] = other.potential_energy(q[odd], walk.slope)
+    return T, U
+
+
 def walk_energy_table(walker: PlanarWalker, walk: WalkResult) -> pd.DataFrame:
     """Kinetic, potential and total mechanical energy at every sample of a walk.
 
@@ -67,12 +88,12 @@ def walk_energy_table(walker: PlanarWalker, walk: WalkResult) -> pd.DataFrame:
         ``total_J`` (J). The potential energy is the walker's
         :meth:`~heelstrike.models.CompassGait.potential_energy` on the walk's slope. At a heel
         strike two rows share the impact time: the last sample of a step (just before the
-        impact) and the first of the next (just after it, legs relabelled).
+        impact) and the first of the next (just after it, legs relabelled). For a walker whose
+        legs differ the odd steps' energies are those of the walker after the leg swap (the
+        walker that takes them).
     """
     _check_walk(walk)
-    q, qd = walk.q, walk.q_dot
-    T = np.asarray(walker.kinetic_energy(q, qd), dtype=float)
-    U = np.asarray(walker.potential_energy(q, walk.slope), dtype=float)
+    T, U = _sample_energies(walker, walk)
     return pd.DataFrame(
         {"t_s": walk.t, "step": walk.step, "kinetic_J": T, "potential_J": U,
          "total_J": T + U}
@@ -115,7 +136,8 @@ def walk_impact_table(walker: PlanarWalker, walk: WalkResult) -> pd.DataFrame:
         If the walk has no samples, or its samples do not split into one stretch per impact.
     """
     _check_walk(walk)
-    E = np.asarray(walker.mechanical_energy(walk.q, walk.q_dot, walk.slope), dtype=float)
+    T_s, U_s = _sample_energies(walker, walk)
+    E = T_s + U_s
     impacts = _impacts(walk)
     # the samples split into stretches between impacts: a heel strike starts a new step, a
     # knee strike a new phase of the same step (both sides of an impact are sampled)
@@ -132,7 +154,10 @@ def walk_impact_table(walker: PlanarWalker, walk: WalkResult) -> pd.DataFrame:
             before, after = float(E[last[i]]), float(E[last[i] + 1])
         else:  # nothing sampled after the walk's last impact
             before = float(E[-1])
-            after = float(walker.mechanical_energy(walk.final_q, walk.final_q_dot, walk.slope))
+            # after a heel strike with its leg swap the final state is the next step's
+            swapped = kind == "heel_strike" and walk.ok
+            final = _walker_of_step(walker, step + 1 if swapped else step)
+            after = float(final.mechanical_energy(walk.final_q, walk.final_q_dot, walk.slope))
         rows.append(
             {
                 "step": step,

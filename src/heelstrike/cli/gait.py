@@ -77,7 +77,9 @@ def add_gait(sub: Any) -> None:
                    "write --guess=-0.27,1.09,-0.72 when Q3 is negative (with --model: the "
                    "walker's section coordinates)")
     add_backend_option(p, "step simulator: compiled numba kernels (default; generated from the "
-                       "walker file with --model) or the scipy reference", "compiled")
+                       "walker file with --model) or the scipy reference (the default for a "
+                       "walker file whose legs differ: its stride alternates two parameter "
+                       "sets)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=_run_gait)
 
@@ -89,14 +91,15 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     from heelstrike.analysis.model_gaits import REFERENCE_SLOPE, find_model_gaits, gait_locks
 
     walker = model_from_args(args)
+    backend = args.backend or ("compiled" if walker.supports("compiled") else "scipy")
     guess = None
     if args.guess is not None:
         guess = parse_floats(args.guess, "--guess", len(walker.section_names))
     try:
         # every start on the compiled backend, as the compass search (QA sweep 9: --model
         # compass listed 1 of its 2 gaits); the scipy reference's steps cost ~1000x more
-        gaits = find_model_gaits(walker, slope=args.slope, guess=guess, backend=args.backend,
-                                 every_start=args.backend == "compiled")
+        gaits = find_model_gaits(walker, slope=args.slope, guess=guess, backend=backend,
+                                 every_start=backend == "compiled")
     except GaitNotFoundError as exc:
         raise _no_gait(args.slope, exc) from exc
     gait = gaits[0]
@@ -104,7 +107,7 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     d["model"] = walker.description.name
     hanging = [g.hanging_links for g in gaits]
     d["hanging_links"] = list(gait.hanging_links)
-    locks = gait_locks(walker, gait.cycle, backend=args.backend)
+    locks = gait_locks(walker, gait.cycle, backend=backend)
     d["lock_torque_range"] = {k: list(v) for k, v in locks.ranges.items()}
     # each gait's collision loss is its step's total (knee strikes included), as in d
     d["gaits"] = [_gait_summary(g.cycle) | {"collision_loss": g.collision_loss,
@@ -137,13 +140,23 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     if hanging[0]:
         print(f"  note: {hanging_text(hanging[0])} in this gait: a gait of the hanging link, "
               "not of the upright one")
+    per = "step" if len(gait.steps) <= 1 else "stride"
+    if per == "stride":
+        print(f"  the period is a stride of {len(gait.steps)} steps (the legs differ): period, "
+              "step length and speed are the stride's, the impact angle its first step's")
     print_step_lines(c)
     print_impact_angle_line(c)
     print_stability_lines(c)
     for imp in d["impacts"]:
-        print(f"  {imp['kind']:<15} T_c = {imp['T_c']:.6f} J")
-    print(f"  collision loss  {energy_text(gait.collision_loss)} J/step (sum of T_c)")
-    print(f"  energy released {energy_text(gait.potential_energy_released)} J/step (gravity)")
+        at = f" (step {imp['step']})" if per == "stride" else ""
+        print(f"  {imp['kind']:<15} T_c = {imp['T_c']:.6f} J{at}")
+    if per == "stride":
+        for b in gait.steps:
+            print(f"  step {b.step}: collision loss {energy_text(b.collision_loss)} J, energy "
+                  f"released {energy_text(b.potential_energy_released)} J, kinetic energy "
+                  f"gained {energy_text(b.kinetic_energy_gained)} J")
+    print(f"  collision loss  {energy_text(gait.collision_loss)} J/{per} (sum of T_c)")
+    print(f"  energy released {energy_text(gait.potential_energy_released)} J/{per} (gravity)")
     print(f"  eta             {energy_text(gait.eta)} J/m")
     return 0
 
@@ -239,11 +252,11 @@ def _run_gait(args: argparse.Namespace) -> int:
     try:
         if guess is None:
             gaits = find_limit_cycles(
-                walker, slope=args.slope, method=args.backend, progress=True
+                walker, slope=args.slope, method=args.backend or "compiled", progress=True
             )
         else:
             gaits = (find_limit_cycle(walker, slope=args.slope, guess=guess,
-                                      method=args.backend),)
+                                      method=args.backend or "compiled"),)
     except GaitNotFoundError as exc:
         raise _no_gait(args.slope, exc) from exc
     cycle = gaits[0]
@@ -317,7 +330,8 @@ def _walk_model(args: argparse.Namespace, walker: Any, out: Any, to_dir: bool) -
     from heelstrike.plots.gait import animate_model_walk
 
     # the default: compiled where the walker runs on it (a walker file declaring its heel
-    # strike, e.g. wheel.toml, runs on the scipy reference only)
+    # strike, e.g. wheel.toml, and a walker whose legs differ, its stride alternating two
+    # parameter sets, run on the scipy reference only)
     backend = args.backend or ("compiled" if walker.supports("compiled") else "scipy")
     if args.guess is not None:
         z = parse_floats(args.guess, "--guess", len(walker.section_names))

@@ -775,7 +775,10 @@ def simulate(
     stage by stage until the stage's guard fires, the knee strikes (an inert impact with
     ``A = [A_R; lock rows]``) and the heel strike (``[A_L; lock rows]`` by the paper's
     projector, eq. 13, with the trailing foot decided by the schedule's rule); then the legs
-    are relabelled and the locks reset exactly.
+    are relabelled and the locks reset exactly. The next step is taken by
+    :meth:`walker.after_swap() <heelstrike.models.base.PlanarWalker.after_swap>`: the walker
+    itself, or for a walker whose legs differ the walker with the other leg in stance (the two
+    alternate; each sample's ``mechanical_energy`` is that of the walker taking its step).
 
     Parameters
     ----------
@@ -837,6 +840,11 @@ def simulate(
     events_out: list[PhasedImpact] = []
     t, work, stance = 0.0, 0.0, 0
     status = WalkStatus.COMPLETED
+    # a walker whose legs differ alternates with the walker after its leg swap
+    # (PlanarWalker.after_swap); each step's samples keep the energy of the step's walker
+    alternating = walker.after_swap() is not walker
+    schedules = {id(walker): schedule}
+    energy_s: list[FloatArray] = []
 
     for k in range(steps):
         t_step, work_start = t, work
@@ -872,6 +880,9 @@ def simulate(
                 q_s.append(qs[first:])
                 qd_s.append(qds[first:])
                 w_s.append(raw.x[first:, -1])
+                if alternating:
+                    energy_s.append(np.asarray(walker.mechanical_energy(
+                        qs[first:], qds[first:], slope)))
                 leg_s.append(np.full(len(raw.t) - first, stance))
                 step_s.append(np.full(len(raw.t) - first, k))
                 phase_s.append(np.full(len(raw.t) - first, phase.name))
@@ -942,6 +953,15 @@ def simulate(
             qd = qd_plus
             break
         q, qd = walker.swap_legs(q, qd_plus)
+        next_walker = walker.after_swap()
+        if next_walker is not walker:
+            walker = next_walker
+            if id(walker) not in schedules:
+                schedules[id(walker)] = walker.step_schedule(
+                    knee_flex_threshold=knee_flex_threshold)
+            schedule = schedules[id(walker)]
+            leg_length = float(walker.scale.leg_length)
+            lock_angle = dict(schedule.lock_angles)
         for j, a in schedule.lock_angles:  # exact lock angles after relabelling (swap round-off)
             q[j] = a
             qd[j] = 0.0
@@ -964,5 +984,6 @@ def simulate(
         slope=float(slope),
         events=tuple(events_out),
         phase=np.concatenate(phase_s),
-        mechanical_energy=np.asarray(walker.mechanical_energy(q_all, qd_all, slope)),
+        mechanical_energy=(np.concatenate(energy_s) if alternating
+                           else np.asarray(walker.mechanical_energy(q_all, qd_all, slope))),
     )

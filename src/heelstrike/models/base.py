@@ -243,6 +243,23 @@ class PlanarWalker(ABC):
         """A copy with some named parameters changed (validated again)."""
         raise NotImplementedError(f"{type(self).__name__} has no named parameters to replace")
 
+    def after_swap(self) -> PlanarWalker:
+        """The walker that takes the next step, after the heel strike's leg swap.
+
+        The walker itself (the default) when the swap is a symmetry: both legs alike, one step
+        is the period. A walker whose legs differ (an amputee with a prosthetic leg) is
+        another parameter set after the swap (the swing leg's parameters now the stance
+        leg's), and ``w.after_swap().after_swap()`` is ``w`` again.
+        """
+        return self
+
+    @property
+    def steps_per_period(self) -> int:
+        """Steps of the walker's periodic gait on the Poincare section: 1 when the leg swap is
+        a symmetry (:meth:`after_swap` is the walker itself), else 2 (the stride: a step on
+        each leg; the Poincare map is the stride map)."""
+        return 1 if self.after_swap() is self else 2
+
     # -- the walker contract: what analyses may ask ------------------------------------------
     @property
     def parameters(self) -> Mapping[str, ParameterValue]:

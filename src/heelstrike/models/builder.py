@@ -30,6 +30,7 @@ coordinates (``SingleSupport(locked=(j, ...))``).
 
 from __future__ import annotations
 
+import contextvars
 import functools
 import hashlib
 import importlib.resources
@@ -129,6 +130,11 @@ def _lead(q: Any, *args: Any) -> tuple[int, ...]:
 _HELPERS: Mapping[str, Any] = MappingProxyType({"numpy": np, "zeros": np.zeros, "_lead": _lead})
 
 _MEMORY: dict[str, GeneratedModel] = {}
+
+#: Set while a walker builds the walker after its leg swap: that one's swap is the inverse of
+#: the one being checked, so it is not checked again (no endless pair of constructions).
+_BUILDING_AFTER_SWAP: contextvars.ContextVar[bool] = contextvars.ContextVar(
+    "heelstrike_building_after_swap", default=False)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -367,8 +373,59 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
             self._check_guard_depends_on_state()
         if "swap_coordinates" in self.model.namespace and all(
             np.ndim(v) == 0 for v in values.values()
-        ):
+        ) and not _BUILDING_AFTER_SWAP.get():
             self.check_swap_symmetry()
+
+    # -- walkers whose legs differ --------------------------------------------------------------
+    @property
+    def swapped_parameters(self) -> dict[str, ParameterValue]:
+        """The parameter values of the walker that takes the next step: the description's
+        ``[swap]`` pairs exchanged (``new[k] = old[j]`` for each pair ``(k, j)``); the values
+        themselves when the description has no ``[swap]`` table."""
+        out: dict[str, Any] = dict(self._values)
+        for k, j in self.description.swap:
+            out[k] = self._values[j]
+        return out
+
+    @functools.cached_property
+    def _after_swap(self) -> BuiltWalker:
+        swapped = self.swapped_parameters
+        if all(np.array_equal(np.asarray(swapped[k]), np.asarray(v))
+               for k, v in self._values.items()):
+            return self
+        token = _BUILDING_AFTER_SWAP.set(True)
+        try:
+            other = self.replace(**swapped)
+        finally:
+            _BUILDING_AFTER_SWAP.reset(token)
+        other.__dict__["_after_swap"] = self  # the stride's two walkers know each other
+        return other
+
+    def after_swap(self) -> BuiltWalker:
+        """The walker after the leg swap (:meth:`PlanarWalker.after_swap`): the same
+        description with the ``[swap]`` parameters exchanged, or this walker itself when they
+        are equal (the swap is then a symmetry: :attr:`steps_per_period` is 1). Calling it on
+        the result returns this walker (the same object)."""
+        return self._after_swap
+
+    @property
+    def compiled_kernel(self) -> CompiledKernel | None:
+        """``"generated"``: the kernel generated from the description
+        (:mod:`heelstrike.dynamics.compiled_phased`).
+
+        None for a subclass that declares another :meth:`step_schedule` (the kernel runs the
+        described walkers' schedule only), for a description declaring its heel-strike guard
+        (``[events]``: the kernel's guard is the swing foot's clearance) and for a walker whose
+        legs differ (:attr:`steps_per_period` 2: the kernel walks one parameter set): such
+        walkers run on the scipy reference only.
+        """
+        if type(self).step_schedule is not BuiltWalker.step_schedule:
+            return None
+        if self.description.events is not None:
+            return None
+        if not self.is_batched and self.steps_per_period != 1:
+            return None
+        return "generated"
 
     def __setattr__(self, name: str, value: Any) -> None:
         if self.__dict__.get("_frozen", False):
@@ -381,12 +438,16 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         super().__delattr__(name)
 
     def _check_mass_matrix(self) -> None:
-        """Refuse parameter values whose mass matrix is singular, naming the coordinate that
-        moves no mass or inertia (a massless link without inertia at the end of a chain: no
-        acceleration, walk or impact is defined; QA sweep 12 met "division by zero").
+        """Refuse parameter values whose mass matrix is singular, naming the coordinates of
+        its null vector (a massless link without inertia at the end of a chain, or a massless
+        rod carrying nothing: no acceleration, walk or impact is defined; QA sweep 12 met
+        "division by zero"). Massless links are otherwise accepted.
 
         Checked at a configuration without symmetries (every joint bent), where a walker's
-        mass matrix is singular only if it is singular everywhere.
+        mass matrix is singular only if it is singular everywhere: ``M`` is refused when its
+        smallest eigenvalue is below ``1e-12`` times its largest, and the message lists the
+        coordinates that M's null space moves (with the null vector when it is one), e.g.
+        ``torso`` for a massless torso rod carrying no point mass.
         """
         k = np.arange(self._n - 2)
         q = np.zeros(self._n)
@@ -397,11 +458,23 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         if not np.any(bad):
             return
         at = tuple(np.argwhere(bad)[0]) if bad.ndim else ()
-        name = self.coordinate_names[int(np.argmax(np.abs(v[at][:, 0])))]
+        small = w[at] <= 1e-12 * np.abs(w[at][-1])
+        basis = v[at][:, small]  # orthonormal basis of M's null space, shape (n, k)
+        weight = np.linalg.norm(basis, axis=1)
+        moved = [int(j) for j in np.argsort(-weight, kind="stable") if weight[j] > 1e-6]
+        names = [self.coordinate_names[j] for j in moved]
+        if basis.shape[1] == 1:
+            null = basis[:, 0] / basis[moved[0], 0]
+            shown = "null vector of M: " + ", ".join(
+                f"{self.coordinate_names[j]}: {null[j]:.3g}" for j in moved)
+        else:
+            shown = f"M has a null space of dimension {basis.shape[1]} in these coordinates"
+        what = (f"coordinate {names[0]!r} moves" if len(names) == 1 else
+                f"coordinates {', '.join(map(repr, names))} move")
         raise ModelDescriptionError(
             f"walker {self.description.name!r}: its mass matrix is singular with these "
-            f"parameter values: coordinate {name!r} moves no mass and no inertia (give the "
-            "links it moves a mass away from the joint or an inertia)")
+            f"parameter values: {what} no mass and no inertia ({shown}; give the links "
+            "they move a mass away from the joint, an inertia or a point mass)")
 
     def _check_guard_depends_on_state(self) -> None:
         """Refuse a declared guard that takes one value at every state (``"hip - hip"``): it
@@ -430,20 +503,6 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
     def parameters(self) -> Mapping[str, ParameterValue]:
         """The named parameter vector (read-only), in the description's parameter order."""
         return MappingProxyType({k: self._values[k] for k in self.description.param_names})
-
-    @property
-    def compiled_kernel(self) -> CompiledKernel | None:
-        """``"generated"``: the kernel generated from the description
-        (:mod:`heelstrike.dynamics.compiled_phased`).
-
-        None for a subclass that declares another :meth:`step_schedule`, or a description
-        declaring its heel-strike guard (``[events]``): the kernel runs the described
-        walkers' default schedule only (its guard is the swing foot's clearance), so such a
-        walker runs on the scipy reference only.
-        """
-        default = (type(self).step_schedule is BuiltWalker.step_schedule
-                   and self.description.events is None)
-        return "generated" if default else None
 
     @property
     def powered_speed(self) -> float | None:
@@ -942,36 +1001,50 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         return out
 
     def check_swap_symmetry(self, n_samples: int = 3, seed: int = 0, rtol: float = 1e-9) -> None:
-        """Check numerically that the leg swap is a symmetry of the walker.
+        """Check numerically that the leg swap maps this walker onto :meth:`after_swap`.
 
-        At random states: ``M = J_s^T M(q') J_s``, ``V(q') = V(q)`` at two slopes, the new
-        swing foot's contact point is the old stance foot's, and every link's COM maps onto its
-        mirror's.
+        With ``P`` this walker's parameter values and ``P'`` the swapped ones
+        (:attr:`swapped_parameters`; ``P' = P`` without a ``[swap]`` table, where the swap is a
+        symmetry), at random states: each link's ``length``, ``mass`` and ``inertia`` at ``P``
+        equal its mirror's at ``P'``; ``M_P(q) = J_s^T M_{P'}(q') J_s``,
+        ``V_P(q) = V_{P'}(q')`` at two slopes; the new swing foot's contact point is the old stance
+        foot's, and every link's COM maps onto its mirror's.
 
         Raises
         ------
         ModelDescriptionError
-            When the mirrors do not describe a symmetry, naming the first thing that does not
+            When the mirrors do not describe the swap, naming the first thing that does not
             map (``link[i].mass: ...``, a link's centre of mass, the feet, the masses).
         """
         links = self.description.links
         index = {lk.name: i for i, lk in enumerate(links)}
-        why = ("; a walker is described by role (stance and swing leg), so one whose legs "
-               "differ cannot be")
+        swapped = self.swapped_parameters
+        if self.description.swap:
+            why = ("; the [swap] table must exchange every parameter in which the legs differ "
+                   "(the walker after the swap is the same file with those values exchanged)")
+        else:
+            why = ("; a walker whose legs differ names each leg's parameters by role and lists "
+                   "the pairs the leg swap exchanges in a [swap] table (e.g. m1 = \"m2\")")
+
+        def after(v: Any) -> Any:
+            return evaluate_expression(v, swapped)
+
         for i, lk in enumerate(links):  # the plainest cause first: the mirrors' own fields
             if lk.mirror is None:
                 continue
             other = links[index[lk.mirror]]
             for key in ("length", "mass", "inertia"):
-                a, b = self._eval(getattr(lk, key)), self._eval(getattr(other, key))
+                a, b = self._eval(getattr(lk, key)), after(getattr(other, key))
                 if not np.allclose(a, b, rtol=rtol, atol=0.0):
+                    swapped_note = " after the [swap]" if self.description.swap else ""
                     raise ModelDescriptionError(
                         f"link[{i}].{key}: link {lk.name!r} and its mirror {other.name!r} "
-                        f"differ ({float(a):g} vs {float(b):g}), so the leg swap is not a "
-                        f"symmetry{why}")
+                        f"differ ({float(a):g} vs {float(b):g}{swapped_note}), so the leg "
+                        f"swap does not map the walker onto itself{why}")
+        other_walker = self.after_swap()
         q, qd = _sample_states(n_samples, self._n, seed)
         q2, _ = self.swap_legs(q, qd)
-        pos1, pos2 = self.positions(q), self.positions(q2)
+        pos1, pos2 = self.positions(q), other_walker.positions(q2)
         for lk in links:
             if not np.allclose(pos2[f"{lk.name}.com"], pos1[f"{lk.mirror or lk.name}.com"],
                                atol=1e-9):
@@ -979,18 +1052,19 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
                     f"link[{index[lk.name]}].com: after the leg swap the centre of mass of "
                     f"{lk.name!r} is not where {lk.mirror or lk.name!r}'s was (its com, "
                     f"com_offset, attach or direction do not mirror){why}")
-        if not np.allclose(self.contact_point(q2, "left"), self.contact_point(q, "right"),
-                           atol=1e-9):
+        if not np.allclose(other_walker.contact_point(q2, "left"),
+                           self.contact_point(q, "right"), atol=1e-9):
             raise ModelDescriptionError(
                 "foot: after the leg swap the new swing foot's contact point is not where the "
                 "old stance foot's was (the feet's radius, profile, centre or centre_offset do "
                 f"not mirror){why}")
         J = self.model.fn("swap_jacobian")(q, self._p)
         M1 = self.mass_matrix(q)
-        M2 = np.swapaxes(J, -1, -2) @ self.mass_matrix(q2) @ J
+        M2 = np.swapaxes(J, -1, -2) @ other_walker.mass_matrix(q2) @ J
         ok = np.allclose(M1, M2, rtol=rtol, atol=rtol * np.max(np.abs(M1)))
         for slope in (0.0, 0.3):
-            V1, V2 = self.potential_energy(q, slope), self.potential_energy(q2, slope)
+            V1 = self.potential_energy(q, slope)
+            V2 = other_walker.potential_energy(q2, slope)
             ok &= np.allclose(V1, V2, rtol=rtol, atol=rtol * np.max(np.abs(V1)) + 1e-12)
         if not ok:
             raise ModelDescriptionError(

@@ -371,7 +371,9 @@ class LinkSpec:
     length : float or str
         Distance (m) from the proximal to the distal point, > 0.
     mass : float or str
-        Mass (kg), > 0.
+        Mass (kg), >= 0: a massless link (a rod carrying a point mass) is accepted where the
+        mass matrix stays positive definite
+        (:meth:`~heelstrike.models.builder.BuiltWalker.check_mass_matrix`).
     com, com_offset : float or str
         Centre of mass along the link from the proximal point and forward offset (m).
     inertia : float or str
@@ -751,6 +753,11 @@ class WalkerDescription:
     events : EventsSpec or None
         The declared heel-strike guard and reset (``[events]``), or None: the swing foot's
         clearance and the default reset.
+    swap : tuple of (str, str)
+        The ``[swap]`` table of a walker whose legs differ: pairs ``(k, j)``, sorted, meaning
+        that after the leg swap parameter ``k`` takes the value ``j`` had (the stance leg's
+        parameters become the swing leg's and back; an involution, listed both ways). Empty
+        when the leg swap is a symmetry of the walker as written. Not part of the derivation.
     source : str
         Where the description came from (file path or ``"<dict>"``); not part of the model.
     """
@@ -764,6 +771,7 @@ class WalkerDescription:
     control: tuple[PostureLawSpec, ...] = ()
     powered: PoweredSpec | None = None
     events: EventsSpec | None = None
+    swap: tuple[tuple[str, str], ...] = ()
     source: str = field(default="<dict>", compare=False)
 
     @property
@@ -843,6 +851,7 @@ class WalkerDescription:
         d.pop("powered")
         if self.events is None:  # the structure of walkers without [events] as before
             d.pop("events")
+        d.pop("swap")
         d["params"] = [k for k, _ in self.params]
         for ft in d["feet"]:
             if ft["profile"] is None:  # an arc foot: the key it had before profiles existed
@@ -873,8 +882,10 @@ class WalkerDescription:
             raise ModelDescriptionError("params.g: must be > 0")
         for i, lk in enumerate(self.links):
             p = f"link[{i}]"
-            if not np.all(ev(lk.mass, f"{p}.mass") > 0):
-                raise ModelDescriptionError(f"{p}.mass: must be > 0")
+            if not np.all(ev(lk.mass, f"{p}.mass") >= 0):
+                raise ModelDescriptionError(
+                    f"{p}.mass: must be > 0, or 0 for a massless link (a rod carrying a point "
+                    "mass)")
             if not np.all(ev(lk.length, f"{p}.length") > 0):
                 raise ModelDescriptionError(f"{p}.length: must be > 0")
             if not np.all(ev(lk.inertia, f"{p}.inertia") >= 0):
@@ -1024,6 +1035,7 @@ _TOP_KEYS = {
     "control",
     "powered",
     "events",
+    "swap",
 }
 _EVENTS_KEYS = {"heel_strike", "reset", "trailing_foot"}
 _EVENTS_REQUIRED = ("heel_strike",)
@@ -1087,7 +1099,8 @@ def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> Wal
         optionally ``point_mass`` (list), ``constraints``, ``control`` (declared posture laws,
         :class:`PostureLawSpec`), ``powered`` (the default powered target,
         :class:`PoweredSpec`), ``events`` (the heel-strike guard and reset,
-        :class:`EventsSpec`), ``description``, ``reference`` (free text).
+        :class:`EventsSpec`), ``swap`` (the parameters the leg swap exchanges, for a walker
+        whose legs differ), ``description``, ``reference`` (free text).
     source : str
         Origin, for messages.
 
@@ -1326,6 +1339,7 @@ def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> Wal
 
     control = _parse_control(top.get("control", {}), params, links, roots[0])
     powered = _parse_powered(top["powered"]) if "powered" in top else None
+    swap = _parse_swap(top.get("swap", {}), params, links)
 
     desc = WalkerDescription(
         name=name,
@@ -1336,6 +1350,7 @@ def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> Wal
         constraints=constraints,
         control=control,
         powered=powered,
+        swap=swap,
         source=source,
     )
     if "events" in top:
@@ -1447,6 +1462,37 @@ def _parse_events(
             f"events.reset: 'swap_legs' relabels the links by their mirrors, and the root "
             f"link {desc.root.name!r} declares no mirror")
     return EventsSpec(**out)
+
+
+def _parse_swap(
+    raw: Any, params: Mapping[str, float], links: list[LinkSpec]
+) -> tuple[tuple[str, str], ...]:
+    """Validate the optional ``[swap]`` table: ``k = "j"`` says that after the leg swap the
+    parameter ``k`` takes the value ``j`` had. A pair given one way is completed the other way
+    (the swap is an involution); both must be parameters, and mirrors must be declared."""
+    tab = _table(raw, "swap")
+    pairs: dict[str, str] = {}
+    for k, v in tab.items():
+        p = f"swap.{k}"
+        if k not in params:
+            raise ModelDescriptionError(f"{p}: unknown parameter {k!r}")
+        if not isinstance(v, str) or v not in params:
+            raise ModelDescriptionError(
+                f"{p}: must name the parameter whose value {k!r} takes after the leg swap "
+                f"(one of {sorted(params)}), got {v!r}")
+        if k == "g" or v == "g":
+            raise ModelDescriptionError(f"{p}: gravity 'g' belongs to no leg")
+        for a, b in ((k, v), (v, k)):
+            if pairs.get(a, b) != b:
+                raise ModelDescriptionError(
+                    f"{p}: {a!r} is swapped with both {pairs[a]!r} and {b!r} (the swap "
+                    "exchanges parameters in pairs)")
+            pairs[a] = b
+    if pairs and not any(lk.mirror is not None for lk in links):
+        raise ModelDescriptionError(
+            "swap: the walker declares no link mirrors, so it has no leg swap to exchange "
+            "parameters at")
+    return tuple(sorted((k, v) for k, v in pairs.items() if k != v))
 
 
 def _parse_powered(raw: Any) -> PoweredSpec:

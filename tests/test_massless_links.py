@@ -94,9 +94,9 @@ def test_massless_rod_conserves_energy_over_single_support(rod_torso: Path) -> N
 def test_massless_rod_carrying_nothing_is_refused_naming_its_coordinate() -> None:
     """The torso without its mass and inertia: its joint moves nothing (M singular)."""
     with pytest.raises(ModelDescriptionError,
-                       match=r"^walker 'torso': its mass matrix is singular .*coordinate "
-                             r"'torso' moves no mass and no inertia \(null vector of M: "
-                             r"torso: 1;"):
+                       match=r"^walker 'torso': its mass matrix is singular .*: coordinate "
+                             r"'torso' moves no mass and no inertia \(M's null space, "
+                             r"dimension 1;"):
         load_walker("torso", mT=0.0, IT=0.0)
     # a mass or an inertia alone makes it regular again
     for values in ({"mT": 0.0, "IT": 0.01}, {"mT": 1.0, "IT": 0.0}):
@@ -117,8 +117,9 @@ def test_singular_null_space_of_several_coordinates_names_them_all(tmp_path: Pat
     path = tmp_path / "tail.toml"
     path.write_text(text)
     with pytest.raises(ModelDescriptionError,
-                       match=r"coordinates '(torso', 'tail|tail', 'torso)' move no mass and no "
-                             r"inertia \(M has a null space of dimension 2"):
+                       match=r"coordinate 'tail' moves no mass and no inertia; coordinate "
+                             r"'torso' moves no mass and no inertia \(M's null space, "
+                             r"dimension 2"):
         load_walker(path)
     # a point mass at the tail's end makes the chain regular: the rod torso carries it
     text += '\n[[point_mass]]\nname = "tip"\nlink = "tail"\nat = 0.3\nmass = 1.0\n'

@@ -148,7 +148,9 @@ def test_symmetry_errors_name_what_does_not_mirror() -> None:
     data["params"]["m2"] = 4.0
     _link(data, "swing_leg")["mass"] = "m2"
     with pytest.raises(ModelDescriptionError, match=r"^link\[0\]\.mass: link 'stance_leg' and "
-                       r"its mirror 'swing_leg' differ \(5 vs 4\).*legs differ cannot be"):
+                       r"its mirror 'swing_leg' differ \(5 vs 4\).*legs differ names each leg's "
+                       r"parameters by role and lists the pairs the leg swap exchanges in a "
+                       r"\[swap\] table"):
         BuiltWalker(parse_description(data))
     data = _data()
     _link(data, "swing_leg")["com"] = "0.4"  # the stance leg's COM is l - b = 0.5 from its foot

@@ -290,6 +290,30 @@ def _first(a: FloatArray) -> FloatArray:
     return a if a.ndim == 1 else a.transpose(a.ndim - 1, *range(a.ndim - 1))
 
 
+def _sparse_null_basis(basis: FloatArray) -> list[FloatArray]:
+    """A basis of the span of the columns of ``basis`` (n, k) in reduced row-echelon form,
+    pivoting on the last coordinates first (the joints before ``x``, ``y``): a joint that moves
+    nothing alone comes out as a unit vector, a combined motion with its pivot scaled to 1.
+    Entries below 1e-12 are set to zero."""
+    B = np.array(basis, dtype=float).T.copy()  # (k, n)
+    k, n = B.shape
+    rows: list[int] = []
+    for col in range(n - 1, -1, -1):
+        free = [r for r in range(k) if r not in rows]
+        if not free:
+            break
+        r = max(free, key=lambda i: abs(B[i, col]))
+        if abs(B[r, col]) < 1e-9:
+            continue
+        B[r] /= B[r, col]
+        for i in range(k):
+            if i != r:
+                B[i] -= B[i, col] * B[r]
+        rows.append(r)
+    B[np.abs(B) < 1e-12] = 0.0
+    return [B[r] for r in rows]
+
+
 class _FrozenAfterInit(ABCMeta):
     """Metaclass freezing an instance once its (sub)class ``__init__`` has returned."""
 
@@ -460,21 +484,21 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         at = tuple(np.argwhere(bad)[0]) if bad.ndim else ()
         small = w[at] <= 1e-12 * np.abs(w[at][-1])
         basis = v[at][:, small]  # orthonormal basis of M's null space, shape (n, k)
-        weight = np.linalg.norm(basis, axis=1)
-        moved = [int(j) for j in np.argsort(-weight, kind="stable") if weight[j] > 1e-6]
-        names = [self.coordinate_names[j] for j in moved]
-        if basis.shape[1] == 1:
-            null = basis[:, 0] / basis[moved[0], 0]
-            shown = "null vector of M: " + ", ".join(
-                f"{self.coordinate_names[j]}: {null[j]:.3g}" for j in moved)
-        else:
-            shown = f"M has a null space of dimension {basis.shape[1]} in these coordinates"
-        what = (f"coordinate {names[0]!r} moves" if len(names) == 1 else
-                f"coordinates {', '.join(map(repr, names))} move")
+        motions = _sparse_null_basis(basis)
+        said = []
+        for vec in motions:
+            moved = [int(j) for j in np.flatnonzero(np.abs(vec) > 1e-9)]
+            if len(moved) == 1:
+                said.append(f"coordinate {self.coordinate_names[moved[0]]!r} moves no mass and "
+                            "no inertia")
+            else:
+                said.append("the motion " + ", ".join(
+                    f"{self.coordinate_names[j]}: {vec[j]:.3g}" for j in moved)
+                    + " moves no mass and no inertia")
         raise ModelDescriptionError(
             f"walker {self.description.name!r}: its mass matrix is singular with these "
-            f"parameter values: {what} no mass and no inertia ({shown}; give the links "
-            "they move a mass away from the joint, an inertia or a point mass)")
+            f"parameter values: {'; '.join(said)} (M's null space, dimension {len(motions)}; "
+            "give the links they move a mass away from the joint, an inertia or a point mass)")
 
     def _check_guard_depends_on_state(self) -> None:
         """Refuse a declared guard that takes one value at every state (``"hip - hip"``): it

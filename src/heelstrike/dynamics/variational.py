@@ -201,11 +201,11 @@ class _PhaseField:
         m = len(sup.free_coordinates)
         free = list(sup.free_coordinates)
         R = -float(sup._basis[0, 0])
-        q = self.q_ref.astype(complex)
+        q = self.q_ref.astype(np.result_type(x, float))
         q[free] = x[:m]
         q[0] = self.q_ref[0] + R * self.q_ref[2] - R * x[0]
         q[1] = R
-        qd = sup._basis.astype(complex) @ x[m: 2 * m]
+        qd = sup._basis @ x[m: 2 * m]
         return q, qd
 
     def pack(self, q: ComplexArray, qd: ComplexArray) -> ComplexArray:
@@ -237,9 +237,7 @@ class _PhaseField:
         def rhs(t: float, y: FloatArray) -> FloatArray:
             x = y[:n]
             Phi = y[n:].reshape(n, n)
-            with warnings.catch_warnings():
-                warnings.simplefilter("error", np.exceptions.ComplexWarning)
-                fx = np.real(self(t, x.astype(complex)))
+            fx = np.real(self(t, x))
             return np.concatenate((fx, (self.jacobian(t, x) @ Phi).reshape(-1)))
 
         y0 = np.concatenate((x0, np.eye(n).reshape(-1)))

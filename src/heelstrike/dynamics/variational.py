@@ -8,12 +8,14 @@ after the next one. Its Jacobian is the chain
     DP(z) = DH\\, \\Pi_h\\, \\Phi_{N}\\, \\Xi_{N-1}\\, \\Phi_{N-1} \\cdots \\Xi_1\\, \\Phi_1\\, X_0,
 
 with ``X_0`` the derivative of the phase-one integrator state ``x = (theta, theta_dot)`` with
-respect to ``z`` (:meth:`section_to_state` and the reduction to the free coordinates),
+respect to ``z`` (:meth:`~heelstrike.models.base.PlanarWalker.section_to_state` and the
+reduction to the free coordinates),
 ``Phi_k`` the fundamental matrix of the ``k``-th continuous phase, integrated with the state by
 the variational equations ``Phi' = D_x F(t, x) Phi`` (``F`` the reduced single-support field of
 :class:`~heelstrike.dynamics.single_support.SingleSupport`), ``Xi_k`` the saltation matrix of
-the reset that ends phase ``k`` (a knee strike; :func:`heelstrike.core.saltation.
-saltation_matrix`), ``Pi_h`` the projection of the heel-strike guard
+the reset that ends phase ``k`` (a knee strike;
+:func:`~heelstrike.core.saltation.saltation_matrix`), ``Pi_h`` the projection of the heel-strike
+guard
 (:func:`~heelstrike.core.saltation.section_projection`: the section is the heel-strike event
 itself) and ``DH`` the Jacobian of the heel strike's reset ``H`` (push-off, the inert impact
 ``q_dot+ = P_a q_dot-`` with ``A = [A_L; lock rows]``, relabelling, section coordinates).
@@ -21,8 +23,9 @@ itself) and ``DH`` the Jacobian of the heel strike's reset ``H`` (push-off, the 
 Every derivative is exact to round-off: ``D_x F``, the guards' gradients and the resets'
 Jacobians are complex-step derivatives (``Im f(x + i h e_k) / h``, ``h = 1e-30``: no
 subtraction) of the walker's generated sympy expressions (a described walker's own, or those
-of the hand-written walker's description, :meth:`~heelstrike.models.base.PlanarWalker.
-as_described`: the same equations in the same coordinates). The guard of a knee strike is the
+of the hand-written walker's description,
+:meth:`~heelstrike.models.base.PlanarWalker.as_described`: the same equations in the same
+coordinates). The guard of a knee strike is the
 striking joint reaching its lock angle, that of the heel strike the swing foot's clearance
 (the compass gait's ``2 q3 + q4`` is the same surface): only the guard's normal enters
 ``Xi`` and ``Pi``. The event times and the nominal trajectory are those of
@@ -63,7 +66,8 @@ __all__ = [
 #: Imaginary step of the complex-step derivatives (no cancellation: any tiny step is exact).
 COMPLEX_STEP = 1e-30
 
-ComplexArray = NDArray[np.complex128]
+#: A real or complex array (complex-step evaluations), shape as documented where used.
+ComplexArray = NDArray[Any]
 
 
 class ExactJacobianUnavailable(ValueError):
@@ -82,7 +86,8 @@ class StepJacobian(ResultDictMixin):
     Attributes
     ----------
     z : ndarray, shape (d,)
-        Section point (post-heel-strike coordinates, :attr:`PlanarWalker.section_names`).
+        Section point (post-heel-strike coordinates,
+        :attr:`~heelstrike.models.base.PlanarWalker.section_names`).
     z_next : ndarray, shape (d,)
         ``P(z)``: the section point after the step (scipy reference).
     jacobian : ndarray, shape (d, d)
@@ -335,6 +340,7 @@ def step_jacobian(
         raise ExactJacobianUnavailable(
             f"push-off {type(push_off).__name__} is not a PushOff impulse: its reset has no "
             "exact derivative here; use central differences")
+    impulse = None if push_off is None else float(push_off.impulse)
     eq = _Equations.of(walker)
     q0, qd0 = walker.section_to_state(z_)
     walk = simulate(walker, q0, qd0, slope=slope, steps=1, torque=torque, push_off=push_off,
@@ -404,8 +410,6 @@ def step_jacobian(
             continue
 
         # -- the heel strike: push-off, impact, relabelling, section coordinates ---------------
-        impulse = None if push_off is None else float(push_off.impulse)  # type: ignore[attr-defined]
-
         def heel(xc: ComplexArray, fld: _PhaseField = fld) -> ComplexArray:
             q, qd = fld.unpack(xc)
             if impulse is not None:

@@ -201,36 +201,68 @@ class _PhaseField:
     torque: Any
     q_ref: FloatArray
 
+    @property
+    def free(self) -> list[int]:
+        return list(self.support.free_coordinates)
+
+    def basis(self) -> FloatArray:
+        """``J`` (n, m): ``q_dot = J theta_dot`` (rolling stance foot, locked joints held)."""
+        free = self.free
+        J = np.zeros((self.q_ref.size, len(free)))
+        J[free, range(len(free))] = 1.0
+        J[0, 0] = -self.radius()
+        return J
+
+    def radius(self) -> float:
+        return float(np.asarray(self.support.walker.foot_radii[0]))
+
     def unpack(self, x: ComplexArray) -> tuple[ComplexArray, ComplexArray]:
-        sup = self.support
-        m = len(sup.free_coordinates)
-        free = list(sup.free_coordinates)
-        R = -float(sup._basis[0, 0])
-        q = self.q_ref.astype(np.result_type(x, float))
-        q[free] = x[:m]
-        q[0] = self.q_ref[0] + R * self.q_ref[2] - R * x[0]
-        q[1] = R
-        qd = sup._basis @ x[m: 2 * m]
+        """Full ``(q, q_dot)``, shapes (..., n), of integrator states ``x`` (..., 2 m)."""
+        free = self.free
+        m, R = len(free), self.radius()
+        q = np.broadcast_to(self.q_ref, (*x.shape[:-1], self.q_ref.size)).astype(
+            np.result_type(x, float))
+        q[..., free] = x[..., :m]
+        q[..., 0] = self.q_ref[0] + R * self.q_ref[2] - R * x[..., 0]
+        q[..., 1] = R
+        qd = x[..., m: 2 * m] @ self.basis().T
         return q, qd
 
     def pack(self, q: ComplexArray, qd: ComplexArray) -> ComplexArray:
-        free = list(self.support.free_coordinates)
-        return np.concatenate((q[free], qd[free]))
+        free = self.free
+        return np.concatenate((q[..., free], qd[..., free]), axis=-1)
 
     def __call__(self, t: float, x: ComplexArray) -> ComplexArray:
-        sup = self.support
-        m = len(sup.free_coordinates)
+        """``F(t, x) = (theta_dot, (J^T M J)^-1 J^T (B u - h))``, shape (..., 2 m)."""
+        m = len(self.free)
         q, qd = self.unpack(x)
         f = -self.eq.bias_forces(q, qd, self.slope)
         if self.torque is not None:
-            u = np.asarray(self.torque(t, q, qd))
-            f = f + sup._actuation @ u
-        J = sup._basis
-        Mr = J.T @ self.eq.mass_matrix(q) @ J
-        return np.concatenate((x[m: 2 * m], np.linalg.solve(Mr, J.T @ f)))
+            B = np.asarray(self.support.walker.actuation_matrix(), dtype=float)
+            if x.ndim == 1:
+                u = np.asarray(self.torque(t, q, qd))
+            else:  # a law takes one state (TorqueLaw): row by row
+                u = np.stack([np.asarray(self.torque(t, a, b)) for a, b in zip(q, qd,
+                                                                                  strict=True)])
+            f = f + u @ B.T
+        J = self.basis()
+        Mr = np.einsum("ia,...ij,jb->...ab", J, self.eq.mass_matrix(q), J)
+        acc = np.linalg.solve(Mr, (f @ J)[..., None])[..., 0]
+        return np.concatenate((x[..., m: 2 * m], acc), axis=-1)
 
-    def jacobian(self, t: float, x: FloatArray) -> FloatArray:
-        return _complex_jacobian(lambda xc: self(t, xc), x, "single-support field (torque law)")
+    def linearise(self, t: float, x: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """``F(t, x)`` (2 m,) and ``D_x F(t, x)`` (2 m, 2 m) from one batched call: complex
+        steps along every axis (the real part of each is ``F(t, x)`` to ``O(h^2)``, exact)."""
+        X = x + 1j * COMPLEX_STEP * np.eye(x.size)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", np.exceptions.ComplexWarning)
+            try:
+                FX = self(t, X)
+            except (TypeError, np.exceptions.ComplexWarning) as exc:
+                raise ExactJacobianUnavailable(
+                    f"the torque law does not take complex states ({exc}): no complex-step "
+                    "derivative; use central differences") from None
+        return np.asarray(np.real(FX[0])), np.asarray(np.imag(FX).T / COMPLEX_STEP)
 
     def flow(self, x0: FloatArray, t0: float, t1: float, rtol: float, atol: float,
              max_step: float) -> tuple[FloatArray, FloatArray]:
@@ -242,8 +274,8 @@ class _PhaseField:
         def rhs(t: float, y: FloatArray) -> FloatArray:
             x = y[:n]
             Phi = y[n:].reshape(n, n)
-            fx = np.real(self(t, x))
-            return np.concatenate((fx, (self.jacobian(t, x) @ Phi).reshape(-1)))
+            fx, D = self.linearise(t, x)
+            return np.concatenate((fx, (D @ Phi).reshape(-1)))
 
         y0 = np.concatenate((x0, np.eye(n).reshape(-1)))
         if t1 <= t0:

@@ -11,6 +11,7 @@ import pytest
 
 from heelstrike.analysis.limit_cycle import PoincareMap, find_limit_cycle
 from heelstrike.analysis.model_gaits import find_model_gait
+from heelstrike.analysis.newton import floquet_multipliers
 from heelstrike.dynamics.actuation import PushOff
 from heelstrike.dynamics.phased import PhasedWalker, TorsoPD, load_phased_walker
 from heelstrike.dynamics.variational import (
@@ -241,3 +242,16 @@ def test_compass_exact_jacobian_matches_30_digit_reference(slope_deg: float) -> 
             ref[:, k] = [float(c) for c in col]
         assert np.allclose([float(c) for c in step(zm, t_e)], res.z_next, atol=1e-11)
     assert np.max(np.abs(res.jacobian - ref)) < 1e-10
+
+
+def test_passive_gait_multipliers_are_exact_by_default() -> None:
+    """A passive gait found on the scipy reference reports the eigenvalues of the exact
+    Jacobian (not those of central differences, which differ by ~1e-8)."""
+    walker = CompassGait()
+    slope = float(np.deg2rad(4.3))
+    cycle = find_limit_cycle(walker, slope=slope)
+    pmap = PoincareMap(walker=walker, slope=slope)
+    exact = floquet_multipliers(pmap.exact_jacobian(cycle.fixed_point).jacobian)
+    central = floquet_multipliers(pmap.jacobian(cycle.fixed_point))
+    assert np.allclose(cycle.multipliers, exact, rtol=0, atol=1e-13)
+    assert not np.allclose(cycle.multipliers, central, rtol=0, atol=1e-13)

@@ -67,7 +67,7 @@ __all__ = [
 COMPLEX_STEP = 1e-30
 
 #: A real or complex array (complex-step evaluations), shape as documented where used.
-ComplexArray = NDArray[Any]
+_ComplexArray = NDArray[Any]
 
 
 class ExactJacobianUnavailable(ValueError):
@@ -142,26 +142,26 @@ class _Equations:
         return cls(fn=fn, params=tuple(twin._p),  # type: ignore[attr-defined]
                    swing_radius=float(np.asarray(twin.foot_radii[1])))
 
-    def mass_matrix(self, q: ComplexArray) -> ComplexArray:
+    def mass_matrix(self, q: _ComplexArray) -> _ComplexArray:
         return np.asarray(self.fn("mass_matrix")(q, self.params))
 
-    def bias_forces(self, q: ComplexArray, qd: ComplexArray, slope: float) -> ComplexArray:
+    def bias_forces(self, q: _ComplexArray, qd: _ComplexArray, slope: float) -> _ComplexArray:
         return np.asarray(self.fn("bias_forces")(q, qd, self.params, slope))
 
-    def contact_jacobian(self, q: ComplexArray, foot: str) -> ComplexArray:
+    def contact_jacobian(self, q: _ComplexArray, foot: str) -> _ComplexArray:
         return np.asarray(self.fn(f"contact_jacobian_{foot}")(q, self.params))
 
-    def swing_clearance(self, q: ComplexArray) -> Any:
+    def swing_clearance(self, q: _ComplexArray) -> Any:
         return np.asarray(self.fn("foot_centre_swing")(q, self.params))[..., 1] \
             - self.swing_radius
 
-    def swap_legs(self, q: ComplexArray, qd: ComplexArray) -> tuple[ComplexArray, ComplexArray]:
+    def swap_legs(self, q: _ComplexArray, qd: _ComplexArray) -> tuple[_ComplexArray, _ComplexArray]:
         q_new = np.asarray(self.fn("swap_coordinates")(q, self.params))
         S = np.asarray(self.fn("swap_jacobian")(q, self.params))
         return q_new, S @ qd
 
 
-def _complex_jacobian(fun: Callable[[ComplexArray], ComplexArray], x: FloatArray,
+def _complex_jacobian(fun: Callable[[_ComplexArray], _ComplexArray], x: FloatArray,
                       what: str) -> FloatArray:
     """``D fun(x)`` (m, n) by the complex step; ``fun`` must be analytic and take complex input."""
     x = np.asarray(x, dtype=float)
@@ -181,8 +181,8 @@ def _complex_jacobian(fun: Callable[[ComplexArray], ComplexArray], x: FloatArray
     return np.stack(cols, axis=-1)
 
 
-def _inert_impact(M: ComplexArray, A: ComplexArray, qd: ComplexArray,
-                  restitution: float = 0.0) -> ComplexArray:
+def _inert_impact(M: _ComplexArray, A: _ComplexArray, qd: _ComplexArray,
+                  restitution: float = 0.0) -> _ComplexArray:
     """``q_dot+ = q_dot- - (1 + e) M^-1 A^T (A M^-1 A^T)^-1 A q_dot-`` (paper eq. 13 for
     ``e = 0``), complex-capable."""
     MiAt = np.linalg.solve(M, A.T)
@@ -216,7 +216,7 @@ class _PhaseField:
     def radius(self) -> float:
         return float(np.asarray(self.support.walker.foot_radii[0]))
 
-    def unpack(self, x: ComplexArray) -> tuple[ComplexArray, ComplexArray]:
+    def unpack(self, x: _ComplexArray) -> tuple[_ComplexArray, _ComplexArray]:
         """Full ``(q, q_dot)``, shapes (..., n), of integrator states ``x`` (..., 2 m)."""
         free = self.free
         m, R = len(free), self.radius()
@@ -228,11 +228,11 @@ class _PhaseField:
         qd = x[..., m: 2 * m] @ self.basis().T
         return q, qd
 
-    def pack(self, q: ComplexArray, qd: ComplexArray) -> ComplexArray:
+    def pack(self, q: _ComplexArray, qd: _ComplexArray) -> _ComplexArray:
         free = self.free
         return np.concatenate((q[..., free], qd[..., free]), axis=-1)
 
-    def __call__(self, t: float, x: ComplexArray) -> ComplexArray:
+    def __call__(self, t: float, x: _ComplexArray) -> _ComplexArray:
         """``F(t, x) = (theta_dot, (J^T M J)^-1 J^T (B u - h))``, shape (..., 2 m)."""
         m = len(self.free)
         q, qd = self.unpack(x)
@@ -418,15 +418,15 @@ def step_jacobian(
                            key=lambda j: abs(float(fld.unpack(x_minus.astype(complex))[0][j].real)
                                              - lock_angle[j]))
 
-            def knee(xc: ComplexArray, fld: _PhaseField = fld, nxt: _PhaseField = nxt,
-                     phase: Phase = phase) -> ComplexArray:
+            def knee(xc: _ComplexArray, fld: _PhaseField = fld, nxt: _PhaseField = nxt,
+                     phase: Phase = phase) -> _ComplexArray:
                 q, qd = fld.unpack(xc)
                 for j in phase.strike_joints:
                     q[j] = lock_angle[j]
                 A = np.vstack((eq.contact_jacobian(q, "stance"), A_lock))
                 return nxt.pack(q, _inert_impact(eq.mass_matrix(q), A, qd))
 
-            def guard(xc: ComplexArray, fld: _PhaseField = fld, j: int = striking) -> Any:
+            def guard(xc: _ComplexArray, fld: _PhaseField = fld, j: int = striking) -> Any:
                 return np.atleast_1d(fld.unpack(xc)[0][j])
 
             D = _complex_jacobian(knee, x_minus, "knee strike")
@@ -442,7 +442,7 @@ def step_jacobian(
             continue
 
         # -- the heel strike: push-off, impact, relabelling, section coordinates ---------------
-        def heel(xc: ComplexArray, fld: _PhaseField = fld) -> ComplexArray:
+        def heel(xc: _ComplexArray, fld: _PhaseField = fld) -> _ComplexArray:
             q, qd = fld.unpack(xc)
             if impulse is not None:
                 f = eq.contact_jacobian(q, "stance").T @ (impulse * _leg_direction(q[2]))
@@ -458,7 +458,7 @@ def step_jacobian(
                 qd[j] = 0.0
             return np.asarray(S @ np.concatenate((q, qd)))
 
-        def strike_guard(xc: ComplexArray, fld: _PhaseField = fld) -> Any:
+        def strike_guard(xc: _ComplexArray, fld: _PhaseField = fld) -> Any:
             return np.atleast_1d(-eq.swing_clearance(fld.unpack(xc)[0]))
 
         DH = _complex_jacobian(heel, x_minus, "heel strike")

@@ -136,25 +136,28 @@ def test_errors() -> None:
 
 # -- a 30-digit reference: independent Lagrangian, Gragg-Bulirsch-Stoer in mpmath -----------------
 def _mp_compass_step_map(walker: CompassGait, slope_deg: float) -> Any:
-    """The compass gait's (R = 0) step map in 30-digit arithmetic, derived here from its
-    Lagrangian (sympy), integrated by Gragg-Bulirsch-Stoer extrapolation (order 18, macro step
-    1/40 s), the heel strike ``2 q3 + q4 = 0`` located by ``mpmath.findroot`` and resolved by
-    the inert impact with the swing foot's Jacobian in floating-base coordinates."""
+    """The compass gait's step map in 30-digit arithmetic, derived here from its Lagrangian
+    (sympy; the stance foot's arc of radius ``R`` rolls: its centre at ``(-R q3, R)``),
+    integrated by Gragg-Bulirsch-Stoer extrapolation (order 18, macro step 1/40 s), the heel
+    strike ``2 q3 + q4 = 0`` located by ``mpmath.findroot`` and resolved by the inert impact
+    with the swing foot's rolling-contact Jacobian in floating-base coordinates."""
     import mpmath as mp
     import sympy as sp
 
     par = {k: sp.nsimplify(repr(float(v))) for k, v in walker.parameters.items()}
     mH, m, ln, b = par["hip_mass"], par["leg_mass"], par["leg_length"], par["leg_com_from_hip"]
-    inertia, g = par["leg_inertia"], par["gravity"]
+    inertia, g, R = par["leg_inertia"], par["gravity"], par["foot_radius"]
     x, y, q3, q4, xd, yd, w3, w4, gam = sp.symbols("x y q3 q4 xd yd w3 w4 gamma", real=True)
 
     def e(th: Any) -> Any:
         return sp.Matrix([-sp.sin(th), sp.cos(th)])
 
     q, qd = [x, y, q3, q4], [xd, yd, w3, w4]
-    hip = sp.Matrix([x, y]) + ln * e(q3)
+    hip = sp.Matrix([x, y]) + (ln - R) * e(q3)  # (x, y): the stance foot's arc centre
     points = [(mH, hip), (m, hip - b * e(q3)), (m, hip - b * e(q3 + q4))]
-    foot = hip - ln * e(q3 + q4)
+    swing_centre = hip - (ln - R) * e(q3 + q4)
+    # the swing foot's contact point moves with its arc centre plus R times the leg's rate
+    roll = sp.Matrix([[0, 0, R, R], [0, 0, 0, 0]])
 
     def vel(r: Any) -> Any:
         return r.jacobian(q) * sp.Matrix(qd)
@@ -162,7 +165,7 @@ def _mp_compass_step_map(walker: CompassGait, slope_deg: float) -> Any:
     T = sum(mi * (vel(r).T * vel(r))[0] for mi, r in points) / 2 \
         + inertia * (w3**2 + (w3 + w4) ** 2) / 2
     V = sum(mi * g * (sp.sin(gam) * r[0] + sp.cos(gam) * r[1]) for mi, r in points)
-    pinned = {x: 0, y: 0, xd: 0, yd: 0}
+    pinned = {x: -R * q3, y: R, xd: -R * w3, yd: 0}  # rolling without slip
     T2, V2 = T.subs(pinned), V.subs(pinned)
     th, om = [q3, q4], [w3, w4]
     M2 = sp.hessian(T2, om)
@@ -171,8 +174,9 @@ def _mp_compass_step_map(walker: CompassGait, slope_deg: float) -> Any:
     f_M2 = sp.lambdify((q3, q4), list(M2), "mpmath", cse=True)
     f_rhs = sp.lambdify((q3, q4, w3, w4, gam), list(rhs), "mpmath", cse=True)
     f_M = sp.lambdify((q3, q4), sp.hessian(T, qd).subs(pinned), "mpmath")
-    f_A = sp.lambdify((q3, q4), foot.jacobian(q).subs(pinned), "mpmath")
+    f_A = sp.lambdify((q3, q4), (swing_centre.jacobian(q) + roll).subs(pinned), "mpmath")
     gamma = mp.radians(slope_deg)
+    R_mp = mp.mpf(float(walker.foot_radius))
 
     def field(s: list[Any]) -> list[Any]:
         m11, m12, m21, m22 = f_M2(s[0], s[1])
@@ -206,7 +210,7 @@ def _mp_compass_step_map(walker: CompassGait, slope_deg: float) -> Any:
                           mp.mpf(t_guess))
         s = gbs(nodes[-1], t_e - base)
         M, A = mp.matrix(f_M(s[0], s[1])), mp.matrix(f_A(s[0], s[1]))
-        v = mp.matrix([0, 0, s[2], s[3]])
+        v = mp.matrix([-R_mp * s[2], 0, s[2], s[3]])
         MiAt = M**-1 * A.T
         vp = v - MiAt * mp.lu_solve(A * MiAt, A * v)
         return [s[0] + s[1], vp[2] + vp[3], -vp[3]]  # relabelled: (q3, q3_dot, q4_dot)
@@ -215,14 +219,14 @@ def _mp_compass_step_map(walker: CompassGait, slope_deg: float) -> Any:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("slope_deg", [4.3])
-def test_compass_exact_jacobian_matches_30_digit_reference(slope_deg: float) -> None:
+@pytest.mark.parametrize(("R", "slope_deg"), [(0.0, 4.3), (0.0, 1.0), (0.3, 3.0)])
+def test_compass_exact_jacobian_matches_30_digit_reference(R: float, slope_deg: float) -> None:
     """The exact Jacobian (rtol = atol = 1e-13) against central differences of the 30-digit
-    step map with steps of 1e-10 (truncation ~1e-20, integration error ~1e-26 / 1e-10), at
-    4.3 deg near the period doubling, to 1e-10."""
+    step map with steps of 1e-10 (truncation ~1e-20, integration error ~1e-26 / 1e-10), to
+    1e-10; 4.3 deg is near the period doubling."""
     import mpmath as mp
 
-    walker = CompassGait()
+    walker = CompassGait(foot_radius=R)
     slope = float(np.deg2rad(slope_deg))
     z = find_limit_cycle(walker, slope=slope).fixed_point
     pmap = PoincareMap(walker=walker, slope=slope, rtol=1e-13, atol=1e-13)

@@ -130,6 +130,16 @@ def test_errors() -> None:
 
     with pytest.raises(ExactJacobianUnavailable, match="no generated equations"):
         step_jacobian(OwnStep(), [-0.27, 1.09, -0.72], slope=0.05)
+
+    class CurvedSection(CompassGait):  # a section map that is not affine in z
+        def section_to_state(self, z: Any) -> tuple[np.ndarray, np.ndarray]:
+            q, qd = super().section_to_state(z)
+            qd = qd.copy()
+            qd[3] = qd[3] * (1.0 + 0.01 * q[2] ** 2)
+            return q, qd
+
+    with pytest.raises(ExactJacobianUnavailable, match="not affine"):
+        step_jacobian(CurvedSection(), [-0.27, 1.09, -0.72], slope=0.05)
     with pytest.raises(ValueError, match="scipy reference"):
         PoincareMap(walker=walker, slope=0.05, method="compiled").exact_jacobian([-0.27, 1, 0])
 

@@ -946,17 +946,18 @@ def _multiplier_jacobian(pmap: PoincareMap, z: FloatArray, fd_step: float) -> Fl
     for a passive walk on the scipy reference whose walker has generated equations; central
     differences with ``fd_step`` otherwise (compiled maps, actuated walks: a torque law need not
     take the complex states of the complex-step derivatives) or where the exact Jacobian is
-    unavailable.
+    unavailable (a grazing event, a step that does not complete).
     """
-    from heelstrike.dynamics.variational import ExactJacobianUnavailable
+    from heelstrike.core.saltation import GrazingEventError
+    from heelstrike.dynamics.variational import ExactJacobianUnavailable, StepFailedError
 
     sim = pmap.simulator
     passive = pmap.torque is None and pmap.push_off is None
     if pmap.method == "scipy" and passive and (sim is None or sim is simulate):
         try:
             return pmap.exact_jacobian(z).jacobian
-        except ExactJacobianUnavailable:
-            pass
+        except (ExactJacobianUnavailable, GrazingEventError, StepFailedError):
+            pass  # central differences say what they can (NaN where the step fails)
     return pmap.jacobian(z, fd_step)
 
 

@@ -290,24 +290,35 @@ class _PhaseField:
 
 def _section_input(walker: PlanarWalker, z: FloatArray, eq: _Equations
                    ) -> tuple[FloatArray, FloatArray]:
-    """``(dq/dz, dq_dot/dz)``, shapes (n, d): the derivative of :meth:`section_to_state`.
+    """``(dq/dz, dq_dot/dz)``, shapes (n, d): the derivative of the walker's
+    :meth:`~heelstrike.models.base.PlanarWalker.section_to_state`.
 
     A section that eliminates a coordinate by the trailing foot's touchdown
     (:class:`~heelstrike.dynamics.phased.PhasedWalker`: ``clearance(q) = 0`` solved for
-    ``q[eliminated]``) gets it by the implicit function theorem; any other section map is
-    affine in ``z`` (the compass gait's ``q4 = -2 q3``) and its columns are exact differences.
+    ``q[eliminated]``) gets its row by the implicit function theorem; the rest of the map must
+    be affine in ``z`` (the compass gait's ``q4 = -2 q3``; checked with two steps): its columns
+    are exact differences.
     """
     d = z.size
     q0, qd0 = walker.section_to_state(z)
-    dq = np.empty((q0.size, d))
-    dqd = np.empty((q0.size, d))
-    for k in range(d):
-        e = np.zeros(d)
-        e[k] = 1.0
-        qp, qdp = walker.section_to_state(z + e)
-        dq[:, k] = qp - q0
-        dqd[:, k] = qdp - qd0
     j = getattr(walker, "eliminated", None)
+    cols = []
+    for step in (1.0, 0.5):
+        dq = np.empty((q0.size, d))
+        dqd = np.empty((q0.size, d))
+        for k in range(d):
+            e = np.zeros(d)
+            e[k] = step
+            qp, qdp = walker.section_to_state(z + e)
+            dq[:, k] = (qp - q0) / step
+            dqd[:, k] = (qdp - qd0) / step
+        if j is not None:
+            dq[j] = 0.0
+        cols.append(np.concatenate((dq, dqd)))
+    if not np.allclose(cols[0], cols[1], rtol=1e-12, atol=1e-12):
+        raise ExactJacobianUnavailable(
+            f"the Poincare section of {type(walker).__name__} is not affine in z (nor solved "
+            "for a touchdown coordinate): its derivative is not known exactly")
     if j is not None:
         grad = _complex_jacobian(lambda qc: np.atleast_1d(eq.swing_clearance(qc)), q0,
                                  "swing foot clearance")[0]

@@ -61,3 +61,34 @@ def test_unknown_parameter(gait: tuple[CompassGait, LimitCycle]) -> None:
     walker, cycle = gait
     with pytest.raises(ValueError, match="'R' is not a parameter of CompassGait"):
         gait_sensitivity(walker, cycle.fixed_point, ["R"], slope=SLOPE)
+
+
+def test_cli_sensitivity_table_and_json(capsys: pytest.CaptureFixture[str]) -> None:
+    """``gait --sensitivity R,b --json``: the library's derivatives, keyed by the walker file's
+    parameter names, with units."""
+    import json
+
+    from heelstrike.cli import main
+
+    argv = ["gait", "--radius", "0.3", "--slope", "3deg", "--backend", "scipy",
+            "--guess=-0.386284,1.419327,-0.967944", "--sensitivity", "R,b"]
+    assert main([*argv, "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    sens = d["sensitivity"]
+    assert sens["parameters"] == {"R": "m", "b": "m"}
+    walker = CompassGait(foot_radius=0.3)
+    z = np.array([d["fixed_point"][k] for k in ("q3", "q3_dot", "q4_dot")])
+    lib = gait_sensitivity(walker, z, ("foot_radius", "leg_com_from_hip"), slope=SLOPE)
+    for k, n in enumerate(("R", "b")):
+        row = sens["derivatives"][n]
+        assert [row[s] for s in ("q3", "q3_dot", "q4_dot")] == pytest.approx(
+            lib.fixed_point[:, k], rel=1e-9)
+        assert row["period"] == pytest.approx(lib.quantities["period"][k], rel=1e-9)
+    units = sens["units"]["derivatives"]["R"]
+    assert units["q3"] == "rad/m" and units["q3_dot"] == "(rad/s)/m"
+    assert units["eta"] == "(J/m)/m" and units["period"] == "s/m"
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "d/dR (m):" in text and "(rad/s)/m" in text
+    assert main([*argv[:-1], "R,mass"]) == 2
+    assert "'mass' is not a walker parameter" in capsys.readouterr().err

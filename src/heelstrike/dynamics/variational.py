@@ -425,9 +425,10 @@ def step_jacobian(
         if phase.reset == "knee_strike":
             nxt = _PhaseField(support=fields[i + 1].support, eq=eq, slope=float(slope),
                               torque=torque, q_ref=q_ref)
-            striking = min(phase.strike_joints,
-                           key=lambda j: abs(float(fld.unpack(x_minus.astype(complex))[0][j].real)
-                                             - lock_angle[j]))
+            q_strike = np.real(fld.unpack(x_minus)[0])
+            striking = min(phase.strike_joints, key=lambda j: abs(q_strike[j] - lock_angle[j]))
+            for j in phase.strike_joints:
+                q_strike[j] = lock_angle[j]  # as the simulation resets them
 
             def knee(xc: _ComplexArray, fld: _PhaseField = fld, nxt: _PhaseField = nxt,
                      phase: Phase = phase) -> _ComplexArray:
@@ -443,7 +444,7 @@ def step_jacobian(
             D = _complex_jacobian(knee, x_minus, "knee strike")
             grad = _complex_jacobian(guard, x_minus, "knee-strike guard")[0]
             x_plus = np.real(knee(x_minus.astype(complex)))
-            q_ref = np.real(nxt.unpack(x_plus.astype(complex))[0])
+            q_ref = q_strike  # the locked joints and the rolling offset of the next phase
             nxt = _PhaseField(support=nxt.support, eq=eq, slope=float(slope), torque=torque,
                               q_ref=q_ref)
             f_plus = np.real(nxt(t_e, x_plus.astype(complex)))

@@ -84,11 +84,33 @@ def test_cli_sensitivity_table_and_json(capsys: pytest.CaptureFixture[str]) -> N
         assert [row[s] for s in ("q3", "q3_dot", "q4_dot")] == pytest.approx(
             lib.fixed_point[:, k], rel=1e-9)
         assert row["period"] == pytest.approx(lib.quantities["period"][k], rel=1e-9)
+        assert row["multipliers"] == pytest.approx(lib.modulus_derivatives[:, k], rel=1e-6)
     units = sens["units"]["derivatives"]["R"]
     assert units["q3"] == "rad/m" and units["q3_dot"] == "(rad/s)/m"
     assert units["eta"] == "(J/m)/m" and units["period"] == "s/m"
+    assert units["multipliers"] == "1/m"
     assert main(argv) == 0
     text = capsys.readouterr().out
     assert "d/dR (m):" in text and "(rad/s)/m" in text
     assert main([*argv[:-1], "R,mass"]) == 2
     assert "'mass' is not a walker parameter" in capsys.readouterr().err
+
+
+def test_multiplier_sensitivities_match_converged_gaits(
+    gait: tuple[CompassGait, LimitCycle]
+) -> None:
+    """``d|lambda_i|/dp`` by eigenvalue perturbation against central differences of the
+    converged gaits' multipliers (each the eigenvalues of an exact Jacobian)."""
+    walker, cycle = gait
+    sens = gait_sensitivity(walker, cycle.fixed_point, NAMES, slope=SLOPE)
+    assert np.allclose(sens.multipliers, cycle.multipliers, atol=1e-9)
+    for k, name in enumerate(NAMES):
+        p = float(walker.parameters[name])
+        h = 1e-4 * max(1.0, abs(p))
+        plus = find_limit_cycle(walker.replace(**{name: p + h}), slope=SLOPE,
+                                guess=cycle.fixed_point, **TIGHT)
+        minus = find_limit_cycle(walker.replace(**{name: p - h}), slope=SLOPE,
+                                 guess=cycle.fixed_point, **TIGHT)
+        ref = (np.abs(plus.multipliers) - np.abs(minus.multipliers)) / (2 * h)
+        got = sens.modulus_derivatives[:, k]
+        assert np.max(np.abs(got - ref)) <= 1e-6 * max(np.max(np.abs(ref)), 1e-2), name

@@ -90,6 +90,7 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "law_gains", "max_walking_speed", "powered_gaits",
         "passive_gait_finder", "powered_step", "preferred_gait",
     ),
+    "sensitivity": ("GAIT_QUANTITY_UNITS", "GaitSensitivity", "gait_sensitivity"),
     "sweep": (
         "KNOWN_UNITS", "SweepError", "SweepFunction", "SweepStoreLockedError",
         "SweepStoreMismatchError", "SweepStoreRepairWarning", "sweep_progress",

@@ -11,6 +11,10 @@ differences of the step map from the fixed ``z*`` in ``p`` (two step maps per pa
 Newton solve). A quantity ``Q(z, p)`` of one step
 (period, step length, speed, collision loss ``T_c``, ``eta``) then has
 ``dQ/dp = D_z Q dz*/dp + dQ/dp``, its partial derivatives central differences of one step.
+The Floquet multipliers ``lambda_i`` (eigenvalues of ``D_z P`` with right and left eigenvectors
+``v_i``, ``w_i``) move by ``d lambda_i = w_i^H (d D_z P) v_i / (w_i^H v_i)``, with
+``d D_z P / dp`` central differences of the exact Jacobian along the gait,
+``(z* +- h dz*/dp, p +- h)``.
 """
 
 from __future__ import annotations
@@ -20,6 +24,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
@@ -52,6 +57,11 @@ class GaitSensitivity(ResultDictMixin):
         unit).
     values : dict of str to float
         The quantities at the gait.
+    multipliers : ndarray of complex, shape (d,)
+        The Floquet multipliers at the gait, largest modulus first
+        (:func:`~heelstrike.analysis.newton.floquet_multipliers` of the exact Jacobian).
+    multiplier_derivatives : ndarray of complex, shape (d, k)
+        ``d lambda_i / dp`` (per parameter unit), rows in the order of ``multipliers``.
     """
 
     parameters: tuple[str, ...]
@@ -59,6 +69,14 @@ class GaitSensitivity(ResultDictMixin):
     fixed_point: FloatArray
     quantities: dict[str, FloatArray]
     values: dict[str, float]
+    multipliers: NDArray[np.complex128]
+    multiplier_derivatives: NDArray[np.complex128]
+
+    @property
+    def modulus_derivatives(self) -> FloatArray:
+        """``d |lambda_i| / dp = Re(conj(lambda_i) d lambda_i) / |lambda_i|``, shape (d, k)."""
+        lam = self.multipliers[:, None]
+        return np.asarray(np.real(np.conj(lam) * self.multiplier_derivatives) / np.abs(lam))
 
 
 def _quantities(pmap: PoincareMap, z: FloatArray) -> FloatArray:
@@ -120,6 +138,11 @@ def gait_sensitivity(
     d = z.size
     pmap = PoincareMap(walker=walker, slope=slope, rtol=rtol, atol=atol)
     DP = pmap.exact_jacobian(z).jacobian
+    lam, V = np.linalg.eig(DP)
+    order = np.argsort(-np.abs(lam), kind="stable")
+    lam, V = lam[order], V[:, order]
+    W = np.linalg.inv(V).conj().T  # left eigenvectors: W^H V = I
+    dlam = np.empty((d, len(names)), dtype=complex)
     dz_all = np.empty((d, len(names)))
     dQ = np.empty((5, len(names)))
     # D_z Q by central differences of one step
@@ -137,10 +160,15 @@ def gait_sensitivity(
         dz_all[:, k] = np.linalg.solve(np.eye(d) - DP, dPdp)
         dQdp = (_quantities(plus, z) - _quantities(minus, z)) / (2.0 * h)
         dQ[:, k] = DQz @ dz_all[:, k] + dQdp
+        dz_h = h * dz_all[:, k]
+        dDP = (plus.exact_jacobian(z + dz_h).jacobian
+               - minus.exact_jacobian(z - dz_h).jacobian) / (2.0 * h)
+        dlam[:, k] = np.einsum("ji,jk,ki->i", W.conj(), dDP, V)
     values = _quantities(pmap, z)
     keys = tuple(GAIT_QUANTITY_UNITS)
     return GaitSensitivity(
         parameters=names, section_names=tuple(walker.section_names), fixed_point=dz_all,
         quantities={key: dQ[i].copy() for i, key in enumerate(keys)},
         values={key: float(values[i]) for i, key in enumerate(keys)},
+        multipliers=np.asarray(lam, dtype=complex), multiplier_derivatives=dlam,
     )

@@ -81,8 +81,8 @@ def add_gait(sub: Any) -> None:
     p.add_argument("--sensitivity", default=None, metavar="NAMES",
                    help="comma-separated walker parameters (the walker file's names: R, b, "
                    "mH, m, l, I, g): print the derivatives of the fixed point, period, step "
-                   "length, speed, T_c and eta in each (implicit function theorem with the "
-                   "exact step Jacobian, scipy reference)")
+                   "length, speed, T_c, eta and |multipliers| in each (implicit function "
+                   "theorem with the exact step Jacobian, scipy reference)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=_run_gait)
 
@@ -121,11 +121,14 @@ def _sensitivity(args: argparse.Namespace, walker: Any, cycle: Any) -> dict[str,
     out: dict[str, Any] = {"parameters": {n: u for n, _, u in names}, "derivatives": {}}
     units: dict[str, Any] = {}
     for k, (n, _, u) in enumerate(names):
-        row = {z: float(sens.fixed_point[i, k]) for i, z in enumerate(sens.section_names)}
+        row: dict[str, Any] = {z: float(sens.fixed_point[i, k])
+                               for i, z in enumerate(sens.section_names)}
         row.update({q: float(v[k]) for q, v in sens.quantities.items()})
+        row["multipliers"] = [float(v) for v in sens.modulus_derivatives[:, k]]  # d|m_i|/dp
         out["derivatives"][n] = row
         units[n] = {**{z: _per(section_unit(z), u) for z in sens.section_names},
-                    **{q: _per(qu, u) for q, qu in GAIT_QUANTITY_UNITS.items()}}
+                    **{q: _per(qu, u) for q, qu in GAIT_QUANTITY_UNITS.items()},
+                    "multipliers": _per("1", u)}
     out["units"] = {"parameters": "unit of each parameter", "derivatives": units}
     return out
 
@@ -142,7 +145,11 @@ def _print_sensitivity(sens: dict[str, Any]) -> None:
     for n, row in sens["derivatives"].items():
         print(f"    d/d{n} ({sens['parameters'][n]}):")
         for key, value in row.items():
-            print(f"      {key:<15} {value: .6g} {units[n][key]}")
+            if key == "multipliers":
+                text = ", ".join(f"{v:.6g}" for v in value)
+                print(f"      {'|multipliers|':<15} {text} {units[n][key]}")
+            else:
+                print(f"      {key:<15} {value: .6g} {units[n][key]}")
 
 
 def _run_gait_model(args: argparse.Namespace) -> int:

@@ -49,10 +49,7 @@ from typing import Any
 _PUBLIC: dict[str, tuple[str, ...]] = {
     "basin": ("Basin", "basin_of_attraction", "model_basin_of_attraction"),
     "cost_study": ("cheapest_gaits",),
-    "gait_map": (
-        "GaitMap", "NewtonGait", "compass_bifurcation", "model_bifurcation", "model_gait_map",
-        "newton_gait",
-    ),
+    "gait_map": ("GaitMap", "compass_bifurcation", "model_bifurcation", "model_gait_map"),
     "heel_strike": ("HeelStrikeStudy", "NotAHeelStrikeError", "heel_strike_study"),
     "limit_cycle": (
         "BifurcationDiagram", "Continuation", "GaitNotFoundError", "LimitCycle", "PoincareMap",
@@ -68,6 +65,7 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "PoweredGait", "PoweredGaitNotFoundError", "find_model_powered_gait",
         "find_powered_gait", "max_walking_speed",
     ),
+    "sensitivity": ("GaitSensitivity", "gait_sensitivity"),
     "walk_tables": ("WalkResult", "walk_energy_table"),
 }
 _SUBMODULE = {name: module for module, names in _PUBLIC.items() for name in names}

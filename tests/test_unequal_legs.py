@@ -273,3 +273,34 @@ def test_powered_gaits_of_a_stride_walker_are_refused() -> None:
     same = load_phased_walker(AMPUTEE, **EQUAL)
     step = powered_step(same, [-0.27, 1.09, -0.72], None, None, slope=SLOPE)
     assert np.all(np.isfinite(step.z_next))
+
+
+def test_basin_of_a_stride_walker_walks_strides(amputee_gait: ModelGait) -> None:
+    """Each point of a stride walker's basin (scipy reference) has the fate of one long walk
+    from it (:func:`simulate` alternates the legs): it converged exactly where that walk ends
+    within the tolerance of the stride's fixed point (a basin that kept leg A in stance every
+    step found no converging point and every walk ending 0.39 from z*)."""
+    from heelstrike.analysis.basin import model_basin_of_attraction
+    from heelstrike.dynamics.hybrid import WalkStatus
+
+    w = load_phased_walker(AMPUTEE)
+    zstar = amputee_gait.cycle.fixed_point
+    steps, tol = 30, 1e-3
+    basin = model_basin_of_attraction(
+        w, SLOPE, grid=(3, 3), ranges=((-0.30, -0.25), (1.0, 1.15)), steps=steps, tol=tol,
+        fixed_point=zstar, backend="scipy")
+    outcome = np.asarray(basin.dataset["outcome"].values)
+    a, b = (np.asarray(basin.dataset[d].values) for d in basin.dataset["outcome"].dims)
+    converged = 0
+    for i, ai in enumerate(a):
+        for j, bj in enumerate(b):
+            z = zstar.copy()
+            z[list(basin.axes)] = ai, bj
+            q, qd = w.section_to_state(z)
+            r = simulate(w, q, qd, slope=SLOPE, steps=steps)
+            arrived = r.ok and r.n_steps % 2 == 0 and float(np.linalg.norm(
+                w.state_to_section(r.final_q, r.final_q_dot) - zstar)) < tol
+            is_converged = outcome[i, j] == WalkStatus.CONVERGED.code
+            converged += is_converged
+            assert is_converged == arrived or (not r.ok and not is_converged)
+    assert converged >= 3

@@ -646,26 +646,33 @@ def _walk_points_scipy(
     walker: PlanarWalker, Z: FloatArray, slope: float, steps: int, zstar: FloatArray,
     tol: float, rtol: float, atol: float,
 ) -> tuple[NDArray[np.int64], NDArray[np.int64], FloatArray]:
-    """The ensemble with the scipy reference, one step at a time (stops on arrival); any
-    walker with a Poincare section."""
+    """The ensemble with the scipy reference, one period at a time (stops on arrival); any
+    walker with a Poincare section. A period is
+    :attr:`~heelstrike.models.base.PlanarWalker.steps_per_period` steps (a walker whose legs
+    differ walks a stride, its steps taken by the walker and by the walker after its swap, as
+    :func:`~heelstrike.dynamics.hybrid.simulate` does), and arrival is tested at the section
+    where ``zstar`` lies: after whole periods."""
     from heelstrike.dynamics.hybrid import simulate
 
     n = Z.shape[0]
     status = np.zeros(n, dtype=np.int64)
     taken = np.zeros(n, dtype=np.int64)
     zf = np.zeros_like(Z)
+    period = int(walker.steps_per_period)
     for i in range(n):
         q, qd = walker.section_to_state(Z[i])
         k = 0
         code = WalkStatus.COMPLETED.code
         while k < steps:
-            r = simulate(walker, q, qd, slope=slope, steps=1, rtol=rtol, atol=atol)
+            r = simulate(walker, q, qd, slope=slope, steps=min(period, steps - k), rtol=rtol,
+                         atol=atol)
             k += r.n_steps
             q, qd = r.final_q, r.final_q_dot
             if not r.ok:
                 code = r.status.code
                 break
-            if float(np.linalg.norm(walker.state_to_section(q, qd) - zstar)) < tol:
+            if k % period == 0 and float(np.linalg.norm(
+                    walker.state_to_section(q, qd) - zstar)) < tol:
                 break
         status[i], taken[i], zf[i] = code, k, walker.state_to_section(q, qd)
     return status, taken, zf

@@ -263,7 +263,7 @@ def _parameter_entry(walker: PlanarWalker, name: str) -> tuple[int | None, Plana
         raise ExactJacobianUnavailable(
             f"parameter {name!r}: {type(walker).__name__} has no generated equations")
     p = float(np.asarray(known[name]))
-    delta = 0.25 * max(1.0, abs(p))  # a change that keeps the walker valid is not needed
+    delta = 0.25 * max(1.0, abs(p))  # any change the walker accepts shows where p enters
     other = None
     for step in (delta, 1e-3 * delta, -1e-3 * delta):
         try:
@@ -272,7 +272,7 @@ def _parameter_entry(walker: PlanarWalker, name: str) -> tuple[int | None, Plana
         except ValueError:
             continue
     twin2 = None if other is None else _twin(other)
-    if twin2 is None:
+    if other is None or twin2 is None:
         raise ExactJacobianUnavailable(
             f"parameter {name!r}: no valid walker with it changed to check how it enters "
             "the equations; use central differences")

@@ -138,7 +138,7 @@ def gait_sensitivity(
         ``p`` by the variational equations
         (:func:`~heelstrike.dynamics.variational.step_jacobian` with ``parameters``), falling
         back to central differences for a parameter with no exact derivative (see
-        :attr:`GaitSensitivity.exact`). ``"central"``: central differences of the step map
+        ``GaitSensitivity.exact``). ``"central"``: central differences of the step map
         for all of them. Either way the multipliers' derivatives (second derivatives of the
         step map) are central differences of the exact Jacobian along the gait.
     rel_step : float

@@ -170,3 +170,51 @@ def test_fallback_column_is_central(monkeypatch: pytest.MonkeyPatch) -> None:
     assert not np.array_equal(mixed.fixed_point[:, 1], exact.fixed_point[:, 1])
     assert np.allclose(mixed.fixed_point[:, 1], exact.fixed_point[:, 1], rtol=1e-6,
                        atol=1e-6 * np.max(np.abs(exact.fixed_point[:, 1])))
+
+
+def test_kneed_quantity_partials_match_central_differences(
+    kneed: tuple[PoincareMap, np.ndarray]
+) -> None:
+    """Two events (the period is the heel strike's time after a knee strike): the exact
+    partials of the step quantities in ``z`` and ``p``."""
+    pmap, z = kneed
+    names = ("R", "b2")
+    sj = step_jacobian(pmap.walker, z, slope=pmap.slope, parameters=names, **TIGHT)
+    keys = tuple(GAIT_QUANTITY_UNITS)
+    h = 1e-5
+    DQz = np.stack([(_quantities(pmap, z + h * e) - _quantities(pmap, z - h * e)) / (2 * h)
+                    for e in np.eye(z.size)], axis=-1)
+    for i, key in enumerate(keys):
+        exact = sj.quantity_state_gradients[key]
+        assert np.max(np.abs(exact - DQz[i])) <= 1e-7 * np.max(np.abs(DQz[i])), key
+    for k, name in enumerate(names):
+        ref = _difference(pmap, name, lambda m: _quantities(m, z))
+        for i, key in enumerate(keys):
+            scale = max(np.max(np.abs(DQz[i])), abs(ref[i]))
+            assert abs(sj.quantity_parameter_gradients[key][k] - ref[i]) <= 1e-7 * scale, \
+                (name, key)
+
+
+def test_kneed_gait_sensitivity_matches_converged_gaits(
+    kneed: tuple[PoincareMap, np.ndarray]
+) -> None:
+    """The kneed walker's gait sensitivities (exact partials) against central differences of
+    gaits re-solved by Newton at ``p +- h``."""
+    from heelstrike.analysis.model_gaits import find_model_gait
+
+    pmap, z = kneed
+    walker = pmap.walker
+    names = ("R", "mH")
+    sens = gait_sensitivity(walker, z, names, slope=pmap.slope)
+    assert sens.exact == (True, True)
+    for k, name in enumerate(names):
+        p = float(walker.parameters[name])
+        h = 1e-4 * max(1.0, abs(p))
+        plus, minus = (find_model_gait(walker.replace(**{name: v}), slope=pmap.slope, guess=z,
+                                       tol=1e-12, **TIGHT).cycle for v in (p + h, p - h))
+        dz = (plus.fixed_point - minus.fixed_point) / (2 * h)
+        assert np.max(np.abs(sens.fixed_point[:, k] - dz)) <= 1e-6 * np.max(np.abs(dz)), name
+        for q in GAIT_QUANTITY_UNITS:
+            ref = (getattr(plus, q) - getattr(minus, q)) / (2 * h)
+            scale = max(abs(ref), 1e-2 * abs(getattr(plus, q)) / max(1.0, abs(p)))
+            assert abs(sens.quantities[q][k] - ref) <= 1e-6 * scale, (name, q)

@@ -46,7 +46,7 @@ from __future__ import annotations
 import types
 import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -205,7 +205,8 @@ class _Parameters:
 
     ``index[i]`` is the position of parameter ``names[i]`` in the generated functions'
     parameter vector (None: the ground slope). The foot radii are the description's
-    expressions evaluated at complex parameter values.
+    expressions evaluated at complex parameter values (for the feet whose radius
+    ``radius_moves`` with the parameters; the others keep their value).
     """
 
     names: tuple[str, ...]
@@ -215,6 +216,7 @@ class _Parameters:
     twin_names: tuple[str, ...]
     feet: tuple[Any, Any]
     nominal: FloatArray
+    radius_moves: tuple[bool, bool] = (True, True)
 
     @property
     def k(self) -> int:
@@ -235,7 +237,9 @@ class _Parameters:
             else:
                 params[idx] = pv[..., i]
                 values[self.twin_names[idx]] = pv[..., i]
-        radii = tuple(evaluate_expression(ft.radius, values) for ft in self.feet)
+        radii = tuple(evaluate_expression(ft.radius, values) if moves else r
+                      for ft, moves, r in zip(self.feet, self.radius_moves, self.eq.radii,
+                                              strict=True))
         return _Equations(fn=self.eq.fn, params=tuple(params), radii=(radii[0], radii[1]),
                           slope=slope)
 
@@ -297,13 +301,17 @@ def _parameters(walker: PlanarWalker, names: tuple[str, ...], slope: float
     entries = [_parameter_entry(walker, name) for name in names]
     twin = _twin(walker)
     desc = twin.description
-    return _Parameters(
+    par = _Parameters(
         names=names, index=tuple(e[0] for e in entries), eq=eq,
         values=dict(twin._values), twin_names=tuple(desc.param_names),
         feet=(desc.feet[0], desc.feet[1]),
         nominal=np.array([float(slope) if e[0] is None else float(twin._p[e[0]])
                           for e in entries]),
-    ), [e[1] for e in entries]
+    )
+    # which foot radii move with the parameters: a complex step along each
+    steps = par.nominal + 1j * COMPLEX_STEP * np.eye(par.k)
+    moves = tuple(bool(np.any(np.imag(r) != 0.0)) for r in par.at(steps).radii)
+    return replace(par, radius_moves=(moves[0], moves[1])), [e[1] for e in entries]
 
 
 def _complex_jacobian(fun: Callable[[_ComplexArray], _ComplexArray], x: FloatArray,

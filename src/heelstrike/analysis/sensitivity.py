@@ -6,11 +6,17 @@ the periodicity condition in a walker parameter ``p`` gives
 .. math:: \\frac{dz^*}{dp} = (I - D_z P)^{-1} \\frac{\\partial P}{\\partial p},
 
 with ``D_z P`` the exact step-map Jacobian
-(:meth:`~heelstrike.analysis.limit_cycle.PoincareMap.exact_jacobian`) and ``dP/dp`` central
-differences of the step map from the fixed ``z*`` in ``p`` (two step maps per parameter; no
-Newton solve). A quantity ``Q(z, p)`` of one step
-(period, step length, speed, collision loss ``T_c``, ``eta``) then has
-``dQ/dp = D_z Q dz*/dp + dQ/dp``, its partial derivatives central differences of one step.
+(:meth:`~heelstrike.analysis.limit_cycle.PoincareMap.exact_jacobian`) and ``dP/dp`` exact too,
+by default: :func:`~heelstrike.dynamics.variational.step_jacobian` with ``parameters`` (the
+variational equations on the state augmented with the parameters; one integration for every
+parameter). A quantity ``Q(z, p)`` of one step (period, step length, speed, collision loss
+``T_c``, ``eta``) then has ``dQ/dp = D_z Q dz*/dp + dQ/dp``, its partial derivatives exact from
+the same integration. ``method="central"`` takes ``dP/dp`` and the partials of ``Q`` by central
+differences of the step map instead (two step maps per parameter and per section coordinate;
+no Newton solve), the check of the exact ones; so does the exact method for a parameter that
+cannot be differentiated exactly (one the walker's equations do not take as one of their
+parameters, or one that moves a lock angle: see
+:func:`~heelstrike.dynamics.variational.step_jacobian`), for that parameter's column only.
 The Floquet multipliers ``lambda_i`` (eigenvalues of ``D_z P`` with right and left eigenvectors
 ``v_i``, ``w_i``) move by ``d lambda_i = w_i^H (d D_z P) v_i / (w_i^H v_i)``, with
 ``d D_z P / dp`` central differences of the exact Jacobian along the gait,
@@ -20,8 +26,8 @@ The Floquet multipliers ``lambda_i`` (eigenvalues of ``D_z P`` with right and le
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import Any
+from dataclasses import dataclass, replace
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -47,7 +53,8 @@ class GaitSensitivity(ResultDictMixin):
     ----------
     parameters : tuple of str
         The walker parameters ``p`` (names of
-        :attr:`~heelstrike.models.base.PlanarWalker.parameters`), in the columns' order.
+        :attr:`~heelstrike.models.base.PlanarWalker.parameters`, or ``"slope"``), in the
+        columns' order.
     section_names : tuple of str
         The section coordinates, in the rows' order of ``fixed_point``.
     fixed_point : ndarray, shape (d, k)
@@ -62,6 +69,9 @@ class GaitSensitivity(ResultDictMixin):
         (:func:`~heelstrike.analysis.newton.floquet_multipliers` of the exact Jacobian).
     multiplier_derivatives : ndarray of complex, shape (d, k)
         ``d lambda_i / dp`` (per parameter unit), rows in the order of ``multipliers``.
+    exact : tuple of bool
+        Per parameter: True if its partial derivatives are exact, False if central
+        differences (``method="central"``, or a parameter with no exact derivative).
     """
 
     parameters: tuple[str, ...]
@@ -71,6 +81,7 @@ class GaitSensitivity(ResultDictMixin):
     values: dict[str, float]
     multipliers: NDArray[np.complex128]
     multiplier_derivatives: NDArray[np.complex128]
+    exact: tuple[bool, ...] = ()
 
     @property
     def modulus_derivatives(self) -> FloatArray:
@@ -89,12 +100,20 @@ def _quantities(pmap: PoincareMap, z: FloatArray) -> FloatArray:
     return np.array([T, L, L / T, loss, loss / L])
 
 
+def _changed_map(pmap: PoincareMap, name: str, value: float) -> PoincareMap:
+    """``pmap`` with parameter ``name`` (or ``"slope"``) set to ``value``."""
+    if name == "slope":
+        return replace(pmap, slope=value)
+    return replace(pmap, walker=pmap.walker.replace(**{name: value}))
+
+
 def gait_sensitivity(
     walker: PlanarWalker,
     fixed_point: Any,
     parameters: Sequence[str],
     *,
     slope: float,
+    method: Literal["exact", "central"] = "exact",
     rel_step: float = 1e-5,
     rtol: float = 1e-12,
     atol: float = 1e-12,
@@ -110,12 +129,21 @@ def gait_sensitivity(
         The gait's fixed point ``z*`` (e.g. the ``fixed_point`` of a
         :class:`~heelstrike.analysis.limit_cycle.LimitCycle`), converged at about ``rtol``.
     parameters : sequence of str
-        Names in :attr:`~heelstrike.models.base.PlanarWalker.parameters` (SI units).
+        Names in :attr:`~heelstrike.models.base.PlanarWalker.parameters` (SI units), or
+        ``"slope"`` (rad).
     slope : float
         Ground slope (rad).
+    method : {"exact", "central"}
+        ``"exact"`` (default): ``dP/dp`` and the quantities' partial derivatives in ``z`` and
+        ``p`` by the variational equations
+        (:func:`~heelstrike.dynamics.variational.step_jacobian` with ``parameters``), falling
+        back to central differences for a parameter with no exact derivative (see
+        ``GaitSensitivity.exact``). ``"central"``: central differences of the step map
+        for all of them. Either way the multipliers' derivatives (second derivatives of the
+        step map) are central differences of the exact Jacobian along the gait.
     rel_step : float
-        Relative central-difference step of the partial derivatives, ``h = rel_step
-        max(1, |p|)`` (and ``max(1, |z_i|)`` in ``z``).
+        Relative central-difference step, ``h = rel_step max(1, |p|)`` (and
+        ``max(1, |z_i|)`` in ``z``).
     rtol, atol : float
         Integrator tolerances.
 
@@ -126,49 +154,73 @@ def gait_sensitivity(
     Raises
     ------
     ValueError
-        For a name that is not a parameter of the walker, or a step that fails.
+        For a name that is not a parameter of the walker (nor ``"slope"``), an unknown
+        ``method``, or a step that fails.
     """
+    from heelstrike.dynamics.variational import (
+        ExactJacobianUnavailable,
+        _parameter_entry,
+        step_jacobian,
+    )
+
     names = tuple(parameters)
     known = walker.parameters
     for name in names:
-        if name not in known:
+        if name not in known and name != "slope":
             raise ValueError(f"{name!r} is not a parameter of {type(walker).__name__} "
-                             f"(its parameters: {', '.join(known)})")
+                             f"(its parameters: {', '.join(known)}, or 'slope')")
+    if method not in ("exact", "central"):
+        raise ValueError(f"method must be 'exact' or 'central', not {method!r}")
     z = np.asarray(fixed_point, dtype=float)
     d = z.size
     pmap = PoincareMap(walker=walker, slope=slope, rtol=rtol, atol=atol)
-    DP = pmap.exact_jacobian(z).jacobian
+    exact_names: list[str] = []
+    if method == "exact":
+        for name in names:
+            try:
+                _parameter_entry(walker, name)
+            except ExactJacobianUnavailable:
+                continue
+            exact_names.append(name)
+    sj = step_jacobian(walker, z, slope=slope, parameters=exact_names, rtol=rtol, atol=atol)
+    DP = sj.jacobian
     lam, V = np.linalg.eig(DP)
     order = np.argsort(-np.abs(lam), kind="stable")
     lam, V = lam[order], V[:, order]
     W = np.linalg.inv(V).conj().T  # left eigenvectors: W^H V = I
+    keys = tuple(GAIT_QUANTITY_UNITS)
     dlam = np.empty((d, len(names)), dtype=complex)
     dz_all = np.empty((d, len(names)))
     dQ = np.empty((5, len(names)))
-    # D_z Q by central differences of one step
-    hz = rel_step * np.maximum(1.0, np.abs(z))
-    DQz = np.stack([(_quantities(pmap, z + hz[i] * e) - _quantities(pmap, z - hz[i] * e))
-                    / (2.0 * hz[i]) for i, e in enumerate(np.eye(d))], axis=-1)
+    if method == "exact":
+        DQz = np.stack([sj.quantity_state_gradients[q] for q in keys])
+        values = np.array([sj.quantities[q] for q in keys])
+    else:  # D_z Q by central differences of one step
+        hz = rel_step * np.maximum(1.0, np.abs(z))
+        DQz = np.stack([(_quantities(pmap, z + hz[i] * e) - _quantities(pmap, z - hz[i] * e))
+                        / (2.0 * hz[i]) for i, e in enumerate(np.eye(d))], axis=-1)
+        values = _quantities(pmap, z)
     for k, name in enumerate(names):
-        p = float(np.asarray(known[name]))
+        p = float(slope) if name == "slope" else float(np.asarray(known[name]))
         h = rel_step * max(1.0, abs(p))
-        plus = PoincareMap(walker=walker.replace(**{name: p + h}), slope=slope, rtol=rtol,
-                           atol=atol)
-        minus = PoincareMap(walker=walker.replace(**{name: p - h}), slope=slope, rtol=rtol,
-                            atol=atol)
-        dPdp = (plus(z) - minus(z)) / (2.0 * h)
+        plus, minus = _changed_map(pmap, name, p + h), _changed_map(pmap, name, p - h)
+        if name in exact_names:
+            i = exact_names.index(name)
+            dPdp = sj.parameter_jacobian[:, i]
+            dQdp = np.array([sj.quantity_parameter_gradients[q][i] for q in keys])
+        else:
+            dPdp = (plus(z) - minus(z)) / (2.0 * h)
+            dQdp = (_quantities(plus, z) - _quantities(minus, z)) / (2.0 * h)
         dz_all[:, k] = np.linalg.solve(np.eye(d) - DP, dPdp)
-        dQdp = (_quantities(plus, z) - _quantities(minus, z)) / (2.0 * h)
         dQ[:, k] = DQz @ dz_all[:, k] + dQdp
         dz_h = h * dz_all[:, k]
         dDP = (plus.exact_jacobian(z + dz_h).jacobian
                - minus.exact_jacobian(z - dz_h).jacobian) / (2.0 * h)
         dlam[:, k] = np.einsum("ji,jk,ki->i", W.conj(), dDP, V)
-    values = _quantities(pmap, z)
-    keys = tuple(GAIT_QUANTITY_UNITS)
     return GaitSensitivity(
         parameters=names, section_names=tuple(walker.section_names), fixed_point=dz_all,
         quantities={key: dQ[i].copy() for i, key in enumerate(keys)},
         values={key: float(values[i]) for i, key in enumerate(keys)},
         multipliers=np.asarray(lam, dtype=complex), multiplier_derivatives=dlam,
+        exact=tuple(name in exact_names for name in names),
     )

@@ -31,6 +31,11 @@ striking joint reaching its lock angle, that of the heel strike the swing foot's
 ``Xi`` and ``Pi``. The event times and the nominal trajectory are those of
 :func:`~heelstrike.dynamics.hybrid.simulate` (the scipy reference).
 
+Parameter derivatives ``dP/dp`` come from the same chain on the state augmented with the
+parameters (zero rate): ``step_jacobian(..., parameters=("foot_radius", "slope"))``, with the
+step quantities' partial derivatives (period, step length, speed, collision loss, ``eta``)
+in ``z`` and ``p``.
+
 The *naive* product (reset Jacobians times flow Jacobians, ``Xi`` replaced by ``D Delta`` and
 ``Pi_h`` by the identity) is returned too: it is wrong (it ignores that moving the initial
 state moves the event times), and shows how much the saltation terms matter.
@@ -40,8 +45,8 @@ from __future__ import annotations
 
 import types
 import warnings
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -100,6 +105,18 @@ class StepJacobian(ResultDictMixin):
         Time (s) of each reset of the step (knee strikes, then the heel strike).
     events : tuple of str
         Their kinds (``"knee_strike"``, ``"heel_strike"``).
+    parameters : tuple of str
+        The parameters differentiated in (``step_jacobian(..., parameters=...)``), in the
+        columns' order; empty by default.
+    parameter_jacobian : ndarray, shape (d, k)
+        ``dP/dp`` at fixed ``z`` (section units per parameter unit), exact.
+    quantities : dict of str to float
+        The step's ``period`` (s, the heel strike's time), ``step_length`` (m), ``speed``
+        (m/s), ``collision_loss`` (``T_c`` of the heel strike, J) and ``eta`` (J/m).
+    quantity_state_gradients : dict of str to ndarray, shape (d,)
+        Their partial derivatives in ``z`` (exact).
+    quantity_parameter_gradients : dict of str to ndarray, shape (k,)
+        Their partial derivatives in ``p`` at fixed ``z`` (exact).
     """
 
     z: FloatArray
@@ -108,20 +125,38 @@ class StepJacobian(ResultDictMixin):
     naive: FloatArray
     event_times: tuple[float, ...]
     events: tuple[str, ...]
+    parameters: tuple[str, ...] = ()
+    parameter_jacobian: FloatArray = field(default_factory=lambda: np.zeros((0, 0)))
+    quantities: dict[str, float] = field(default_factory=dict)
+    quantity_state_gradients: dict[str, FloatArray] = field(default_factory=dict)
+    quantity_parameter_gradients: dict[str, FloatArray] = field(default_factory=dict)
 
 
 # -- complex-capable equations of a walker ---------------------------------------------------
+def _twin(walker: PlanarWalker) -> Any:
+    """The described walker whose generated equations are differentiated (None if none)."""
+    if getattr(walker, "model", None) is not None:
+        return walker
+    return walker.as_described()
+
+
 @dataclass(frozen=True, kw_only=True)
 class _Equations:
-    """The walker's generated expressions, evaluated without casting to float (complex step)."""
+    """The walker's generated expressions, evaluated without casting to float (complex step).
+
+    ``params`` is the generated functions' parameter vector; its entries may be complex
+    arrays (a batch of complex steps). ``radii`` are the (stance, swing) foot radii and
+    ``slope`` the ground slope at these parameter values.
+    """
 
     fn: Callable[[str], Callable[..., Any]]
     params: tuple[Any, ...]
-    swing_radius: float
+    radii: tuple[Any, Any]
+    slope: Any
 
     @classmethod
-    def of(cls, walker: PlanarWalker) -> _Equations:
-        twin = walker if getattr(walker, "model", None) is not None else walker.as_described()
+    def of(cls, walker: PlanarWalker, slope: float) -> _Equations:
+        twin = _twin(walker)
         model = getattr(twin, "model", None)
         if twin is None or model is None:
             raise ExactJacobianUnavailable(
@@ -139,26 +174,144 @@ class _Equations:
                 cache[name] = types.FunctionType(code, namespace, name)
             return cache[name]
 
-        return cls(fn=fn, params=tuple(twin._p),  # type: ignore[attr-defined]
-                   swing_radius=float(np.asarray(twin.foot_radii[1])))
+        radii = tuple(float(np.asarray(r)) for r in twin.foot_radii)
+        return cls(fn=fn, params=tuple(twin._p), radii=(radii[0], radii[1]), slope=float(slope))
 
     def mass_matrix(self, q: _ComplexArray) -> _ComplexArray:
         return np.asarray(self.fn("mass_matrix")(q, self.params))
 
-    def bias_forces(self, q: _ComplexArray, qd: _ComplexArray, slope: float) -> _ComplexArray:
-        return np.asarray(self.fn("bias_forces")(q, qd, self.params, slope))
+    def bias_forces(self, q: _ComplexArray, qd: _ComplexArray) -> _ComplexArray:
+        return np.asarray(self.fn("bias_forces")(q, qd, self.params, self.slope))
 
     def contact_jacobian(self, q: _ComplexArray, foot: str) -> _ComplexArray:
         return np.asarray(self.fn(f"contact_jacobian_{foot}")(q, self.params))
 
+    def swing_centre(self, q: _ComplexArray) -> _ComplexArray:
+        """Swing foot arc centre ``(x, y)`` (m), shape (..., 2)."""
+        return np.asarray(self.fn("foot_centre_swing")(q, self.params))
+
     def swing_clearance(self, q: _ComplexArray) -> Any:
-        return np.asarray(self.fn("foot_centre_swing")(q, self.params))[..., 1] \
-            - self.swing_radius
+        return self.swing_centre(q)[..., 1] - self.radii[1]
 
     def swap_legs(self, q: _ComplexArray, qd: _ComplexArray) -> tuple[_ComplexArray, _ComplexArray]:
         q_new = np.asarray(self.fn("swap_coordinates")(q, self.params))
         S = np.asarray(self.fn("swap_jacobian")(q, self.params))
-        return q_new, S @ qd
+        return q_new, np.einsum("...ij,...j->...i", S, qd)
+
+
+@dataclass(frozen=True, kw_only=True)
+class _Parameters:
+    """How the differentiated parameters enter the equations.
+
+    ``index[i]`` is the position of parameter ``names[i]`` in the generated functions'
+    parameter vector (None: the ground slope). The foot radii are the description's
+    expressions evaluated at complex parameter values (for the feet whose radius
+    ``radius_moves`` with the parameters; the others keep their value).
+    """
+
+    names: tuple[str, ...]
+    index: tuple[int | None, ...]
+    eq: _Equations
+    values: dict[str, Any]
+    twin_names: tuple[str, ...]
+    feet: tuple[Any, Any]
+    nominal: FloatArray
+    radius_moves: tuple[bool, bool] = (True, True)
+
+    @property
+    def k(self) -> int:
+        return len(self.names)
+
+    def at(self, pv: _ComplexArray) -> _Equations:
+        """The equations at parameter values ``pv`` (..., k) of :attr:`names`."""
+        if self.k == 0:
+            return self.eq
+        from heelstrike.models.description import evaluate_expression
+
+        params = list(self.eq.params)
+        slope: Any = self.eq.slope
+        values = dict(self.values)
+        for i, idx in enumerate(self.index):
+            if idx is None:
+                slope = pv[..., i]
+            else:
+                params[idx] = pv[..., i]
+                values[self.twin_names[idx]] = pv[..., i]
+        radii = tuple(evaluate_expression(ft.radius, values) if moves else r
+                      for ft, moves, r in zip(self.feet, self.radius_moves, self.eq.radii,
+                                              strict=True))
+        return _Equations(fn=self.eq.fn, params=tuple(params), radii=(radii[0], radii[1]),
+                          slope=slope)
+
+
+def _parameter_entry(walker: PlanarWalker, name: str) -> tuple[int | None, PlanarWalker | None]:
+    """Where walker parameter ``name`` enters the generated equations (``"slope"``: None) and
+    the walker with it changed (for the checks of :func:`_section_input`).
+
+    Raises
+    ------
+    ValueError
+        If ``name`` is neither ``"slope"`` nor a parameter of the walker.
+    ExactJacobianUnavailable
+        If the parameter does not enter as one entry of the equations' parameter vector, or
+        it moves a joint's lock angle (not differentiated here).
+    """
+    if name == "slope":
+        return None, None
+    known = walker.parameters
+    if name not in known:
+        raise ValueError(f"{name!r} is not a parameter of {type(walker).__name__} "
+                         f"(its parameters: {', '.join(known)}, or 'slope')")
+    twin = _twin(walker)
+    if twin is None or getattr(twin, "model", None) is None:
+        raise ExactJacobianUnavailable(
+            f"parameter {name!r}: {type(walker).__name__} has no generated equations")
+    p = float(np.asarray(known[name]))
+    delta = 0.25 * max(1.0, abs(p))  # any change the walker accepts shows where p enters
+    other = None
+    for step in (delta, 1e-3 * delta, -1e-3 * delta):
+        try:
+            other = walker.replace(**{name: p + step})
+            break
+        except ValueError:
+            continue
+    twin2 = None if other is None else _twin(other)
+    if other is None or twin2 is None:
+        raise ExactJacobianUnavailable(
+            f"parameter {name!r}: no valid walker with it changed to check how it enters "
+            "the equations; use central differences")
+    diff = np.asarray(twin2._p, dtype=float) - np.asarray(twin._p, dtype=float)
+    moved = np.flatnonzero(diff)
+    change = float(np.asarray(other.parameters[name])) - p
+    if moved.size != 1 or not np.isclose(diff[moved[0]], change, rtol=1e-12, atol=0.0):
+        raise ExactJacobianUnavailable(
+            f"parameter {name!r} does not enter {type(walker).__name__}'s generated equations "
+            "as one of their parameters: no exact derivative; use central differences")
+    if not np.array_equal(np.asarray(getattr(twin2, "lock_angles", ()), dtype=float),
+                          np.asarray(getattr(twin, "lock_angles", ()), dtype=float)):
+        raise ExactJacobianUnavailable(
+            f"parameter {name!r} moves a joint's lock angle (the knee-strike guard and the "
+            "locked configuration): not differentiated exactly; use central differences")
+    return int(moved[0]), other
+
+
+def _parameters(walker: PlanarWalker, names: tuple[str, ...], slope: float
+                ) -> tuple[_Parameters, list[PlanarWalker | None]]:
+    eq = _Equations.of(walker, slope)
+    entries = [_parameter_entry(walker, name) for name in names]
+    twin = _twin(walker)
+    desc = twin.description
+    par = _Parameters(
+        names=names, index=tuple(e[0] for e in entries), eq=eq,
+        values=dict(twin._values), twin_names=tuple(desc.param_names),
+        feet=(desc.feet[0], desc.feet[1]),
+        nominal=np.array([float(slope) if e[0] is None else float(twin._p[e[0]])
+                          for e in entries]),
+    )
+    # which foot radii move with the parameters: a complex step along each
+    steps = par.nominal + 1j * COMPLEX_STEP * np.eye(par.k)
+    moves = tuple(bool(np.any(np.imag(r) != 0.0)) for r in par.at(steps).radii)
+    return replace(par, radius_moves=(moves[0], moves[1])), [e[1] for e in entries]
 
 
 def _complex_jacobian(fun: Callable[[_ComplexArray], _ComplexArray], x: FloatArray,
@@ -193,11 +346,16 @@ def _inert_impact(M: _ComplexArray, A: _ComplexArray, qd: _ComplexArray,
 # -- one phase ---------------------------------------------------------------------------------
 @dataclass(frozen=True, kw_only=True)
 class _PhaseField:
-    """The reduced single-support field ``F(t, x)`` of one phase, complex-capable."""
+    """The reduced single-support field of one phase on the augmented state, complex-capable.
+
+    The augmented state is ``y = (theta, theta_dot, c, p)``, shape (..., 2 m + 1 + k): the
+    integrator state, the stance angle ``c`` at the step's start (the rolling stance foot's
+    arc centre is at ``x = R (c - theta)``) and the differentiated parameters ``p``; ``c`` and
+    ``p`` have zero rate, so the variational equations carry their columns (``dP/dp``).
+    """
 
     support: SingleSupport
-    eq: _Equations
-    slope: float
+    par: _Parameters
     torque: Any
     q_ref: FloatArray
 
@@ -205,103 +363,122 @@ class _PhaseField:
     def free(self) -> list[int]:
         return list(self.support.free_coordinates)
 
-    def basis(self) -> FloatArray:
-        """``J`` (n, m): ``q_dot = J theta_dot`` (rolling stance foot, locked joints held)."""
+    @property
+    def m(self) -> int:
+        return len(self.free)
+
+    def unpack(self, y: _ComplexArray) -> tuple[_ComplexArray, _ComplexArray, _Equations]:
+        """Full ``(q, q_dot)``, shapes (..., n), and the equations at ``y``'s parameters."""
+        free, m = self.free, self.m
+        eq = self.par.at(y[..., 2 * m + 1:])
+        R = eq.radii[0]
+        dtype = np.result_type(y, float)
+        q = np.broadcast_to(self.q_ref, (*y.shape[:-1], self.q_ref.size)).astype(dtype)
+        q[..., free] = y[..., :m]
+        q[..., 0] = R * (y[..., 2 * m] - y[..., 0])
+        q[..., 1] = R
+        qd = np.zeros_like(q)
+        qd[..., free] = y[..., m: 2 * m]
+        qd[..., 0] = -R * y[..., m]
+        return q, qd, eq
+
+    def basis(self, eq: _Equations, batch: tuple[int, ...]) -> _ComplexArray:
+        """``J`` (..., n, m): ``q_dot = J theta_dot`` (rolling stance foot, locked joints
+        held)."""
         free = self.free
-        J = np.zeros((self.q_ref.size, len(free)))
-        J[free, range(len(free))] = 1.0
-        J[0, 0] = -self.radius()
+        J = np.zeros((*batch, self.q_ref.size, len(free)), dtype=np.result_type(eq.radii[0],
+                                                                                 float))
+        J[..., free, range(len(free))] = 1.0
+        J[..., 0, 0] = -np.asarray(eq.radii[0])
         return J
 
-    def radius(self) -> float:
-        return float(np.asarray(self.support.walker.foot_radii[0]))
-
-    def unpack(self, x: _ComplexArray) -> tuple[_ComplexArray, _ComplexArray]:
-        """Full ``(q, q_dot)``, shapes (..., n), of integrator states ``x`` (..., 2 m)."""
+    def pack(self, q: _ComplexArray, qd: _ComplexArray, rest: _ComplexArray) -> _ComplexArray:
         free = self.free
-        m, R = len(free), self.radius()
-        q = np.broadcast_to(self.q_ref, (*x.shape[:-1], self.q_ref.size)).astype(
-            np.result_type(x, float))
-        q[..., free] = x[..., :m]
-        q[..., 0] = self.q_ref[0] + R * self.q_ref[2] - R * x[..., 0]
-        q[..., 1] = R
-        qd = x[..., m: 2 * m] @ self.basis().T
-        return q, qd
+        return np.concatenate((q[..., free], qd[..., free], rest), axis=-1)
 
-    def pack(self, q: _ComplexArray, qd: _ComplexArray) -> _ComplexArray:
-        free = self.free
-        return np.concatenate((q[..., free], qd[..., free]), axis=-1)
-
-    def __call__(self, t: float, x: _ComplexArray) -> _ComplexArray:
-        """``F(t, x) = (theta_dot, (J^T M J)^-1 J^T (B u - h))``, shape (..., 2 m)."""
-        m = len(self.free)
-        q, qd = self.unpack(x)
-        f = -self.eq.bias_forces(q, qd, self.slope)
+    def __call__(self, t: float, y: _ComplexArray) -> _ComplexArray:
+        """``F(t, y) = (theta_dot, (J^T M J)^-1 J^T (B u - h), 0, 0)``, shape (..., N)."""
+        m = self.m
+        q, qd, eq = self.unpack(y)
+        f = -eq.bias_forces(q, qd)
         if self.torque is not None:
             B = np.asarray(self.support.walker.actuation_matrix(), dtype=float)
-            if x.ndim == 1:
+            if y.ndim == 1:
                 u = np.asarray(self.torque(t, q, qd))
             else:  # a law takes one state (TorqueLaw): row by row
                 u = np.stack([np.asarray(self.torque(t, a, b)) for a, b in zip(q, qd,
                                                                                   strict=True)])
             f = f + u @ B.T
-        J = self.basis()
-        Mr = np.einsum("ia,...ij,jb->...ab", J, self.eq.mass_matrix(q), J)
-        acc = np.linalg.solve(Mr, (f @ J)[..., None])[..., 0]
-        return np.concatenate((x[..., m: 2 * m], acc), axis=-1)
+        J = self.basis(eq, y.shape[:-1])
+        Mr = np.einsum("...ia,...ij,...jb->...ab", J, eq.mass_matrix(q), J)
+        acc = np.linalg.solve(Mr, np.einsum("...i,...ia->...a", f, J)[..., None])[..., 0]
+        return np.concatenate((y[..., m: 2 * m], acc, np.zeros_like(y[..., 2 * m:])), axis=-1)
 
-    def linearise(self, t: float, x: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """``F(t, x)`` (2 m,) and ``D_x F(t, x)`` (2 m, 2 m) from one batched call: complex
-        steps along every axis (the real part of each is ``F(t, x)`` to ``O(h^2)``, exact)."""
-        X = x + 1j * COMPLEX_STEP * np.eye(x.size)
+    def linearise(self, t: float, y: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """``F(t, y)`` (N,) and ``D_y F(t, y)`` (N, N) from one batched call: complex
+        steps along every axis (the real part of each is ``F(t, y)`` to ``O(h^2)``, exact)."""
+        Y = y + 1j * COMPLEX_STEP * np.eye(y.size)
         with warnings.catch_warnings():
             warnings.simplefilter("error", np.exceptions.ComplexWarning)
             try:
-                FX = self(t, X)
+                FY = self(t, Y)
             except (TypeError, np.exceptions.ComplexWarning) as exc:
                 raise ExactJacobianUnavailable(
                     f"the torque law does not take complex states ({exc}): no complex-step "
                     "derivative; use central differences") from None
-        return np.asarray(np.real(FX[0])), np.asarray(np.imag(FX).T / COMPLEX_STEP)
+        return np.asarray(np.real(FY[0])), np.asarray(np.imag(FY).T / COMPLEX_STEP)
 
-    def flow(self, x0: FloatArray, t0: float, t1: float, rtol: float, atol: float,
+    def flow(self, y0: FloatArray, t0: float, t1: float, rtol: float, atol: float,
              max_step: float) -> tuple[FloatArray, FloatArray]:
-        """``x(t1)`` and ``Phi = dx(t1)/dx(t0)`` (DOP853 on state and variational equations)."""
+        """``y(t1)`` and ``Phi = dy(t1)/dy(t0)`` (DOP853 on state and variational equations)."""
         from scipy.integrate import solve_ivp
 
-        n = x0.size
+        n = y0.size
 
-        def rhs(t: float, y: FloatArray) -> FloatArray:
-            x = y[:n]
-            Phi = y[n:].reshape(n, n)
+        def rhs(t: float, w: FloatArray) -> FloatArray:
+            x = w[:n]
+            Phi = w[n:].reshape(n, n)
             fx, D = self.linearise(t, x)
             return np.concatenate((fx, (D @ Phi).reshape(-1)))
 
-        y0 = np.concatenate((x0, np.eye(n).reshape(-1)))
+        w0 = np.concatenate((y0, np.eye(n).reshape(-1)))
         if t1 <= t0:
-            return x0.copy(), np.eye(n)
-        sol = solve_ivp(rhs, (t0, t1), y0, method="DOP853", rtol=rtol, atol=atol,
+            return y0.copy(), np.eye(n)
+        sol = solve_ivp(rhs, (t0, t1), w0, method="DOP853", rtol=rtol, atol=atol,
                         max_step=max_step)
         if sol.status < 0:
             raise StepFailedError(f"the variational equations failed: {sol.message}")
-        y1 = sol.y[:, -1]
-        return y1[:n], y1[n:].reshape(n, n)
+        w1 = sol.y[:, -1]
+        return w1[:n], w1[n:].reshape(n, n)
 
 
-def _section_input(walker: PlanarWalker, z: FloatArray, eq: _Equations
-                   ) -> tuple[FloatArray, FloatArray]:
-    """``(dq/dz, dq_dot/dz)``, shapes (n, d): the derivative of the walker's
-    :meth:`~heelstrike.models.base.PlanarWalker.section_to_state`.
+def _section_input(walker: PlanarWalker, z: FloatArray, par: _Parameters,
+                   changed: list[PlanarWalker | None]) -> tuple[FloatArray, FloatArray,
+                                                                 FloatArray]:
+    """``(dq/dz, dq_dot/dz, dq/dp)``, shapes (n, d), (n, d), (n, k): the derivative of the
+    walker's :meth:`~heelstrike.models.base.PlanarWalker.section_to_state` (``dq_dot/dp``
+    vanishes on the coordinates integrated; the rows of ``x``, ``y`` and the rolling rate
+    are rebuilt from the foot radius by :class:`_PhaseField`).
 
     A section that eliminates a coordinate by the trailing foot's touchdown
-    (:class:`~heelstrike.dynamics.phased.PhasedWalker`: ``clearance(q) = 0`` solved for
-    ``q[eliminated]``) gets its row by the implicit function theorem; the rest of the map must
-    be affine in ``z`` (the compass gait's ``q4 = -2 q3``; checked with two steps): its columns
-    are exact differences.
+    (:class:`~heelstrike.dynamics.phased.PhasedWalker`: ``clearance(q, p) = 0`` solved for
+    ``q[eliminated]``) gets its row by the implicit function theorem, in ``z`` and ``p``; the
+    rest of the map must be affine in ``z`` (the compass gait's ``q4 = -2 q3``; checked with
+    two steps): its columns are exact differences, and independent of ``p`` (checked with
+    the changed walkers ``changed``).
     """
     d = z.size
     q0, qd0 = walker.section_to_state(z)
     j = getattr(walker, "eliminated", None)
+    keep = [i for i in range(2, q0.size) if i != j]
+    for name, other in zip(par.names, changed, strict=True):
+        if other is None:
+            continue
+        q1, qd1 = other.section_to_state(z)
+        if not (np.array_equal(q1[keep], q0[keep]) and np.array_equal(qd1[2:], qd0[2:])):
+            raise ExactJacobianUnavailable(
+                f"parameter {name!r} moves the Poincare section's state (other than a "
+                "touchdown coordinate): its derivative is not known exactly")
     cols = []
     for step in (1.0, 0.5):
         dq = np.empty((q0.size, d))
@@ -319,13 +496,22 @@ def _section_input(walker: PlanarWalker, z: FloatArray, eq: _Equations
         raise ExactJacobianUnavailable(
             f"the Poincare section of {type(walker).__name__} is not affine in z (nor solved "
             "for a touchdown coordinate): its derivative is not known exactly")
+    dqp = np.zeros((q0.size, par.k))
     if j is not None:
-        grad = _complex_jacobian(lambda qc: np.atleast_1d(eq.swing_clearance(qc)), q0,
+        def clearance(w: _ComplexArray) -> Any:
+            eq = par.at(w[q0.size:])
+            q = w[:q0.size].copy()
+            q[1] = eq.radii[0]  # the stance foot's arc centre height, as section_to_state's
+            return np.atleast_1d(eq.swing_clearance(q))
+
+        grad = _complex_jacobian(clearance, np.concatenate((q0, par.nominal)),
                                  "swing foot clearance")[0]
+        gq, gp = grad[:q0.size], grad[q0.size:]
         dq[j] = 0.0
-        dq[j] = -(grad @ dq) / grad[j]
+        dq[j] = -(gq @ dq) / gq[j]
         dq[0] = 0.0  # the stance contact stays at x = 0 (section_to_state's q1)
-    return dq, dqd
+        dqp[j] = -gp / gq[j]
+    return dq, dqd, dqp
 
 
 # -- the step ----------------------------------------------------------------------------------
@@ -336,12 +522,24 @@ def step_jacobian(
     slope: float,
     torque: TorqueLaw | Callable[[float, FloatArray, FloatArray], FloatArray] | None = None,
     push_off: PushOff | None = None,
+    parameters: Sequence[str] = (),
     rtol: float = 1e-11,
     atol: float = 1e-11,
     max_step_duration: float = 5.0,
     max_step: float = np.inf,
 ) -> StepJacobian:
     """Exact Jacobian ``DP(z)`` of the step map by variational equations and saltation matrices.
+
+    With ``parameters``, also ``dP/dp`` and the step quantities' partial derivatives, exact:
+    the state is augmented with the parameters ``p`` (zero rate), so that the same chain
+    (variational equations, saltation matrices, section projection, reset Jacobian, section
+    input) carries ``k`` more columns. Every ``p``-dependence is complex-step differentiated:
+    the generated functions' parameter vector, the foot radii (the description's expressions),
+    the slope (in the bias forces), the touchdown configuration of the section. The period's
+    sensitivity is the event time's, ``dt = -grad g . dy / (grad g . f)``; the step length and
+    the collision loss ``T_c`` (kinetic energy before minus after the inert impact:
+    ``T_c`` of the split ``T = T_c + T_a``) are differentiated at the projected heel-strike
+    state. The torque law and the push-off impulse are held fixed.
 
     Parameters
     ----------
@@ -357,6 +555,9 @@ def step_jacobian(
         states (e.g. :class:`~heelstrike.dynamics.phased.TorsoPD`).
     push_off : PushOff, optional
         A :class:`~heelstrike.dynamics.actuation.PushOff` impulse before the heel strike.
+    parameters : sequence of str
+        Names in :attr:`~heelstrike.models.base.PlanarWalker.parameters` (SI units), or
+        ``"slope"`` (rad), to differentiate in (default none).
     rtol, atol : float
         Tolerances of the nominal step and of the variational equations (DOP853).
     max_step_duration, max_step : float
@@ -368,10 +569,16 @@ def step_jacobian(
 
     Raises
     ------
+    ValueError
+        For a name that is neither a parameter of the walker nor ``"slope"``.
     StepFailedError
         If the step does not complete.
     ExactJacobianUnavailable
-        If a part of the step cannot be differentiated exactly (see the class).
+        If a part of the step cannot be differentiated exactly (see the class), or a
+        parameter: one that does not enter the generated equations as one entry of their
+        parameter vector (e.g. a hand-written walker's parameter its description computes
+        from others), one that moves a joint's lock angle, or one that moves the section's
+        state other than through the touchdown coordinate. The message names it.
     heelstrike.core.saltation.GrazingEventError
         If an event is grazing.
     """
@@ -379,12 +586,14 @@ def step_jacobian(
     from heelstrike.dynamics.actuation import _leg_direction
 
     z_ = np.asarray(z, dtype=float)
+    names = tuple(parameters)
     if push_off is not None and not isinstance(push_off, PushOffImpulse):
         raise ExactJacobianUnavailable(
             f"push-off {type(push_off).__name__} is not a PushOff impulse: its reset has no "
             "exact derivative here; use central differences")
     impulse = None if push_off is None else float(push_off.impulse)
-    eq = _Equations.of(walker)
+    par, changed = _parameters(walker, names, float(slope))
+    k = par.k
     q0, qd0 = walker.section_to_state(z_)
     walk = simulate(walker, q0, qd0, slope=slope, steps=1, torque=torque, push_off=push_off,
                     rtol=rtol, atol=atol, max_step_duration=max_step_duration,
@@ -399,86 +608,122 @@ def step_jacobian(
             f"the step had {len(events)} resets for {len(phases)} phases (a phase skipped)")
     lock_angle = dict(schedule.lock_angles)
     n = walker.n_coordinates
+    d = z_.size
     A_lock = np.eye(n)[list(schedule.locks)]
     S = np.stack([walker.state_to_section(*np.split(e, 2)) for e in np.eye(2 * n)], axis=-1)
     S = S - walker.state_to_section(np.zeros(n), np.zeros(n))[:, None]
 
-    dq, dqd = _section_input(walker, z_, eq)
-    fields = [
-        _PhaseField(support=SingleSupport(walker=walker, slope=slope, torque=None,
-                                          locked=ph.locked),
-                    eq=eq, slope=float(slope), torque=torque, q_ref=np.zeros(n))
-        for ph in phases
-    ]
-    first = fields[0]
-    free = list(first.support.free_coordinates)
-    X = np.concatenate((dq[free], dqd[free]))  # dx0/dz
+    dq, dqd, dqp = _section_input(walker, z_, par, changed)
+    supports = [SingleSupport(walker=walker, slope=slope, torque=None, locked=ph.locked)
+                for ph in phases]
+    free = list(supports[0].free_coordinates)
+    m = len(free)
+    # dy0/d(z, p): the integrator state, the start's stance angle c = q0[2], the parameters
+    X = np.zeros((2 * m + 1 + k, d + k))
+    X[:m, :d], X[:m, d:] = dq[free], dqp[free]
+    X[m: 2 * m, :d] = dqd[free]
+    X[2 * m, :d] = dq[2]
+    X[2 * m + 1:, d:] = np.eye(k)
     exact, naive = X, X
-    t0, q_ref, x0 = 0.0, q0.copy(), np.concatenate((q0[free], qd0[free]))
+    t0 = 0.0
+    q_ref = q0.copy()
+    y0 = np.concatenate((q0[free], qd0[free], [q0[2]], par.nominal))
     for i, (phase, ev) in enumerate(zip(phases, events, strict=True)):
-        fld = _PhaseField(support=fields[i].support, eq=eq, slope=float(slope), torque=torque,
-                          q_ref=q_ref)
-        x_minus, Phi = fld.flow(x0, t0, float(ev.time), rtol, atol, max_step)
+        fld = _PhaseField(support=supports[i], par=par, torque=torque, q_ref=q_ref)
+        y_minus, Phi = fld.flow(y0, t0, float(ev.time), rtol, atol, max_step)
         exact, naive = Phi @ exact, Phi @ naive
         t_e = float(ev.time)
-        f_minus = np.real(fld(t_e, x_minus.astype(complex)))
+        f_minus = np.real(fld(t_e, y_minus.astype(complex)))
         if phase.reset == "knee_strike":
-            nxt = _PhaseField(support=fields[i + 1].support, eq=eq, slope=float(slope),
-                              torque=torque, q_ref=q_ref)
-            q_strike = np.real(fld.unpack(x_minus)[0])
+            q_strike = np.real(fld.unpack(y_minus)[0])
             striking = min(phase.strike_joints, key=lambda j: abs(q_strike[j] - lock_angle[j]))
             for j in phase.strike_joints:
                 q_strike[j] = lock_angle[j]  # as the simulation resets them
+            nxt = _PhaseField(support=supports[i + 1], par=par, torque=torque, q_ref=q_strike)
+            m_now = fld.m
 
-            def knee(xc: _ComplexArray, fld: _PhaseField = fld, nxt: _PhaseField = nxt,
-                     phase: Phase = phase) -> _ComplexArray:
-                q, qd = fld.unpack(xc)
+            def knee(yc: _ComplexArray, fld: _PhaseField = fld, nxt: _PhaseField = nxt,
+                     phase: Phase = phase, m_now: int = m_now) -> _ComplexArray:
+                q, qd, eq = fld.unpack(yc)
                 for j in phase.strike_joints:
                     q[j] = lock_angle[j]
                 A = np.vstack((eq.contact_jacobian(q, "stance"), A_lock))
-                return nxt.pack(q, _inert_impact(eq.mass_matrix(q), A, qd))
+                return nxt.pack(q, _inert_impact(eq.mass_matrix(q), A, qd), yc[2 * m_now:])
 
-            def guard(xc: _ComplexArray, fld: _PhaseField = fld, j: int = striking) -> Any:
-                return np.atleast_1d(fld.unpack(xc)[0][j])
+            def guard(yc: _ComplexArray, fld: _PhaseField = fld, j: int = striking) -> Any:
+                return np.atleast_1d(fld.unpack(yc)[0][j])
 
-            D = _complex_jacobian(knee, x_minus, "knee strike")
-            grad = _complex_jacobian(guard, x_minus, "knee-strike guard")[0]
-            x_plus = np.real(knee(x_minus.astype(complex)))
-            q_ref = q_strike  # the locked joints and the rolling offset of the next phase
-            nxt = _PhaseField(support=nxt.support, eq=eq, slope=float(slope), torque=torque,
-                              q_ref=q_ref)
-            f_plus = np.real(nxt(t_e, x_plus.astype(complex)))
+            D = _complex_jacobian(knee, y_minus, "knee strike")
+            grad = _complex_jacobian(guard, y_minus, "knee-strike guard")[0]
+            y_plus = np.real(knee(y_minus.astype(complex)))
+            q_ref = q_strike  # the locked joints of the next phase
+            f_plus = np.real(nxt(t_e, y_plus.astype(complex)))
             exact = saltation_matrix(D, f_minus, f_plus, grad) @ exact
             naive = D @ naive
-            t0, x0 = t_e, x_plus
+            t0, y0 = t_e, y_plus
             continue
 
         # -- the heel strike: push-off, impact, relabelling, section coordinates ---------------
-        def heel(xc: _ComplexArray, fld: _PhaseField = fld) -> _ComplexArray:
-            q, qd = fld.unpack(xc)
+        def impact(yc: _ComplexArray, fld: _PhaseField = fld
+                   ) -> tuple[_ComplexArray, _ComplexArray, _ComplexArray, _Equations]:
+            """``(q, q_dot-, q_dot+, equations)`` of the heel strike (after push-off)."""
+            q, qd, eq = fld.unpack(yc)
+            M = eq.mass_matrix(q)
             if impulse is not None:
                 f = eq.contact_jacobian(q, "stance").T @ (impulse * _leg_direction(q[2]))
-                dv = np.linalg.solve(eq.mass_matrix(q), f)
+                dv = np.linalg.solve(M, f)
                 if A_lock.shape[0]:
-                    dv = _inert_impact(eq.mass_matrix(q), A_lock.astype(complex), dv)
+                    dv = _inert_impact(M, A_lock.astype(complex), dv)
                 qd = qd + dv
             A = np.vstack((eq.contact_jacobian(q, "swing"), A_lock))
-            qd = _inert_impact(eq.mass_matrix(q), A, qd)
+            return q, qd, _inert_impact(M, A, qd), eq
+
+        def heel(yc: _ComplexArray) -> _ComplexArray:
+            q, _, qd, eq = impact(yc)
             q, qd = eq.swap_legs(q, qd)
             for j, a in schedule.lock_angles:
                 q[j] = a
                 qd[j] = 0.0
             return np.asarray(S @ np.concatenate((q, qd)))
 
-        def strike_guard(xc: _ComplexArray, fld: _PhaseField = fld) -> Any:
-            return np.atleast_1d(-eq.swing_clearance(fld.unpack(xc)[0]))
+        def measures(yc: _ComplexArray) -> _ComplexArray:
+            """``(step length, T_c)``: ``x`` of the stance contact at the start (0) minus the
+            striking foot's; kinetic energy before minus after the inert impact."""
+            q, qd_minus, qd_plus, eq = impact(yc)
+            M = eq.mass_matrix(q)
+            loss = 0.5 * (qd_minus @ M @ qd_minus - qd_plus @ M @ qd_plus)
+            return np.array([-eq.swing_centre(q)[0], loss])
 
-        DH = _complex_jacobian(heel, x_minus, "heel strike")
-        grad = _complex_jacobian(strike_guard, x_minus, "heel-strike guard")[0]
-        exact = DH @ section_projection(f_minus, grad) @ exact
-        naive = DH @ naive
+        def strike_guard(yc: _ComplexArray, fld: _PhaseField = fld) -> Any:
+            q, _, eq = fld.unpack(yc)
+            return np.atleast_1d(-eq.swing_clearance(q))
+
+        DH = _complex_jacobian(heel, y_minus, "heel strike")
+        grad = _complex_jacobian(strike_guard, y_minus, "heel-strike guard")[0]
+        Pi = section_projection(f_minus, grad)
+        dT = -(grad @ exact) / (grad @ f_minus)  # the event time's sensitivity, (d + k,)
+        dLC = _complex_jacobian(measures, y_minus, "step length and collision loss") \
+            @ Pi @ exact
+        L, loss = np.real(measures(y_minus.astype(complex)))
+        exact = DH @ Pi @ exact
+        naive = DH @ naive[:, :d]
     z_next = np.asarray(walker.state_to_section(walk.final_q, walk.final_q_dot), dtype=float)
-    return StepJacobian(z=z_.copy(), z_next=z_next, jacobian=np.asarray(exact),
+    period = float(events[-1].time)
+    values = {"period": period, "step_length": float(L), "speed": float(L) / period,
+              "collision_loss": float(loss), "eta": float(loss) / float(L)}
+    grads = {
+        "period": dT,
+        "step_length": dLC[0],
+        "speed": dLC[0] / period - float(L) * dT / period**2,
+        "collision_loss": dLC[1],
+        "eta": dLC[1] / float(L) - float(loss) * dLC[0] / float(L) ** 2,
+    }
+    return StepJacobian(z=z_.copy(), z_next=z_next, jacobian=np.asarray(exact[:, :d]),
                         naive=np.asarray(naive),
                         event_times=tuple(float(e.time) for e in events),
-                        events=tuple(str(e.kind) for e in events))
+                        events=tuple(str(e.kind) for e in events),
+                        parameters=names, parameter_jacobian=np.asarray(exact[:, d:]),
+                        quantities=values,
+                        quantity_state_gradients={q: np.asarray(g[:d]) for q, g in grads.items()},
+                        quantity_parameter_gradients={q: np.asarray(g[d:])
+                                                      for q, g in grads.items()})

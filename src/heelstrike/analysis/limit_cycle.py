@@ -38,6 +38,7 @@ from heelstrike.models.base import PlanarWalker, check_backend_name
 
 if TYPE_CHECKING:
     from heelstrike.analysis.gait_map import NewtonGait
+    from heelstrike.dynamics.variational import StepJacobian
 
 
 __all__ = [
@@ -179,14 +180,62 @@ class PoincareMap:
             return np.where(ens_p.ok[:, None], ens_p.z, np.nan)
         return np.stack([self(z) for z in Z_])
 
-    def jacobian(self, z: ArrayLike, step: float = 1e-6) -> FloatArray:
-        """Central-difference Jacobian ``DP(z)``, shape (d, d) (one :meth:`many` call)."""
+    def jacobian(self, z: ArrayLike, step: float = 1e-6, method: str = "central") -> FloatArray:
+        """Jacobian ``DP(z)``, shape (d, d).
+
+        Parameters
+        ----------
+        z : array_like, shape (d,)
+            Section point.
+        step : float
+            Relative step of the central differences (``method="central"``).
+        method : {"central", "exact"}
+            ``"central"``: central differences of the map (one :meth:`many` call, ``2 d`` step
+            maps, accurate to about :data:`MULTIPLIER_ACCURACY`). ``"exact"``: variational
+            equations through every event with saltation matrices
+            (:func:`heelstrike.dynamics.variational.step_jacobian`, exact to the integrator's
+            tolerance), on the scipy reference (``method="scipy"`` and no ``simulator``).
+
+        Raises
+        ------
+        ValueError
+            For an unknown ``method``, or ``"exact"`` on a compiled map.
+        heelstrike.dynamics.variational.ExactJacobianUnavailable
+            If the walk cannot be differentiated exactly (see that function).
+        """
+        if method == "exact":
+            return self.exact_jacobian(z).jacobian
+        if method != "central":
+            raise ValueError(f"jacobian method must be 'central' or 'exact', got {method!r}")
         z_ = np.asarray(z, dtype=float)
         d = z_.size
         dz = step * np.maximum(1.0, np.abs(z_))
         offsets = np.diag(dz)
         P = self.many(np.concatenate((z_ + offsets, z_ - offsets)))
         return (P[:d] - P[d:]).T / (2.0 * dz)
+
+
+    def exact_jacobian(self, z: ArrayLike) -> StepJacobian:
+        """The exact Jacobian of the step from ``z`` with its details (event times, the naive
+        product without saltation terms): :func:`~heelstrike.dynamics.variational.step_jacobian`
+        at this map's slope, actuation and tolerances (scipy reference only).
+
+        Raises
+        ------
+        ValueError
+            On a compiled map (``method="compiled"`` or a ``simulator``).
+        """
+        from heelstrike.dynamics.variational import step_jacobian
+
+        sim = self.simulator
+        reference = sim is None or sim is simulate or (
+            isinstance(sim, BoundSimulator) and sim.backend == "scipy")
+        if self.method != "scipy" or not reference:
+            raise ValueError("the exact Jacobian runs on the scipy reference: a PoincareMap "
+                             "with method='scipy' and no simulator")
+        return step_jacobian(self.walker, z, slope=self.slope, torque=self.torque,
+                             push_off=self.push_off, rtol=self.rtol, atol=self.atol,
+                             max_step_duration=self.max_step_duration, max_step=self.max_step)
 
 
 class _WalkField:

@@ -199,10 +199,12 @@ class TorsoPD:
     def __call__(self, t: float, q: FloatArray, q_dot: FloatArray) -> FloatArray:
         j = self.walker.joint_index("torso")
         col = self.walker.actuated_joints.index(j)
-        q_, qd = np.asarray(q, dtype=float), np.asarray(q_dot, dtype=float)
+        # complex states pass through (complex-step derivatives, :mod:`.variational`)
+        q_, qd = np.asarray(q), np.asarray(q_dot)
         theta = q_[..., 2] + q_[..., j]
         omega = qd[..., 2] + qd[..., j]
-        u = np.zeros((*q_.shape[:-1], len(self.walker.actuated_joints)))
+        u = np.zeros((*q_.shape[:-1], len(self.walker.actuated_joints)),
+                     dtype=np.result_type(theta, omega, float))
         u[..., col] = -self.kp * (theta - self.angle) - self.kd * omega
         return u
 

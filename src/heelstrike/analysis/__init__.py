@@ -49,6 +49,10 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "BRANCH_NOTE", "GAIT_VARIABLES", "STUDY_BYTES_PER_POINT", "cheapest_gaits",
         "check_study_memory", "paper_eta",
     ),
+    "design": (
+        "DESIGN_FIELDS", "DesignError", "DesignIterate", "DesignResult", "DesignStatus",
+        "foot_outline",
+    ),
     "gait_map": (
         "GaitMap", "NewtonGait", "compass_bifurcation", "model_bifurcation", "model_gait_map",
         "newton_gait", "newton_gaits",
@@ -89,6 +93,10 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "find_model_powered_gait", "find_powered_gait", "impact_angle_for_step_length",
         "law_gains", "max_walking_speed", "powered_gaits",
         "passive_gait_finder", "powered_step", "preferred_gait",
+    ),
+    "sensitivity": (
+        "FIELDS", "FIELD_UNITS", "STENCIL_STEP", "GaitSensitivity", "SensitivityError",
+        "gait_fields", "gait_sensitivity",
     ),
     "sweep": (
         "KNOWN_UNITS", "SweepError", "SweepFunction", "SweepStoreLockedError",

@@ -22,8 +22,8 @@ import numpy as np
 import pytest
 
 from heelstrike.analysis.design import DesignError, DesignStatus, design, foot_outline
+from heelstrike.analysis.design_gradients import GradientError, gait_gradients
 from heelstrike.analysis.model_gaits import find_model_gait
-from heelstrike.analysis.sensitivity import SensitivityError, gait_sensitivity
 from heelstrike.cli import main
 from heelstrike.models.builder import load_walker
 
@@ -35,7 +35,7 @@ FOOT6 = Path(__file__).resolve().parents[1] / "examples" / "walkers" / "compass_
 def compass_gait():  # type: ignore[no-untyped-def]
     w = load_walker("compass", R=0.3)
     g = find_model_gait(w, slope=SLOPE, backend="scipy")
-    s = gait_sensitivity(w, g.cycle.fixed_point, ["R", "slope", "m"], slope=SLOPE,
+    s = gait_gradients(w, g.cycle.fixed_point, ["R", "slope", "m"], slope=SLOPE,
                          spectral_radius=False)
     return w, g, s
 
@@ -83,8 +83,8 @@ def test_eta_sensitivities_are_the_energy_books_closed_form(compass_gait) -> Non
 
 def test_unknown_parameter_is_named() -> None:
     w = load_walker("compass", R=0.3)
-    with pytest.raises(SensitivityError, match="unknown parameter 'Rx'"):
-        gait_sensitivity(w, np.zeros(3), ["Rx"], slope=SLOPE)
+    with pytest.raises(GradientError, match="unknown parameter 'Rx'"):
+        gait_gradients(w, np.zeros(3), ["Rx"], slope=SLOPE)
     with pytest.raises(DesignError, match="unknown parameter 'Rx'"):
         design(w, vary={"Rx": (0.1, 0.5)}, slope=SLOPE)
     with pytest.raises(DesignError, match=r"R=0\.5:0\.1 must have finite lower < upper"):
@@ -140,7 +140,7 @@ def test_foot_outline_of_the_arc_is_the_circle_about_its_centre() -> None:
 def test_profile_parameter_sensitivities_agree_with_converged_gaits() -> None:
     w = load_walker(FOOT6)
     g = find_model_gait(w, slope=SLOPE, backend="scipy")
-    s = gait_sensitivity(w, g.cycle.fixed_point, ["k2", "d"], slope=SLOPE,
+    s = gait_gradients(w, g.cycle.fixed_point, ["k2", "d"], slope=SLOPE,
                          spectral_radius=False)
     z0 = g.cycle.fixed_point
 

@@ -94,9 +94,9 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "law_gains", "max_walking_speed", "powered_gaits",
         "passive_gait_finder", "powered_step", "preferred_gait",
     ),
-    "sensitivity": (
-        "FIELDS", "FIELD_UNITS", "STENCIL_STEP", "GaitSensitivity", "SensitivityError",
-        "gait_fields", "gait_sensitivity",
+    "design_gradients": (
+        "GRADIENT_FIELDS", "GRADIENT_UNITS", "STENCIL_STEP", "GaitGradients", "GradientError",
+        "step_fields", "gait_gradients",
     ),
     "sweep": (
         "KNOWN_UNITS", "SweepError", "SweepFunction", "SweepStoreLockedError",

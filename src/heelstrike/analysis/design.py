@@ -5,7 +5,7 @@
 parameters (geometry, masses, foot-profile coefficients) and the slope, within bounds and
 subject to constraints (spectral radius at most a value, speed and step-length ranges), with
 :func:`scipy.optimize.minimize` (SLSQP) and the gradients of
-:func:`~heelstrike.analysis.sensitivity.gait_sensitivity` (implicit function theorem on the
+:func:`~heelstrike.analysis.design_gradients.gait_gradients` (implicit function theorem on the
 periodicity condition). The gait is followed by continuation as the parameters move: each new
 point starts Newton from the last converged fixed point moved by the first-order prediction
 ``dz*/dp dp``; if Newton fails, the segment is walked in smaller steps.
@@ -36,14 +36,14 @@ from numpy.typing import ArrayLike
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
+from heelstrike.analysis.design_gradients import (
+    GRADIENT_FIELDS,
+    GaitGradients,
+    GradientError,
+    gait_gradients,
+)
 from heelstrike.analysis.limit_cycle import GaitNotFoundError
 from heelstrike.analysis.model_gaits import find_model_gait
-from heelstrike.analysis.sensitivity import (
-    FIELDS,
-    GaitSensitivity,
-    SensitivityError,
-    gait_sensitivity,
-)
 from heelstrike.models.builder import BuiltWalker
 
 __all__ = [
@@ -57,10 +57,17 @@ __all__ = [
 ]
 
 #: Names a cost expression may use: the gait fields and the spectral radius.
-DESIGN_FIELDS = (*FIELDS, "spectral_radius")
+DESIGN_FIELDS = (*GRADIENT_FIELDS, "spectral_radius")
+
+#: The scaled cost SLSQP sees at a point without a gait (its line search steps back).
+LOST_PENALTY = 1e3
+
+#: Newton iterations allowed from a continuation prediction (it converges in 2-4 when the
+#: gait is there).
+CONTINUATION_NEWTON = 8
 
 #: Continuation sub-steps tried when Newton fails from the first-order prediction.
-CONTINUATION_SUBSTEPS = (2, 4, 8)
+CONTINUATION_SUBSTEPS = (2, 4)
 
 
 class DesignError(ValueError):
@@ -347,7 +354,8 @@ def design(
         xp, zp, dzp = state["x"], state["z"], state["dz"]
         try:
             return np.asarray(find_model_gait(w, slope=sl, guess=zp + dzp @ (x - xp),
-                                              backend="scipy").cycle.fixed_point, dtype=float)
+                                              backend="scipy", max_iter=CONTINUATION_NEWTON)
+                              .cycle.fixed_point, dtype=float)
         except GaitNotFoundError:
             pass
         for m in CONTINUATION_SUBSTEPS:
@@ -357,7 +365,8 @@ def design(
                     xi = xp + (x - xp) * i / m
                     wi, si = params_of(xi)
                     z = np.asarray(find_model_gait(
-                        wi, slope=si, guess=z + dzp @ ((x - xp) / m), backend="scipy")
+                        wi, slope=si, guess=z + dzp @ ((x - xp) / m), backend="scipy",
+                        max_iter=CONTINUATION_NEWTON)
                         .cycle.fixed_point, dtype=float)
                 return z
             except GaitNotFoundError:
@@ -372,13 +381,22 @@ def design(
                 counts["replayed"] += 1
                 entry["_counted"] = True
         else:
-            z = gait_at(x)
-            w, sl = params_of(x)
             try:
-                s: GaitSensitivity = gait_sensitivity(w, z, names, slope=sl,
+                z = gait_at(x)
+                w, sl = params_of(x)
+                s: GaitGradients = gait_gradients(w, z, names, slope=sl,
                                                       spectral_radius=use_rho)
-            except SensitivityError as exc:
-                raise _GaitLost(str(exc)) from None
+            except (_GaitLost, GaitNotFoundError, GradientError, ValueError) as exc:
+                if state["x"] is None:
+                    raise
+                # no gait here: a penalty the optimiser's line search steps back from
+                lost = {"problem": problem, "values": [float(v) for v in x], "lost": str(exc)}
+                cache[k] = dict(lost, _counted=True)
+                counts["simulated"] += 1
+                if path is not None:
+                    with path.open("a", encoding="utf-8") as fh:
+                        fh.write(json.dumps(lost) + "\n")
+                return lost
             grad = np.zeros(len(names))
             for f, df in partial.items():
                 grad += df(s.fields) * s.derivatives[f]
@@ -392,6 +410,8 @@ def design(
             if path is not None:
                 with path.open("a", encoding="utf-8") as fh:
                     fh.write(json.dumps(entry) + "\n")
+        if "lost" in entry:
+            return entry
         state["x"], state["z"] = np.array(x, dtype=float), np.array(entry["fixed_point"])
         state["dz"] = np.array(entry["dz"])
         return entry
@@ -407,18 +427,34 @@ def design(
     if progress is not None:
         progress(history[0])
 
-    def fun(x: FloatArray) -> float:
-        return float(evaluate(np.asarray(x))["cost"]) / scale
+    # SLSQP works on u = (x - lower) / (upper - lower) in [0, 1]: its first quasi-Newton step
+    # (identity Hessian) is then a fraction of the box, not a jump to a corner
+    width = hi - lo
 
-    def jac(x: FloatArray) -> FloatArray:
-        return np.array(evaluate(np.asarray(x))["gradient"]) / scale
+    def phys(u: FloatArray) -> FloatArray:
+        return np.clip(lo + np.asarray(u, dtype=float) * width, lo, hi)
+
+    def fun(u: FloatArray) -> float:
+        e = evaluate(phys(u))
+        return LOST_PENALTY if "lost" in e else float(e["cost"]) / scale
+
+    def jac(u: FloatArray) -> FloatArray:
+        e = evaluate(phys(u))
+        return np.zeros(len(names)) if "lost" in e else np.array(e["gradient"]) * width / scale
 
     def field_con(field: str, sign: float, bound: float) -> dict[str, Any]:
         ref = max(abs(bound), 1e-3)
-        return {"type": "ineq",
-                "fun": lambda x: sign * (evaluate(np.asarray(x))["fields"][field] - bound) / ref,
-                "jac": lambda x: sign * np.array(
-                    evaluate(np.asarray(x))["derivatives"][field]) / ref}
+
+        def con(u: FloatArray) -> float:
+            e = evaluate(phys(u))
+            return -1.0 if "lost" in e else sign * (e["fields"][field] - bound) / ref
+
+        def con_jac(u: FloatArray) -> FloatArray:
+            e = evaluate(phys(u))
+            return np.zeros(len(names)) if "lost" in e else \
+                sign * np.array(e["derivatives"][field]) * width / ref
+
+        return {"type": "ineq", "fun": con, "jac": con_jac}
 
     cons: list[dict[str, Any]] = []
     labels: list[tuple[str, str, float, float]] = []
@@ -433,8 +469,11 @@ def design(
             labels += [(f"{field} >= lower", field, 1.0, a), (f"{field} <= upper", field, -1.0, b)]
     cons = [field_con(f, s, b) for _, f, s, b in labels]
 
-    def callback(xk: FloatArray) -> None:
-        it = iterate(evaluate(np.asarray(xk)))
+    def callback(uk: FloatArray) -> None:
+        e = evaluate(phys(uk))
+        if "lost" in e:
+            return
+        it = iterate(e)
         history.append(it)
         if progress is not None:
             progress(it)
@@ -443,7 +482,8 @@ def design(
     message = ""
     try:
         solver: Any = minimize
-        res = solver(fun, x0, jac=jac, method="SLSQP", bounds=list(zip(lo, hi, strict=True)),
+        res = solver(fun, (x0 - lo) / width, jac=jac, method="SLSQP",
+                     bounds=[(0.0, 1.0)] * len(names),
                      constraints=cons, callback=callback,
                      options={"maxiter": int(max_iter), "ftol": float(tol)})
         message = str(res.message)
@@ -451,10 +491,14 @@ def design(
             status = DesignStatus.CONVERGED
         elif res.status == 9:
             status = DesignStatus.MAX_ITERATIONS
-        final_entry = evaluate(np.clip(np.asarray(res.x, dtype=float), lo, hi))
-        final = iterate(final_entry)
-        if not np.array_equal(final.values, history[-1].values):
-            history.append(final)
+        final_entry = evaluate(phys(res.x))
+        if "lost" in final_entry:
+            status, message = DesignStatus.GAIT_LOST, str(final_entry["lost"])
+            final = history[-1]
+        else:
+            final = iterate(final_entry)
+            if not np.array_equal(final.values, history[-1].values):
+                history.append(final)
     except _GaitLost as exc:
         status, message = DesignStatus.GAIT_LOST, str(exc)
         final = history[-1]

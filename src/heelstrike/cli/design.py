@@ -138,7 +138,7 @@ def _run_design(args: argparse.Namespace) -> int:
 
 
 def _units(res: Any) -> dict[str, Any]:
-    from heelstrike.analysis.sensitivity import FIELD_UNITS
+    from heelstrike.analysis.design_gradients import GRADIENT_UNITS
 
     params = {n: ("rad" if n == "slope" else "SI") for n in res.parameters}
-    return {"fields": FIELD_UNITS, "parameters": params, "cost": "units of the cost field"}
+    return {"fields": GRADIENT_UNITS, "parameters": params, "cost": "units of the cost field"}

@@ -1,4 +1,4 @@
-"""Figures of a design (:class:`~heelstrike.analysis.DesignResult`): the cost history and the
+"""Figures of a design (:class:`~heelstrike.analysis.design.DesignResult`): the cost history and the
 foot before and after. Draw only."""
 
 from __future__ import annotations

@@ -1,4 +1,10 @@
-"""Parameter sensitivities of a periodic gait by the implicit function theorem.
+"""Gradients of a periodic gait for design (:func:`heelstrike.analysis.design.design`), by the
+implicit function theorem.
+
+Unlike the general sensitivities of :mod:`heelstrike.analysis.sensitivity`, these take the slope
+as a parameter, sum the collision loss over every impact of the step (knee strikes included),
+give the cost of transport and the spectral radius's derivative, and use a fourth-order stencil
+for the one-step partial derivatives (the design's known-answer tests need 1e-7 at small slopes).
 
 A period-one gait is a fixed point ``z*(p) = P(z*(p), p)`` of the step map ``P`` of a described
 walker; differentiating the periodicity condition gives
@@ -40,13 +46,13 @@ from heelstrike.dynamics.phased import PhasedWalker
 from heelstrike.models.builder import BuiltWalker
 
 __all__ = [
-    "FIELDS",
-    "FIELD_UNITS",
+    "GRADIENT_FIELDS",
+    "GRADIENT_UNITS",
     "STENCIL_STEP",
-    "GaitSensitivity",
-    "SensitivityError",
-    "gait_fields",
-    "gait_sensitivity",
+    "GaitGradients",
+    "GradientError",
+    "step_fields",
+    "gait_gradients",
 ]
 
 #: Relative step of the fourth-order stencil (``h = STENCIL_STEP * max(1, |x|)``): its
@@ -54,19 +60,19 @@ __all__ = [
 STENCIL_STEP = 3e-4
 
 #: The gait fields differentiated, in this order.
-FIELDS = ("step_length", "period", "speed", "collision_loss", "eta", "cost_of_transport")
+GRADIENT_FIELDS = ("step_length", "period", "speed", "collision_loss", "eta", "cost_of_transport")
 
 #: Their units (SI).
-FIELD_UNITS = {"step_length": "m", "period": "s", "speed": "m/s", "collision_loss": "J",
+GRADIENT_UNITS = {"step_length": "m", "period": "s", "speed": "m/s", "collision_loss": "J",
                "eta": "J/m", "cost_of_transport": "1", "spectral_radius": "1"}
 
 
-class SensitivityError(ValueError):
+class GradientError(ValueError):
     """A parameter is unknown or a step of the stencil fails (the message names it)."""
 
 
 @dataclass(frozen=True, kw_only=True)
-class GaitSensitivity(ResultDictMixin):
+class GaitGradients(ResultDictMixin):
     """Derivatives of a periodic gait with respect to named parameters.
 
     Attributes
@@ -82,7 +88,7 @@ class GaitSensitivity(ResultDictMixin):
     fixed_point_derivative : ndarray, shape (d, k)
         ``dz*/dp`` (section units per parameter unit).
     fields : dict of str to float
-        The gait's :data:`FIELDS` (and ``spectral_radius``), SI.
+        The gait's :data:`GRADIENT_FIELDS` (and ``spectral_radius``), SI.
     derivatives : dict of str to ndarray, shape (k,)
         ``dF/dp`` for every field (units of the field per unit of the parameter).
     multipliers : ndarray of complex, shape (d,)
@@ -101,7 +107,7 @@ class GaitSensitivity(ResultDictMixin):
     def table(self) -> list[dict[str, Any]]:
         """One row per (field, parameter): ``field``, ``parameter``, ``value`` and ``units``."""
         return [{"field": f, "parameter": p, "value": float(self.derivatives[f][j]),
-                 "units": f"{FIELD_UNITS.get(f, '1')} per {_param_unit(p)}"}
+                 "units": f"{GRADIENT_UNITS.get(f, '1')} per {_param_unit(p)}"}
                 for f in self.derivatives for j, p in enumerate(self.parameters)]
 
 
@@ -119,7 +125,7 @@ def _setup(walker: BuiltWalker, values: Mapping[str, float], slope: float) -> Po
     return PoincareMap(walker=w, slope=sl, simulator=backend_simulator(w, "scipy"))
 
 
-def gait_fields(walker: BuiltWalker, z: ArrayLike, values: Mapping[str, float], *,
+def step_fields(walker: BuiltWalker, z: ArrayLike, values: Mapping[str, float], *,
                 slope: float) -> FloatArray:
     """One step from ``z``: ``(P(z), step_length, period, collision_loss, weight)``.
 
@@ -142,13 +148,13 @@ def gait_fields(walker: BuiltWalker, z: ArrayLike, values: Mapping[str, float], 
 
     Raises
     ------
-    SensitivityError
+    GradientError
         If the step does not complete.
     """
     pmap = _setup(walker, values, slope)
     walk = pmap.walk(np.asarray(z, dtype=float), 1)
     if not walk.ok:
-        raise SensitivityError(f"no step at {dict(values)} from z = {np.asarray(z)}: "
+        raise GradientError(f"no step at {dict(values)} from z = {np.asarray(z)}: "
                                f"{walk.status.value}")
     w = pmap.walker
     z1 = np.asarray(w.state_to_section(walk.final_q, walk.final_q_dot), dtype=float)
@@ -159,7 +165,7 @@ def gait_fields(walker: BuiltWalker, z: ArrayLike, values: Mapping[str, float], 
 
 
 def _derived(L: float, T: float, C: float, W: float) -> tuple[FloatArray, FloatArray]:
-    """:data:`FIELDS` from ``(L, T, C, W)`` and their Jacobian, shape (6, 4)."""
+    """:data:`GRADIENT_FIELDS` from ``(L, T, C, W)`` and their Jacobian, shape (6, 4)."""
     vals = np.array([L, T, L / T, C, C / L, C / (W * L)])
     jac = np.array([
         [1, 0, 0, 0],
@@ -181,14 +187,14 @@ def _stencil(fun: Any, x: FloatArray, k: int) -> FloatArray:
                       / (12 * h))
 
 
-def gait_sensitivity(
+def gait_gradients(
     walker: BuiltWalker,
     fixed_point: ArrayLike,
     parameters: Sequence[str],
     *,
     slope: float,
     spectral_radius: bool = True,
-) -> GaitSensitivity:
+) -> GaitGradients:
     """Derivatives of a converged passive gait with respect to ``parameters``.
 
     Parameters
@@ -206,18 +212,18 @@ def gait_sensitivity(
 
     Returns
     -------
-    GaitSensitivity
+    GaitGradients
 
     Raises
     ------
-    SensitivityError
+    GradientError
         For an unknown parameter name or a failed step.
     """
     names = tuple(parameters)
     known = set(walker.parameters)
     for name in names:
         if name != "slope" and name not in known:
-            raise SensitivityError(f"unknown parameter {name!r}: the walker has "
+            raise GradientError(f"unknown parameter {name!r}: the walker has "
                                    f"{', '.join(sorted(known))} (and 'slope')")
     base = {n: float(slope) if n == "slope" else float(np.asarray(walker.parameters[n]))
             for n in names}
@@ -226,7 +232,7 @@ def gait_sensitivity(
     p0 = np.array([base[n] for n in names])
 
     def G(x: FloatArray) -> FloatArray:
-        return gait_fields(walker, x[:d], dict(zip(names, map(float, x[d:]), strict=True)),
+        return step_fields(walker, x[:d], dict(zip(names, map(float, x[d:]), strict=True)),
                            slope=slope)
 
     x0 = np.concatenate((z, p0))
@@ -241,8 +247,8 @@ def gait_sensitivity(
     dfields = jac @ dbasic
     mult = np.linalg.eigvals(DPz)
     mult = mult[np.argsort(-np.abs(mult), kind="stable")]
-    fields = dict(zip(FIELDS, map(float, vals), strict=True))
-    derivs = {f: dfields[i].copy() for i, f in enumerate(FIELDS)}
+    fields = dict(zip(GRADIENT_FIELDS, map(float, vals), strict=True))
+    derivs = {f: dfields[i].copy() for i, f in enumerate(GRADIENT_FIELDS)}
     fields["spectral_radius"] = float(np.max(np.abs(mult)))
     if spectral_radius:
         drho = np.empty(k)
@@ -257,7 +263,7 @@ def gait_sensitivity(
 
             drho[j] = (rho(1.0) - rho(-1.0)) / (2 * h)
         derivs["spectral_radius"] = drho
-    return GaitSensitivity(parameters=names, values=p0,
+    return GaitGradients(parameters=names, values=p0,
                            section_names=tuple(pmap.walker.section_names), fixed_point=z.copy(),
                            fixed_point_derivative=np.asarray(dz, dtype=float), fields=fields,
                            derivatives=derivs,

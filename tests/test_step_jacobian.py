@@ -4,11 +4,14 @@ extrapolation at tight tolerances."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
 from heelstrike.analysis.limit_cycle import PoincareMap, find_limit_cycle
 from heelstrike.analysis.model_gaits import find_model_gait
+from heelstrike.analysis.newton import floquet_multipliers
 from heelstrike.dynamics.actuation import PushOff
 from heelstrike.dynamics.phased import PhasedWalker, TorsoPD, load_phased_walker
 from heelstrike.dynamics.variational import (
@@ -127,5 +130,142 @@ def test_errors() -> None:
 
     with pytest.raises(ExactJacobianUnavailable, match="no generated equations"):
         step_jacobian(OwnStep(), [-0.27, 1.09, -0.72], slope=0.05)
+
+    class CurvedSection(CompassGait):  # a section map that is not affine in z
+        def section_to_state(self, z: Any) -> tuple[np.ndarray, np.ndarray]:
+            q, qd = super().section_to_state(z)
+            qd = qd.copy()
+            qd[3] = qd[3] * (1.0 + 0.01 * q[2] ** 2)
+            return q, qd
+
+    with pytest.raises(ExactJacobianUnavailable, match="not affine"):
+        step_jacobian(CurvedSection(), [-0.27, 1.09, -0.72], slope=0.05)
     with pytest.raises(ValueError, match="scipy reference"):
         PoincareMap(walker=walker, slope=0.05, method="compiled").exact_jacobian([-0.27, 1, 0])
+
+
+# -- a 30-digit reference: independent Lagrangian, Gragg-Bulirsch-Stoer in mpmath -----------------
+def _mp_compass_step_map(walker: CompassGait, slope_deg: float) -> Any:
+    """The compass gait's step map in 30-digit arithmetic, derived here from its Lagrangian
+    (sympy; the stance foot's arc of radius ``R`` rolls: its centre at ``(-R q3, R)``),
+    integrated by Gragg-Bulirsch-Stoer extrapolation (order 18, macro step 1/40 s), the heel
+    strike ``2 q3 + q4 = 0`` located by ``mpmath.findroot`` and resolved by the inert impact
+    with the swing foot's rolling-contact Jacobian in floating-base coordinates."""
+    import mpmath as mp
+    import sympy as sp
+
+    par = {k: sp.nsimplify(repr(float(v))) for k, v in walker.parameters.items()}
+    mH, m, ln, b = par["hip_mass"], par["leg_mass"], par["leg_length"], par["leg_com_from_hip"]
+    inertia, g, R = par["leg_inertia"], par["gravity"], par["foot_radius"]
+    x, y, q3, q4, xd, yd, w3, w4, gam = sp.symbols("x y q3 q4 xd yd w3 w4 gamma", real=True)
+
+    def e(th: Any) -> Any:
+        return sp.Matrix([-sp.sin(th), sp.cos(th)])
+
+    q, qd = [x, y, q3, q4], [xd, yd, w3, w4]
+    hip = sp.Matrix([x, y]) + (ln - R) * e(q3)  # (x, y): the stance foot's arc centre
+    points = [(mH, hip), (m, hip - b * e(q3)), (m, hip - b * e(q3 + q4))]
+    swing_centre = hip - (ln - R) * e(q3 + q4)
+    # the swing foot's contact point moves with its arc centre plus R times the leg's rate
+    roll = sp.Matrix([[0, 0, R, R], [0, 0, 0, 0]])
+
+    def vel(r: Any) -> Any:
+        return r.jacobian(q) * sp.Matrix(qd)
+
+    T = sum(mi * (vel(r).T * vel(r))[0] for mi, r in points) / 2 \
+        + inertia * (w3**2 + (w3 + w4) ** 2) / 2
+    V = sum(mi * g * (sp.sin(gam) * r[0] + sp.cos(gam) * r[1]) for mi, r in points)
+    pinned = {x: -R * q3, y: R, xd: -R * w3, yd: 0}  # rolling without slip
+    T2, V2 = T.subs(pinned), V.subs(pinned)
+    th, om = [q3, q4], [w3, w4]
+    M2 = sp.hessian(T2, om)
+    rhs = -(sp.Matrix([sp.diff(T2, o) for o in om]).jacobian(th) * sp.Matrix(om)
+            - sp.Matrix([sp.diff(T2, t) for t in th]) + sp.Matrix([sp.diff(V2, t) for t in th]))
+    f_M2 = sp.lambdify((q3, q4), list(M2), "mpmath", cse=True)
+    f_rhs = sp.lambdify((q3, q4, w3, w4, gam), list(rhs), "mpmath", cse=True)
+    f_M = sp.lambdify((q3, q4), sp.hessian(T, qd).subs(pinned), "mpmath")
+    f_A = sp.lambdify((q3, q4), (swing_centre.jacobian(q) + roll).subs(pinned), "mpmath")
+    gamma = mp.radians(slope_deg)
+    R_mp = mp.mpf(float(walker.foot_radius))
+
+    def field(s: list[Any]) -> list[Any]:
+        m11, m12, m21, m22 = f_M2(s[0], s[1])
+        r1, r2 = f_rhs(s[0], s[1], s[2], s[3], gamma)
+        det = m11 * m22 - m12 * m21
+        return [s[2], s[3], (m22 * r1 - m12 * r2) / det, (m11 * r2 - m21 * r1) / det]
+
+    def gbs(y0: list[Any], H: Any, k: int = 9) -> list[Any]:
+        rows: list[list[list[Any]]] = []
+        for j in range(1, k + 1):
+            n = 2 * j
+            h = H / n
+            z0, z1 = y0, [a + h * f for a, f in zip(y0, field(y0), strict=True)]
+            for _ in range(n - 1):
+                z0, z1 = z1, [a + 2 * h * f for a, f in zip(z0, field(z1), strict=True)]
+            row = [[(a + c + h * f) / 2 for a, c, f in zip(z0, z1, field(z1), strict=True)]]
+            for i in range(1, j):
+                r = (mp.mpf(n) / (n - 2 * i)) ** 2
+                row.append([c + (c - p) / (r - 1)
+                            for c, p in zip(row[i - 1], rows[-1][i - 1], strict=True)])
+            rows.append(row)
+        return rows[-1][-1]
+
+    def step(z: list[Any], t_guess: float) -> list[Any]:
+        H = mp.mpf(1) / 40
+        nodes = [[z[0], -2 * z[0], z[1], z[2]]]
+        while H * len(nodes) < t_guess - H / 2:
+            nodes.append(gbs(nodes[-1], H))
+        base = H * (len(nodes) - 1)
+        t_e = mp.findroot(lambda t: (lambda s: 2 * s[0] + s[1])(gbs(nodes[-1], t - base)),
+                          mp.mpf(t_guess))
+        s = gbs(nodes[-1], t_e - base)
+        M, A = mp.matrix(f_M(s[0], s[1])), mp.matrix(f_A(s[0], s[1]))
+        v = mp.matrix([-R_mp * s[2], 0, s[2], s[3]])
+        MiAt = M**-1 * A.T
+        vp = v - MiAt * mp.lu_solve(A * MiAt, A * v)
+        return [s[0] + s[1], vp[2] + vp[3], -vp[3]]  # relabelled: (q3, q3_dot, q4_dot)
+
+    return step
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("R", "slope_deg"), [(0.0, 4.3), (0.0, 1.0), (0.3, 3.0)])
+def test_compass_exact_jacobian_matches_30_digit_reference(R: float, slope_deg: float) -> None:
+    """The exact Jacobian (rtol = atol = 1e-13) against central differences of the 30-digit
+    step map with steps of 1e-10 (truncation ~1e-20, integration error ~1e-26 / 1e-10), to
+    1e-10; 4.3 deg is near the period doubling."""
+    import mpmath as mp
+
+    walker = CompassGait(foot_radius=R)
+    slope = float(np.deg2rad(slope_deg))
+    z = find_limit_cycle(walker, slope=slope).fixed_point
+    pmap = PoincareMap(walker=walker, slope=slope, rtol=1e-13, atol=1e-13)
+    res = pmap.exact_jacobian(z)
+    with mp.workdps(30):
+        step = _mp_compass_step_map(walker, slope_deg)
+        zm = [mp.mpf(float(v)) for v in z]
+        t_e = res.event_times[-1]
+        delta = mp.mpf("1e-10")
+        ref = np.empty((3, 3))
+        for k in range(3):
+            zp, zn = list(zm), list(zm)
+            zp[k] += delta
+            zn[k] -= delta
+            col = [(a - c) / (2 * delta) for a, c in zip(step(zp, t_e), step(zn, t_e),
+                                                          strict=True)]
+            ref[:, k] = [float(c) for c in col]
+        assert np.allclose([float(c) for c in step(zm, t_e)], res.z_next, atol=1e-11)
+    assert np.max(np.abs(res.jacobian - ref)) < 1e-10
+
+
+def test_passive_gait_multipliers_are_exact_by_default() -> None:
+    """A passive gait found on the scipy reference reports the eigenvalues of the exact
+    Jacobian (not those of central differences, which differ by ~1e-8)."""
+    walker = CompassGait()
+    slope = float(np.deg2rad(4.3))
+    cycle = find_limit_cycle(walker, slope=slope)
+    pmap = PoincareMap(walker=walker, slope=slope)
+    exact = floquet_multipliers(pmap.exact_jacobian(cycle.fixed_point).jacobian)
+    central = floquet_multipliers(pmap.jacobian(cycle.fixed_point))
+    assert np.allclose(cycle.multipliers, exact, rtol=0, atol=1e-13)
+    assert not np.allclose(cycle.multipliers, central, rtol=0, atol=1e-13)

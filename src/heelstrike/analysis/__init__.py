@@ -98,6 +98,7 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "GRADIENT_FIELDS", "GRADIENT_UNITS", "STENCIL_STEP", "GaitGradients", "GradientError",
         "step_fields", "gait_gradients",
     ),
+    "sensitivity": ("GAIT_QUANTITY_UNITS", "GaitSensitivity", "gait_sensitivity"),
     "sweep": (
         "KNOWN_UNITS", "SweepError", "SweepFunction", "SweepStoreLockedError",
         "SweepStoreMismatchError", "SweepStoreRepairWarning", "sweep_progress",

@@ -4,9 +4,12 @@ The Poincare section is the state just after heel strike (after the legs are rel
 parametrised by the walker's section coordinates ``z`` (for the compass gait
 ``z = (q3, q3_dot, q4_dot)`` with ``q4 = -2 q3``). The map ``P`` integrates one step and applies
 the impact; a period-one gait is a fixed point ``P(z*) = z*``. Its stability is given by the
-eigenvalues (Floquet multipliers) of the Jacobian ``DP(z*)``, estimated by central differences:
-the gait is stable if all have modulus < 1. A real multiplier leaving the unit circle through
--1 while a parameter varies is a period-doubling bifurcation (Goswami, Thuilot & Espiau 1998).
+eigenvalues (Floquet multipliers) of the Jacobian ``DP(z*)``: the gait is stable if all have
+modulus < 1. For a passive walk on the scipy reference the Jacobian is exact (variational
+equations and saltation matrices, :meth:`PoincareMap.exact_jacobian`); otherwise (compiled
+maps, actuated walks) it is estimated by central differences. A real multiplier leaving the
+unit circle through -1 while a parameter varies is a period-doubling bifurcation (Goswami,
+Thuilot & Espiau 1998).
 """
 
 from __future__ import annotations
@@ -506,8 +509,10 @@ SAME_GAIT_TOL = 1e-6
 ENERGY_BOOKS_RTOL = 0.05
 
 #: Accuracy of the Floquet multipliers' moduli (central differences of the step map, passive
-#: and powered gaits alike): a largest ``|m|`` within this of 1 says the gait is neutral to that
-#: accuracy, not stable or unstable (McGeer's wheel with push-off: ``|m| = 1 - 3.5e-9``).
+#: and powered gaits alike; a passive gait's exact Jacobian on the scipy reference agrees with
+#: a 30-digit reference to about 1e-12): a largest ``|m|`` within this of 1 says the gait is
+#: neutral to that accuracy, not stable or unstable (McGeer's wheel with push-off:
+#: ``|m| = 1 - 3.5e-9``).
 MULTIPLIER_ACCURACY = 1e-6
 
 
@@ -894,7 +899,8 @@ def find_limit_cycle(
     max_iter : int
         Maximum Newton iterations.
     fd_step : float
-        Relative finite-difference step for the Jacobian.
+        Relative finite-difference step for the Jacobian (Newton's; the multipliers' too where
+        the exact Jacobian is not used: compiled maps, actuated walks).
     rtol, atol : float
         Integrator tolerances.
     progress : bool
@@ -933,11 +939,33 @@ def find_limit_cycle(
     return _closed_books([_characterise(pmap, z, residual, it, fd_step)], pmap)[0]
 
 
+def _multiplier_jacobian(pmap: PoincareMap, z: FloatArray, fd_step: float) -> FloatArray:
+    """The Jacobian whose eigenvalues are a gait's Floquet multipliers.
+
+    Exact (:meth:`PoincareMap.exact_jacobian`: variational equations and saltation matrices)
+    for a passive walk on the scipy reference whose walker has generated equations; central
+    differences with ``fd_step`` otherwise (compiled maps, actuated walks: a torque law need not
+    take the complex states of the complex-step derivatives) or where the exact Jacobian is
+    unavailable (a grazing event, a step that does not complete).
+    """
+    from heelstrike.core.saltation import GrazingEventError
+    from heelstrike.dynamics.variational import ExactJacobianUnavailable, StepFailedError
+
+    sim = pmap.simulator
+    passive = pmap.torque is None and pmap.push_off is None
+    if pmap.method == "scipy" and passive and (sim is None or sim is simulate):
+        try:
+            return pmap.exact_jacobian(z).jacobian
+        except (ExactJacobianUnavailable, GrazingEventError, StepFailedError):
+            pass  # central differences say what they can (NaN where the step fails)
+    return pmap.jacobian(z, fd_step)
+
+
 def _characterise(
     pmap: PoincareMap, z: FloatArray, residual: float, iterations: int, fd_step: float
 ) -> LimitCycle:
     walker = pmap.walker
-    Jac = pmap.jacobian(z, fd_step)
+    Jac = _multiplier_jacobian(pmap, z, fd_step)
     mult = floquet_multipliers(Jac)
     if pmap.method == "compiled":
         from heelstrike.dynamics.compiled import step_map_compiled

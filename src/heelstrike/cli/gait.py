@@ -78,8 +78,78 @@ def add_gait(sub: Any) -> None:
                    "walker's section coordinates)")
     add_backend_option(p, "step simulator: compiled numba kernels (default; generated from the "
                        "walker file with --model) or the scipy reference", "compiled")
+    p.add_argument("--sensitivity", default=None, metavar="NAMES",
+                   help="comma-separated walker parameters (the walker file's names: R, b, "
+                   "mH, m, l, I, g): print the derivatives of the fixed point, period, step "
+                   "length, speed, T_c, eta and |multipliers| in each (implicit function "
+                   "theorem with the exact step Jacobian, scipy reference)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=_run_gait)
+
+
+def _sensitivity_names(text: str, walker: Any) -> list[tuple[str, str, str]]:
+    """``(name as given, walker parameter, unit)`` of each name of ``--sensitivity``."""
+    from heelstrike.models.compass import DESCRIBED_PARAMETERS
+    from heelstrike.models.description import parameter_units
+
+    described = walker.as_described()
+    units = parameter_units(described.description) if described is not None else {}
+    field = {v: k for k, v in DESCRIBED_PARAMETERS.items()}
+    out = []
+    for raw in text.split(","):
+        name = raw.strip()
+        if name not in field:
+            raise CliError(f"--sensitivity: {name!r} is not a walker parameter (one of "
+                           f"{', '.join(field)})")
+        out.append((name, field[name], units.get(name, "1")))
+    return out
+
+
+def _sensitivity(args: argparse.Namespace, walker: Any, cycle: Any) -> dict[str, Any]:
+    """The ``sensitivity`` object of ``gait --sensitivity``: derivatives per parameter, with
+    their units."""
+    from heelstrike.analysis.sensitivity import GAIT_QUANTITY_UNITS, gait_sensitivity
+    from heelstrike.dynamics.variational import ExactJacobianUnavailable
+    from heelstrike.models.base import section_unit
+
+    names = _sensitivity_names(args.sensitivity, walker)
+    try:
+        sens = gait_sensitivity(walker, cycle.fixed_point, [f for _, f, _ in names],
+                                slope=args.slope)
+    except (ExactJacobianUnavailable, ValueError) as exc:
+        raise CliError(f"--sensitivity: {exc}") from exc
+    out: dict[str, Any] = {"parameters": {n: u for n, _, u in names}, "derivatives": {}}
+    units: dict[str, Any] = {}
+    for k, (n, _, u) in enumerate(names):
+        row: dict[str, Any] = {z: float(sens.fixed_point[i, k])
+                               for i, z in enumerate(sens.section_names)}
+        row.update({q: float(v[k]) for q, v in sens.quantities.items()})
+        row["multipliers"] = [float(v) for v in sens.modulus_derivatives[:, k]]  # d|m_i|/dp
+        out["derivatives"][n] = row
+        units[n] = {**{z: _per(section_unit(z), u) for z in sens.section_names},
+                    **{q: _per(qu, u) for q, qu in GAIT_QUANTITY_UNITS.items()},
+                    "multipliers": _per("1", u)}
+    out["units"] = {"parameters": "unit of each parameter", "derivatives": units}
+    return out
+
+
+def _per(unit: str, per: str) -> str:
+    """``unit`` per ``per``: ``"rad/m"``, ``"(rad/s)/m"``."""
+    top = f"({unit})" if "/" in unit or " " in unit else unit
+    return f"{top}/({per})" if " " in per or "/" in per else f"{top}/{per}"
+
+
+def _print_sensitivity(sens: dict[str, Any]) -> None:
+    units = sens["units"]["derivatives"]
+    print("  sensitivities (implicit function theorem, exact step Jacobian):")
+    for n, row in sens["derivatives"].items():
+        print(f"    d/d{n} ({sens['parameters'][n]}):")
+        for key, value in row.items():
+            if key == "multipliers":
+                text = ", ".join(f"{v:.6g}" for v in value)
+                print(f"      {'|multipliers|':<15} {text} {units[n][key]}")
+            else:
+                print(f"      {key:<15} {value: .6g} {units[n][key]}")
 
 
 def _run_gait_model(args: argparse.Namespace) -> int:
@@ -240,8 +310,13 @@ def _run_gait(args: argparse.Namespace) -> int:
         raise CliError(f"--slope must be below 90deg (a walkable incline), got "
                        f"{math.degrees(args.slope):g} deg")
     if args.model is not None:
+        if args.sensitivity is not None:
+            raise CliError("--sensitivity is available for the compass gait's options, not "
+                           "with --model")
         return _run_gait_model(args)
     walker = walker_from_args(args)
+    if args.sensitivity is not None:
+        _sensitivity_names(args.sensitivity, walker)  # refuse a bad name before the search
     guess = parse_guess(args.guess)
     try:
         if guess is None:
@@ -256,6 +331,9 @@ def _run_gait(args: argparse.Namespace) -> int:
     cycle = gaits[0]
     d = cycle.to_dict()
     d["gaits"] = [_gait_summary(c) for c in gaits]
+    sens = None if args.sensitivity is None else _sensitivity(args, walker, cycle)
+    if sens is not None:
+        d["sensitivity"] = sens
     if args.json:
         print_json(d)
         return 0
@@ -268,6 +346,8 @@ def _run_gait(args: argparse.Namespace) -> int:
     print(f"  collision loss  {energy_text(cycle.collision_loss)} J/step (T_c)")
     print(f"  energy released {energy_text(cycle.potential_energy_released)} J/step (gravity)")
     print(f"  eta             {energy_text(cycle.eta)} J/m")
+    if sens is not None:
+        _print_sensitivity(sens)
     return 0
 
 

@@ -8,12 +8,14 @@ after the next one. Its Jacobian is the chain
     DP(z) = DH\\, \\Pi_h\\, \\Phi_{N}\\, \\Xi_{N-1}\\, \\Phi_{N-1} \\cdots \\Xi_1\\, \\Phi_1\\, X_0,
 
 with ``X_0`` the derivative of the phase-one integrator state ``x = (theta, theta_dot)`` with
-respect to ``z`` (:meth:`section_to_state` and the reduction to the free coordinates),
+respect to ``z`` (:meth:`~heelstrike.models.base.PlanarWalker.section_to_state` and the
+reduction to the free coordinates),
 ``Phi_k`` the fundamental matrix of the ``k``-th continuous phase, integrated with the state by
 the variational equations ``Phi' = D_x F(t, x) Phi`` (``F`` the reduced single-support field of
 :class:`~heelstrike.dynamics.single_support.SingleSupport`), ``Xi_k`` the saltation matrix of
-the reset that ends phase ``k`` (a knee strike; :func:`heelstrike.core.saltation.
-saltation_matrix`), ``Pi_h`` the projection of the heel-strike guard
+the reset that ends phase ``k`` (a knee strike;
+:func:`~heelstrike.core.saltation.saltation_matrix`), ``Pi_h`` the projection of the heel-strike
+guard
 (:func:`~heelstrike.core.saltation.section_projection`: the section is the heel-strike event
 itself) and ``DH`` the Jacobian of the heel strike's reset ``H`` (push-off, the inert impact
 ``q_dot+ = P_a q_dot-`` with ``A = [A_L; lock rows]``, relabelling, section coordinates).
@@ -21,8 +23,9 @@ itself) and ``DH`` the Jacobian of the heel strike's reset ``H`` (push-off, the 
 Every derivative is exact to round-off: ``D_x F``, the guards' gradients and the resets'
 Jacobians are complex-step derivatives (``Im f(x + i h e_k) / h``, ``h = 1e-30``: no
 subtraction) of the walker's generated sympy expressions (a described walker's own, or those
-of the hand-written walker's description, :meth:`~heelstrike.models.base.PlanarWalker.
-as_described`: the same equations in the same coordinates). The guard of a knee strike is the
+of the hand-written walker's description,
+:meth:`~heelstrike.models.base.PlanarWalker.as_described`: the same equations in the same
+coordinates). The guard of a knee strike is the
 striking joint reaching its lock angle, that of the heel strike the swing foot's clearance
 (the compass gait's ``2 q3 + q4`` is the same surface): only the guard's normal enters
 ``Xi`` and ``Pi``. The event times and the nominal trajectory are those of
@@ -63,7 +66,8 @@ __all__ = [
 #: Imaginary step of the complex-step derivatives (no cancellation: any tiny step is exact).
 COMPLEX_STEP = 1e-30
 
-ComplexArray = NDArray[np.complex128]
+#: A real or complex array (complex-step evaluations), shape as documented where used.
+_ComplexArray = NDArray[Any]
 
 
 class ExactJacobianUnavailable(ValueError):
@@ -82,7 +86,8 @@ class StepJacobian(ResultDictMixin):
     Attributes
     ----------
     z : ndarray, shape (d,)
-        Section point (post-heel-strike coordinates, :attr:`PlanarWalker.section_names`).
+        Section point (post-heel-strike coordinates,
+        :attr:`~heelstrike.models.base.PlanarWalker.section_names`).
     z_next : ndarray, shape (d,)
         ``P(z)``: the section point after the step (scipy reference).
     jacobian : ndarray, shape (d, d)
@@ -137,26 +142,26 @@ class _Equations:
         return cls(fn=fn, params=tuple(twin._p),  # type: ignore[attr-defined]
                    swing_radius=float(np.asarray(twin.foot_radii[1])))
 
-    def mass_matrix(self, q: ComplexArray) -> ComplexArray:
+    def mass_matrix(self, q: _ComplexArray) -> _ComplexArray:
         return np.asarray(self.fn("mass_matrix")(q, self.params))
 
-    def bias_forces(self, q: ComplexArray, qd: ComplexArray, slope: float) -> ComplexArray:
+    def bias_forces(self, q: _ComplexArray, qd: _ComplexArray, slope: float) -> _ComplexArray:
         return np.asarray(self.fn("bias_forces")(q, qd, self.params, slope))
 
-    def contact_jacobian(self, q: ComplexArray, foot: str) -> ComplexArray:
+    def contact_jacobian(self, q: _ComplexArray, foot: str) -> _ComplexArray:
         return np.asarray(self.fn(f"contact_jacobian_{foot}")(q, self.params))
 
-    def swing_clearance(self, q: ComplexArray) -> Any:
+    def swing_clearance(self, q: _ComplexArray) -> Any:
         return np.asarray(self.fn("foot_centre_swing")(q, self.params))[..., 1] \
             - self.swing_radius
 
-    def swap_legs(self, q: ComplexArray, qd: ComplexArray) -> tuple[ComplexArray, ComplexArray]:
+    def swap_legs(self, q: _ComplexArray, qd: _ComplexArray) -> tuple[_ComplexArray, _ComplexArray]:
         q_new = np.asarray(self.fn("swap_coordinates")(q, self.params))
         S = np.asarray(self.fn("swap_jacobian")(q, self.params))
         return q_new, S @ qd
 
 
-def _complex_jacobian(fun: Callable[[ComplexArray], ComplexArray], x: FloatArray,
+def _complex_jacobian(fun: Callable[[_ComplexArray], _ComplexArray], x: FloatArray,
                       what: str) -> FloatArray:
     """``D fun(x)`` (m, n) by the complex step; ``fun`` must be analytic and take complex input."""
     x = np.asarray(x, dtype=float)
@@ -176,8 +181,8 @@ def _complex_jacobian(fun: Callable[[ComplexArray], ComplexArray], x: FloatArray
     return np.stack(cols, axis=-1)
 
 
-def _inert_impact(M: ComplexArray, A: ComplexArray, qd: ComplexArray,
-                  restitution: float = 0.0) -> ComplexArray:
+def _inert_impact(M: _ComplexArray, A: _ComplexArray, qd: _ComplexArray,
+                  restitution: float = 0.0) -> _ComplexArray:
     """``q_dot+ = q_dot- - (1 + e) M^-1 A^T (A M^-1 A^T)^-1 A q_dot-`` (paper eq. 13 for
     ``e = 0``), complex-capable."""
     MiAt = np.linalg.solve(M, A.T)
@@ -196,36 +201,68 @@ class _PhaseField:
     torque: Any
     q_ref: FloatArray
 
-    def unpack(self, x: ComplexArray) -> tuple[ComplexArray, ComplexArray]:
-        sup = self.support
-        m = len(sup.free_coordinates)
-        free = list(sup.free_coordinates)
-        R = -float(sup._basis[0, 0])
-        q = self.q_ref.astype(np.result_type(x, float))
-        q[free] = x[:m]
-        q[0] = self.q_ref[0] + R * self.q_ref[2] - R * x[0]
-        q[1] = R
-        qd = sup._basis @ x[m: 2 * m]
+    @property
+    def free(self) -> list[int]:
+        return list(self.support.free_coordinates)
+
+    def basis(self) -> FloatArray:
+        """``J`` (n, m): ``q_dot = J theta_dot`` (rolling stance foot, locked joints held)."""
+        free = self.free
+        J = np.zeros((self.q_ref.size, len(free)))
+        J[free, range(len(free))] = 1.0
+        J[0, 0] = -self.radius()
+        return J
+
+    def radius(self) -> float:
+        return float(np.asarray(self.support.walker.foot_radii[0]))
+
+    def unpack(self, x: _ComplexArray) -> tuple[_ComplexArray, _ComplexArray]:
+        """Full ``(q, q_dot)``, shapes (..., n), of integrator states ``x`` (..., 2 m)."""
+        free = self.free
+        m, R = len(free), self.radius()
+        q = np.broadcast_to(self.q_ref, (*x.shape[:-1], self.q_ref.size)).astype(
+            np.result_type(x, float))
+        q[..., free] = x[..., :m]
+        q[..., 0] = self.q_ref[0] + R * self.q_ref[2] - R * x[..., 0]
+        q[..., 1] = R
+        qd = x[..., m: 2 * m] @ self.basis().T
         return q, qd
 
-    def pack(self, q: ComplexArray, qd: ComplexArray) -> ComplexArray:
-        free = list(self.support.free_coordinates)
-        return np.concatenate((q[free], qd[free]))
+    def pack(self, q: _ComplexArray, qd: _ComplexArray) -> _ComplexArray:
+        free = self.free
+        return np.concatenate((q[..., free], qd[..., free]), axis=-1)
 
-    def __call__(self, t: float, x: ComplexArray) -> ComplexArray:
-        sup = self.support
-        m = len(sup.free_coordinates)
+    def __call__(self, t: float, x: _ComplexArray) -> _ComplexArray:
+        """``F(t, x) = (theta_dot, (J^T M J)^-1 J^T (B u - h))``, shape (..., 2 m)."""
+        m = len(self.free)
         q, qd = self.unpack(x)
         f = -self.eq.bias_forces(q, qd, self.slope)
         if self.torque is not None:
-            u = np.asarray(self.torque(t, q, qd))
-            f = f + sup._actuation @ u
-        J = sup._basis
-        Mr = J.T @ self.eq.mass_matrix(q) @ J
-        return np.concatenate((x[m: 2 * m], np.linalg.solve(Mr, J.T @ f)))
+            B = np.asarray(self.support.walker.actuation_matrix(), dtype=float)
+            if x.ndim == 1:
+                u = np.asarray(self.torque(t, q, qd))
+            else:  # a law takes one state (TorqueLaw): row by row
+                u = np.stack([np.asarray(self.torque(t, a, b)) for a, b in zip(q, qd,
+                                                                                  strict=True)])
+            f = f + u @ B.T
+        J = self.basis()
+        Mr = np.einsum("ia,...ij,jb->...ab", J, self.eq.mass_matrix(q), J)
+        acc = np.linalg.solve(Mr, (f @ J)[..., None])[..., 0]
+        return np.concatenate((x[..., m: 2 * m], acc), axis=-1)
 
-    def jacobian(self, t: float, x: FloatArray) -> FloatArray:
-        return _complex_jacobian(lambda xc: self(t, xc), x, "single-support field (torque law)")
+    def linearise(self, t: float, x: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """``F(t, x)`` (2 m,) and ``D_x F(t, x)`` (2 m, 2 m) from one batched call: complex
+        steps along every axis (the real part of each is ``F(t, x)`` to ``O(h^2)``, exact)."""
+        X = x + 1j * COMPLEX_STEP * np.eye(x.size)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", np.exceptions.ComplexWarning)
+            try:
+                FX = self(t, X)
+            except (TypeError, np.exceptions.ComplexWarning) as exc:
+                raise ExactJacobianUnavailable(
+                    f"the torque law does not take complex states ({exc}): no complex-step "
+                    "derivative; use central differences") from None
+        return np.asarray(np.real(FX[0])), np.asarray(np.imag(FX).T / COMPLEX_STEP)
 
     def flow(self, x0: FloatArray, t0: float, t1: float, rtol: float, atol: float,
              max_step: float) -> tuple[FloatArray, FloatArray]:
@@ -237,8 +274,8 @@ class _PhaseField:
         def rhs(t: float, y: FloatArray) -> FloatArray:
             x = y[:n]
             Phi = y[n:].reshape(n, n)
-            fx = np.real(self(t, x))
-            return np.concatenate((fx, (self.jacobian(t, x) @ Phi).reshape(-1)))
+            fx, D = self.linearise(t, x)
+            return np.concatenate((fx, (D @ Phi).reshape(-1)))
 
         y0 = np.concatenate((x0, np.eye(n).reshape(-1)))
         if t1 <= t0:
@@ -253,24 +290,35 @@ class _PhaseField:
 
 def _section_input(walker: PlanarWalker, z: FloatArray, eq: _Equations
                    ) -> tuple[FloatArray, FloatArray]:
-    """``(dq/dz, dq_dot/dz)``, shapes (n, d): the derivative of :meth:`section_to_state`.
+    """``(dq/dz, dq_dot/dz)``, shapes (n, d): the derivative of the walker's
+    :meth:`~heelstrike.models.base.PlanarWalker.section_to_state`.
 
     A section that eliminates a coordinate by the trailing foot's touchdown
     (:class:`~heelstrike.dynamics.phased.PhasedWalker`: ``clearance(q) = 0`` solved for
-    ``q[eliminated]``) gets it by the implicit function theorem; any other section map is
-    affine in ``z`` (the compass gait's ``q4 = -2 q3``) and its columns are exact differences.
+    ``q[eliminated]``) gets its row by the implicit function theorem; the rest of the map must
+    be affine in ``z`` (the compass gait's ``q4 = -2 q3``; checked with two steps): its columns
+    are exact differences.
     """
     d = z.size
     q0, qd0 = walker.section_to_state(z)
-    dq = np.empty((q0.size, d))
-    dqd = np.empty((q0.size, d))
-    for k in range(d):
-        e = np.zeros(d)
-        e[k] = 1.0
-        qp, qdp = walker.section_to_state(z + e)
-        dq[:, k] = qp - q0
-        dqd[:, k] = qdp - qd0
     j = getattr(walker, "eliminated", None)
+    cols = []
+    for step in (1.0, 0.5):
+        dq = np.empty((q0.size, d))
+        dqd = np.empty((q0.size, d))
+        for k in range(d):
+            e = np.zeros(d)
+            e[k] = step
+            qp, qdp = walker.section_to_state(z + e)
+            dq[:, k] = (qp - q0) / step
+            dqd[:, k] = (qdp - qd0) / step
+        if j is not None:
+            dq[j] = 0.0
+        cols.append(np.concatenate((dq, dqd)))
+    if not np.allclose(cols[0], cols[1], rtol=1e-12, atol=1e-12):
+        raise ExactJacobianUnavailable(
+            f"the Poincare section of {type(walker).__name__} is not affine in z (nor solved "
+            "for a touchdown coordinate): its derivative is not known exactly")
     if j is not None:
         grad = _complex_jacobian(lambda qc: np.atleast_1d(eq.swing_clearance(qc)), q0,
                                  "swing foot clearance")[0]
@@ -335,6 +383,7 @@ def step_jacobian(
         raise ExactJacobianUnavailable(
             f"push-off {type(push_off).__name__} is not a PushOff impulse: its reset has no "
             "exact derivative here; use central differences")
+    impulse = None if push_off is None else float(push_off.impulse)
     eq = _Equations.of(walker)
     q0, qd0 = walker.section_to_state(z_)
     walk = simulate(walker, q0, qd0, slope=slope, steps=1, torque=torque, push_off=push_off,
@@ -376,25 +425,26 @@ def step_jacobian(
         if phase.reset == "knee_strike":
             nxt = _PhaseField(support=fields[i + 1].support, eq=eq, slope=float(slope),
                               torque=torque, q_ref=q_ref)
-            striking = min(phase.strike_joints,
-                           key=lambda j: abs(float(fld.unpack(x_minus.astype(complex))[0][j].real)
-                                             - lock_angle[j]))
+            q_strike = np.real(fld.unpack(x_minus)[0])
+            striking = min(phase.strike_joints, key=lambda j: abs(q_strike[j] - lock_angle[j]))
+            for j in phase.strike_joints:
+                q_strike[j] = lock_angle[j]  # as the simulation resets them
 
-            def knee(xc: ComplexArray, fld: _PhaseField = fld, nxt: _PhaseField = nxt,
-                     phase: Phase = phase) -> ComplexArray:
+            def knee(xc: _ComplexArray, fld: _PhaseField = fld, nxt: _PhaseField = nxt,
+                     phase: Phase = phase) -> _ComplexArray:
                 q, qd = fld.unpack(xc)
                 for j in phase.strike_joints:
                     q[j] = lock_angle[j]
                 A = np.vstack((eq.contact_jacobian(q, "stance"), A_lock))
                 return nxt.pack(q, _inert_impact(eq.mass_matrix(q), A, qd))
 
-            def guard(xc: ComplexArray, fld: _PhaseField = fld, j: int = striking) -> Any:
+            def guard(xc: _ComplexArray, fld: _PhaseField = fld, j: int = striking) -> Any:
                 return np.atleast_1d(fld.unpack(xc)[0][j])
 
             D = _complex_jacobian(knee, x_minus, "knee strike")
             grad = _complex_jacobian(guard, x_minus, "knee-strike guard")[0]
             x_plus = np.real(knee(x_minus.astype(complex)))
-            q_ref = np.real(nxt.unpack(x_plus.astype(complex))[0])
+            q_ref = q_strike  # the locked joints and the rolling offset of the next phase
             nxt = _PhaseField(support=nxt.support, eq=eq, slope=float(slope), torque=torque,
                               q_ref=q_ref)
             f_plus = np.real(nxt(t_e, x_plus.astype(complex)))
@@ -404,9 +454,7 @@ def step_jacobian(
             continue
 
         # -- the heel strike: push-off, impact, relabelling, section coordinates ---------------
-        impulse = None if push_off is None else float(push_off.impulse)  # type: ignore[attr-defined]
-
-        def heel(xc: ComplexArray, fld: _PhaseField = fld) -> ComplexArray:
+        def heel(xc: _ComplexArray, fld: _PhaseField = fld) -> _ComplexArray:
             q, qd = fld.unpack(xc)
             if impulse is not None:
                 f = eq.contact_jacobian(q, "stance").T @ (impulse * _leg_direction(q[2]))
@@ -422,7 +470,7 @@ def step_jacobian(
                 qd[j] = 0.0
             return np.asarray(S @ np.concatenate((q, qd)))
 
-        def strike_guard(xc: ComplexArray, fld: _PhaseField = fld) -> Any:
+        def strike_guard(xc: _ComplexArray, fld: _PhaseField = fld) -> Any:
             return np.atleast_1d(-eq.swing_clearance(fld.unpack(xc)[0]))
 
         DH = _complex_jacobian(heel, x_minus, "heel strike")

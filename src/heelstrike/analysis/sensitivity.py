@@ -1,0 +1,174 @@
+"""Parameter sensitivities of a periodic gait by the implicit function theorem.
+
+A period-one gait is a fixed point of the step map, ``P(z*(p), p) = z*(p)``. Differentiating
+the periodicity condition in a walker parameter ``p`` gives
+
+.. math:: \\frac{dz^*}{dp} = (I - D_z P)^{-1} \\frac{\\partial P}{\\partial p},
+
+with ``D_z P`` the exact step-map Jacobian
+(:meth:`~heelstrike.analysis.limit_cycle.PoincareMap.exact_jacobian`) and ``dP/dp`` central
+differences of the step map from the fixed ``z*`` in ``p`` (two step maps per parameter; no
+Newton solve). A quantity ``Q(z, p)`` of one step
+(period, step length, speed, collision loss ``T_c``, ``eta``) then has
+``dQ/dp = D_z Q dz*/dp + dQ/dp``, its partial derivatives central differences of one step.
+The Floquet multipliers ``lambda_i`` (eigenvalues of ``D_z P`` with right and left eigenvectors
+``v_i``, ``w_i``) move by ``d lambda_i = w_i^H (d D_z P) v_i / (w_i^H v_i)``, with
+``d D_z P / dp`` central differences of the exact Jacobian along the gait,
+``(z* +- h dz*/dp, p +- h)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from heelstrike._results import ResultDictMixin
+from heelstrike._typing import FloatArray
+from heelstrike.analysis.limit_cycle import PoincareMap
+from heelstrike.models.base import PlanarWalker
+
+__all__ = ["GAIT_QUANTITY_UNITS", "GaitSensitivity", "gait_sensitivity"]
+
+#: The step quantities whose sensitivities :func:`gait_sensitivity` gives, with their units.
+GAIT_QUANTITY_UNITS: dict[str, str] = {
+    "period": "s", "step_length": "m", "speed": "m/s", "collision_loss": "J", "eta": "J/m",
+}
+
+
+@dataclass(frozen=True, kw_only=True)
+class GaitSensitivity(ResultDictMixin):
+    """Derivatives of a periodic gait with respect to walker parameters.
+
+    Attributes
+    ----------
+    parameters : tuple of str
+        The walker parameters ``p`` (names of
+        :attr:`~heelstrike.models.base.PlanarWalker.parameters`), in the columns' order.
+    section_names : tuple of str
+        The section coordinates, in the rows' order of ``fixed_point``.
+    fixed_point : ndarray, shape (d, k)
+        ``dz*/dp`` (section units per parameter unit).
+    quantities : dict of str to ndarray, shape (k,)
+        ``dQ/dp`` of every quantity of :data:`GAIT_QUANTITY_UNITS` (its unit per parameter
+        unit).
+    values : dict of str to float
+        The quantities at the gait.
+    multipliers : ndarray of complex, shape (d,)
+        The Floquet multipliers at the gait, largest modulus first
+        (:func:`~heelstrike.analysis.newton.floquet_multipliers` of the exact Jacobian).
+    multiplier_derivatives : ndarray of complex, shape (d, k)
+        ``d lambda_i / dp`` (per parameter unit), rows in the order of ``multipliers``.
+    """
+
+    parameters: tuple[str, ...]
+    section_names: tuple[str, ...]
+    fixed_point: FloatArray
+    quantities: dict[str, FloatArray]
+    values: dict[str, float]
+    multipliers: NDArray[np.complex128]
+    multiplier_derivatives: NDArray[np.complex128]
+
+    @property
+    def modulus_derivatives(self) -> FloatArray:
+        """``d |lambda_i| / dp = Re(conj(lambda_i) d lambda_i) / |lambda_i|``, shape (d, k)."""
+        lam = self.multipliers[:, None]
+        return np.asarray(np.real(np.conj(lam) * self.multiplier_derivatives) / np.abs(lam))
+
+
+def _quantities(pmap: PoincareMap, z: FloatArray) -> FloatArray:
+    """``(period, step_length, speed, collision_loss, eta)`` of the step from ``z``, shape (5,)."""
+    walk = pmap.walk(z, 1)
+    if not walk.ok:
+        raise ValueError(f"no step from z = {np.round(z, 6)} ({walk.status.value})")
+    rec = walk.impacts[0]
+    T, L, loss = rec.step_duration, rec.step_length, rec.energy_lost
+    return np.array([T, L, L / T, loss, loss / L])
+
+
+def gait_sensitivity(
+    walker: PlanarWalker,
+    fixed_point: Any,
+    parameters: Sequence[str],
+    *,
+    slope: float,
+    rel_step: float = 1e-5,
+    rtol: float = 1e-12,
+    atol: float = 1e-12,
+) -> GaitSensitivity:
+    """Sensitivities of a passive gait to walker parameters (implicit function theorem).
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+        A walker whose exact step Jacobian exists (see
+        :func:`~heelstrike.dynamics.variational.step_jacobian`).
+    fixed_point : array_like, shape (d,)
+        The gait's fixed point ``z*`` (e.g. the ``fixed_point`` of a
+        :class:`~heelstrike.analysis.limit_cycle.LimitCycle`), converged at about ``rtol``.
+    parameters : sequence of str
+        Names in :attr:`~heelstrike.models.base.PlanarWalker.parameters` (SI units).
+    slope : float
+        Ground slope (rad).
+    rel_step : float
+        Relative central-difference step of the partial derivatives, ``h = rel_step
+        max(1, |p|)`` (and ``max(1, |z_i|)`` in ``z``).
+    rtol, atol : float
+        Integrator tolerances.
+
+    Returns
+    -------
+    GaitSensitivity
+
+    Raises
+    ------
+    ValueError
+        For a name that is not a parameter of the walker, or a step that fails.
+    """
+    names = tuple(parameters)
+    known = walker.parameters
+    for name in names:
+        if name not in known:
+            raise ValueError(f"{name!r} is not a parameter of {type(walker).__name__} "
+                             f"(its parameters: {', '.join(known)})")
+    z = np.asarray(fixed_point, dtype=float)
+    d = z.size
+    pmap = PoincareMap(walker=walker, slope=slope, rtol=rtol, atol=atol)
+    DP = pmap.exact_jacobian(z).jacobian
+    lam, V = np.linalg.eig(DP)
+    order = np.argsort(-np.abs(lam), kind="stable")
+    lam, V = lam[order], V[:, order]
+    W = np.linalg.inv(V).conj().T  # left eigenvectors: W^H V = I
+    dlam = np.empty((d, len(names)), dtype=complex)
+    dz_all = np.empty((d, len(names)))
+    dQ = np.empty((5, len(names)))
+    # D_z Q by central differences of one step
+    hz = rel_step * np.maximum(1.0, np.abs(z))
+    DQz = np.stack([(_quantities(pmap, z + hz[i] * e) - _quantities(pmap, z - hz[i] * e))
+                    / (2.0 * hz[i]) for i, e in enumerate(np.eye(d))], axis=-1)
+    for k, name in enumerate(names):
+        p = float(np.asarray(known[name]))
+        h = rel_step * max(1.0, abs(p))
+        plus = PoincareMap(walker=walker.replace(**{name: p + h}), slope=slope, rtol=rtol,
+                           atol=atol)
+        minus = PoincareMap(walker=walker.replace(**{name: p - h}), slope=slope, rtol=rtol,
+                            atol=atol)
+        dPdp = (plus(z) - minus(z)) / (2.0 * h)
+        dz_all[:, k] = np.linalg.solve(np.eye(d) - DP, dPdp)
+        dQdp = (_quantities(plus, z) - _quantities(minus, z)) / (2.0 * h)
+        dQ[:, k] = DQz @ dz_all[:, k] + dQdp
+        dz_h = h * dz_all[:, k]
+        dDP = (plus.exact_jacobian(z + dz_h).jacobian
+               - minus.exact_jacobian(z - dz_h).jacobian) / (2.0 * h)
+        dlam[:, k] = np.einsum("ji,jk,ki->i", W.conj(), dDP, V)
+    values = _quantities(pmap, z)
+    keys = tuple(GAIT_QUANTITY_UNITS)
+    return GaitSensitivity(
+        parameters=names, section_names=tuple(walker.section_names), fixed_point=dz_all,
+        quantities={key: dQ[i].copy() for i, key in enumerate(keys)},
+        values={key: float(values[i]) for i, key in enumerate(keys)},
+        multipliers=np.asarray(lam, dtype=complex), multiplier_derivatives=dlam,
+    )

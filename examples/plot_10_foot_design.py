@@ -7,11 +7,17 @@ convex foot profile ``h(phi) = R (1 - cos phi) + d sin phi + k2 (1 - cos 2 phi) 
 (``examples/walkers/compass_foot6.toml``, six coefficients; :doc:`/design`). On a passive gait
 the collision loss per metre is ``M g sin(slope)`` whatever the foot, so the foot is designed
 for the gait's kinematics: the fastest passive gait on a 0.05 rad slope, over the base radius
-``R`` and the ``1 - cos 2 phi`` coefficient ``k2`` (a flatter or rounder heel), with SLSQP and
-the implicit-function-theorem gradients of :func:`heelstrike.analysis.design_gradients.
-gait_gradients`. ``heelstrike design --model examples/walkers/compass_foot6.toml --slope 0.05
---vary R=0.2:0.4 --vary k2=-0.01:0.01 --cost=-speed --out DIR`` does the same from the command
-line, with all six coefficients if asked.
+``R`` and the ``1 - cos 2 phi`` coefficient ``k2`` (``k2 > 0`` flattens the sole under the leg
+and rounds its ends: the radius of curvature is ``R + k2 (1 + 3 cos 2 phi)``), with SLSQP and
+the implicit-function-theorem gradients of
+:func:`heelstrike.analysis.design_gradients.gait_gradients`. The command line does the same
+(with all six coefficients if asked)::
+
+    heelstrike design --model examples/walkers/compass_foot6.toml --slope 0.05 \
+        --vary R=0.2:0.4 --vary k2=-0.01:0.01 --cost=-speed --out DIR
+
+Both parameters end on their upper bounds: a larger base radius and a sole flatter under the
+leg walk faster (and, here, more stably).
 """
 
 from pathlib import Path

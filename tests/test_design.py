@@ -182,3 +182,10 @@ def test_cli_design_json_figures_and_record(tmp_path: Path, capsys) -> None:  # 
     assert "slope=lower" in text and "converged" in text
     assert main(["design", "--model", "compass", "--slope", "0.05", "--vary", "R"]) == 2
     assert "NAME=LO:HI" in capsys.readouterr().err
+
+
+def test_cli_default_tolerance_is_the_analysis_default() -> None:
+    from heelstrike.analysis.design import DESIGN_TOL
+    from heelstrike.cli import design as cli_design
+
+    assert cli_design.DESIGN_TOL == DESIGN_TOL

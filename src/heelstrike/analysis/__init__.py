@@ -50,8 +50,8 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
         "check_study_memory", "paper_eta",
     ),
     "design": (
-        "DESIGN_FIELDS", "DesignError", "DesignIterate", "DesignResult", "DesignStatus",
-        "foot_outline",
+        "DESIGN_FIELDS", "DESIGN_TOL", "DesignError", "DesignIterate", "DesignResult",
+        "DesignStatus", "foot_outline",
     ),
     "gait_map": (
         "GaitMap", "NewtonGait", "compass_bifurcation", "model_bifurcation", "model_gait_map",

@@ -48,6 +48,7 @@ from heelstrike.models.builder import BuiltWalker
 
 __all__ = [
     "DESIGN_FIELDS",
+    "DESIGN_TOL",
     "DesignError",
     "DesignIterate",
     "DesignResult",
@@ -58,6 +59,10 @@ __all__ = [
 
 #: Names a cost expression may use: the gait fields and the spectral radius.
 DESIGN_FIELDS = (*GRADIENT_FIELDS, "spectral_radius")
+
+#: Default stopping tolerance: SLSQP's ``ftol`` on the cost divided by its start value (the
+#: gradients are accurate to about 1e-8 relative).
+DESIGN_TOL = 1e-7
 
 #: The scaled cost SLSQP sees at a point without a gait (its line search steps back).
 LOST_PENALTY = 1e3
@@ -81,6 +86,7 @@ class DesignStatus(enum.Enum):
     CONVERGED = "converged"
     MAX_ITERATIONS = "max_iterations"
     GAIT_LOST = "gait_lost"
+    STALLED = "stalled"
     FAILED = "failed"
 
     @property
@@ -91,6 +97,9 @@ class DesignStatus(enum.Enum):
             "max_iterations": "stopped at the iteration limit before convergence",
             "gait_lost": "the gait could not be followed to a point the optimiser asked for "
                          "(the result is the last feasible iterate)",
+            "stalled": "the line search found no descent from the last iterate: an optimum to "
+                       "the gradients' accuracy (about 1e-8; 1e-4 for the spectral radius's), "
+                       "or inconsistent gradients",
             "failed": "the optimiser stopped without convergence (its message says why)",
         }[self.value]
 
@@ -256,7 +265,7 @@ def design(
     speed: tuple[float, float] | None = None,
     step_length: tuple[float, float] | None = None,
     max_iter: int = 50,
-    tol: float = 1e-10,
+    tol: float = DESIGN_TOL,
     record: str | Path | None = None,
     progress: Callable[[DesignIterate], None] | None = None,
 ) -> DesignResult:
@@ -283,7 +292,7 @@ def design(
     max_iter : int
         SLSQP iterations.
     tol : float
-        SLSQP's ``ftol`` on the cost divided by its start value.
+        SLSQP's ``ftol`` on the cost divided by its start value (:data:`DESIGN_TOL`).
     record : path, optional
         JSON-lines file of the evaluations: read back first (replayed), appended to.
     progress : callable, optional
@@ -491,6 +500,8 @@ def design(
             status = DesignStatus.CONVERGED
         elif res.status == 9:
             status = DesignStatus.MAX_ITERATIONS
+        elif res.status == 8:  # "Positive directional derivative for linesearch"
+            status = DesignStatus.STALLED
         final_entry = evaluate(phys(res.x))
         if "lost" in final_entry:
             status, message = DesignStatus.GAIT_LOST, str(final_entry["lost"])

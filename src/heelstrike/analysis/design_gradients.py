@@ -51,8 +51,8 @@ __all__ = [
     "STENCIL_STEP",
     "GaitGradients",
     "GradientError",
-    "step_fields",
     "gait_gradients",
+    "step_fields",
 ]
 
 #: Relative step of the fourth-order stencil (``h = STENCIL_STEP * max(1, |x|)``): its

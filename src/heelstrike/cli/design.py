@@ -20,6 +20,10 @@ from heelstrike.cli._render import print_json, print_paths
 
 __all__ = ["add_design"]
 
+#: :data:`heelstrike.analysis.design.DESIGN_TOL`, repeated here so that building the parser
+#: imports no analysis code (a test checks they agree).
+DESIGN_TOL = 1e-7
+
 
 def _vary(text: str) -> tuple[str, float, float]:
     """Parse ``NAME=LO:HI`` (SI units; ``slope`` in rad or with a ``deg`` suffix)."""
@@ -72,6 +76,9 @@ def add_design(sub: Any) -> None:
     p.add_argument("--step-length", type=_pair, default=None, metavar="LO:HI",
                    help="constraint: step-length range (m)")
     p.add_argument("--max-iter", type=positive_int, default=50, help="SLSQP iterations")
+    p.add_argument("--tol", type=float, default=DESIGN_TOL,
+                   help=f"SLSQP's ftol on the cost divided by its start value "
+                   f"(default {DESIGN_TOL:g})")
     p.add_argument("--json", action="store_true", help="print the result as one JSON object")
     p.add_argument("--out", default=None, metavar="DIR",
                    help="write design_record.jsonl (resumable: a rerun replays it), "
@@ -101,7 +108,8 @@ def _run_design(args: argparse.Namespace) -> int:
         with bar:
             res = design(walker, vary=vary, cost=args.cost, slope=args.slope,
                          max_spectral_radius=args.max_spectral_radius, speed=args.speed,
-                         step_length=args.step_length, max_iter=args.max_iter, record=record,
+                         step_length=args.step_length, max_iter=args.max_iter, tol=args.tol,
+                         record=record,
                          progress=progress)
     except DesignError as exc:
         raise CliError(str(exc)) from None

@@ -189,3 +189,22 @@ def test_cli_default_tolerance_is_the_analysis_default() -> None:
     from heelstrike.cli import design as cli_design
 
     assert cli_design.DESIGN_TOL == DESIGN_TOL
+
+
+def test_a_point_without_gait_is_stepped_back_from(tmp_path: Path) -> None:
+    # the known-answer design's first trial point (its optimum) marked in the record as a point
+    # without a gait: the line search must step back, and the design must end on a point that
+    # has a gait, better than the start, never on the marked one
+    w = load_walker("compass", R=0.3)
+    record = tmp_path / "record.jsonl"
+    vary = {"R": (0.1, 0.5), "slope": (0.02, 0.06)}
+    first = design(w, vary=vary, cost="eta", slope=SLOPE, record=record)
+    lines = [json.loads(x) for x in record.read_text().splitlines()]
+    marked = lines[1]
+    assert marked["values"] == list(first.final.values)
+    lost = {"problem": marked["problem"], "values": marked["values"], "lost": "marked"}
+    record.write_text(json.dumps(lines[0]) + "\n" + json.dumps(lost) + "\n")
+    res = design(w, vary=vary, cost="eta", slope=SLOPE, record=record, max_iter=6)
+    assert list(res.final.values) != marked["values"]
+    assert res.final.cost < res.start.cost
+    assert all(it.values.tolist() != marked["values"] for it in res.history)

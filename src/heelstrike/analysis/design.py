@@ -3,7 +3,8 @@
 :func:`design` minimises a cost of the passive gait of a described walker (a gait field such as
 ``collision_loss``, or an expression of the fields, e.g. ``"eta/speed"``) over named walker
 parameters (geometry, masses, foot-profile coefficients) and the slope, within bounds and
-subject to constraints (spectral radius at most a value, speed and step-length ranges), with
+subject to constraints (spectral radius at most a value, speed and step-length ranges, the
+trailing foot lifting), with
 :func:`scipy.optimize.minimize` (SLSQP) and the gradients of
 :func:`~heelstrike.analysis.design_gradients.gait_gradients` (implicit function theorem on the
 periodicity condition). The gait is followed by continuation as the parameters move: each new
@@ -264,12 +265,13 @@ def design(
     max_spectral_radius: float | None = None,
     speed: tuple[float, float] | None = None,
     step_length: tuple[float, float] | None = None,
+    trailing_foot_lifts: bool = False,
     max_iter: int = 50,
     tol: float = DESIGN_TOL,
     record: str | Path | None = None,
     progress: Callable[[DesignIterate], None] | None = None,
 ) -> DesignResult:
-    """Minimise a cost of the passive gait over named parameters (SLSQP, exact-IFT gradients).
+    """Minimise a cost of the passive gait over named parameters (SLSQP, IFT gradients).
 
     Parameters
     ----------
@@ -289,6 +291,9 @@ def design(
         Constraint ``spectral_radius <= max_spectral_radius``.
     speed, step_length : (float, float), optional
         Constraints ``lo <= speed <= hi`` (m/s), ``lo <= step_length <= hi`` (m).
+    trailing_foot_lifts : bool
+        Constraint: the trailing foot's normal velocity just after the heel strike is not
+        negative (``lift_velocity >= 0``: the impact leaves it free to lift).
     max_iter : int
         SLSQP iterations.
     tol : float
@@ -452,7 +457,7 @@ def design(
         return np.zeros(len(names)) if "lost" in e else np.array(e["gradient"]) * width / scale
 
     def field_con(field: str, sign: float, bound: float) -> dict[str, Any]:
-        ref = max(abs(bound), 1e-3)
+        ref = abs(bound) if bound else 1.0
 
         def con(u: FloatArray) -> float:
             e = evaluate(phys(u))
@@ -470,6 +475,8 @@ def design(
     if max_spectral_radius is not None:
         labels.append(("spectral_radius <= max", "spectral_radius", -1.0,
                        float(max_spectral_radius)))
+    if trailing_foot_lifts:
+        labels.append(("trailing foot lifts", "lift_velocity", 1.0, 0.0))
     for field, rng in (("speed", speed), ("step_length", step_length)):
         if rng is not None:
             a, b = map(float, rng)

@@ -59,12 +59,15 @@ __all__ = [
 #: truncation error ``h^4`` and the integrator's round-off ``tol / h`` are both about 1e-8 or less.
 STENCIL_STEP = 3e-4
 
-#: The gait fields differentiated, in this order.
-GRADIENT_FIELDS = ("step_length", "period", "speed", "collision_loss", "eta", "cost_of_transport")
+#: The gait fields differentiated, in this order (``lift_velocity``: the trailing foot's normal
+#: velocity just after the heel strike, m/s, positive when it lifts).
+GRADIENT_FIELDS = ("step_length", "period", "speed", "collision_loss", "eta", "cost_of_transport",
+                   "lift_velocity")
 
 #: Their units (SI).
 GRADIENT_UNITS = {"step_length": "m", "period": "s", "speed": "m/s", "collision_loss": "J",
-               "eta": "J/m", "cost_of_transport": "1", "spectral_radius": "1"}
+                  "eta": "J/m", "cost_of_transport": "1", "spectral_radius": "1",
+                  "lift_velocity": "m/s"}
 
 
 class GradientError(ValueError):
@@ -127,7 +130,7 @@ def _setup(walker: BuiltWalker, values: Mapping[str, float], slope: float) -> Po
 
 def step_fields(walker: BuiltWalker, z: ArrayLike, values: Mapping[str, float], *,
                 slope: float) -> FloatArray:
-    """One step from ``z``: ``(P(z), step_length, period, collision_loss, weight)``.
+    """One step from ``z``: ``(P(z), step_length, period, collision_loss, weight, lift)``.
 
     Parameters
     ----------
@@ -142,9 +145,10 @@ def step_fields(walker: BuiltWalker, z: ArrayLike, values: Mapping[str, float], 
 
     Returns
     -------
-    ndarray, shape (d + 4,)
+    ndarray, shape (d + 5,)
         The next section point, the step length (m), the step's duration (s), the collision
-        loss summed over its impacts (J) and the walker's weight ``M g`` (N).
+        loss summed over its impacts (J), the walker's weight ``M g`` (N) and the trailing
+        foot's normal velocity just after the heel strike (m/s; positive: it lifts).
 
     Raises
     ------
@@ -161,19 +165,22 @@ def step_fields(walker: BuiltWalker, z: ArrayLike, values: Mapping[str, float], 
     rec = walk.impacts[0]
     loss = float(sum(e.kinetic_energy_constrained for e in walk.events))  # type: ignore[attr-defined]
     weight = float(w.total_mass) * float(w.scale.gravity)
-    return np.concatenate((z1, [rec.step_length, rec.step_duration, loss, weight]))
+    lift = float(walk.events[-1].trailing_normal_velocity)  # type: ignore[attr-defined]
+    return np.concatenate((z1, [rec.step_length, rec.step_duration, loss, weight, lift]))
 
 
-def _derived(L: float, T: float, C: float, W: float) -> tuple[FloatArray, FloatArray]:
-    """:data:`GRADIENT_FIELDS` from ``(L, T, C, W)`` and their Jacobian, shape (6, 4)."""
-    vals = np.array([L, T, L / T, C, C / L, C / (W * L)])
+def _derived(L: float, T: float, C: float, W: float, V: float
+             ) -> tuple[FloatArray, FloatArray]:
+    """:data:`GRADIENT_FIELDS` from ``(L, T, C, W, V)`` and their Jacobian, shape (7, 5)."""
+    vals = np.array([L, T, L / T, C, C / L, C / (W * L), V])
     jac = np.array([
-        [1, 0, 0, 0],
-        [0, 1, 0, 0],
-        [1 / T, -L / T**2, 0, 0],
-        [0, 0, 1, 0],
-        [-C / L**2, 0, 1 / L, 0],
-        [-C / (W * L**2), 0, 1 / (W * L), -C / (W**2 * L)],
+        [1, 0, 0, 0, 0],
+        [0, 1, 0, 0, 0],
+        [1 / T, -L / T**2, 0, 0, 0],
+        [0, 0, 1, 0, 0],
+        [-C / L**2, 0, 1 / L, 0, 0],
+        [-C / (W * L**2), 0, 1 / (W * L), -C / (W**2 * L), 0],
+        [0, 0, 0, 0, 1],
     ], dtype=float)
     return vals, jac
 
@@ -237,12 +244,12 @@ def gait_gradients(
 
     x0 = np.concatenate((z, p0))
     g0 = G(x0)
-    DG = np.stack([_stencil(G, x0, j) for j in range(d + k)], axis=1)  # (d + 4, d + k)
+    DG = np.stack([_stencil(G, x0, j) for j in range(d + k)], axis=1)  # (d + 5, d + k)
     pmap = _setup(walker, base, slope)
     DPz = pmap.exact_jacobian(z).jacobian
     DPp = DG[:d, d:]
     dz = np.linalg.solve(np.eye(d) - DPz, DPp)  # (d, k)
-    dbasic = DG[d:, :d] @ dz + DG[d:, d:]  # (4, k): L, T, C, W
+    dbasic = DG[d:, :d] @ dz + DG[d:, d:]  # (5, k): L, T, C, W, V
     vals, jac = _derived(*g0[d:])
     dfields = jac @ dbasic
     mult = np.linalg.eigvals(DPz)

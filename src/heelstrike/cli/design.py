@@ -54,12 +54,13 @@ def add_design(sub: Any) -> None:
     """Register ``heelstrike design``."""
     p = sub.add_parser(
         "design", help="optimise walker parameters (a foot profile, the slope...) for a cost "
-        "of the passive gait, with exact-IFT gradients",
+        "of the passive gait, with implicit-function-theorem gradients",
         description="Minimise a cost of a described walker's passive gait (a gait field or an "
         "expression of them) over named parameters with bounds, subject to a spectral radius "
-        "bound and speed / step-length ranges (SLSQP with the implicit-function-theorem "
-        "gradients of the gait; the gait is followed by continuation). Progress on stderr, a "
-        "result table on stdout (or --json), figures and a resumable record in --out.")
+        "bound, speed / step-length ranges and the trailing foot lifting (SLSQP with the "
+        "implicit-function-theorem gradients of the gait; the gait is followed by "
+        "continuation). Progress on stderr, a result table on stdout (or --json), figures and "
+        "a resumable record in --out.")
     add_model_options(p, required=True)
     p.add_argument("--slope", type=parse_slope, required=True,
                    help="ground slope, e.g. 3deg (the start value if --vary slope=...)")
@@ -67,7 +68,7 @@ def add_design(sub: Any) -> None:
                    help="a parameter to vary and its bounds (SI units), repeatable")
     p.add_argument("--cost", default="collision_loss",
                    help="a gait field (step_length, period, speed, collision_loss, eta, "
-                   "cost_of_transport, spectral_radius) or an expression of them "
+                   "cost_of_transport, spectral_radius, lift_velocity) or an expression of them "
                    "(default collision_loss)")
     p.add_argument("--max-spectral-radius", type=float, default=None,
                    help="constraint: largest Floquet multiplier modulus at most this")
@@ -75,6 +76,9 @@ def add_design(sub: Any) -> None:
                    help="constraint: speed range (m/s)")
     p.add_argument("--step-length", type=_pair, default=None, metavar="LO:HI",
                    help="constraint: step-length range (m)")
+    p.add_argument("--trailing-foot-lifts", action="store_true",
+                   help="constraint: the trailing foot's normal velocity just after the heel "
+                   "strike is not negative (lift_velocity >= 0)")
     p.add_argument("--max-iter", type=positive_int, default=50, help="SLSQP iterations")
     p.add_argument("--tol", type=float, default=DESIGN_TOL,
                    help=f"SLSQP's ftol on the cost divided by its start value "
@@ -109,6 +113,7 @@ def _run_design(args: argparse.Namespace) -> int:
             res = design(walker, vary=vary, cost=args.cost, slope=args.slope,
                          max_spectral_radius=args.max_spectral_radius, speed=args.speed,
                          step_length=args.step_length, max_iter=args.max_iter, tol=args.tol,
+                         trailing_foot_lifts=args.trailing_foot_lifts,
                          record=record,
                          progress=progress)
     except DesignError as exc:

@@ -28,8 +28,11 @@ from heelstrike.analysis.design import design
 from heelstrike.models.builder import load_walker
 from heelstrike.plots.design import cost_history_figure, foot_figure
 
-here = Path(__file__).resolve().parent if "__file__" in globals() else Path("examples")
-walker = load_walker(here / "walkers" / "compass_foot6.toml")
+# the walker file next to this script (sphinx-gallery runs it from its own folder)
+here = Path(__file__).resolve().parent if "__file__" in globals() else Path.cwd()
+foot6 = next(p for p in (here / "walkers" / "compass_foot6.toml",
+                         here / "examples" / "walkers" / "compass_foot6.toml") if p.is_file())
+walker = load_walker(foot6)
 res = design(walker, vary={"R": (0.2, 0.4), "k2": (-0.01, 0.01)}, cost="-speed", slope=0.05,
              max_iter=8)
 print(f"{res.status.value}: {res.message}")

@@ -20,8 +20,8 @@ PLOTS = sorted((PACKAGE / "plots").glob("*.py"))
 
 #: The analysis names ``plots/`` may import: result types (drawn, never computed) ...
 RESULT_TYPES = frozenset({
-    "Basin", "BifurcationDiagram", "Continuation", "Figure3bData", "GaitMap", "ImpactMap",
-    "PaperFigureData", "WalkResult",
+    "Basin", "BifurcationDiagram", "Continuation", "DesignResult", "Figure3bData", "GaitMap",
+    "ImpactMap", "PaperFigureData", "WalkResult",
 })
 #: ... and plain constants (names of outcomes, of the impact-angle axis).
 CONSTANTS = frozenset({"ANGLE", "OUTCOMES"})

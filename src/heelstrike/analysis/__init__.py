@@ -49,14 +49,15 @@ from typing import Any
 _PUBLIC: dict[str, tuple[str, ...]] = {
     "basin": ("Basin", "basin_of_attraction", "model_basin_of_attraction"),
     "cost_study": ("cheapest_gaits",),
+    "design": ("DesignResult", "design"),
     "gait_map": ("GaitMap", "compass_bifurcation", "model_bifurcation", "model_gait_map"),
-    "heel_strike": ("HeelStrikeStudy", "NotAHeelStrikeError", "heel_strike_study"),
+    "heel_strike": ("HeelStrikeStudy", "heel_strike_study"),
     "limit_cycle": (
         "BifurcationDiagram", "Continuation", "GaitNotFoundError", "LimitCycle", "PoincareMap",
         "bifurcation_diagram", "continue_limit_cycle", "find_limit_cycle", "find_limit_cycles",
     ),
     "model_gaits": (
-        "ImpactMap", "ModelGait", "ModelHeelStrike", "find_model_gait", "find_model_gaits",
+        "ImpactMap", "ModelGait", "ModelHeelStrike", "find_model_gaits",
         "impact_map", "model_heel_strike",
     ),
     "newton": ("NewtonSolution", "newton_solve"),

@@ -31,7 +31,7 @@ from typing import Any
 from heelstrike._caching import CacheWarning
 from heelstrike._optional import MissingExtraError
 from heelstrike._version import __version__
-from heelstrike.cli import gait, paper, powered, robot
+from heelstrike.cli import design, gait, paper, powered, robot
 from heelstrike.cli._common import (
     CliError,
     DeprecatedOptionWarning,
@@ -59,6 +59,7 @@ _COMMANDS: tuple[Callable[[Any], None], ...] = (
     paper.add_impact_map,
     powered.add_powered,
     powered.add_study,
+    design.add_design,
     robot.add_robot_command,
 )
 

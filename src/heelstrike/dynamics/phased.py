@@ -64,6 +64,11 @@ class PhasedWalker(BuiltWalker):
         Parameter values (scalars: the section is not batched).
     """
 
+    @property
+    def section_solved_coordinate(self) -> int:
+        """The hip (:attr:`eliminated`), solved for zero swing-foot clearance on the section."""
+        return self.eliminated
+
     def __init__(
         self, description: WalkerDescription, *, use_cache: bool = True, **params: ArrayLike
     ) -> None:

@@ -135,7 +135,7 @@ class StepJacobian(ResultDictMixin):
 # -- complex-capable equations of a walker ---------------------------------------------------
 def _twin(walker: PlanarWalker) -> Any:
     """The described walker whose generated equations are differentiated (None if none)."""
-    if getattr(walker, "model", None) is not None:
+    if walker.generated_model is not None:
         return walker
     return walker.as_described()
 
@@ -157,7 +157,7 @@ class _Equations:
     @classmethod
     def of(cls, walker: PlanarWalker, slope: float) -> _Equations:
         twin = _twin(walker)
-        model = getattr(twin, "model", None)
+        model = None if twin is None else twin.generated_model
         if twin is None or model is None:
             raise ExactJacobianUnavailable(
                 f"{type(walker).__name__} has no generated equations (no walker description) "
@@ -263,7 +263,7 @@ def _parameter_entry(walker: PlanarWalker, name: str) -> tuple[int | None, Plana
         raise ValueError(f"{name!r} is not a parameter of {type(walker).__name__} "
                          f"(its parameters: {', '.join(known)}, or 'slope')")
     twin = _twin(walker)
-    if twin is None or getattr(twin, "model", None) is None:
+    if twin is None or twin.generated_model is None:
         raise ExactJacobianUnavailable(
             f"parameter {name!r}: {type(walker).__name__} has no generated equations")
     p = float(np.asarray(known[name]))
@@ -287,8 +287,7 @@ def _parameter_entry(walker: PlanarWalker, name: str) -> tuple[int | None, Plana
         raise ExactJacobianUnavailable(
             f"parameter {name!r} does not enter {type(walker).__name__}'s generated equations "
             "as one of their parameters: no exact derivative; use central differences")
-    if not np.array_equal(np.asarray(getattr(twin2, "lock_angles", ()), dtype=float),
-                          np.asarray(getattr(twin, "lock_angles", ()), dtype=float)):
+    if twin2.step_schedule().lock_angles != twin.step_schedule().lock_angles:
         raise ExactJacobianUnavailable(
             f"parameter {name!r} moves a joint's lock angle (the knee-strike guard and the "
             "locked configuration): not differentiated exactly; use central differences")
@@ -469,7 +468,7 @@ def _section_input(walker: PlanarWalker, z: FloatArray, par: _Parameters,
     """
     d = z.size
     q0, qd0 = walker.section_to_state(z)
-    j = getattr(walker, "eliminated", None)
+    j = walker.section_solved_coordinate
     keep = [i for i in range(2, q0.size) if i != j]
     for name, other in zip(par.names, changed, strict=True):
         if other is None:

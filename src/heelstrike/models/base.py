@@ -52,6 +52,7 @@ from heelstrike.models.schedule import (
 )
 
 if TYPE_CHECKING:
+    from heelstrike.models.builder import GeneratedModel
     from heelstrike.models.description import WalkerDescription
 
 Foot = Literal["right", "left"]
@@ -293,6 +294,20 @@ class PlanarWalker(ABC):
         backend runs it on the kernel generated from the description where the walker's own
         kernel cannot: push-off, a friction limit, dense samples (:mod:`heelstrike.dynamics`).
         """
+        return None
+
+    @property
+    def generated_model(self) -> GeneratedModel | None:
+        """The walker's own generated equations (a described walker's), or None (the default:
+        a hand-written walker; its :meth:`as_described` twin may have them)."""
+        return None
+
+    @property
+    def section_solved_coordinate(self) -> int | None:
+        """The coordinate the Poincare section solves for from the others (a described
+        walker's touchdown configuration: the hip, placing the swing foot on the ground), or
+        None (the default: the section fixes every coordinate explicitly, e.g. the compass
+        gait's affine ``q4 = -2 q3``)."""
         return None
 
     @property

@@ -433,6 +433,11 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         return self._after_swap
 
     @property
+    def generated_model(self) -> GeneratedModel:
+        """The equations generated from :attr:`description` (:class:`GeneratedModel`)."""
+        return self.model
+
+    @property
     def compiled_kernel(self) -> CompiledKernel | None:
         """``"generated"``: the kernel generated from the description
         (:mod:`heelstrike.dynamics.compiled_phased`).

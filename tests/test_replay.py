@@ -377,6 +377,7 @@ def test_hdf5_logs_round_trip_and_replay_as_the_npz(mujoco, tmp_path, capsys) ->
             g.create_dataset(key, data=arr)
     grouped = read_trajectory(f"{tmp_path / 'runs.hdf5'}#/trials/run3", robot)
     assert np.array_equal(grouped.q, traj.q) and np.array_equal(grouped.v, traj.v)
+    assert grouped.source.endswith("runs.hdf5#/trials/run3")
     write_trajectory(traj, tmp_path / "log.npz")
     results = []
     for name in ("log.npz", "log.h5"):
@@ -406,6 +407,19 @@ def test_hdf5_log_refusals_name_what_is_missing(tmp_path, monkeypatch) -> None:
     (tmp_path / "bad.h5").write_text("not hdf5")
     with pytest.raises(ValueError, match="not an HDF5 file"):
         read_trajectory(tmp_path / "bad.h5", robot)
+    with h5py.File(tmp_path / "odd.h5", "w") as f:
+        g = f.create_group("runs/run#1")  # a '#' in a group's name
+        g.create_dataset("t", data=np.arange(3.0))
+        g.create_dataset("q", data=np.zeros((3, robot.nq)))
+        g.create_dataset("v", data=np.zeros((3, robot.nv)) + 1j)
+        h = f.create_group("wide")
+        h.create_dataset("t", data=np.zeros((2, 3)))
+        h.create_dataset("q", data=np.zeros((3, robot.nq)))
+        h.create_dataset("v", data=np.zeros((3, robot.nv)))
+    with pytest.raises(ValueError, match=r"must be real numbers; v \(complex128\) is not"):
+        read_trajectory(f"{tmp_path / 'odd.h5'}#/runs/run#1", robot)
+    with pytest.raises(ValueError, match=r"t must be one row of sample times"):
+        read_trajectory(f"{tmp_path / 'odd.h5'}#wide", robot)
     monkeypatch.setitem(sys.modules, "h5py", None)
     with pytest.raises(MissingExtraError, match=r"the 'hdf5' extra: pip install '\.\[hdf5\]'"):
         read_trajectory(tmp_path / "log.h5", robot)

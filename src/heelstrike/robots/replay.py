@@ -422,7 +422,10 @@ def read_trajectory(
                          f"and {v.shape}")
     if convention == "mujoco":
         q, v = mujoco_to_pinocchio(robot, q, v)
-    return Trajectory(time=t.reshape(-1), q=q, v=v, source=str(p))
+    if t.ndim != 1:
+        raise RobotError(f"{p}: t must be one row of sample times (N,), got shape {t.shape}")
+    source = str(p) if group is None else f"{p}#{group}"
+    return Trajectory(time=t, q=q, v=v, source=source)
 
 
 _HDF5 = (".h5", ".hdf5")
@@ -431,9 +434,11 @@ _HDF5 = (".h5", ".hdf5")
 def _split_group(path: str | Path) -> tuple[Path, str | None]:
     """``"log.h5#/run3"`` -> ``(Path("log.h5"), "/run3")``; a path without ``#`` has no group."""
     text = str(path)
-    head, sep, group = text.rpartition("#")
-    if sep and Path(head).suffix.lower() in _HDF5:
-        return Path(head), group or "/"
+    at = text.find("#")
+    while at >= 0:  # the first '#' after an HDF5 file's name: a group's name may hold '#'
+        if Path(text[:at]).suffix.lower() in _HDF5:
+            return Path(text[:at]), text[at + 1:] or "/"
+        at = text.find("#", at + 1)
     return Path(text), None
 
 
@@ -457,10 +462,12 @@ def _read_hdf5(p: Path, group: str | None) -> tuple[FloatArray, FloatArray, Floa
                 raise RobotError(f"{p}{'' if where == '/' else '#' + where}: no dataset "
                                  f"{', '.join(missing)} (needs t, q, v; found "
                                  f"{', '.join(found) or 'none'})")
-            try:
-                t, q, v = (np.asarray(g[k][()], dtype=float) for k in ("t", "q", "v"))
-            except (TypeError, ValueError) as exc:
-                raise RobotError(f"{p}: t, q, v must be numeric arrays ({exc})") from None
+            kinds = {k: g[k].dtype.kind for k in ("t", "q", "v")}
+            wrong = [f"{k} ({g[k].dtype})" for k, kind in kinds.items() if kind not in "biuf"]
+            if wrong:
+                raise RobotError(f"{p}: t, q, v must be real numbers; {', '.join(wrong)} "
+                                 "is not")
+            t, q, v = (np.asarray(g[k][()], dtype=float) for k in ("t", "q", "v"))
     except OSError as exc:
         raise RobotError(f"{p}: not an HDF5 file ({exc})") from None
     return t, q, v

@@ -186,6 +186,10 @@ class _Equations:
     def contact_jacobian(self, q: _ComplexArray, foot: str) -> _ComplexArray:
         return np.asarray(self.fn(f"contact_jacobian_{foot}")(q, self.params))
 
+    def stance_centre(self, q: _ComplexArray) -> _ComplexArray:
+        """Stance foot's rolling-disc centre ``(x, y)`` (m), above its contact point."""
+        return np.asarray(self.fn("foot_centre_stance")(q, self.params))
+
     def swing_centre(self, q: _ComplexArray) -> _ComplexArray:
         """Swing foot arc centre ``(x, y)`` (m), shape (..., 2)."""
         return np.asarray(self.fn("foot_centre_swing")(q, self.params))
@@ -226,7 +230,7 @@ class _Parameters:
         """The equations at parameter values ``pv`` (..., k) of :attr:`names`."""
         if self.k == 0:
             return self.eq
-        from heelstrike.models.description import evaluate_expression
+        from heelstrike.models.description import rolling_radius
 
         params = list(self.eq.params)
         slope: Any = self.eq.slope
@@ -237,7 +241,7 @@ class _Parameters:
             else:
                 params[idx] = pv[..., i]
                 values[self.twin_names[idx]] = pv[..., i]
-        radii = tuple(evaluate_expression(ft.radius, values) if moves else r
+        radii = tuple(rolling_radius(ft, values) if moves else r
                       for ft, moves, r in zip(self.feet, self.radius_moves, self.eq.radii,
                                               strict=True))
         return _Equations(fn=self.eq.fn, params=tuple(params), radii=(radii[0], radii[1]),
@@ -685,13 +689,19 @@ def step_jacobian(
                 qd[j] = 0.0
             return np.asarray(S @ np.concatenate((q, qd)))
 
-        def measures(yc: _ComplexArray) -> _ComplexArray:
-            """``(step length, T_c)``: ``x`` of the stance contact at the start (0) minus the
-            striking foot's; kinetic energy before minus after the inert impact."""
+        def measures(yc: _ComplexArray, fld: _PhaseField = fld) -> _ComplexArray:
+            """``(step length, T_c)``: ``x`` of the stance contact at the start minus the
+            striking foot's (:meth:`~heelstrike.models.base.PlanarWalker.step_length`; the
+            start's contact is below the rolling disc's centre ``x = 0`` for an arc foot, not
+            for a profile foot: it moves with the start angle ``c`` and the profile); kinetic
+            energy before minus after the inert impact."""
             q, qd_minus, qd_plus, eq = impact(yc)
             M = eq.mass_matrix(q)
             loss = 0.5 * (qd_minus @ M @ qd_minus - qd_plus @ M @ qd_plus)
-            return np.array([-eq.swing_centre(q)[0], loss])
+            q_start = q.copy()
+            q_start[0], q_start[2] = 0.0, yc[2 * fld.m]
+            x_start = eq.stance_centre(q_start)[0]
+            return np.array([x_start - eq.swing_centre(q)[0], loss])
 
         def strike_guard(yc: _ComplexArray, fld: _PhaseField = fld) -> Any:
             q, _, eq = fld.unpack(yc)

@@ -455,6 +455,9 @@ class _Jet:
     the safe expressions (numbers, + - * / **, sqrt, sin, cos) without sympy."""
 
     __slots__ = ("d0", "d1", "d2")
+    #: numpy defers to the jet's reflected operators (``array * jet`` is a jet of arrays, not
+    #: an object array of jets: parameter values given as arrays, e.g. a complex step)
+    __array_ufunc__ = None
 
     def __init__(self, d0: Any, d1: Any = 0.0, d2: Any = 0.0) -> None:
         self.d0, self.d1, self.d2 = d0, d1, d2
@@ -546,8 +549,9 @@ def support_function(
     out = _Jet.lift(evaluate_expression(profile, {**values, PROFILE_ANGLE: x},
                                         funcs=_JET_FUNCS, path=path))
     shape = np.broadcast_shapes(*(np.shape(d) for d in (x.d0, out.d0, out.d1, out.d2)))
-    h, dh, d2h = (np.broadcast_to(np.asarray(d, dtype=float), shape) for d in
-                  (out.d0, out.d1, out.d2))
+    # complex parameter values (complex-step derivatives) keep their imaginary parts
+    h, dh, d2h = (np.broadcast_to(np.asarray(d, dtype=complex if np.iscomplexobj(d) else float),
+                                  shape) for d in (out.d0, out.d1, out.d2))
     return h, dh, d2h
 
 
@@ -563,7 +567,8 @@ def rolling_radius(foot: FootSpec, values: Mapping[str, Any]) -> Any:
         assert foot.radius is not None
         return evaluate_expression(foot.radius, values)
     h, _, d2h = support_function(foot.profile, 0.0, values)
-    return h + d2h if h.ndim else float(h + d2h)
+    # arrays (a batch) and complex values (complex-step derivatives) stay as they are
+    return h + d2h if np.ndim(h) or np.iscomplexobj(h) else float(h + d2h)
 
 
 def check_profile(foot: FootSpec, values: Mapping[str, Any], path: str) -> None:

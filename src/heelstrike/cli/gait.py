@@ -308,9 +308,12 @@ def _run_gait(args: argparse.Namespace) -> int:
 
     if not args.slope > 0:
         raise CliError(
-            f"no gait found at slope {math.degrees(args.slope):g} deg: a passive walker needs "
-            "a downhill slope > 0 (the energy lost at heel strike must come from gravity); "
-            "e.g. --slope 3deg, or see 'heelstrike powered' for level ground"
+            f"no gait found at slope {math.degrees(args.slope):g} deg: a passive walker has an "
+            "isolated gait only on a downhill slope > 0 (on level ground nothing replaces the "
+            "energy its heel strikes lose; a walker whose strikes can lose nothing, such as "
+            "wheel.toml, walks there a continuum of gaits, one per energy, none isolated: "
+            "'heelstrike walk' simulates one); e.g. --slope 3deg, or see 'heelstrike powered' "
+            "for level ground"
         )
     if not args.slope < math.pi / 2:
         raise CliError(f"--slope must be below 90deg (a walkable incline), got "

@@ -23,6 +23,9 @@ Main entry points:
   :func:`~heelstrike.analysis.model_gaits.impact_map`: gaits and impact maps of described
   walkers;
 - :func:`~heelstrike.analysis.sweep.sweep`: parameter sweeps with a resumable store;
+- :func:`~heelstrike.analysis.sensitivity.gait_sensitivity` and
+  :func:`~heelstrike.analysis.design.design`: a gait's parameter sensitivities (exact step
+  Jacobians through the impacts) and gradient-based design;
 - :func:`~heelstrike.analysis.newton.newton_solve`: the one Newton engine every gait search
   runs (batched starts, per-start :class:`~heelstrike.status.SolveStatus`);
 - :func:`~heelstrike.analysis.walk_tables.walk_energy_table` and the other tables of
@@ -33,9 +36,10 @@ Only these entry points, their result types and errors are importable from here 
 names); tuning constants and helpers are imported from their submodules
 (``from heelstrike.analysis.basin import OUTCOMES``).
 
-``gait_map``, ``sweep`` and ``cost_study`` name both a submodule and its main function; here
-they stay the submodules (``from heelstrike.analysis import sweep`` gives the module, as it
-always has): call ``heelstrike.analysis.sweep.sweep`` and so on.
+``gait_map``, ``sweep``, ``cost_study`` and ``design`` name both a submodule and its main
+function; here they stay the submodules (``from heelstrike.analysis import sweep`` gives the
+module, as it always has): call ``heelstrike.analysis.sweep.sweep``,
+``heelstrike.analysis.design.design`` and so on.
 """
 
 from __future__ import annotations
@@ -49,7 +53,7 @@ from typing import Any
 _PUBLIC: dict[str, tuple[str, ...]] = {
     "basin": ("Basin", "basin_of_attraction", "model_basin_of_attraction"),
     "cost_study": ("cheapest_gaits",),
-    "design": ("DesignResult", "design"),
+    "design": ("DesignResult",),  # the function is heelstrike.analysis.design.design
     "gait_map": ("GaitMap", "compass_bifurcation", "model_bifurcation", "model_gait_map"),
     "heel_strike": ("HeelStrikeStudy", "heel_strike_study"),
     "limit_cycle": (

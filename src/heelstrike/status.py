@@ -11,12 +11,77 @@ This module imports nothing of the package: every layer may use it.
 
 from __future__ import annotations
 
+import re
 from enum import StrEnum
+from functools import cache
+from typing import Any, Self
 
-__all__ = ["SolveStatus"]
+__all__ = ["CodedStatus", "SolveStatus"]
 
 
-class SolveStatus(StrEnum):
+class CodedStatus(StrEnum):
+    """A status vocabulary: members are their string names with a stable integer ``code``
+    (what compiled kernels write) and a ``message`` for users. Subclasses (:class:`SolveStatus`,
+    :class:`~heelstrike.dynamics.hybrid.WalkStatus`) only list their members as
+    ``NAME = value, code, message``, with codes 0, 1, ... without gaps or repeats
+    (:func:`check_codes`)."""
+
+    code: int
+    message: str
+
+    # ``Status("converged")`` looks a member up by value (the defaults only let type checkers
+    # accept that call).
+    def __new__(cls, value: str, code: int = -1, message: str = "") -> Self:
+        obj = str.__new__(cls, value)
+        obj._value_ = value
+        obj.code = code
+        obj.message = message
+        return obj
+
+    @classmethod
+    def from_code(cls, code: int) -> Self:
+        """The member with integer code ``code`` (as written by a compiled kernel).
+
+        Raises
+        ------
+        ValueError
+            If no member has that code.
+        """
+        members = _members(cls)
+        try:
+            k = int(code)
+        except (TypeError, ValueError):
+            k = -1
+        if 0 <= k < len(members) and members[k].code == k:  # codes are the definition order
+            return members[k]
+        what = re.sub(r"(?<!^)(?=[A-Z])", " ", cls.__name__).lower()  # "walk status"
+        raise ValueError(f"no {what} has code {code!r}")
+
+    @classmethod
+    def names_by_code(cls) -> tuple[str, ...]:
+        """Member names indexed by code: ``names_by_code()[s.code] == s.value``."""
+        return tuple(s.value for s in cls)
+
+    @classmethod
+    def messages_by_code(cls) -> dict[int, str]:
+        """``{code: message}`` of every member."""
+        return {s.code: s.message for s in cls}
+
+
+@cache
+def _members(status: type[CodedStatus]) -> tuple[Any, ...]:
+    """The members of a vocabulary in definition (= code) order, listed once."""
+    return tuple(status)
+
+
+def check_codes(status: type[CodedStatus]) -> None:
+    """Refuse a vocabulary whose codes are not its definition order 0, 1, ... (checked once,
+    where it is defined: :meth:`CodedStatus.from_code` relies on it)."""
+    if [s.code for s in status] != list(range(len(status))):  # pragma: no cover
+        raise RuntimeError(f"{status.__name__} codes must be 0, 1, ... in definition order")
+
+
+class SolveStatus(CodedStatus):
     """How a solve ended (a Newton start, or one item of a compiled impact batch).
 
     Each member is its string name (``status == "converged"`` holds), carries a
@@ -27,18 +92,6 @@ class SolveStatus(StrEnum):
     (:func:`~heelstrike.models.compass_fast.heel_strike_impact`); codes 8-14 end a Newton start
     (:func:`~heelstrike.analysis.newton.newton_solve`). ``CONVERGED`` (0) is success for both.
     """
-
-    code: int
-    message: str
-
-    # Members are ``value, code, message``; ``SolveStatus("converged")`` looks a member up by
-    # value (the defaults only let type checkers accept that call).
-    def __new__(cls, value: str, code: int = -1, message: str = "") -> SolveStatus:
-        obj = str.__new__(cls, value)
-        obj._value_ = value
-        obj.code = code
-        obj.message = message
-        return obj
 
     CONVERGED = "converged", 0, "converged"
     NOT_FINITE = "not_finite", 1, "an input contains non-finite values (nan or inf)"
@@ -60,26 +113,5 @@ class SolveStatus(StrEnum):
     MAX_ITERATIONS = "max_iterations", 13, "Newton did not converge in the allowed iterations"
     TIME_LIMIT = "time_limit", 14, "time limit reached"
 
-    @classmethod
-    def from_code(cls, code: int) -> SolveStatus:
-        """The member with integer code ``code`` (as written by a compiled kernel).
 
-        Raises
-        ------
-        ValueError
-            If no status has that code.
-        """
-        try:
-            return _BY_CODE[int(code)]
-        except (KeyError, TypeError, ValueError):
-            raise ValueError(f"no solve status has code {code!r}") from None
-
-    @classmethod
-    def messages_by_code(cls) -> dict[int, str]:
-        """``{code: message}`` of every member."""
-        return {s.code: s.message for s in cls}
-
-
-_BY_CODE: dict[int, SolveStatus] = {s.code: s for s in SolveStatus}
-if sorted(_BY_CODE) != list(range(len(SolveStatus))):  # pragma: no cover - definition check
-    raise RuntimeError("SolveStatus codes must be 0, 1, ... without gaps or repeats")
+check_codes(SolveStatus)

@@ -37,7 +37,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from enum import StrEnum
 from typing import Any, Literal
 
 import numpy as np
@@ -52,6 +51,7 @@ from heelstrike.dynamics.single_support import SingleSupport, TorqueLaw
 from heelstrike.models._contact import grazes, lift_velocity_scale, lifts
 from heelstrike.models.base import PlanarWalker
 from heelstrike.models.schedule import Guard, Stage, StepSchedule
+from heelstrike.status import CodedStatus, check_codes
 
 __all__ = [
     "GroundReaction",
@@ -76,7 +76,7 @@ PushOff = Callable[[PlanarWalker, FloatArray, FloatArray, FloatArray],
                    tuple[FloatArray, float]]
 
 
-class WalkStatus(StrEnum):
+class WalkStatus(CodedStatus):
     """How a simulation ended: the one status vocabulary of every backend.
 
     Each member is its string name (a :class:`~enum.StrEnum`, so ``status == "completed"``
@@ -92,18 +92,6 @@ class WalkStatus(StrEnum):
     started; no simulation returns them. A basin stores the member codes, so code 0
     (``COMPLETED``) means the same everywhere.
     """
-
-    code: int
-    message: str
-
-    # Members are defined as ``value, code, message``; ``WalkStatus("completed")`` looks a
-    # member up by value (the defaults only let type checkers accept that call).
-    def __new__(cls, value: str, code: int = -1, message: str = "") -> WalkStatus:
-        obj = str.__new__(cls, value)
-        obj._value_ = value
-        obj.code = code
-        obj.message = message
-        return obj
 
     COMPLETED = "completed", 0, "all requested steps were taken"
     FELL_FORWARD = (
@@ -153,29 +141,8 @@ class WalkStatus(StrEnum):
         "strike leaves",
     )
 
-    @classmethod
-    def from_code(cls, code: int) -> WalkStatus:
-        """The member with integer code ``code`` (as written by the compiled kernels).
 
-        Raises
-        ------
-        ValueError
-            If no status has that code.
-        """
-        try:
-            return _BY_CODE[int(code)]
-        except (KeyError, TypeError, ValueError):
-            raise ValueError(f"no walk status has code {code!r}") from None
-
-    @classmethod
-    def names_by_code(cls) -> tuple[str, ...]:
-        """Status names indexed by code: ``names_by_code()[s.code] == s.value``."""
-        return tuple(_BY_CODE[c].value for c in range(len(_BY_CODE)))
-
-
-_BY_CODE: dict[int, WalkStatus] = {s.code: s for s in WalkStatus}
-if sorted(_BY_CODE) != list(range(len(WalkStatus))):  # pragma: no cover - definition check
-    raise RuntimeError("WalkStatus codes must be 0, 1, ... without gaps or repeats")
+check_codes(WalkStatus)
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -16,7 +16,7 @@ from enum import StrEnum
 from functools import cache
 from typing import Any, Self
 
-__all__ = ["CodedStatus", "SolveStatus"]
+__all__ = ["CodedStatus", "SolveStatus", "check_codes"]
 
 
 class CodedStatus(StrEnum):

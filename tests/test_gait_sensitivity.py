@@ -114,3 +114,28 @@ def test_multiplier_sensitivities_match_converged_gaits(
         ref = (np.abs(plus.multipliers) - np.abs(minus.multipliers)) / (2 * h)
         got = sens.modulus_derivatives[:, k]
         assert np.max(np.abs(got - ref)) <= 1e-6 * max(np.max(np.abs(ref)), 1e-2), name
+
+
+def test_sensitivity_at_a_bound_of_the_parameter() -> None:
+    """At ``R = 0`` (the point foot; ``R < 0`` is no walker) the derivatives exist one-sided:
+    the multipliers' moduli move as a one-sided difference of re-converged gaits says (the
+    central difference asked for ``R = -1e-5`` and ``gait --sensitivity R`` failed at its
+    default foot)."""
+    from heelstrike.analysis.limit_cycle import find_limit_cycle
+    from heelstrike.analysis.sensitivity import gait_sensitivity
+    from heelstrike.models import CompassGait
+
+    slope = float(np.deg2rad(3.0))
+    tight = {"rtol": 1e-12, "atol": 1e-12}
+
+    def rho(R: float) -> np.ndarray:
+        c = find_limit_cycle(CompassGait(foot_radius=R), slope=slope, tol=1e-12, **tight)
+        return np.sort(np.abs(c.multipliers))[::-1]
+
+    z = find_limit_cycle(CompassGait(), slope=slope, tol=1e-12, **tight).fixed_point
+    s = gait_sensitivity(CompassGait(), z, ["foot_radius"], slope=slope)
+    h = 1e-4
+    ref = (-3.0 * rho(0.0) + 4.0 * rho(h) - rho(2 * h)) / (2 * h)
+    got = np.sort(s.modulus_derivatives[:, 0])[::-1]
+    assert np.all(np.isfinite(got))
+    assert np.allclose(np.sort(got), np.sort(ref), rtol=1e-3, atol=1e-4 * np.max(np.abs(ref)))

@@ -107,6 +107,20 @@ def _changed_map(pmap: PoincareMap, name: str, value: float) -> PoincareMap:
     return replace(pmap, walker=pmap.walker.replace(**{name: value}))
 
 
+def _stencil(pmap: PoincareMap, name: str, p: float, h: float
+             ) -> list[tuple[float, float, PoincareMap]]:
+    """``(offset, weight, map)`` of a second-order difference in ``name`` at ``p``, step ``h``
+    (the derivative is ``sum(weight * f(map at p + offset h)) / h``): central, or one-sided
+    where ``p - h`` is outside the walker's admissible values (``R = 0``: a foot radius < 0
+    is no walker)."""
+    try:
+        minus = _changed_map(pmap, name, p - h)
+    except ValueError:
+        return [(0.0, -1.5, pmap), (1.0, 2.0, _changed_map(pmap, name, p + h)),
+                (2.0, -0.5, _changed_map(pmap, name, p + 2.0 * h))]
+    return [(-1.0, -0.5, minus), (1.0, 0.5, _changed_map(pmap, name, p + h))]
+
+
 def gait_sensitivity(
     walker: PlanarWalker,
     fixed_point: Any,
@@ -203,19 +217,18 @@ def gait_sensitivity(
     for k, name in enumerate(names):
         p = float(slope) if name == "slope" else float(np.asarray(known[name]))
         h = rel_step * max(1.0, abs(p))
-        plus, minus = _changed_map(pmap, name, p + h), _changed_map(pmap, name, p - h)
+        stencil = _stencil(pmap, name, p, h)
         if name in exact_names:
             i = exact_names.index(name)
             dPdp = sj.parameter_jacobian[:, i]
             dQdp = np.array([sj.quantity_parameter_gradients[q][i] for q in keys])
         else:
-            dPdp = (plus(z) - minus(z)) / (2.0 * h)
-            dQdp = (_quantities(plus, z) - _quantities(minus, z)) / (2.0 * h)
+            dPdp = np.sum([w * m(z) for _, w, m in stencil], axis=0) / h
+            dQdp = np.sum([w * _quantities(m, z) for _, w, m in stencil], axis=0) / h
         dz_all[:, k] = np.linalg.solve(np.eye(d) - DP, dPdp)
         dQ[:, k] = DQz @ dz_all[:, k] + dQdp
-        dz_h = h * dz_all[:, k]
-        dDP = (plus.exact_jacobian(z + dz_h).jacobian
-               - minus.exact_jacobian(z - dz_h).jacobian) / (2.0 * h)
+        dDP = np.sum([w * m.exact_jacobian(z + s * h * dz_all[:, k]).jacobian
+                      for s, w, m in stencil], axis=0) / h
         dlam[:, k] = np.einsum("ji,jk,ki->i", W.conj(), dDP, V)
     return GaitSensitivity(
         parameters=names, section_names=tuple(walker.section_names), fixed_point=dz_all,

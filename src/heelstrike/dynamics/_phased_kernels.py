@@ -43,6 +43,7 @@ from heelstrike.dynamics.compiled import (
 from heelstrike.dynamics.compiled_phased import (
     _C_EREF,
     _C_GAIN,
+    _C_GUARD,
     _C_KD,
     _C_KP,
     _C_LAW,
@@ -55,6 +56,7 @@ from heelstrike.dynamics.compiled_phased import (
     _C_TANG,
     _C_THR,
     _C_TJ,
+    _C_TRAIL,
     _C_UMAX,
     _EV_ARMED,
     _EV_BACK,
@@ -71,19 +73,27 @@ from heelstrike.dynamics.compiled_phased import (
     _KIND_KNEE,
     _LAW_ENERGY,
     _LAW_POSTURE,
+    _MODE_GRAZE,
+    _MODE_PENETRATING,
+    _MODE_SEPARATE,
     _NO_CONSISTENT_ASSIGNMENT,
     _NO_SWAP,
     SLIPPED,
 )
 from heelstrike.models._codegen_numba import NumbaModel, signatures
+from heelstrike.models import _contact
 from heelstrike.models._contact import CONTACT_TOLERANCE
 
 tolerate_numba_cache_errors()  # numba's cache unwritable (full disk): run uncached
+
+#: The graze rule (:func:`heelstrike.models._contact.grazes`), compiled.
+grazes_jit: Any = njit(cache=True, nogil=True, inline="always")(_contact.grazes)
 
 _SIGNATURES = signatures()
 _DYN_T = nbt.FunctionType(_SIGNATURES["dynamics"])
 _CON_T = nbt.FunctionType(_SIGNATURES["contacts"])
 _SWP_T = nbt.FunctionType(_SIGNATURES["swap"])
+_GRD_T = nbt.FunctionType(_SIGNATURES["heel_strike_guard"])
 
 
 # ---------------------------------------------------------------------------------------------
@@ -383,9 +393,16 @@ def _reaction(
 
 @njit(cache=True, nogil=True)
 def _event_value(
-    kind: int, dyn: Any, con: Any, p: FloatArray, cfg: FloatArray, free: IntArray,
+    kind: int, dyn: Any, con: Any, gua: Any, p: FloatArray, cfg: FloatArray, free: IntArray,
     qref: FloatArray, swing_idx: IntArray, lockv: FloatArray, x: FloatArray, ew: Any,
 ) -> float:
+    """The witness of event ``kind`` at the reduced state ``x``.
+
+    The heel strike's (``_EV_STRIKE``) is minus the swing foot's clearance, or, for a walker
+    declaring its guard (``cfg[_C_GUARD] == 1``), the declared guard ``gua(q, p)``; its arming
+    (``_EV_ARMED``) is then the stance angle (the compass gait's midstance) instead of
+    ``min(stance angle, swing foot ahead, clearance)``.
+    """
     m = free.shape[0]
     if kind == _EV_FWD:
         return x[0] - 0.5 * math.pi
@@ -399,6 +416,8 @@ def _event_value(
         return g - cfg[_C_THR] if kind == _EV_FLEXED else g
     q, qd = ew[0], ew[1]
     _unpack(x, free, qref, cfg[_C_RST], q, qd)
+    if cfg[_C_GUARD] != 0.0 and (kind == _EV_ARMED or kind == _EV_STRIKE):
+        return float(x[0]) if kind == _EV_ARMED else gua(q, p)
     if kind == _EV_ARMED or kind == _EV_STRIKE:
         A, rate, c = ew[4], ew[5], ew[6]
         con(q, qd, p, A, rate, c)
@@ -414,18 +433,19 @@ def _event_value(
 
 # ---------------------------------------------------------------------------------------------
 # integrator: the drivers of heelstrike.dynamics._dp5 (starting step, event location) with the
-# context tuple ``(dyn, con, p, cfg, free, qref, swing_idx, lockv, q, qd, M, h, Mr, Fr, ew)``
+# context tuple ``(dyn, con, p, cfg, free, qref, swing_idx, lockv, q, qd, M, h, Mr, Fr, ew, gua)``
 # ---------------------------------------------------------------------------------------------
 @njit(nogil=True, inline="always")
 def _ctx_rhs(ctx: Any, x: FloatArray, dx: FloatArray) -> None:
-    dyn, _, p, cfg, free, qref, _, _, q, qd, M, h, Mr, Fr, _ = ctx
+    dyn, _, p, cfg, free, qref, _, _, q, qd, M, h, Mr, Fr, _, _ = ctx
     _rhs(dyn, p, cfg, free, qref, x, dx, q, qd, M, h, Mr, Fr)
 
 
 @njit(nogil=True, inline="always")
 def _ctx_event(ctx: Any, x: FloatArray, kind: int) -> float:
     dyn, con, p, cfg, free, qref, swing_idx, lockv = ctx[:8]
-    return _event_value(kind, dyn, con, p, cfg, free, qref, swing_idx, lockv, x, ctx[14])
+    return _event_value(kind, dyn, con, ctx[15], p, cfg, free, qref, swing_idx, lockv, x,
+                        ctx[14])
 
 
 _ode = dp5.integrator(_ctx_rhs, _ctx_event)
@@ -490,7 +510,7 @@ def _same_row(S: FloatArray, i: int, j: int) -> bool:
 
 @njit(cache=True, nogil=True)
 def _segment(
-    dyn: Any, con: Any, p: FloatArray, cfg: FloatArray, free: IntArray, qref: FloatArray,
+    dyn: Any, con: Any, gua: Any, p: FloatArray, cfg: FloatArray, free: IntArray, qref: FloatArray,
     swing_idx: IntArray, lockv: FloatArray, y: FloatArray, t: float, t_limit: float,
     kinds: IntArray, dirs: IntArray, rtol: float, atol: float, max_step: float, S: FloatArray,
     ns: int, step: int, leg: int, phase: int,
@@ -527,7 +547,7 @@ def _segment(
     # the owners stay referenced (``keep``) while the borrowed views are in use
     keep = (qo, qdo, Mo, hvo, Mro, Fro, ewo, ko, ktryo, wo, go)
     return _integrate(
-        dyn, con, _borrow(p), _borrow(cfg), _borrow(free), _borrow(qref), _borrow(swing_idx),
+        dyn, con, gua, _borrow(p), _borrow(cfg), _borrow(free), _borrow(qref), _borrow(swing_idx),
         _borrow(lockv), _borrow(y), t, t_limit, _borrow(kinds), _borrow(dirs), rtol, atol,
         max_step, S, ns, step, leg, phase, _borrow(qo), _borrow(qdo), _borrow(Mo), _borrow(hvo),
         _borrow(Mro), _borrow(Fro), ew, _borrow(ko), _borrow(ktryo), _borrow(wo), _borrow(go),
@@ -537,7 +557,7 @@ def _segment(
 
 @njit(cache=True, nogil=True)
 def _integrate(
-    dyn: Any, con: Any, p: FloatArray, cfg: FloatArray, free: IntArray, qref: FloatArray,
+    dyn: Any, con: Any, gua: Any, p: FloatArray, cfg: FloatArray, free: IntArray, qref: FloatArray,
     swing_idx: IntArray, lockv: FloatArray, y: FloatArray, t: float, t_limit: float,
     kinds: IntArray, dirs: IntArray, rtol: float, atol: float, max_step: float, S: FloatArray,
     ns: int, step: int, leg: int, phase: int, q: FloatArray, qd: FloatArray, M: FloatArray,
@@ -548,7 +568,7 @@ def _integrate(
     d = y.shape[0]
     R = cfg[_C_RST]
     n_ev = kinds.shape[0]
-    ctx = (dyn, con, p, cfg, free, qref, swing_idx, lockv, q, qd, M, hv, Mr, Fr, ew)
+    ctx = (dyn, con, p, cfg, free, qref, swing_idx, lockv, q, qd, M, hv, Mr, Fr, ew, gua)
     tmp = w[0]
     ynew = w[1]
     ytry = w[2]
@@ -556,8 +576,8 @@ def _integrate(
     g_new = g[1]
     _rhs(dyn, p, cfg, free, qref, y, k[0], q, qd, M, hv, Mr, Fr)
     for j in range(n_ev):
-        g_old[j] = _event_value(kinds[j], dyn, con, p, cfg, free, qref, swing_idx, lockv, y,
-                                ew)
+        g_old[j] = _event_value(kinds[j], dyn, con, gua, p, cfg, free, qref, swing_idx, lockv,
+                                y, ew)
     for j in range(n_ev):
         # contact already lost at the start: no sign change to detect (hybrid.CONTACT_EVENTS)
         if (kinds[j] == _EV_LOST or kinds[j] == _EV_SLIP) and g_old[j] <= 0.0:
@@ -585,8 +605,8 @@ def _integrate(
                 return _EV_FAIL, t, S, ns
         h_next = min(hh * dp5.grow_factor(en), max_step)
         for j in range(n_ev):
-            g_new[j] = _event_value(kinds[j], dyn, con, p, cfg, free, qref, swing_idx, lockv,
-                                    ynew, ew)
+            g_new[j] = _event_value(kinds[j], dyn, con, gua, p, cfg, free, qref, swing_idx,
+                                    lockv, ynew, ew)
         if dp5.any_crossed(g_old, g_new, dirs, n_ev):
             best, tau = _ode.first_event(ctx, y, hh, t, k, ktry, tmp, ynew, ytry, kinds, dirs,
                                          n_ev, g_old, g_new)
@@ -683,13 +703,13 @@ def _record_impact(
 
 _F = nbt.float64
 _WALK_SIG = (
-    _DYN_T, _CON_T, _SWP_T, _F[::1], _F[::1], _F[::1], _F[::1], nbt.int64, nbt.int64[::1],
+    _DYN_T, _CON_T, _SWP_T, _GRD_T, _F[::1], _F[::1], _F[::1], _F[::1], nbt.int64, nbt.int64[::1],
     nbt.int64[::1], _F[::1], _F, _F, _F, _F,
 )
 
 
 def _walk_py(
-    dyn: Any, con: Any, swp: Any, p: FloatArray, cfg: FloatArray, q0: FloatArray,
+    dyn: Any, con: Any, swp: Any, gua: Any, p: FloatArray, cfg: FloatArray, q0: FloatArray,
     qd0: FloatArray, steps: int, stance_locks: IntArray, swing_locks: IntArray,
     lockv: FloatArray, max_duration: float, rtol: float, atol: float, max_step: float,
 ) -> tuple[int, FloatArray, int, FloatArray, int, FloatArray, FloatArray, FloatArray]:
@@ -700,6 +720,8 @@ def _walk_py(
     """
     n = q0.shape[0]
     friction = not math.isnan(cfg[_C_MU])
+    declared = cfg[_C_GUARD] != 0.0  # the walker's declared heel-strike guard
+    graze_rule = cfg[_C_TRAIL] != 0.0  # its trailing foot may lift or graze (the projector)
     nsl = stance_locks.shape[0]
     nwl = swing_locks.shape[0]
     all_locks = np.empty(nsl + nwl, dtype=np.int64)
@@ -748,8 +770,8 @@ def _walk_py(
                 y = np.empty(2 * free.shape[0] + 1)
                 _pack(q, qd, free, work, y)
                 kinds, dirs = _kinds(want, friction)
-                ev, t, S, ns = _segment(dyn, con, p, cfg, free, qref, swing_idx, lockv, y, t,
-                                        t_limit, kinds, dirs, rtol, atol, max_step, S, ns,
+                ev, t, S, ns = _segment(dyn, con, gua, p, cfg, free, qref, swing_idx, lockv, y,
+                                        t, t_limit, kinds, dirs, rtol, atol, max_step, S, ns,
                                         kstep, leg, 0)
                 _unpack(y, free, qref, cfg[_C_RST], q, qd)
                 work = y[2 * free.shape[0]]
@@ -782,14 +804,17 @@ def _walk_py(
                 qref = q.copy()
                 y = np.empty(2 * free.shape[0] + 1)
                 _pack(q, qd, free, work, y)
-                if want == _EV_ARMED and not rearming and _event_value(
-                        _EV_ARMED, dyn, con, p, cfg, free, qref, none_idx, lockv, y, ew) > 0.0:
-                    want = _EV_STRIKE
-                    continue
+                if want == _EV_ARMED and not rearming:
+                    armed = _event_value(_EV_ARMED, dyn, con, gua, p, cfg, free, qref, none_idx,
+                                         lockv, y, ew)
+                    # armed at the start: skipped (a declared guard's midstance at q_2 >= 0)
+                    if armed > 0.0 or (declared and armed == 0.0):
+                        want = _EV_STRIKE
+                        continue
                 rearming = False
                 kinds, dirs = _kinds(want, friction)
-                ev, t, S, ns = _segment(dyn, con, p, cfg, free, qref, none_idx, lockv, y, t,
-                                        t_limit, kinds, dirs, rtol, atol, max_step, S, ns,
+                ev, t, S, ns = _segment(dyn, con, gua, p, cfg, free, qref, none_idx, lockv, y,
+                                        t, t_limit, kinds, dirs, rtol, atol, max_step, S, ns,
                                         kstep, leg, 1)
                 _unpack(y, free, qref, cfg[_C_RST], q, qd)
                 work = y[2 * free.shape[0]]
@@ -799,10 +824,15 @@ def _walk_py(
                 if want == _EV_ARMED:
                     want = _EV_STRIKE
                     continue
+                con(q, qd, p, Ac, rate, cc)
+                if declared:
+                    # a declared guard's crossing with the swing foot off the ground is no
+                    # heel strike (BuiltWalker._declared_strike_phase): arm it anew
+                    if abs(cc[1, 1] - cfg[_C_RSW]) <= CONTACT_TOLERANCE * cfg[_C_LEG]:
+                        break
                 # a heel strike only with the swing foot ahead (BuiltWalker.strike_not_ahead);
                 # level with or behind the stance foot, arm the strike anew (QA sweep 11, #4)
-                con(q, qd, p, Ac, rate, cc)
-                if cc[0, 0] - cc[1, 0] > CONTACT_TOLERANCE * (cfg[_C_LEG] - cfg[_C_RSW]):
+                elif cc[0, 0] - cc[1, 0] > CONTACT_TOLERANCE * (cfg[_C_LEG] - cfg[_C_RSW]):
                     break
                 want, rearming = _EV_ARMED, True
         if ended >= 0:
@@ -849,6 +879,18 @@ def _walk_py(
         k_rows = kb
         for trial in (0, 1, 2):  # separate, stick, then the slip fallback
             k_rows = kb
+            if graze_rule:
+                # the projector with the striking foot's (and lock) rows only; the trailing
+                # foot's mode by the sign of its normal velocity (hybrid.simulate's rule)
+                _impact(M, rows, kb, qd, v_c, lam)
+                vn = 0.0
+                for i in range(n):
+                    vn += Ac[0, 1, i] * (qd[i] - v_c[i])
+                scale = lift_velocity_scale_jit(cfg[_C_LEG], qd[2:])
+                mode = _MODE_SEPARATE if vn >= 0.0 else _MODE_PENETRATING
+                if grazes_jit(vn, scale):
+                    mode = _MODE_GRAZE
+                break
             if trial == 1:
                 rows[kb] = Ac[0, 1]
                 rows[kb + 1] = Ac[0, 0]
@@ -882,7 +924,9 @@ def _walk_py(
             vn += Ac[0, 1, i] * v_post[i]
         ni = _record_impact(Imp, ni, _KIND_HEEL, kstep, t, M, q, qd, v_c, lam, k_rows, vn, mode,
                             work, push_work)
-        if mode != 0 or not lifts_jit(vn, lift_velocity_scale_jit(cfg[_C_LEG], qd[2:])):
+        if mode != _MODE_GRAZE and (
+                mode != _MODE_SEPARATE
+                or not lifts_jit(vn, lift_velocity_scale_jit(cfg[_C_LEG], qd[2:]))):
             status = TRAILING_FOOT_STAYS
             qd = v_post
             break
@@ -953,7 +997,7 @@ def _announced(disp: Any, what: str, *, quiet: bool, kind: str = "jit-kernel") -
 # ensembles: many walkers (initial states) in one compiled call
 # ---------------------------------------------------------------------------------------------
 def _ensemble_py(
-    dyn: Any, con: Any, swp: Any, p: FloatArray, cfg: FloatArray, Q0: FloatArray,
+    dyn: Any, con: Any, swp: Any, gua: Any, p: FloatArray, cfg: FloatArray, Q0: FloatArray,
     QD0: FloatArray, steps: int, stance_locks: IntArray, swing_locks: IntArray,
     lockv: FloatArray, max_duration: float, rtol: float, atol: float, max_step: float,
     sec_q: IntArray, sec_v: IntArray, target: FloatArray, stop_tol: float, i0: int, i1: int,
@@ -974,7 +1018,7 @@ def _ensemble_py(
         k = 0
         while k < steps:
             s, _S, _ns, Imp, ni, _starts, qn, qdn = _WALK_JIT(
-                dyn, con, swp, p, cfg, q, qd, 1, stance_locks, swing_locks, lockv,
+                dyn, con, swp, gua, p, cfg, q, qd, 1, stance_locks, swing_locks, lockv,
                 max_duration, rtol, atol, max_step,
             )
             for r in range(ni):
@@ -1000,7 +1044,7 @@ def _ensemble_py(
 
 
 _ENS_SIG = (
-    _DYN_T, _CON_T, _SWP_T, _F[::1], _F[::1], _F[:, ::1], _F[:, ::1], nbt.int64,
+    _DYN_T, _CON_T, _SWP_T, _GRD_T, _F[::1], _F[::1], _F[:, ::1], _F[:, ::1], nbt.int64,
     nbt.int64[::1], nbt.int64[::1], _F[::1], _F, _F, _F, _F, nbt.int64[::1], nbt.int64[::1],
     _F[::1], _F, nbt.int64, nbt.int64, nbt.int64[::1], nbt.int64[::1], _F[:, ::1], _F[:, ::1],
 )
@@ -1055,12 +1099,13 @@ def bound_functions(model: NumbaModel) -> dict[str, Any]:
     """The walk and ensemble kernels with one walker's generated functions bound.
 
     For the ahead-of-time build (an exported function takes arrays and numbers only): the
-    walker's ``dynamics``, ``contacts`` and ``swap`` are constants of uncached compiles of
-    ``_walk_py`` and ``_ensemble_py`` (:func:`_uncached_namespace`; their code unchanged).
-    Arguments and results are those of the JIT kernels without the three functions
+    walker's ``dynamics``, ``contacts``, ``swap`` and ``heel_strike_guard`` are constants of
+    uncached compiles of ``_walk_py`` and ``_ensemble_py`` (:func:`_uncached_namespace`; their
+    code unchanged). Arguments and results are those of the JIT kernels without the four
+    functions
     (:data:`heelstrike.dynamics.compiled_phased.AOT_EXPORTS`).
     """
-    dyn, con, swp = model.dynamics, model.contacts, model.swap
+    dyn, con, swp, gua = model.dynamics, model.contacts, model.swap, model.heel_strike_guard
     ns = _uncached_namespace()
     walk = ns["_WALK_JIT"]
     ensemble = njit(nogil=True)(ns["_ensemble_py"])
@@ -1070,7 +1115,7 @@ def bound_functions(model: NumbaModel) -> dict[str, Any]:
         stance_locks: IntArray, swing_locks: IntArray, lockv: FloatArray, max_duration: float,
         rtol: float, atol: float, max_step: float,
     ) -> Any:
-        return walk(dyn, con, swp, p, cfg, q0, qd0, steps, stance_locks, swing_locks, lockv,
+        return walk(dyn, con, swp, gua, p, cfg, q0, qd0, steps, stance_locks, swing_locks, lockv,
                     max_duration, rtol, atol, max_step)
 
     def ensemble_bound(
@@ -1080,7 +1125,7 @@ def bound_functions(model: NumbaModel) -> dict[str, Any]:
         target: FloatArray, stop_tol: float, i0: int, i1: int, status: IntArray,
         taken: IntArray, Qf: FloatArray, QDf: FloatArray,
     ) -> None:
-        ensemble(dyn, con, swp, p, cfg, Q0, QD0, steps, stance_locks, swing_locks, lockv,
+        ensemble(dyn, con, swp, gua, p, cfg, Q0, QD0, steps, stance_locks, swing_locks, lockv,
                  max_duration, rtol, atol, max_step, sec_q, sec_v, target, stop_tol, i0, i1,
                  status, taken, Qf, QDf)
 
@@ -1093,7 +1138,7 @@ class JitBound:
     all walkers)."""
 
     def __init__(self, model: NumbaModel) -> None:
-        self.functions = (model.dynamics, model.contacts, model.swap)
+        self.functions = (model.dynamics, model.contacts, model.swap, model.heel_strike_guard)
 
     def walk(self, *args: Any) -> Any:
         return _walk_kernel()(*self.functions, *args)

@@ -15,12 +15,24 @@ The same hybrid model as :func:`heelstrike.dynamics.phased.simulate_phased`, ste
   (the rule of :mod:`heelstrike.models._contact`, compiled); then the legs are
   relabelled (``swap``) and the locks reset exactly.
 
+A walker file declaring its heel-strike guard (``[events] heel_strike``, e.g. McGeer's wheel
+``wheel.toml``) runs it as the scipy reference does
+(:meth:`heelstrike.models.builder.BuiltWalker.step_schedule`): the locked swing is armed when
+the stance angle rises through zero (skipped if it is ``>= 0``), the strike is the declared
+guard (generated into the same numba source as the equations:
+:mod:`heelstrike.models._codegen_numba`'s ``heel_strike_guard``) rising through zero, and a
+crossing with the swing foot off the ground (``|clearance| > CONTACT_TOLERANCE l``) arms it
+anew. With ``trailing_foot = "lifts_or_grazes"`` the heel strike is the projector with rows
+``[A_L; lock rows]`` only, and the walk goes on if the trailing foot lifts or grazes
+(:func:`~heelstrike.models._contact.grazes`; modes ``"graze"``, ``"separate"`` or
+``"penetrating"``); with ``"lifts"`` the trailing foot is the complementarity candidate above.
+
 Each continuous stretch uses the terminal events of ``simulate_phased`` (``lost_contact``,
 ``fell_forward``, ``fell_backward`` and, with a friction coefficient, ``slipped``) with
 ``solve_ivp``'s crossing rules; a stretch that starts with the contact already lost (normal
 force or friction margin ``<= 0``) ends at once with that status. The right-hand side is the
 reduced single-support dynamics ``J^T M J theta_dd = J^T (B u - h)`` with ``M``, ``h``, the
-contact Jacobians and the swap generated from the walker's sympy expressions
+contact Jacobians, the swap and the declared guard generated from the walker's sympy expressions
 (:mod:`heelstrike.models._codegen_numba`). The integrator is the Dormand-Prince 5(4) scheme of
 :mod:`heelstrike.dynamics._dp5`, shared with :mod:`heelstrike.dynamics.compiled` (scipy's error
 norm and step control; an event's time is located by the Illinois method on the exact
@@ -100,9 +112,10 @@ _EV_FAIL = -2  # integrator failure
 # friction coefficient (nan: none), the joint law's joint (-1: passive), its reference angle,
 # kp, kd, push-off impulse (nan: none), leg length of the walker's scale (the lift rule's
 # velocity scale), the joint law (_LAW_*), its torque limit (N m, inf: none), the energy gain
-# and the target energy (J)
+# and the target energy (J), the heel-strike guard (1.0: the walker's declared guard, 0.0: the
+# swing foot's clearance) and the trailing-foot rule (1.0: lift or graze, 0.0: complementarity)
 _C_SLOPE, _C_RST, _C_RSW, _C_THR, _C_MU, _C_TJ, _C_TANG, _C_KP, _C_KD, _C_PUSH, _C_LEG = range(11)
-_C_LAW, _C_UMAX, _C_GAIN, _C_EREF = range(11, 15)
+_C_LAW, _C_UMAX, _C_GAIN, _C_EREF, _C_GUARD, _C_TRAIL = range(11, 17)
 # joint laws: TorsoPD (absolute angle q_2 + q_j), SwingLegPD (relative q_j), EnergyTracking
 _LAW_POSTURE, _LAW_JOINT_PD, _LAW_ENERGY = 0, 1, 2
 #: The torque laws the kernel evaluates (:func:`check_compiled_actuation`).
@@ -112,7 +125,8 @@ JointLaw = TorsoPD | SwingLegPD | EnergyTracking
 # then q, q_dot-, q_dot+ and the impulses (n each)
 _I_HEAD = 11
 _KIND_KNEE, _KIND_HEEL = 0.0, 1.0
-_MODES = ("separate", "stick", "slip")
+_MODES = ("separate", "stick", "slip", "graze", "penetrating")
+_MODE_SEPARATE, _MODE_GRAZE, _MODE_PENETRATING = 0, 3, 4
 
 # ---------------------------------------------------------------------------------------------
 # The kernel's entry points
@@ -326,12 +340,10 @@ def _configuration(
     friction: float | None, knee_flex_threshold: float,
 ) -> tuple[FloatArray, FloatArray]:
     """The kernel's parameter values ``p`` and float configuration ``cfg`` (``_C_*``)."""
-    walker.check_heel_strike_detectable()  # the kernel's guard is the swing foot's clearance
-    if walker.description.events is not None:
-        raise ValueError(
-            f"model {walker.description.name!r} declares its heel-strike guard ([events] "
-            f"heel_strike = {walker.description.events.heel_strike!r}); the compiled kernel's "
-            "guard is the swing foot's clearance: use backend='scipy'")
+    walker.check_heel_strike_detectable()  # a clearance guard must see the strike
+    events = walker.description.events
+    declared = events is not None
+    grazing = declared and events.trailing_foot == "lifts_or_grazes"  # type: ignore[union-attr]
     values = [np.asarray(walker.parameters[k], dtype=float) for k in walker.description.param_names]
     if any(v.ndim != 0 for v in values):
         raise ValueError("the compiled backend needs scalar parameter values (one walker)")
@@ -340,7 +352,8 @@ def _configuration(
         [slope, float(np.asarray(walker.foot_radii[0])), float(np.asarray(walker.foot_radii[1])),
          knee_flex_threshold, math.nan if friction is None else float(friction), tj, tang, kp,
          kd, math.nan if push_off is None else float(push_off.impulse),
-         float(walker.scale.leg_length), law, umax, gain, eref],
+         float(walker.scale.leg_length), law, umax, gain, eref, float(declared),
+         float(grazing)],
         dtype=float,
     )
     return np.array([float(v) for v in values]), cfg
@@ -440,7 +453,7 @@ def _result(
             rows = np.vstack((walker.contact_jacobian(q, "right"), A_lock))
         else:
             A_R = walker.contact_jacobian(q, "right")
-            extra = {"separate": A_R[:0], "stick": A_R[::-1], "slip": A_R[1:]}[mode]
+            extra = {"stick": A_R[::-1], "slip": A_R[1:]}.get(mode, A_R[:0])
             rows = np.vstack((walker.contact_jacobian(q, "left"), A_lock, extra))
         T, T_c, T_a = float(row[3]), float(row[4]), float(row[5])
         v_trail = float(row[6])

@@ -12,7 +12,11 @@ their rates, the foot centres and the leg swap as sympy expressions; this module
     rows), their rates ``A_dot q_dot`` ``rate`` (2, 2) and the arc centres ``c`` (2, 2) (m);
 ``swap(q, u, p, q_new, u_new)``
     writes the leg-swapped coordinates and velocities and returns 1.0 (0.0 and nothing written
-    for a walker without mirrors).
+    for a walker without mirrors);
+``heel_strike_guard(q, p)``
+    returns the walker file's declared heel-strike guard (``[events] heel_strike``, the same
+    expression as the builder's ``heel_strike_guard``), 0.0 for a walker declaring none (its
+    kernel's guard is the swing foot's clearance, from ``contacts``).
 
 Every function returns a float (0.0 unless said otherwise) and has a fixed numba signature
 (:func:`signatures`), so compiled simulation kernels take them as first-class function
@@ -76,8 +80,8 @@ __all__ = [
     "signatures",
 ]
 
-#: The three generated functions, in the order of :func:`signatures`.
-FUNCTIONS = ("dynamics", "contacts", "swap")
+#: The four generated functions, in the order of :func:`signatures`.
+FUNCTIONS = ("dynamics", "contacts", "swap", "heel_strike_guard")
 
 
 @functools.cache
@@ -86,7 +90,8 @@ def signatures() -> dict[str, Any]:
 
     - ``dynamics(q, u, p, slope, M, h) -> V`` (J);
     - ``contacts(q, u, p, A, rate, c) -> 0.0``; ``A`` (2, 2, n), ``rate`` and ``c`` (2, 2);
-    - ``swap(q, u, p, q_new, u_new) -> 1.0`` (0.0: no swap declared).
+    - ``swap(q, u, p, q_new, u_new) -> 1.0`` (0.0: no swap declared);
+    - ``heel_strike_guard(q, p) -> g`` (the declared guard; 0.0: none declared).
     """
     from numba import types as nbt
 
@@ -96,7 +101,10 @@ def signatures() -> dict[str, Any]:
         "dynamics": nbt.float64(v, v, v, nbt.float64, m, v),
         "contacts": nbt.float64(v, v, v, nbt.float64[:, :, ::1], m, m),
         "swap": nbt.float64(v, v, v, v, v),
+        "heel_strike_guard": nbt.float64(v, v),
     }
+#: ``heel_strike_guard`` of a walker declaring no guard (its kernel's is the clearance).
+_GUARD_STUB = "def heel_strike_guard(q, p):\n    return 0.0\n"
 #: The only name generated code uses without defining it (injected; no builtins).
 _HELPERS: Mapping[str, Any] = types.MappingProxyType({"math": math})
 
@@ -145,7 +153,7 @@ def _param_symbols(d: Mapping[str, Any], desc: WalkerDescription) -> list[Any]:
 
 
 def generate_numba_source(desc: WalkerDescription) -> str:
-    """Derive the walker with sympy and return the source of its three scalar functions.
+    """Derive the walker with sympy and return the source of its four scalar functions.
 
     See the module docstring for the functions and the naming of the generated identifiers.
     """
@@ -212,6 +220,10 @@ def generate_numba_source(desc: WalkerDescription) -> str:
         parts.append(fn("swap", "q, u, p, q_new, u_new", True, sw, returns="1.0"))
     else:
         parts.append("def swap(q, u, p, q_new, u_new):\n    return 0.0\n")
+    if d["guard"] is not None:
+        parts.append(fn("heel_strike_guard", "q, p", False, [("g", d["guard"])], returns="g"))
+    else:
+        parts.append(_GUARD_STUB)
     source = "\n\n".join(parts)
     check_source(source)
     return source
@@ -261,10 +273,12 @@ class NumbaModel:
         sha256 cache key.
     n : int
         Number of coordinates.
-    dynamics, contacts, swap : numba dispatcher
+    dynamics, contacts, swap, heel_strike_guard : numba dispatcher
         See the module docstring; each compiled for its one signature.
     has_swap : bool
         The walker declares mirrors (``swap`` is not the stub).
+    has_guard : bool
+        The walker declares its heel-strike guard (``heel_strike_guard`` is not the stub).
     path : Path or None
         Cache file of the source (None if it could not be written).
     from_cache : bool
@@ -276,7 +290,9 @@ class NumbaModel:
     dynamics: Callable[..., float]
     contacts: Callable[..., float]
     swap: Callable[..., float]
+    heel_strike_guard: Callable[..., float]
     has_swap: bool
+    has_guard: bool
     path: Path | None
     from_cache: bool
 
@@ -317,7 +333,7 @@ def _numba_cached(path: Path) -> bool:
 
 
 def _load(source: str, path: Path, key: str, cache: bool) -> dict[str, Any]:
-    """Verify, execute with no builtins (``math`` injected) and jit the three functions."""
+    """Verify, execute with no builtins (``math`` injected) and jit the four functions."""
     check_source(source)
     name = f"heelstrike_numba_{key[:16]}"
     mod = types.ModuleType(name)
@@ -394,7 +410,9 @@ def build_numba(desc: WalkerDescription, *, use_cache: bool = True) -> NumbaMode
         dynamics=fns["dynamics"],
         contacts=fns["contacts"],
         swap=fns["swap"],
+        heel_strike_guard=fns["heel_strike_guard"],
         has_swap="q_new[" in source,
+        has_guard=_GUARD_STUB not in source,
         path=written,
         from_cache=from_cache,
     )

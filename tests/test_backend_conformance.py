@@ -45,6 +45,9 @@ TORSO_GAIT = [-0.1180757, 0.1118158, 0.5531974, -0.0140899, -0.6214368]
 #: foot at t = 1.3567 s, and its slope (3 deg).
 LEVEL_TOUCH = [-0.42363789742445795, 1.3893823673283179, -1.142173850332489]
 LEVEL_SLOPE = 0.05235987755982988
+#: McGeer's wheel (wheel.toml: declared guard, grazing trailing foot) walking on 1 deg
+WHEEL_START = [-0.25, 0.8, 0.0]
+WHEEL_SLOPE = 0.017453292519943295
 
 #: Backends under test besides the reference (name -> simulator with simulate_phased's API).
 BACKENDS: dict[str, Callable[..., PhasedWalkResult]] = {"compiled": simulate_phased_compiled}
@@ -88,6 +91,10 @@ CASES = {
                              options=(("max_step_duration", 0.3),)),
     "kneed-slips": Case("kneed", KNEED_GAIT, "slipped", slope=KNEED_SLOPE,
                         options=(("friction", 0.05),)),
+    # the declared heel-strike guard ([events]) and its lift-or-graze rule (issue 32)
+    "wheel-walk": Case("wheel", WHEEL_START, "completed", slope=WHEEL_SLOPE),
+    "wheel-falls-backward": Case("wheel", [-0.25, 0.2, 0.0], "fell_backward",
+                                 slope=WHEEL_SLOPE),
 }
 
 
@@ -109,14 +116,13 @@ def _close(a: Any, b: Any, what: str) -> None:
 
 
 def test_cases_cover_every_shipped_walker() -> None:
-    # every shipped walker with a compiled backend; the others run on the reference only, and
-    # are exactly the files declaring their heel-strike guard (wheel.toml: its walk is checked
-    # against CompassGait's in test_walker_events.py)
+    # every shipped walker runs on the compiled backend, the files declaring their heel-strike
+    # guard too (wheel.toml; its walk is checked against CompassGait's in test_walker_events.py)
     walkers = {name: load_phased_walker(name) for name in shipped_walkers()}
     compiled = {name for name, w in walkers.items() if w.supports("compiled")}
-    assert {c.walker for c in CASES.values()} == compiled
-    assert {name for name, w in walkers.items() if w.description.events is not None} == (
-        set(walkers) - compiled) == {"wheel"}
+    assert {c.walker for c in CASES.values()} == compiled == set(walkers)
+    assert {name for name, w in walkers.items() if w.description.events is not None} == {
+        "wheel"}
 
 
 @pytest.mark.slow

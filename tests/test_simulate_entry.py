@@ -41,6 +41,9 @@ TORSO_GAIT = [-0.1180757, 0.1118158, 0.5531974, -0.0140899, -0.6214368]
 #: The compass gait with round feet on a 3 degree slope (a gait state of CompassGait(R=0.3)).
 ROUND_SLOPE = float(np.deg2rad(3.0))
 ROUND_GAIT = [-0.38628396, 1.41932714, -0.96794436]
+#: McGeer's wheel (wheel.toml, its declared guard) walking on 1 deg
+WHEEL_START = [-0.25, 0.8, 0.0]
+WHEEL_SLOPE = float(np.deg2rad(1.0))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -75,6 +78,8 @@ def _setup(name: str, described: dict[str, Any]) -> tuple[PlanarWalker, dict[str
         return w, {"z": COMPASS_GAIT, "slope": COMPASS_SLOPE}
     if name == "kneed":
         return w, {"z": KNEED_GAIT, "slope": KNEED_SLOPE}
+    if name == "wheel":
+        return w, {"z": WHEEL_START, "slope": WHEEL_SLOPE}
     return w, {"z": TORSO_GAIT, "slope": 0.0, "torque": TorsoPD(walker=w),
                "push_off": PushOff(impulse=2.0)}
 
@@ -98,7 +103,7 @@ def _assert_same_walk(a: hybrid.WalkResult, b: hybrid.WalkResult) -> None:
         np.testing.assert_array_equal(a.impact_array(name), b.impact_array(name), err_msg=name)
 
 
-WALKERS = ("CompassGait", "compass", "kneed", "torso")
+WALKERS = ("CompassGait", "compass", "kneed", "torso", "wheel")
 DIRECT = {
     ("CompassGait", "scipy"): hybrid.simulate,
     ("CompassGait", "compiled"): simulate_compiled,
@@ -108,15 +113,16 @@ DIRECT = {
     ("kneed", "compiled"): simulate_phased_compiled,
     ("torso", "scipy"): simulate_phased,
     ("torso", "compiled"): simulate_phased_compiled,
+    ("wheel", "scipy"): simulate_phased,
+    ("wheel", "compiled"): simulate_phased_compiled,
 }
 
 
 def test_cases_cover_every_shipped_walker_and_registry_entry(described: dict[str, Any]) -> None:
-    # wheel.toml declares its heel-strike guard ([events]): the reference backend only (its
-    # walk is checked against CompassGait's in test_walker_events.py)
-    reference_only = {n for n, w in described.items() if w.backends == ("scipy",)}
-    assert reference_only == {"wheel"}
-    assert set(WALKERS) == {"CompassGait", *shipped_walkers()} - reference_only
+    # every shipped walker runs on both backends, wheel.toml's declared heel-strike guard
+    # ([events]) too
+    assert all(w.backends == ("scipy", "compiled") for w in described.values())
+    assert set(WALKERS) == {"CompassGait", *shipped_walkers()}
     kinds = {(kernel_kind(_setup(n, described)[0]), b) for n, b in DIRECT}
     assert kinds == set(BACKENDS) - {("planar", "scipy")}  # planar: test_planar_walker_...
 

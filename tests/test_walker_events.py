@@ -21,7 +21,6 @@ import pytest
 
 import heelstrike
 from heelstrike.dynamics import simulate as simulate_entry
-from heelstrike.dynamics.compiled_phased import simulate_phased_compiled
 from heelstrike.dynamics.hybrid import WalkStatus, heel_strike, simulate
 from heelstrike.dynamics.phased import load_phased_walker
 from heelstrike.models import CompassGait, load_walker
@@ -105,15 +104,18 @@ def test_wheel_strike_loses_nothing_iff_the_legs_move_together() -> None:
                 assert T_c > 1e-3 * T
 
 
-def test_wheel_runs_on_the_reference_only_and_says_why() -> None:
+def test_wheel_runs_on_both_backends() -> None:
+    """The declared guard runs on the compiled kernel too (its walks against the scipy
+    reference: tests/test_wheel_compiled.py); the compass at R = l, whose guard is the
+    clearance, is still refused on both."""
     wheel = load_phased_walker("wheel")
-    assert wheel.compiled_kernel is None and wheel.backends == ("scipy",)
+    assert wheel.compiled_kernel == "generated" and wheel.backends == ("scipy", "compiled")
     wheel.check_heel_strike_detectable()  # its declared guard detects the strike
-    q, qd = wheel.section_to_state(wheel.section_point(*Z_WHEEL))
-    with pytest.raises(ValueError, match="unsupported backend 'compiled'"):
-        simulate_entry(wheel, q, qd, slope=SLOPE, backend="compiled")
-    with pytest.raises(ValueError, match=r"declares its heel-strike guard \(\[events\]"):
-        simulate_phased_compiled(wheel, q, qd, slope=SLOPE)
+    one_circle = load_phased_walker("compass", R=1.0)
+    q, qd = one_circle.section_to_state(one_circle.section_point(*Z_WHEEL))
+    for backend in ("scipy", "compiled"):
+        with pytest.raises(ValueError, match="one circle in every posture"):
+            simulate_entry(one_circle, q, qd, slope=SLOPE, backend=backend)
 
 
 def test_generated_guard_is_the_declared_expression() -> None:
@@ -231,8 +233,8 @@ def test_passive_search_refuses_the_wheel_only_where_its_step_cannot_end() -> No
 def test_walk_command_walks_the_wheel_file_on_its_backend(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """``walk --model wheel`` defaults to the backend the walker runs on (scipy), and its
-    impacts table holds the strikes of the library walk from the same start."""
+    """``walk --model wheel`` (the compiled backend by default) writes an impacts table holding
+    the strikes of the scipy reference's walk from the same start."""
     import pandas as pd
 
     from heelstrike.cli import main
@@ -288,14 +290,13 @@ def test_wheel_walks_passively_on_level_ground_losing_nothing() -> None:
     np.testing.assert_allclose(walk.mechanical_energy, E0, rtol=1e-9)
 
 
-def test_gait_of_a_walker_without_a_compiled_kernel_runs_on_scipy(capsys) -> None:
-    """``gait --model wheel`` (no compiled kernel) runs on the scipy reference by default and
-    answers with the physics (no passive wheel gait on a slope), not a backend refusal; an
-    explicit ``--backend compiled`` is still refused with the reason."""
+def test_gait_of_the_wheel_answers_with_the_physics_on_both_backends(capsys) -> None:
+    """``gait --model wheel`` (compiled by default) and ``--backend scipy`` answer with the
+    physics (no passive wheel gait on a slope), not a backend refusal."""
     from heelstrike.cli import main
 
-    assert main(["gait", "--model", "wheel", "--slope", "1deg", "--guess", "0.2,-1.0,0.0"]) != 0
-    err = capsys.readouterr().err
-    assert "backend" not in err and "gait" in err
-    assert main(["gait", "--model", "wheel", "--backend", "compiled"]) == 2
-    assert "compiled" in capsys.readouterr().err
+    for backend in ("compiled", "scipy"):
+        assert main(["gait", "--model", "wheel", "--slope", "1deg", "--guess", "0.2,-1.0,0.0",
+                     "--backend", backend]) != 0
+        err = capsys.readouterr().err
+        assert "backend" not in err and "gait" in err, backend

@@ -80,8 +80,8 @@ from heelstrike.dynamics.compiled_phased import (
     _NO_SWAP,
     SLIPPED,
 )
-from heelstrike.models._codegen_numba import NumbaModel, signatures
 from heelstrike.models import _contact
+from heelstrike.models._codegen_numba import NumbaModel, signatures
 from heelstrike.models._contact import CONTACT_TOLERANCE
 
 tolerate_numba_cache_errors()  # numba's cache unwritable (full disk): run uncached

@@ -182,7 +182,7 @@ def test_passive_energy_is_conserved_on_compiled_samples(walkers: dict[str, Phas
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["compass", "kneed", "torso"])
+@pytest.mark.parametrize("name", ["compass", "kneed", "torso", "wheel"])
 def test_generated_numba_functions_equal_numpy(name: str, walkers: dict[str, PhasedWalker]) -> None:
     w = walkers[name]
     model = build_numba(w.description)
@@ -210,17 +210,25 @@ def test_generated_numba_functions_equal_numpy(name: str, walkers: dict[str, Pha
         q_ref, u_ref = w.swap_legs(q, u)
         np.testing.assert_allclose(qn, q_ref, atol=1e-12)
         np.testing.assert_allclose(un, u_ref, atol=1e-12)
+        # the declared heel-strike guard ([events]); a walker declaring none has the stub
+        assert model.has_guard == (w.description.events is not None)
+        g = model.heel_strike_guard(q, p)
+        if model.has_guard:
+            assert g == pytest.approx(float(w.heel_strike_function(q)), abs=1e-12)
+        else:
+            assert g == 0.0
 
 
 _GENERATED_NAME = re.compile(r"^(q|u|p|t)_\d+$")
 _FIXED_NAMES = {
     "def", "return", "math", "sin", "cos", "sqrt", "pi", "q", "u", "p", "slope", "M", "h", "A",
     "rate", "c", "q_new", "u_new", "V", "dynamics", "contacts", "swap",  # V: dynamics returns it
+    "heel_strike_guard", "g",  # g: the declared guard's value (wheel.toml)
 }
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["compass", "kneed", "torso"])
+@pytest.mark.parametrize("name", ["compass", "kneed", "torso", "wheel"])
 def test_generated_source_contains_no_walker_strings(
     name: str, walkers: dict[str, PhasedWalker]
 ) -> None:

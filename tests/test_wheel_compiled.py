@@ -9,7 +9,8 @@ a few steps from a given state (end state, period, every impact), the ensemble k
 ``basin`` and the maps, and the wheel's lossless level gait (a fixed point of the step map,
 found on each backend as the root of the swing rate at the strike); the compass declared
 through a guard equal to its default witness (minus the swing foot's clearance) steps as the
-compass without the table (1e-10); the ``gait`` command runs the wheel on ``--backend
+compass without the table (1e-10), and with the ``"lifts_or_grazes"`` rule where its trailing
+foot lifts as the scipy reference and the table-less compass; the ``gait`` command runs the wheel on ``--backend
 compiled``.
 
 For these parameters the wheel has no passive gait on a slope (both backends): from any start
@@ -163,10 +164,10 @@ def test_wheel_level_gait_fixed_point_compiled_equals_scipy(wheel: PhasedWalker)
     assert got.events[0].time == pytest.approx(ref.events[0].time, abs=TOL)  # the period
 
 
-def _compass_with_guard(guard: str) -> PhasedWalker:
+def _compass_with_guard(guard: str, trailing_foot: str = "lifts") -> PhasedWalker:
     text = (WALKERS / "compass.toml").read_text()
     text = text.replace('name = "compass"', 'name = "compass_declared"')
-    text += f'\n[events]\nheel_strike = "{guard}"\n'
+    text += f'\n[events]\nheel_strike = "{guard}"\ntrailing_foot = "{trailing_foot}"\n'
     return PhasedWalker(parse_description(tomllib.loads(text), source="<test>"))
 
 
@@ -197,6 +198,34 @@ def test_compass_declaring_its_default_witness_steps_as_without_it() -> None:
                                    err_msg=name)
     np.testing.assert_allclose(b.final_q, a.final_q, rtol=0, atol=1e-10)
     np.testing.assert_allclose(b.final_q_dot, a.final_q_dot, rtol=0, atol=1e-10)
+
+
+@pytest.mark.slow
+def test_lift_or_graze_rule_with_a_lifting_trailing_foot_compiled_equals_scipy() -> None:
+    """The declared ``"lifts_or_grazes"`` rule where the trailing foot lifts (the point-foot
+    compass, mode ``"separate"``): the compiled kernel's projector branch walks three steps of
+    the scipy reference's; and since a separating trailing foot is the complementarity
+    solution too, the steps are those of compass.toml without the table."""
+    declared = _compass_with_guard("2 * stance_leg + hip", "lifts_or_grazes")
+    assert declared.step_schedule().trailing_foot == "lift_or_graze"
+    default = load_phased_walker("compass")
+    q, qd = default.section_to_state(COMPASS_GAIT)
+    kw = {"slope": COMPASS_SLOPE, "steps": 3, "rtol": 1e-11, "atol": 1e-11}
+    ref = simulate_phased(declared, q, qd, **kw)
+    got = simulate_phased_compiled(declared, q, qd, **kw)
+    plain = simulate_phased_compiled(default, q, qd, **kw)
+    assert ref.status is got.status is plain.status is WalkStatus.COMPLETED
+    for a, b, c in zip(got.events, ref.events, plain.events, strict=True):
+        assert a.trailing_mode == b.trailing_mode == c.trailing_mode == "separate"
+        assert a.time == pytest.approx(b.time, abs=TOL)
+        for name in ("q", "q_dot_minus", "q_dot_plus", "impulse", "rows"):
+            np.testing.assert_allclose(getattr(a, name), getattr(b, name), rtol=0, atol=TOL,
+                                       err_msg=name)
+            np.testing.assert_allclose(getattr(a, name), getattr(c, name), rtol=0, atol=TOL,
+                                       err_msg=name)
+        assert a.trailing_normal_velocity == pytest.approx(b.trailing_normal_velocity, abs=TOL)
+        assert a.trailing_normal_velocity > 0.0  # it lifts
+    np.testing.assert_allclose(got.final_q_dot, ref.final_q_dot, rtol=0, atol=TOL)
 
 
 @pytest.mark.slow

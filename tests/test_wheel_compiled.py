@@ -10,8 +10,8 @@ a few steps from a given state (end state, period, every impact), the ensemble k
 found on each backend as the root of the swing rate at the strike); the compass declared
 through a guard equal to its default witness (minus the swing foot's clearance) steps as the
 compass without the table (1e-10), and with the ``"lifts_or_grazes"`` rule where its trailing
-foot lifts as the scipy reference and the table-less compass; the ``gait`` command runs the wheel on ``--backend
-compiled``.
+foot lifts as the scipy reference and the table-less compass; the ``gait`` command runs the
+wheel on ``--backend compiled``.
 
 For these parameters the wheel has no passive gait on a slope (both backends): from any start
 it gains speed step after step until it falls forward (0.2 deg: 96 steps from the level gait's

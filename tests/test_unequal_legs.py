@@ -203,6 +203,16 @@ def _amputee_text() -> str:
      r"^swap\.m2: 'm2' is swapped with both 'm1' and 'b1'"),
     (("m1 = \"m2\"\n", "m1 = \"m2\"\ng = \"l\"\n"), r"^swap\.g: gravity 'g' belongs to no leg"),
     (("m1 = \"m2\"\n", "m1 = \"m2\"\nmX = \"mH\"\n"), r"^swap\.mX: unknown parameter"),
+    # review finding: a self-pair was accepted and the file then refused for the mirror's mass;
+    # a coordinate paired with itself was an "unknown parameter"
+    (("m1 = \"m2\"\n", "m1 = \"m1\"\n"),
+     r"^swap\.m1: pairs 'm1' with itself, which exchanges nothing: name the other leg's "
+     r"parameter whose value 'm1' takes after the leg swap"),
+    (("m1 = \"m2\"\n", "m1 = \"m2\"\nhip = \"hip\"\n"),
+     r"^swap\.hip: 'hip' is a coordinate, not a parameter: \[swap\] pairs parameters"),
+    (("m1 = \"m2\"\n", "m1 = \"m2\"\nstance_leg = \"stance_leg\"\n"),
+     r"^swap\.stance_leg: 'stance_leg' is a coordinate, not a parameter"),
+    (("m1 = \"m2\"\n", "m1 = \"hip\"\n"), r"^swap\.m1: 'hip' is a coordinate, not a parameter"),
 ])
 def test_files_whose_swap_does_not_map_the_walker_are_refused(
         change: tuple[str, str], message: str, tmp_path: Path) -> None:

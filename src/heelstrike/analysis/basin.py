@@ -85,6 +85,7 @@ OUTCOMES: tuple[WalkStatus, ...] = (
     WalkStatus.SLIPPED,
     WalkStatus.NO_CONSISTENT_ASSIGNMENT,
     WalkStatus.NO_LEG_SWAP,
+    WalkStatus.OFF_PROFILE,
     WalkStatus.INADMISSIBLE_START,
 )
 

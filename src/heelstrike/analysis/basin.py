@@ -85,8 +85,8 @@ OUTCOMES: tuple[WalkStatus, ...] = (
     WalkStatus.SLIPPED,
     WalkStatus.NO_CONSISTENT_ASSIGNMENT,
     WalkStatus.NO_LEG_SWAP,
-    WalkStatus.OFF_PROFILE,
     WalkStatus.INADMISSIBLE_START,
+    WalkStatus.OFF_PROFILE,
 )
 
 #: Default window of the slice: ``q3`` (rad) and ``q3_dot`` (rad/s) ranges (widened where

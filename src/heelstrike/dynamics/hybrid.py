@@ -62,6 +62,7 @@ __all__ = [
     "WalkResult",
     "WalkStatus",
     "check_initial_state",
+    "cut_off_profile",
     "heel_strike",
     "lock_torques",
     "simulate",
@@ -149,8 +150,8 @@ class WalkStatus(CodedStatus):
     OFF_PROFILE = (
         "off_profile", 13,
         "a profile foot's contact angle left its profile's phi_range (the stance foot's during "
-        "the step, or the striking foot's at the heel strike): beyond it the support function "
-        "would be extrapolated past the shape the walker file gives",
+        "the step, or the swing foot's as it comes down to the heel strike): beyond it the "
+        "support function would be extrapolated past the shape the walker file gives",
     )
 
 
@@ -690,6 +691,11 @@ def cut_off_profile(walker: PlanarWalker, walk: PhasedWalkResult,
     walk : PhasedWalkResult
     tol : float
         Tolerance (rad) on the range's ends.
+
+    Returns
+    -------
+    PhasedWalkResult
+        ``walk`` itself, or the walk cut (its samples, impacts and events up to the cut).
     """
     from heelstrike.models.builder import BuiltWalker
 

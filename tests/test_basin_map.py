@@ -190,7 +190,7 @@ def test_every_walk_status_has_its_own_basin_outcome() -> None:
     assert [s.value for s in OUTCOMES] == [
         "converged", "keeps_walking", "fell_forward", "fell_backward", "trailing_foot_stays",
         "lost_contact", "no_heel_strike", "integration_failed", "slipped",
-        "no_consistent_assignment", "no_leg_swap", "inadmissible_start"]
+        "no_consistent_assignment", "no_leg_swap", "inadmissible_start", "off_profile"]
     ended = [s for s in OUTCOMES if s not in BASIN_ONLY]  # what a walk itself can end with
     codes = np.array([s.code for s in ended] + [WalkStatus.COMPLETED.code] * 2
                      + [WalkStatus.INADMISSIBLE_START.code])

@@ -335,3 +335,134 @@ def test_profile_without_usable_antiderivative_is_refused(tmp_path: Path, profil
     with pytest.raises(ModelDescriptionError, match=r"^stance foot: profile .*: "
                                                     + re.escape(message)):
         load_walker(_compass_with_feet(tmp_path, foot, foot), use_cache=False)
+
+
+# -- a walk leaving a profile's phi_range (review finding) ------------------------------------
+def _arc_profile_walker(tmp_path: Path, phi_range: str) -> PhasedWalker:
+    """The R = 0.3 arc written as a profile about the foot's end, both feet over ``phi_range``."""
+    stance, swing = (f.replace("[-1.2, 1.2]", phi_range) for f in ARC_FORMS["foot_end"])
+    name = "ranged_" + re.sub(r"\W", "_", phi_range)
+    return PhasedWalker(walker_description(_compass_with_feet(tmp_path, stance, swing,
+                                                              name=name)), R=0.3)
+
+
+def test_walk_ends_where_the_stance_foot_leaves_its_phi_range(tmp_path: Path) -> None:
+    """From ``Z0`` the stance angle rises from -0.2 through 0 to the strike at ~0.22 rad. With
+    ``phi_range = [-1.2, 0.1]`` the profile holds up to 0.1 rad only: the walk ends in
+    ``off_profile`` exactly where the stance foot's contact angle (the stance leg's angle)
+    reaches 0.1, its samples before that those of the walk with the full range (the integrator's
+    steps do not depend on the events), and the message names the foot and the angle."""
+    full_w = _arc_profile_walker(tmp_path, "[-1.2, 1.2]")
+    q, qd = full_w.section_to_state(Z0)
+    full = simulate(full_w, q, qd, slope=SLOPE, steps=1)
+    assert full.status == "completed" and full.impacts[0].q[2] > 0.2
+    narrow_w = _arc_profile_walker(tmp_path, "[-1.2, 0.1]")
+    assert narrow_w.profile_ranges == ((-1.2, 0.1), (-1.2, 0.1))
+    walk = simulate(narrow_w, q, qd, slope=SLOPE, steps=1)
+    assert walk.status == "off_profile" and walk.n_steps == 0
+    assert float(narrow_w.contact_angle(walk.q[-1], "right")) == pytest.approx(0.1, abs=1e-9)
+    assert walk.q[-1][2] == pytest.approx(0.1, abs=1e-9)
+    n = walk.t.size - 1
+    np.testing.assert_array_equal(walk.t[:n], full.t[:n])
+    np.testing.assert_array_equal(walk.q[:n], full.q[:n])
+    assert "the stance foot 'stance' (link 'stance_leg') is at contact angle phi = 0.1 rad" \
+        in walk.message and "[-1.2, 0.1]" in walk.message
+    # a start outside the range ends at once (no sign change to detect from there)
+    start = simulate(_arc_profile_walker(tmp_path, "[-0.15, 1.2]"), q, qd, slope=SLOPE)
+    assert start.status == "off_profile" and start.t.size == 1
+    assert "phi = -0.2 rad" in start.message
+
+
+def test_walk_ends_where_the_striking_foot_leaves_its_phi_range(tmp_path: Path) -> None:
+    """The stance foot starts at -0.2 rad, inside ``[-0.21, 1.2]``, but the swing foot strikes
+    at about -0.221 rad (its link's angle ``q3 + q4``): the walk ends in ``off_profile``
+    naming the swing foot, where its contact angle reaches -0.21, before the heel strike."""
+    full_w = _arc_profile_walker(tmp_path, "[-1.2, 1.2]")
+    q, qd = full_w.section_to_state(Z0)
+    strike = simulate(full_w, q, qd, slope=SLOPE).impacts[0]
+    assert strike.q[2] + strike.q[3] < -0.215
+    w = _arc_profile_walker(tmp_path, "[-0.21, 1.2]")
+    walk = simulate(w, q, qd, slope=SLOPE)
+    assert walk.status == "off_profile" and walk.n_steps == 0
+    assert float(w.contact_angle(walk.q[-1], "left")) == pytest.approx(-0.21, abs=1e-9)
+    assert walk.t[-1] < strike.time
+    assert "the swing (striking) foot 'swing' (link 'swing_leg')" in walk.message
+
+
+def test_gait_search_returns_no_gait_whose_step_leaves_the_range(tmp_path: Path) -> None:
+    """The step map's walk ends in ``off_profile``, so Newton (scipy reference) converges to no
+    gait of the narrow-range walker from the full-range walker's fixed point."""
+    from heelstrike.analysis.limit_cycle import GaitNotFoundError
+    from heelstrike.analysis.model_gaits import find_model_gait
+
+    full_w = _arc_profile_walker(tmp_path, "[-1.2, 1.2]")
+    gait = find_model_gait(full_w, slope=SLOPE, guess=Z0, backend="scipy")
+    z = np.array(list(gait.to_dict()["fixed_point"].values()))
+    assert abs(z[0]) > 0.15
+    narrow = _arc_profile_walker(tmp_path, f"[{-0.5 * abs(z[0]):.4f}, 1.2]")
+    with pytest.raises(GaitNotFoundError, match="fails to take a step"):
+        find_model_gait(narrow, slope=SLOPE, guess=z, backend="scipy")
+
+
+def test_a_walk_without_range_guards_is_cut_where_a_foot_leaves_its_range(
+        tmp_path: Path) -> None:
+    """What the compiled backend (whose kernel has no ``off_profile`` guards) does with its
+    walk: the full-range walk, given to the narrow-range walker, is cut at the first sample whose
+    stance angle is beyond 0.1 rad (the sample before it inside), with the same samples before;
+    a walk inside its ranges is returned as it is."""
+    from heelstrike.dynamics.hybrid import cut_off_profile
+
+    full_w = _arc_profile_walker(tmp_path, "[-1.2, 1.2]")
+    q, qd = full_w.section_to_state(Z0)
+    full = simulate(full_w, q, qd, slope=SLOPE, steps=2)
+    assert cut_off_profile(full_w, full) is full
+    narrow = _arc_profile_walker(tmp_path, "[-1.2, 0.1]")
+    cut = cut_off_profile(narrow, full)
+    i = int(np.flatnonzero(full.q[:, 2] > 0.1 + 1e-9)[0])
+    assert cut.status == "off_profile" and cut.t.size == i + 1 and cut.n_steps == 0
+    assert cut.q[-2][2] <= 0.1 < cut.q[-1][2]
+    np.testing.assert_array_equal(cut.q, full.q[: i + 1])
+    np.testing.assert_array_equal(cut.final_q, full.q[i])
+    assert f"phi = {full.q[i][2]:.6g} rad" in cut.message and "'stance'" in cut.message
+    # the striking foot out of range at the first heel strike: the walk ends before it
+    strike = full.impacts[0]
+    lo = strike.q[2] + strike.q[3] + 0.005  # the swing foot's angle at the strike, + 5 mrad
+    assert lo < Z0[0]  # the stance foot starts inside, and stays inside over the first step
+    at_strike = cut_off_profile(_arc_profile_walker(tmp_path, f"[{lo:.6f}, 1.2]"), full)
+    assert at_strike.status == "off_profile" and at_strike.n_steps == 0
+    assert at_strike.events == () and at_strike.t[-1] == strike.time
+    assert np.all(at_strike.step == 0)
+    assert "the swing (striking) foot 'swing'" in at_strike.message
+
+
+@pytest.mark.slow
+def test_compiled_backend_ends_a_walk_leaving_the_range(tmp_path: Path) -> None:
+    """The compiled backend ends the narrow-range walk in ``off_profile`` too, at the first
+    sample beyond the range (the scipy reference locates the range's end exactly)."""
+    from heelstrike.dynamics.backends import simulate as simulate_on
+
+    w = _arc_profile_walker(tmp_path, "[-1.2, 0.1]")
+    q, qd = w.section_to_state(Z0)
+    ref = simulate(w, q, qd, slope=SLOPE)
+    got = simulate_on(w, q, qd, slope=SLOPE, backend="compiled")
+    assert ref.status == got.status == "off_profile" and got.n_steps == 0
+    assert got.q[-1][2] > 0.1 and got.q[-2][2] <= 0.1
+    assert got.t[-1] >= ref.t[-1] > got.t[-2]
+
+
+@pytest.mark.slow
+def test_compiled_gait_search_returns_no_gait_whose_step_leaves_the_range(
+        tmp_path: Path) -> None:
+    """As on the scipy reference: the compiled search returns no gait of the narrow-range
+    walker from the full-range walker's fixed point (which it finds). Newton converges on the
+    batched map, which does not check the ranges; the walk of the converged point does, and
+    fails, naming the foot."""
+    from heelstrike.analysis.limit_cycle import GaitNotFoundError
+    from heelstrike.analysis.model_gaits import find_model_gait
+
+    full_w = _arc_profile_walker(tmp_path, "[-1.2, 1.2]")
+    gait = find_model_gait(full_w, slope=SLOPE, guess=Z0, backend="compiled")
+    z = np.array(list(gait.to_dict()["fixed_point"].values()))
+    narrow = _arc_profile_walker(tmp_path, f"[{-0.5 * abs(z[0]):.4f}, 1.2]")
+    with pytest.raises(GaitNotFoundError, match=r"off_profile .*'stance'.*phi_range"):
+        find_model_gait(narrow, slope=SLOPE, guess=z, backend="compiled")

@@ -171,6 +171,62 @@ def test_gait_json_lists_the_stride_books(amputee_gait: ModelGait) -> None:
     json.dumps(d)
 
 
+def test_gait_json_energies_are_all_the_strides(capsys: pytest.CaptureFixture[str]) -> None:
+    """Review finding: ``gait --model amputee --json`` gave the stride's ``collision_loss`` with
+    the first step's ``T`` and ``T_a``. Every top-level energy is now the stride's (``"per":
+    "stride"``): ``T_c`` the sum of the steps' (and of the impacts'), ``T = T_c + T_a``, each
+    step's ``T``, ``T_c`` and ``T_a`` those of its heel strike, ``T`` recomputed as
+    ``q_dot^T M q_dot / 2`` with the mass matrix of the walker taking that step and ``T_c`` as
+    the kinetic energy the impact destroys."""
+    from heelstrike.cli import main
+
+    assert main(["gait", "--model", str(AMPUTEE), "--slope", "3deg", "--json",
+                 "--guess=-0.2739,1.0878,-0.7221"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["per"] == "stride" and d["steps_per_period"] == 2
+    T, Tc, Ta = (d[k] for k in ("kinetic_energy_pre", "kinetic_energy_constrained",
+                                "kinetic_energy_admissible"))
+    assert Tc == pytest.approx(d["collision_loss"], abs=1e-10)
+    assert Tc == pytest.approx(sum(b["collision_loss"] for b in d["steps"]), abs=1e-10)
+    assert Tc == pytest.approx(sum(i["T_c"] for i in d["impacts"]), abs=1e-10)
+    assert T == pytest.approx(Tc + Ta, abs=1e-10)
+    assert T == pytest.approx(sum(b["kinetic_energy_pre"] for b in d["steps"]), abs=1e-10)
+    assert Ta == pytest.approx(sum(b["kinetic_energy_admissible"] for b in d["steps"]),
+                               abs=1e-10)
+    # each step's book against its heel strike, recomputed from the walk of the stride
+    w = load_phased_walker(AMPUTEE)
+    q, qd = w.section_to_state(list(d["fixed_point"].values()))
+    walk = simulate(w, q, qd, slope=SLOPE, steps=2)
+    walkers = (w, w.after_swap())
+    for b, rec, wk in zip(d["steps"], walk.impacts, walkers, strict=True):
+        M = wk.mass_matrix(rec.q)
+        T_pre = 0.5 * rec.q_dot_minus @ M @ rec.q_dot_minus
+        T_post = 0.5 * rec.q_dot_plus @ M @ rec.q_dot_plus
+        assert b["kinetic_energy_pre"] == pytest.approx(T_pre, rel=1e-7)
+        assert b["collision_loss"] == pytest.approx(T_pre - T_post, rel=1e-6)
+        assert b["kinetic_energy_pre"] == pytest.approx(
+            b["collision_loss"] + b["kinetic_energy_admissible"], abs=1e-10)
+        assert b["impact_angle"] == pytest.approx(rec.impact_angle, abs=1e-7)
+    # the steps differ, so a step's T is not the stride's (it was, for step 0)
+    assert abs(T - d["steps"][0]["kinetic_energy_pre"]) > 1.0
+
+
+def test_gait_json_of_equal_legs_is_per_step() -> None:
+    """A walker whose swap is a symmetry: one step per period, the top level per step and equal
+    to the step's book (and to the heel strike's ``T``, ``T_c``, ``T_a``)."""
+    g = find_model_gaits(load_phased_walker(AMPUTEE, **EQUAL), slope=SLOPE,
+                         guess=[-0.2739, 1.0878, -0.7221], backend="scipy")[0]
+    d = g.to_dict()
+    (b,), (imp,) = d["steps"], d["impacts"]
+    assert d["per"] == "step"
+    for top, key in (("kinetic_energy_pre", "T"), ("kinetic_energy_constrained", "T_c"),
+                     ("kinetic_energy_admissible", "T_a")):
+        assert d[top] == pytest.approx(imp[key], abs=1e-12)
+    assert b["kinetic_energy_pre"] == pytest.approx(d["kinetic_energy_pre"], abs=1e-12)
+    assert d["kinetic_energy_pre"] == pytest.approx(
+        d["kinetic_energy_constrained"] + d["kinetic_energy_admissible"], abs=1e-10)
+
+
 def test_cli_gait_model_walks_the_stride(capsys: pytest.CaptureFixture[str]) -> None:
     """``heelstrike gait --model FILE`` on a walker whose legs differ: the scipy reference by
     default (its only backend), the stride's books in the JSON; the compiled backend refused
@@ -203,6 +259,16 @@ def _amputee_text() -> str:
      r"^swap\.m2: 'm2' is swapped with both 'm1' and 'b1'"),
     (("m1 = \"m2\"\n", "m1 = \"m2\"\ng = \"l\"\n"), r"^swap\.g: gravity 'g' belongs to no leg"),
     (("m1 = \"m2\"\n", "m1 = \"m2\"\nmX = \"mH\"\n"), r"^swap\.mX: unknown parameter"),
+    # review finding: a self-pair was accepted and the file then refused for the mirror's mass;
+    # a coordinate paired with itself was an "unknown parameter"
+    (("m1 = \"m2\"\n", "m1 = \"m1\"\n"),
+     r"^swap\.m1: pairs 'm1' with itself, which exchanges nothing: name the other leg's "
+     r"parameter whose value 'm1' takes after the leg swap"),
+    (("m1 = \"m2\"\n", "m1 = \"m2\"\nhip = \"hip\"\n"),
+     r"^swap\.hip: 'hip' is a coordinate, not a parameter: \[swap\] pairs parameters"),
+    (("m1 = \"m2\"\n", "m1 = \"m2\"\nstance_leg = \"stance_leg\"\n"),
+     r"^swap\.stance_leg: 'stance_leg' is a coordinate, not a parameter"),
+    (("m1 = \"m2\"\n", "m1 = \"hip\"\n"), r"^swap\.m1: 'hip' is a coordinate, not a parameter"),
 ])
 def test_files_whose_swap_does_not_map_the_walker_are_refused(
         change: tuple[str, str], message: str, tmp_path: Path) -> None:

@@ -300,3 +300,35 @@ def test_gait_of_the_wheel_answers_with_the_physics_on_both_backends(capsys) -> 
                      "--backend", backend]) != 0
         err = capsys.readouterr().err
         assert "backend" not in err and "gait" in err, backend
+
+
+@pytest.mark.parametrize(("guard", "status", "said"), [
+    # above zero at every state: it cannot rise through zero, so nothing could end the step
+    ("hip*hip + 1", "no_heel_strike", "never below zero, so it cannot rise through zero (the "
+     "integration stopped at t = "),
+    # below zero throughout: the walker fails first (the physical outcome stays), the guard named
+    ("-1 - stance_leg**2", "lost_contact", "before that"),
+])
+def test_a_declared_guard_that_never_fires_is_named(guard: str, status: str, said: str) -> None:
+    """Review finding: a declared guard that never crosses zero ended the walk as
+    ``lost_contact`` without naming it. The walk's message names the expression and the range
+    of its values over the stage that was to end in the strike (checked against the guard
+    evaluated on the walk's own samples), and a guard never below zero ends it as
+    ``no_heel_strike``."""
+    from heelstrike.dynamics.phased import PhasedWalker
+
+    default = load_phased_walker("compass")
+    w = PhasedWalker(_compass_with_events(f'heel_strike = "{guard}"\n'))
+    q, qd = default.section_to_state(COMPASS_GAIT)
+    walk = simulate(w, q, qd, slope=COMPASS_SLOPE, steps=2)
+    assert walk.status == status and walk.n_steps == 0
+    assert walk.status is not WalkStatus.COMPLETED
+    assert f"the declared heel-strike guard {guard!r} (events.heel_strike) did not rise " \
+        "through zero in step 0" in walk.message
+    assert said in walk.message
+    # the values quoted are the guard's over the samples after mid-stance (stance_leg >= 0)
+    after = walk.q[walk.q[:, 2] >= -1e-12]
+    g = np.asarray(w.heel_strike_function(after))
+    assert f"[{g.min():.6g}, {g.max():.6g}]" in walk.message
+    # the default guard walks the same start: the test's walker fails only by its guard
+    assert simulate(default, q, qd, slope=COMPASS_SLOPE, steps=2).status is WalkStatus.COMPLETED

@@ -26,8 +26,8 @@ UNITS: dict[str, str | None] = {
     "T": "J", "T_c": "J", "T_a": "J", "T_plus": "J", "energy_lost": "J",
     "collision_loss": "J", "potential_energy_released": "J", "actuator_work": "J",
     "push_off_work": "J", "hip_work": "J", "torque_work": "J", "kinetic_energy_pre": "J",
-    "kinetic_energy_admissible": "J", "energy_change": "J", "energy_balance_error": "J",
-    "energy_residual": "J",
+    "kinetic_energy_admissible": "J", "kinetic_energy_constrained": "J", "energy_change": "J",
+    "energy_balance_error": "J", "energy_residual": "J",
     "eta": "J/m", "work_per_metre": "J/m",
     # geometry, time, speed
     "step_length": "m", "radius": "m", "foot_radius": "m",
@@ -52,7 +52,7 @@ UNITS: dict[str, str | None] = {
     "parameter_name": None, "parameter_unit": None, "kind": None, "figure": None,
     "data": None, "residual": None, "status": None, "message": None, "gait_found": None,
     "gait_stable": None, "note": None, "branch_data": None, "branch_stopped": None,
-    "hanging_links": None, "settling": None,
+    "hanging_links": None, "settling": None, "per": None,
     # robots (heelstrike.cli.robot writes its own units maps with these)
     "loss_beyond_T_c": "J", "normal_impulse": "N s", "admissible": None, "frame": None,
     "joint": None, "unit": None,

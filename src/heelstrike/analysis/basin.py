@@ -86,6 +86,7 @@ OUTCOMES: tuple[WalkStatus, ...] = (
     WalkStatus.NO_CONSISTENT_ASSIGNMENT,
     WalkStatus.NO_LEG_SWAP,
     WalkStatus.INADMISSIBLE_START,
+    WalkStatus.OFF_PROFILE,
 )
 
 #: Default window of the slice: ``q3`` (rad) and ``q3_dot`` (rad/s) ranges (widened where

@@ -1013,6 +1013,9 @@ def _characterise(
         )
         return _characterise_compiled(pmap, z, step.step_time, mult, residual, iterations)
     walk = pmap.walk(z, walker.steps_per_period)
+    if not walk.ok:  # converged on a batched map that does not check everything the walk does
+        raise GaitNotFoundError(f"the walk of a period from the converged point "
+                                f"{np.round(z, 6)} fails: {walk.status.value} ({walk.message})")
     recs = walk.impacts
     rec = recs[0]
     return _cycle(

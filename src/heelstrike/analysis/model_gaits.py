@@ -104,6 +104,12 @@ class StepBook(ResultDictMixin):
         energy the step hands on to the next (just after its heel strike minus just after the
         previous one); zero on each step of a symmetric walker's gait, opposite on the two
         steps of a stride.
+    kinetic_energy_pre, kinetic_energy_admissible : float
+        ``T`` and ``T_a`` (J) just before each of the step's impacts, summed over them as
+        ``collision_loss`` sums ``T_c`` (eq. 10 impact by impact: ``T = T_c + T_a``), so
+        ``kinetic_energy_pre = collision_loss + kinetic_energy_admissible``.
+    impact_angle : float
+        Stance-leg angle at the step's heel strike (rad).
     """
 
     step: int
@@ -113,6 +119,9 @@ class StepBook(ResultDictMixin):
     potential_energy_released: float
     actuator_work: float
     kinetic_energy_gained: float
+    kinetic_energy_pre: float = 0.0
+    kinetic_energy_admissible: float = 0.0
+    impact_angle: float = 0.0
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -160,10 +169,28 @@ class ModelGait(ResultDictMixin):
         return float(loss_per_metre(self.collision_loss, self.cycle.step_length))
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready summary: the compass-gait keys, ``collision_loss`` the step total, and
-        ``impacts`` listing each impact's kind, ``T``, ``T_c``, ``T_a`` (J)."""
+        """JSON-ready summary: the compass-gait keys over one period, ``"per"`` saying which
+        (``"step"``, or ``"stride"`` for a walker whose legs differ), ``impacts`` listing each
+        impact's kind, ``T``, ``T_c``, ``T_a`` (J) and ``steps`` each step's
+        :class:`StepBook`.
+
+        Every energy at the top level is the period's: ``collision_loss`` (= the added
+        ``kinetic_energy_constrained``), ``kinetic_energy_pre`` and
+        ``kinetic_energy_admissible`` are the sums of ``T_c``, ``T`` and ``T_a`` over the
+        period's impacts (knee strikes included; equal to the sums over ``steps``), so that
+        ``kinetic_energy_pre = collision_loss + kinetic_energy_admissible``; the work, the
+        potential energy released, ``period``, ``step_length`` and ``speed`` are the period's
+        too, ``eta`` the loss per metre. ``impact_angle`` is the first step's heel strike's
+        (each step's is in ``steps``); ``multipliers`` are the period map's.
+        """
         d = self.cycle.to_dict()
+        d["per"] = "stride" if len(self.steps) > 1 else "step"
         d["collision_loss"] = self.collision_loss
+        d["kinetic_energy_pre"] = float(sum(e.kinetic_energy for e in self.impacts))
+        d["kinetic_energy_constrained"] = float(
+            sum(e.kinetic_energy_constrained for e in self.impacts))
+        d["kinetic_energy_admissible"] = float(
+            sum(e.kinetic_energy_admissible for e in self.impacts))
         d["eta"] = self.eta
         d["actuator_work"] = self.actuator_work
         d["potential_energy_released"] = self.potential_energy_released
@@ -226,14 +253,18 @@ def _energy_book(cycle: LimitCycle, walker: PlanarWalker) -> ModelGait:
     impacts = walk.events
     books = []
     for rec in walk.impacts:
-        lost = float(sum(e.kinetic_energy_constrained for e in impacts if e.step == rec.step))
+        mine = [e for e in impacts if e.step == rec.step]
+        lost = float(sum(e.kinetic_energy_constrained for e in mine))
         books.append(StepBook(
             step=int(rec.step), duration=float(rec.step_duration),
             step_length=float(rec.step_length), collision_loss=lost,
             potential_energy_released=float(rec.potential_energy_released),
             actuator_work=float(rec.actuator_work),
             kinetic_energy_gained=float(rec.actuator_work + rec.potential_energy_released
-                                        - lost)))
+                                        - lost),
+            kinetic_energy_pre=float(sum(e.kinetic_energy for e in mine)),
+            kinetic_energy_admissible=float(sum(e.kinetic_energy_admissible for e in mine)),
+            impact_angle=float(rec.impact_angle)))
     loss = float(sum(b.collision_loss for b in books))
     work = float(sum(b.actuator_work for b in books))
     released = float(sum(b.potential_energy_released for b in books))

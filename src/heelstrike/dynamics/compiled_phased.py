@@ -75,7 +75,7 @@ from heelstrike.core.impact import ImpactInputError
 from heelstrike.dynamics._aot import AotExport, AotLibrary, aot_mode, load_library
 from heelstrike.dynamics.actuation import EnergyTracking, PushOff, SwingLegPD
 from heelstrike.dynamics.compiled import STATUS_NAMES, EnsembleStatus
-from heelstrike.dynamics.hybrid import ImpactRecord, WalkStatus
+from heelstrike.dynamics.hybrid import ImpactRecord, WalkStatus, cut_off_profile
 from heelstrike.dynamics.phased import (
     ImpactKind,
     PhasedImpact,
@@ -403,7 +403,9 @@ def simulate_phased_compiled(
     Returns
     -------
     PhasedWalkResult
-        Samples are the states after every accepted integrator step.
+        Samples are the states after every accepted integrator step. A walk in which a
+        profile foot leaves its ``phi_range`` ends in ``off_profile`` at the first sample or
+        heel strike out of range (:func:`~heelstrike.dynamics.hybrid.cut_off_profile`).
 
     Raises
     ------
@@ -427,8 +429,9 @@ def simulate_phased_compiled(
         raise NotImplementedError(
             f"walker {walker.description.name!r}: {WalkStatus.NO_LEG_SWAP.message}"
         )
-    return _result(walker, int(status), S[:ns], Imp[:ni], starts, qf, qdf, float(slope),
+    walk = _result(walker, int(status), S[:ns], Imp[:ni], starts, qf, qdf, float(slope),
                    stance_locks + swing_locks)
+    return cut_off_profile(walker, walk)  # the kernel has no off_profile guards
 
 
 def _result(

@@ -36,7 +36,7 @@ Failures are reported in :attr:`WalkResult.status`, never raised from inside the
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -62,6 +62,7 @@ __all__ = [
     "WalkResult",
     "WalkStatus",
     "check_initial_state",
+    "cut_off_profile",
     "heel_strike",
     "lock_torques",
     "simulate",
@@ -86,6 +87,11 @@ class WalkStatus(CodedStatus):
 
     ``NO_CONSISTENT_ASSIGNMENT`` and ``NO_LEG_SWAP`` are reported by the compiled phased
     kernels only and raised as errors by their Python wrappers, as the scipy backend does.
+
+    A walk's :attr:`WalkResult.message` says more where it can: for ``off_profile`` which
+    foot, its contact angle and its range; for a walk of a walker file declaring its
+    heel-strike guard that ends before the strike, the guard's expression and the values it
+    took (``no_heel_strike`` when it was never below zero, so it could not rise through zero).
 
     ``CONVERGED``, ``KEEPS_WALKING`` and ``INADMISSIBLE_START`` are the outcomes a basin of
     attraction (:mod:`heelstrike.analysis.basin`) gives where a walk completed or was not
@@ -116,7 +122,8 @@ class WalkStatus(CodedStatus):
     NO_HEEL_STRIKE = (
         "no_heel_strike",
         6,
-        "no heel strike (or knee strike) within the time bound of a step",
+        "no heel strike (or knee strike) within the time bound of a step, or a heel-strike "
+        "guard declared by the walker file ([events] heel_strike) that could not cross zero",
     )
     INTEGRATION_FAILED = "integration_failed", 7, "the integrator failed"
     NO_CONSISTENT_ASSIGNMENT = (
@@ -139,6 +146,12 @@ class WalkStatus(CodedStatus):
         "inadmissible_start", 12,
         "not walked: the trailing foot is on the ground and moving into it, a state no heel "
         "strike leaves",
+    )
+    OFF_PROFILE = (
+        "off_profile", 13,
+        "a profile foot's contact angle left its profile's phi_range (the stance foot's during "
+        "the step, or the swing foot's as it comes down to the heel strike): beyond it the "
+        "support function would be extrapolated past the shape the walker file gives",
     )
 
 
@@ -453,9 +466,11 @@ def heel_strike(
     return res, np.asarray(v_trailing)
 
 
-#: Events of the stance foot's contact (normal force, friction cone), checked at the start of
-#: every integrated segment as well as for sign changes.
-CONTACT_EVENTS: tuple[str, ...] = (WalkStatus.LOST_CONTACT.value, WalkStatus.SLIPPED.value)
+#: Events of the stance foot's contact (normal force, friction cone, a profile foot's contact
+#: angle inside its range), checked at the start of every integrated segment as well as for
+#: sign changes.
+CONTACT_EVENTS: tuple[str, ...] = (WalkStatus.LOST_CONTACT.value, WalkStatus.SLIPPED.value,
+                                   WalkStatus.OFF_PROFILE.value)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -618,6 +633,111 @@ def _segment_outcome(seg: Segment, want: str) -> WalkStatus | None:
     if seg.event != want:
         return WalkStatus(seg.event)
     return None
+
+
+def _ended_message(
+    walker: PlanarWalker, status: WalkStatus, stage: Stage, k: int, t: float,
+    qs: FloatArray, qds: FloatArray,
+) -> tuple[WalkStatus, str]:
+    """The status and message of a walk whose step ``k`` ended in ``status`` at time ``t``
+    during ``stage`` (its samples ``qs``, ``qds``, shape (N, n)).
+
+    ``off_profile``: which foot, its contact angle and range
+    (:meth:`~heelstrike.models.builder.BuiltWalker.profile_excursion`). A stage that was to end
+    in the heel strike of a guard declared by the walker file (``[events] heel_strike``): the
+    guard's expression and the values it took; ``no_heel_strike`` if it was never below zero
+    over the stage (it rises through zero at the strike, so from there it cannot fire), the
+    event that stopped the integration named in the message. Otherwise the status's message.
+    """
+    from heelstrike.models.builder import BuiltWalker
+
+    if status is WalkStatus.OFF_PROFILE and isinstance(walker, BuiltWalker):
+        where = walker.profile_excursion(qs[-1])
+        if where is not None:
+            return status, f"{status.message}: {where} (step {k}, t = {t:.6g} s)"
+    desc = walker.description
+    if (desc is None or desc.events is None or stage.until.name != "heel_strike"
+            or status is WalkStatus.OFF_PROFILE):
+        return status, status.message
+    g = np.array([stage.until.function(a, b) for a, b in zip(qs, qds, strict=True)])
+    said = (f"the declared heel-strike guard {desc.events.heel_strike!r} (events.heel_strike) "
+            f"did not rise through zero in step {k}: it took values in "
+            f"[{float(g.min()):.6g}, {float(g.max()):.6g}]")
+    if g.size > 1 and bool(np.all(g >= 0.0)):
+        return WalkStatus.NO_HEEL_STRIKE, (
+            f"no heel strike: {said}, never below zero, so it cannot rise through zero (the "
+            f"integration stopped at t = {t:.6g} s: {status.value}, {status.message})")
+    return status, f"{status.message}; {said} before that (t = {t:.6g} s)"
+
+
+def cut_off_profile(walker: PlanarWalker, walk: PhasedWalkResult,
+                    tol: float = 1e-9) -> PhasedWalkResult:
+    """A walk computed without the ``off_profile`` guards (the compiled kernels), ended where a
+    profile foot first leaves its ``phi_range``.
+
+    Checked on the walk's samples (the stance foot's contact angle) and at every heel strike
+    (the striking foot's, :meth:`~heelstrike.models.builder.BuiltWalker.profile_margin`
+    below ``-tol`` rad): the walk is cut at the first sample out of range (kept, the walk's
+    last) or just before the first heel strike out of range (that strike and what follows
+    dropped), with status ``off_profile`` and a message naming the foot and its angle. Unlike
+    :func:`simulate`, whose guards locate the range's end exactly, the sample is the
+    integrator's (the range's end lies between it and the one before). A walker without
+    profile feet, or a walk inside the ranges, is returned as it is.
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+        The walker of every step (a walker whose legs differ has no compiled kernel).
+    walk : PhasedWalkResult
+    tol : float
+        Tolerance (rad) on the range's ends.
+
+    Returns
+    -------
+    PhasedWalkResult
+        ``walk`` itself, or the walk cut (its samples, impacts and events up to the cut).
+    """
+    from heelstrike.models.builder import BuiltWalker
+
+    if not isinstance(walker, BuiltWalker) or walker.is_batched or walk.t.size == 0:
+        return walk
+    if walker.profile_ranges == (None, None):
+        return walk
+    stance = np.asarray(walker.profile_margin(walk.q, "right"))
+    bad = np.flatnonzero(stance < -tol)
+    cut: tuple[float, int, FloatArray] | None = None  # (time, step, q) of the first excursion
+    if bad.size:
+        i = int(bad[0])
+        cut = (float(walk.t[i]), int(walk.step[i]), walk.q[i])
+    for e in walk.events:
+        if e.kind == "heel_strike" and float(walker.profile_margin(e.q, "left")) < -tol:
+            if cut is None or e.time < cut[0] or (e.time == cut[0] and e.step <= cut[1]):
+                cut = (float(e.time), int(e.step), e.q)
+            break
+    if cut is None:
+        return walk
+    t_cut, k_cut, q_cut = cut
+    keep = (walk.step < k_cut) | ((walk.step == k_cut) & (walk.t <= t_cut))
+    n = max(int(np.count_nonzero(keep)), 1)
+    where = walker.profile_excursion(q_cut, tol=-tol) or "a profile foot left its range"
+    message = (f"{WalkStatus.OFF_PROFILE.message}: {where} (step {k_cut}, t = {t_cut:.6g} s; "
+               "located to the integrator's samples)")
+
+    def kept(e: PhasedImpact | ImpactRecord) -> bool:
+        return e.time < t_cut or (e.time == t_cut and e.step < k_cut)
+
+    return replace(
+        walk, status=WalkStatus.OFF_PROFILE, message=message, t=walk.t[:n], q=walk.q[:n],
+        q_dot=walk.q_dot[:n], stance_leg=walk.stance_leg[:n], step=walk.step[:n],
+        actuator_work=walk.actuator_work[:n],
+        impacts=tuple(r for r in walk.impacts if kept(r)),
+        final_q=walk.q[n - 1].copy(), final_q_dot=walk.q_dot[n - 1].copy(),
+        events=tuple(e for e in walk.events if kept(e)),
+        phase=walk.phase[:n] if walk.phase.size == walk.t.size else walk.phase,
+        mechanical_energy=(walk.mechanical_energy[:n]
+                           if walk.mechanical_energy.size == walk.t.size
+                           else walk.mechanical_energy),
+    )
 
 
 def _events(
@@ -807,6 +927,7 @@ def simulate(
     events_out: list[PhasedImpact] = []
     t, work, stance = 0.0, 0.0, 0
     status = WalkStatus.COMPLETED
+    message = status.message
     # a walker whose legs differ alternates with the walker after its leg swap
     # (PlanarWalker.after_swap); each step's samples keep the energy of the step's walker
     alternating = walker.after_swap() is not walker
@@ -857,6 +978,7 @@ def simulate(
                 work = float(raw.x[-1, -1])
                 ended = _segment_outcome(raw, stage.until.name)
                 if ended is not None:
+                    ended, message = _ended_message(walker, ended, stage, k, t, qs, qds)
                     break
                 if stage.reject is not None and stage.reject(q, qd):
                     i_stage, rearming = 0, True  # not the planned event: arm the guard anew
@@ -917,6 +1039,7 @@ def simulate(
         lifted = lifts(v_trail, lift_velocity_scale(leg_length, qd[2:]))
         if not (mode == "graze" or (mode == "separate" and lifted)):
             status = WalkStatus.TRAILING_FOOT_STAYS
+            message = status.message
             qd = qd_plus
             break
         q, qd = walker.swap_legs(q, qd_plus)
@@ -938,7 +1061,7 @@ def simulate(
     qd_all = np.concatenate(qd_s)
     return PhasedWalkResult(
         status=status,
-        message=status.message,
+        message=message,
         t=np.concatenate(t_s),
         q=q_all,
         q_dot=qd_all,

@@ -893,8 +893,11 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         the declared rule (``"lifts"``: complementarity; ``"lifts_or_grazes"``: the
         ``"lift_or_graze"`` rule of :data:`~heelstrike.models.schedule.TrailingFootRule`).
         Every stage can end in a fall: forward (stance angle reaching ``pi/2``) or backward
-        (the stance leg stopping before the vertical, or rolling back through it). The heel
-        strike decides the trailing foot by complementarity.
+        (the stance leg stopping before the vertical, or rolling back through it), and for a
+        profile foot (``[[foot]] profile``) in ``off_profile``: the stance foot's contact angle
+        leaving its ``phi_range`` (every stage; checked at each stage's start too), or the
+        swing foot's in the stage that ends in the heel strike (:meth:`profile_margin`). The
+        heel strike decides the trailing foot by complementarity.
 
         Parameters
         ----------
@@ -910,6 +913,7 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         stance_locks, swing_locks = self.stance_and_swing_locks()
         angle = {j: float(a) for j, a in zip(self.lockable_joints, self.lock_angles,
                                               strict=True)}
+        stance_range, swing_range = self._profile_guards()
         falls = (
             fell_forward(),
             Guard(
@@ -917,6 +921,7 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
                 function=lambda q, qd: float(qd[2]) if q[2] < 0.0 else 1.0 + float(q[2]),
                 direction=-1,
             ),
+            *stance_range,
         )
 
         def flex(q: FloatArray, qd: FloatArray) -> float:
@@ -939,7 +944,8 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
             ))
         events = self.description.events
         if events is not None:
-            phases.append(self._declared_strike_phase(stance_locks + swing_locks, falls))
+            phases.append(self._declared_strike_phase(stance_locks + swing_locks, falls,
+                                                      swing_range))
             rule: TrailingFootRule = ("lift_or_graze" if events.trailing_foot == "lifts_or_grazes"
                                       else "complementarity")
             return StepSchedule(phases=tuple(phases), lock_angles=tuple(angle.items()),
@@ -951,13 +957,15 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
             stages=(
                 Stage(until=Guard(name="armed", function=armed, direction=1), failures=falls,
                       skip=lambda q, qd: armed(q, qd) > 0.0),
-                Stage(until=strike, failures=falls, reject=self.strike_not_ahead),
+                Stage(until=strike, failures=(*falls, *swing_range),
+                      reject=self.strike_not_ahead),
             ),
         ))
         return StepSchedule(phases=tuple(phases), lock_angles=tuple(angle.items()),
                             trailing_foot="complementarity")
 
-    def _declared_strike_phase(self, locked: tuple[int, ...], falls: tuple[Guard, ...]) -> Phase:
+    def _declared_strike_phase(self, locked: tuple[int, ...], falls: tuple[Guard, ...],
+                               swing_range: tuple[Guard, ...] = ()) -> Phase:
         """The locked swing of a walker declaring its heel-strike guard (``[events]``).
 
         As the compass gait's step (:meth:`PlanarWalker.step_schedule`): first until the
@@ -978,10 +986,79 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
             until=Guard(name="heel_strike",
                         function=lambda q, qd: float(self.heel_strike_function(q)),
                         direction=1),
-            failures=falls, reject=off_ground,
+            failures=(*falls, *swing_range), reject=off_ground,
         )
         return Phase(name="locked_swing", locked=locked, reset="heel_strike",
                      stages=(midstance, strike))
+
+    @functools.cached_property
+    def profile_ranges(self) -> tuple[tuple[float, float] | None, tuple[float, float] | None]:
+        """``(phi_min, phi_max)`` (rad) of the stance and the swing foot's profile
+        (``[[foot]] phi_range`` at this walker's values), None for an arc foot (whose support
+        function ``h = R`` holds at every angle). Of a single walker (not a batch)."""
+        out: list[tuple[float, float] | None] = []
+        for ft in self.description.feet:
+            if ft.profile is None:
+                out.append(None)
+                continue
+            lo, hi = (float(self._eval(v)) for v in ft.phi_range)
+            out.append((lo, hi))
+        return out[0], out[1]
+
+    def contact_angle(self, q: ArrayLike, foot: Foot) -> FloatArray:
+        """The profile angle ``phi`` (rad) at a foot's contact with the ground, shape (...).
+
+        The contact normal is the ground's, so ``phi`` is the absolute angle of the foot's
+        link (:meth:`link_angles`; ``docs/walker_files.rst``): the support function is
+        evaluated at it. ``foot = "right"`` is the stance foot, ``"left"`` the swing foot.
+        """
+        ft = self.description.feet[0 if self._foot(foot) == "stance" else 1]
+        return self.link_angles(q)[ft.link]
+
+    def profile_margin(self, q: ArrayLike, foot: Foot) -> FloatArray:
+        """How far (rad) a foot's contact angle is inside its profile's ``phi_range``,
+        ``min(phi - phi_min, phi_max - phi)`` (:meth:`contact_angle`), shape (...): negative
+        where the support function would be extrapolated beyond the shape the walker file
+        gives; ``+inf`` for an arc foot."""
+        rng = self.profile_ranges[0 if self._foot(foot) == "stance" else 1]
+        phi = self.contact_angle(q, foot)
+        if rng is None:
+            return np.full(np.shape(phi), np.inf)
+        lo, hi = rng
+        return np.asarray(np.minimum(phi - lo, hi - phi))
+
+    def profile_excursion(self, q: ArrayLike, tol: float = 1e-9) -> str | None:
+        """Which foot's contact angle is at or beyond its profile's ``phi_range`` at ``q``
+        (shape (n,)), said in words (the foot, its link, the angle and the range), or None
+        if both are inside by more than ``tol`` (rad). The message of a walk ending in
+        ``off_profile``."""
+        feet: tuple[Foot, Foot] = ("right", "left")
+        margin, foot = min((float(self.profile_margin(q, f)), f) for f in feet)
+        if margin > tol:
+            return None
+        i = 0 if foot == "right" else 1
+        ft = self.description.feet[i]
+        rng = self.profile_ranges[i]
+        assert rng is not None
+        role = "stance" if i == 0 else "swing (striking)"
+        return (f"the {role} foot {ft.name!r} (link {ft.link!r}) is at contact angle "
+                f"phi = {float(self.contact_angle(q, foot)):.6g} rad, at or beyond the end of "
+                f"its phi_range [{rng[0]:.6g}, {rng[1]:.6g}] rad")
+
+    def _profile_guards(self) -> tuple[tuple[Guard, ...], tuple[Guard, ...]]:
+        """The ``off_profile`` guards of the stance and the swing foot (each empty for an arc
+        foot or a batch of walkers): :meth:`profile_margin` falling through zero."""
+        if self.is_batched:
+            return (), ()
+
+        def guard(foot: Foot) -> tuple[Guard, ...]:
+            if self.profile_ranges[0 if foot == "right" else 1] is None:
+                return ()
+            return (Guard(name="off_profile",
+                          function=lambda q, qd: float(self.profile_margin(q, foot)),
+                          direction=-1),)
+
+        return guard("right"), guard("left")
 
     def swing_foot_ahead(self, q: ArrayLike) -> float:
         """How far (m) the swing ("left") foot's contact point is ahead of the stance foot's,

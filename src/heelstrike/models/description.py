@@ -1344,8 +1344,6 @@ def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> Wal
 
     control = _parse_control(top.get("control", {}), params, links, roots[0])
     powered = _parse_powered(top["powered"]) if "powered" in top else None
-    swap = _parse_swap(top.get("swap", {}), params, links)
-
     desc = WalkerDescription(
         name=name,
         params=tuple(sorted(params.items())),
@@ -1355,9 +1353,9 @@ def parse_description(data: Mapping[str, Any], *, source: str = "<dict>") -> Wal
         constraints=constraints,
         control=control,
         powered=powered,
-        swap=swap,
         source=source,
     )
+    desc = replace(desc, swap=_parse_swap(top.get("swap", {}), params, desc))
     if "events" in top:
         desc = replace(desc, events=_parse_events(top["events"], params, desc))
     seen_points: set[str] = set()
@@ -1470,21 +1468,34 @@ def _parse_events(
 
 
 def _parse_swap(
-    raw: Any, params: Mapping[str, float], links: list[LinkSpec]
+    raw: Any, params: Mapping[str, float], desc: WalkerDescription
 ) -> tuple[tuple[str, str], ...]:
     """Validate the optional ``[swap]`` table: ``k = "j"`` says that after the leg swap the
     parameter ``k`` takes the value ``j`` had. A pair given one way is completed the other way
-    (the swap is an involution); both must be parameters, and mirrors must be declared."""
+    (the swap is an involution); both must be parameters (not coordinates: the leg swap
+    relabels those by the links' mirrors), distinct, and mirrors must be declared."""
     tab = _table(raw, "swap")
+    coords = desc.coordinate_names
     pairs: dict[str, str] = {}
     for k, v in tab.items():
         p = f"swap.{k}"
+        for name in (k, v):
+            if isinstance(name, str) and name in coords and name not in params:
+                raise ModelDescriptionError(
+                    f"{p}: {name!r} is a coordinate, not a parameter: [swap] pairs parameters "
+                    "whose values the legs exchange (the leg swap relabels the coordinates "
+                    "itself, by the links' mirrors)")
         if k not in params:
             raise ModelDescriptionError(f"{p}: unknown parameter {k!r}")
         if not isinstance(v, str) or v not in params:
             raise ModelDescriptionError(
                 f"{p}: must name the parameter whose value {k!r} takes after the leg swap "
                 f"(one of {sorted(params)}), got {v!r}")
+        if k == v:
+            raise ModelDescriptionError(
+                f"{p}: pairs {k!r} with itself, which exchanges nothing: name the other leg's "
+                f"parameter whose value {k!r} takes after the leg swap (a parameter both legs "
+                "share is simply left out of [swap])")
         if k == "g" or v == "g":
             raise ModelDescriptionError(f"{p}: gravity 'g' belongs to no leg")
         for a, b in ((k, v), (v, k)):
@@ -1493,11 +1504,11 @@ def _parse_swap(
                     f"{p}: {a!r} is swapped with both {pairs[a]!r} and {b!r} (the swap "
                     "exchanges parameters in pairs)")
             pairs[a] = b
-    if pairs and not any(lk.mirror is not None for lk in links):
+    if pairs and not any(lk.mirror is not None for lk in desc.links):
         raise ModelDescriptionError(
             "swap: the walker declares no link mirrors, so it has no leg swap to exchange "
             "parameters at")
-    return tuple(sorted((k, v) for k, v in pairs.items() if k != v))
+    return tuple(sorted(pairs.items()))
 
 
 def _parse_powered(raw: Any) -> PoweredSpec:

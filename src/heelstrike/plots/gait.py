@@ -398,6 +398,7 @@ _COLOURS = {
     "slipped": "#8c510a",
     "no_consistent_assignment": "#f781bf",
     "no_leg_swap": "#636363",
+    "off_profile": "#35978f",
     "inadmissible_start": "#ffffbf",
 }
 

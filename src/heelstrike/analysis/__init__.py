@@ -54,14 +54,15 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
     "basin": ("Basin", "basin_of_attraction", "model_basin_of_attraction"),
     "cost_study": ("cheapest_gaits",),
     "design": ("DesignResult",),  # the function is heelstrike.analysis.design.design
+    "gaits": ("Gait",),
     "gait_map": ("GaitMap", "compass_bifurcation", "model_bifurcation", "model_gait_map"),
     "heel_strike": ("HeelStrikeStudy", "heel_strike_study"),
     "limit_cycle": (
-        "BifurcationDiagram", "Continuation", "GaitNotFoundError", "LimitCycle", "PoincareMap",
+        "BifurcationDiagram", "Continuation", "GaitNotFoundError", "PoincareMap",
         "bifurcation_diagram", "continue_limit_cycle", "find_limit_cycle", "find_limit_cycles",
     ),
     "model_gaits": (
-        "ImpactMap", "ModelGait", "ModelHeelStrike", "find_model_gaits",
+        "ImpactMap", "ModelHeelStrike", "find_model_gaits",
         "impact_map", "model_heel_strike",
     ),
     "newton": ("NewtonSolution", "newton_solve"),

@@ -54,7 +54,7 @@ def gait_order(gait: Any, *, undecided: bool = False) -> tuple[bool, bool, float
 
     Parameters
     ----------
-    gait : LimitCycle or PoweredGait
+    gait : Gait or PoweredGait
         Any gait with ``multipliers``, ``actuator_work`` (J per step; 0 for a passive gait)
         and ``multi_swing``.
     undecided : bool
@@ -81,7 +81,7 @@ def ordered_gaits(gaits: Iterable[_G], *, undecided: bool = False) -> list[_G]:
 
     Parameters
     ----------
-    gaits : iterable of LimitCycle or PoweredGait
+    gaits : iterable of Gait or PoweredGait
     undecided : bool
         Their stability is undecided (McGeer's wheel): cheapest first (:func:`gait_order`).
 

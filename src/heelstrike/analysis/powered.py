@@ -2016,7 +2016,7 @@ def find_model_powered_gait(
         gait = find_model_gait(walker, slope=slope, torque=law, backend=backend,
                                tol=PASSIVE_TOLERANCE, rtol=SEARCH_TOLERANCE * 0.1,
                                atol=SEARCH_TOLERANCE * 0.1)
-        return np.asarray(gait.cycle.fixed_point, dtype=float)
+        return np.asarray(gait.fixed_point, dtype=float)
 
     options.setdefault("passive_gait", passive_gait)
     return find_powered_gait(w, actuation=family, speed=speed, step_length=step_length,

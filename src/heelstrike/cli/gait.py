@@ -177,13 +177,12 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     d["model"] = walker.description.name
     hanging = [g.hanging_links for g in gaits]
     d["hanging_links"] = list(gait.hanging_links)
-    locks = gait_locks(walker, gait.cycle, backend=backend)
+    locks = gait_locks(walker, gait, backend=backend)
     d["lock_torque_range"] = {k: list(v) for k, v in locks.ranges.items()}
     # each gait's collision loss is its step's total (knee strikes included), as in d
-    d["gaits"] = [_gait_summary(g.cycle) | {"collision_loss": g.collision_loss,
-                                            "hanging_links": list(h)}
+    d["gaits"] = [_gait_summary(g) | {"hanging_links": list(h)}
                   for g, h in zip(gaits, hanging, strict=True)]
-    if guess is None and not gait.cycle.stable:
+    if guess is None and not gait.stable:
         # QA sweep 10: this said "where it has a stable one" of the torso walker, which has none
         reference = abs(float(args.slope) - REFERENCE_SLOPE) <= 1e-12 and all(
             np.array_equal(np.asarray(v, dtype=float),
@@ -203,8 +202,8 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     if args.json:
         print_json(d)
         return 0
-    c = gait.cycle
-    _print_gait_list([g.cycle for g in gaits], hanging)
+    c = gait
+    _print_gait_list(list(gaits), hanging)
     print(f"passive gait of '{d['model']}', slope = {math.degrees(args.slope):g} deg")
     print(f"  fixed point (just after heel strike): {fixed_point_text(d['fixed_point'])}")
     if hanging[0]:
@@ -420,7 +419,7 @@ def _walk_model(args: argparse.Namespace, walker: Any, out: Any, to_dir: bool) -
         z = parse_floats(args.guess, "--guess", len(walker.section_names))
     else:
         try:
-            cycle = find_model_gait(walker, slope=args.slope, backend=backend).cycle
+            cycle = find_model_gait(walker, slope=args.slope, backend=backend)
         except GaitNotFoundError as exc:
             raise CliError(f"no gait found to start from: {exc}") from exc
         z = list(cycle.fixed_point)

@@ -1,20 +1,23 @@
-"""The one result type of every gait search: :class:`Gait`.
+"""One gait finder and one result type: :func:`find_gaits` and :class:`Gait`.
 
 A gait is a fixed point ``P(z*) = z*`` of the step-to-step map on the post-impact section
 (:class:`~heelstrike.analysis.limit_cycle.PoincareMap`), with its period, step length, speed,
 Floquet multipliers and stability, the kinetic energy lost at its impacts (``T_c``, Font &
-Kövecses 2008) and its energy books. Passive gaits of the compass and of described walkers
-alike are :class:`Gait`.
+Kövecses 2008) and its energy books. A powered gait is a fixed point with one more unknown,
+the actuation amplitude, and one more equation, the target speed or step length; its
+:class:`Actuation` record says how it is driven. Passive and powered gaits of the compass
+and of described walkers alike are :class:`Gait`, listed in the one order of gaits
+(:func:`~heelstrike.analysis._gait_order.ordered_gaits`: the cheapest stable gait first).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
@@ -22,8 +25,9 @@ from heelstrike.dynamics.hybrid import WalkResult
 
 if TYPE_CHECKING:
     from heelstrike.dynamics.phased import PhasedImpact
+    from heelstrike.models.base import PlanarWalker
 
-__all__ = ["ENERGY_BOOKS_RTOL", "Gait", "StepBook"]
+__all__ = ["ENERGY_BOOKS_RTOL", "TARGETS", "Actuation", "Gait", "StepBook", "find_gaits"]
 
 #: Relative tolerance of a passive gait's energy books: the collision loss per step must equal
 #: the potential energy released per step to within this fraction of the larger. The books of
@@ -97,8 +101,53 @@ class _WalkField:
 
 
 @dataclass(frozen=True, kw_only=True)
+class Actuation(ResultDictMixin):
+    """How a powered gait is driven: the actuation family, the amplitude Newton found (the
+    one more unknown of a powered fixed point, solved with one more equation: a target speed
+    or step length) and the work it does per step.
+
+    Attributes
+    ----------
+    name : str
+        Actuation family (:func:`~heelstrike.analysis.powered.actuation_family`).
+    parameter_name, parameter_unit : str
+        The actuation parameter found by Newton and its unit.
+    parameter : float
+        Its value (N s, J, N m or rad: ``parameter_unit``).
+    push_off_work : float
+        Work of the push-off impulse alone per step (J).
+    torque_work : float
+        Work of the torque law during single support per step (J), across ``torque_joint``
+        (the gait's ``actuator_work`` minus ``push_off_work``).
+    torque_joint : str
+        The joint the torque law acts across (``"hip"``, or a posture law's joint).
+    gains : dict of str to float
+        The torque law's gains as used (:func:`~heelstrike.analysis.powered.law_gains`;
+        empty for the push-off alone): what reproduces the gait.
+    model : str or None
+        The described walker's name (None: the compass gait).
+    """
+
+    name: str
+    parameter_name: str
+    parameter_unit: str
+    parameter: float
+    push_off_work: float
+    torque_work: float
+    torque_joint: str = "hip"
+    gains: dict[str, float] = field(default_factory=dict)
+    model: str | None = None
+
+    @property
+    def hip_work(self) -> float:
+        """Work of the hip torque during single support (J); 0 if the torque acts elsewhere."""
+        return self.torque_work if self.torque_joint == "hip" else 0.0
+
+
+@dataclass(frozen=True, kw_only=True)
 class Gait(ResultDictMixin):
-    """A periodic gait and its energetics: the one result type of every gait search.
+    """A periodic gait and its energetics: the one result type of every gait search, passive
+    (``actuation`` None) or powered.
 
     Attributes
     ----------
@@ -158,6 +207,27 @@ class Gait(ResultDictMixin):
     steps : tuple of StepBook
         The energy book of each step of the period (empty where the impacts are not
         recorded).
+    energy_change : float
+        Change of mechanical energy ``T + V`` over the period (J); 0 on a periodic gait on level
+        ground (NaN where not computed: the passive searches).
+    energy_balance_error : float
+        ``actuator_work - collision_loss - energy_change`` (J): the integration error of the
+        books of a powered gait (NaN where not computed).
+    cost_of_transport : float
+        ``actuator_work / (m_total g step_length)`` (dimensionless; NaN where not computed).
+    trailing_foot_lift_velocity : float
+        Normal velocity of the trailing foot just after heel strike (m/s; NaN where not
+        computed).
+    trailing_foot_grazes : bool
+        The trailing foot leaves the ground tangentially at heel strike (McGeer's wheel,
+        ``R = l``).
+    stability_undecided : bool
+        Whether the gait's stability is undecided: McGeer's wheel (``R = l``), whose gaits at
+        one target form a neutral family (a multiplier of 1 to round-off). The one order of
+        gaits (:func:`~heelstrike.analysis._gait_order.gait_order`) then leaves stability out
+        of its key, and reports say "undecided".
+    actuation : Actuation or None
+        How a powered gait is driven (None for a passive gait).
     walk : WalkResult
         One simulated period from the fixed point (the map's simulator; for a gait
         characterised on the compiled backend the scipy reference, simulated on first access).
@@ -188,6 +258,13 @@ class Gait(ResultDictMixin):
     energy_residual: float = float("nan")
     hanging_links: tuple[str, ...] = ()
     steps: tuple[StepBook, ...] = ()
+    energy_change: float = float("nan")
+    energy_balance_error: float = float("nan")
+    cost_of_transport: float = float("nan")
+    trailing_foot_lift_velocity: float = float("nan")
+    trailing_foot_grazes: bool = False
+    stability_undecided: bool = False
+    actuation: Actuation | None = None
     walk: _WalkField = field(default=_WalkField(), repr=False, compare=False)
 
     @property
@@ -218,8 +295,12 @@ class Gait(ResultDictMixin):
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary (SI units; angles in rad); with recorded impacts also
         ``energy_residual``, ``impacts`` (each impact's kind, ``T``, ``T_c``, ``T_a`` (J), time
-        and step), ``steps_per_period`` and ``steps`` (each step's book)."""
-        d = {
+        and step), ``steps_per_period`` and ``steps`` (each step's book). A powered gait's
+        summary has its actuation record's fields flattened into it (``actuation`` the
+        family's name, ``parameter``, ``push_off_work``, ``torque_work``, ``gains``...)."""
+        if self.actuation is not None:
+            return self._powered_dict(self.actuation)
+        d: dict[str, Any] = {
             "period": self.period,
             "step_length": self.step_length,
             "speed": self.speed,
@@ -254,3 +335,169 @@ class Gait(ResultDictMixin):
             d["steps_per_period"] = len(self.steps)
             d["steps"] = [b.to_dict() for b in self.steps]
         return d
+
+    def _powered_dict(self, a: Actuation) -> dict[str, Any]:
+        """:meth:`to_dict` of a powered gait: the actuation record flattened in."""
+        return {
+            "actuation": a.name,
+            "parameter_name": a.parameter_name,
+            "parameter_unit": a.parameter_unit,
+            "parameter": a.parameter,
+            "period": self.period,
+            "step_length": self.step_length,
+            "speed": self.speed,
+            "impact_angle": self.impact_angle,
+            "actuator_work": self.actuator_work,
+            "push_off_work": a.push_off_work,
+            "hip_work": a.hip_work,
+            "torque_joint": a.torque_joint,
+            "torque_work": a.torque_work,
+            "model": a.model,
+            "gains": dict(a.gains),
+            "collision_loss": self.collision_loss,
+            "energy_change": self.energy_change,
+            "energy_balance_error": self.energy_balance_error,
+            "cost_of_transport": self.cost_of_transport,
+            "eta": self.eta,
+            "stable": bool(self.stable),
+            "multipliers": [float(abs(m)) for m in self.multipliers],
+            "multipliers_complex": [[float(m.real), float(m.imag)] for m in self.multipliers],
+            "fixed_point": dict(zip(self.section_names, map(float, self.fixed_point), strict=True)),
+            "residual": self.residual,
+            "trailing_foot_lift_velocity": self.trailing_foot_lift_velocity,
+            "trailing_foot_grazes": bool(self.trailing_foot_grazes),
+            "leg_crossings": self.leg_crossings,
+        }
+
+
+#: The targets of a powered gait search (:func:`find_gaits`): the one more equation of the
+#: augmented fixed point, and its unit.
+TARGETS = {"speed": "m/s", "step_length": "m"}
+
+
+def find_gaits(
+    walker: PlanarWalker,
+    slope: float = 0.0,
+    *,
+    control: str | None = None,
+    target: Mapping[str, float] | None = None,
+    backend: str | None = None,
+    guess: ArrayLike | None = None,
+    actuation_options: Mapping[str, float] | None = None,
+    **options: Any,
+) -> tuple[Gait, ...]:
+    """Every distinct gait found, in the one order of gaits: the cheapest stable gait first.
+
+    A gait is a fixed point ``P(z*) = z*`` of the step-to-step map on the post-impact section.
+    A passive gait (``control`` None) is found on a downhill ``slope``; a powered gait is a
+    fixed point with one more unknown, the amplitude ``a`` of the actuation family
+    ``control``, and one more equation, the ``target``: ``P(z*, a) = z*`` with
+    ``v(z*, a) = v_target`` (speed) or ``L(z*, a) = L_target`` (step length), on level ground.
+
+    Parameters
+    ----------
+    walker : PlanarWalker
+        The compass gait (:class:`~heelstrike.models.CompassGait`) or a described walker
+        (:class:`~heelstrike.models.builder.BuiltWalker`, a walker file).
+    slope : float
+        Ground slope (rad), positive downhill; > 0 for a passive gait, 0 for a powered one.
+    control : str or None
+        None: passive gaits (:func:`~heelstrike.analysis.limit_cycle.find_limit_cycles` for
+        the compass gait, :func:`~heelstrike.analysis.model_gaits.find_model_gaits` for a
+        described walker). Else an actuation family of
+        :data:`~heelstrike.analysis.powered.ACTUATIONS` (``"pushoff"``, ``"hip-energy"``,
+        ``"hip-pd"``): the powered gaits that meet ``target``
+        (:func:`~heelstrike.analysis.powered.powered_gaits`).
+    target : mapping, optional
+        With ``control``: exactly one of ``{"speed": v}`` (m/s) or ``{"step_length": L}`` (m),
+        finite and > 0.
+    backend : {"compiled", "scipy"} or None
+        Step simulator; None: compiled where the walker runs on it, else the scipy reference
+        (powered: as :func:`~heelstrike.analysis.powered.powered_gaits` chooses).
+    guess : array_like, optional
+        Passive only: section coordinates to start Newton from (the one gait it converges
+        to is returned).
+    actuation_options : mapping, optional
+        With ``control``: the torque law's gains (:func:`~heelstrike.analysis.powered.law_gains`
+        names).
+    **options
+        Passed to the search (``tol``, ``rtol``, ``atol``, ``progress``, ``time_limit``,
+        ``every_start``...).
+
+    Returns
+    -------
+    tuple of Gait
+        Distinct gaits in :func:`~heelstrike.analysis._gait_order.ordered_gaits` order: ordinary
+        steps before multi-swing gaits, stable before unstable (``stable`` marks each; a gait
+        whose ``stability_undecided``, McGeer's wheel, is ordered by work alone), then the least
+        actuator work, then the most attracting. Powered gaits carry their
+        :class:`Actuation`; passive ones have ``actuation`` None.
+
+    Raises
+    ------
+    ValueError
+        Unknown ``control``, a bad ``target`` (missing, not one of ``speed`` and
+        ``step_length``, not finite and > 0), a ``target`` or ``guess`` where it does not
+        apply, a powered search on a slope, or an unknown backend.
+    GaitNotFoundError, PoweredGaitNotFoundError
+        No gait found (:class:`~heelstrike.analysis.limit_cycle.GaitNotFoundError`,
+        :class:`~heelstrike.analysis.powered.PoweredGaitNotFoundError`).
+    """
+    from heelstrike.analysis._gait_order import ordered_gaits
+    from heelstrike.models.builder import BuiltWalker
+
+    described = isinstance(walker, BuiltWalker)
+    if control is None:
+        if target is not None:
+            raise ValueError(f"target {dict(target)!r} is for a powered gait: give control "
+                             "(an actuation family), or no target for passive gaits")
+        if actuation_options:
+            raise ValueError("actuation_options are for a powered gait: give control")
+        method = backend or ("compiled" if walker.supports("compiled") else "scipy")
+        if described:
+            from heelstrike.analysis.model_gaits import find_model_gaits
+
+            found: Sequence[Gait] = find_model_gaits(
+                cast(BuiltWalker, walker), slope=slope, guess=guess, backend=method, **options)
+        else:
+            from heelstrike.analysis.limit_cycle import find_limit_cycle, find_limit_cycles
+
+            found = (find_limit_cycles(walker, slope=slope, method=method, **options)
+                     if guess is None else
+                     (find_limit_cycle(walker, slope=slope, guess=guess, method=method,
+                                       **options),))
+        return tuple(ordered_gaits(found))
+    from heelstrike.analysis.powered import ACTUATIONS, powered_gaits
+
+    if control not in ACTUATIONS:
+        raise ValueError(f"control {control!r} is not an actuation family (one of "
+                         f"{', '.join(ACTUATIONS)}; None for passive gaits)")
+    if guess is not None:
+        raise ValueError("guess starts a passive gait's Newton; a powered search seeds itself")
+    if slope != 0.0:
+        raise ValueError(f"powered gaits are found on level ground (slope 0), got slope "
+                         f"{slope:g} rad")
+    goal = _target(target)
+    radius = float(np.asarray(walker.foot_radii[0], dtype=float))
+    gaits = powered_gaits(
+        radius, speed=goal.get("speed"), step_length=goal.get("step_length"),
+        actuation=control, walker=None if described else cast(Any, walker),
+        model=walker if described else None, backend=backend,
+        actuation_options=dict(actuation_options) if actuation_options else None, **options)
+    return tuple(ordered_gaits(gaits))
+
+
+def _target(target: Mapping[str, float] | None) -> dict[str, float]:
+    """The powered search's ``target`` checked: one key of :data:`TARGETS`, finite and > 0."""
+    if target is None:
+        raise ValueError("a powered gait needs a target: {'speed': v} (m/s) or "
+                         "{'step_length': L} (m)")
+    keys = list(target)
+    if len(keys) != 1 or keys[0] not in TARGETS:
+        raise ValueError(f"target {dict(target)!r} must have exactly one of the keys "
+                         f"{', '.join(TARGETS)}")
+    (key,) = keys
+    value = float(target[key])
+    if not (np.isfinite(value) and value > 0):
+        raise ValueError(f"target {key} must be finite and > 0 ({TARGETS[key]}), got {value:g}")
+    return {key: value}

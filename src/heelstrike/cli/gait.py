@@ -157,8 +157,9 @@ def _print_sensitivity(sens: dict[str, Any]) -> None:
 def _run_gait_model(args: argparse.Namespace) -> int:
     import numpy as np
 
+    from heelstrike.analysis.gaits import find_gaits
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
-    from heelstrike.analysis.model_gaits import REFERENCE_SLOPE, find_model_gaits, gait_locks
+    from heelstrike.analysis.model_gaits import REFERENCE_SLOPE, gait_locks
 
     walker = model_from_args(args)
     backend = args.backend or ("compiled" if walker.supports("compiled") else "scipy")
@@ -168,8 +169,8 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     try:
         # every start on the compiled backend, as the compass search (QA sweep 9: --model
         # compass listed 1 of its 2 gaits); the scipy reference's steps cost ~1000x more
-        gaits = find_model_gaits(walker, slope=args.slope, guess=guess, backend=backend,
-                                 every_start=backend == "compiled")
+        gaits = find_gaits(walker, args.slope, guess=guess, backend=backend,
+                           every_start=backend == "compiled")
     except GaitNotFoundError as exc:
         raise _no_gait(args.slope, exc) from exc
     gait = gaits[0]
@@ -299,11 +300,8 @@ def _print_gait_list(gaits: Sequence[Any], hanging: Sequence[Sequence[str]] = ()
 
 
 def _run_gait(args: argparse.Namespace) -> int:
-    from heelstrike.analysis.limit_cycle import (
-        GaitNotFoundError,
-        find_limit_cycle,
-        find_limit_cycles,
-    )
+    from heelstrike.analysis.gaits import find_gaits
+    from heelstrike.analysis.limit_cycle import GaitNotFoundError
 
     if not args.slope > 0:
         raise CliError(
@@ -327,13 +325,8 @@ def _run_gait(args: argparse.Namespace) -> int:
         _sensitivity_names(args.sensitivity, walker)  # refuse a bad name before the search
     guess = parse_guess(args.guess)
     try:
-        if guess is None:
-            gaits = find_limit_cycles(
-                walker, slope=args.slope, method=args.backend or "compiled", progress=True
-            )
-        else:
-            gaits = (find_limit_cycle(walker, slope=args.slope, guess=guess,
-                                      method=args.backend or "compiled"),)
+        gaits = find_gaits(walker, args.slope, guess=guess, backend=args.backend or "compiled",
+                           progress=guess is None)
     except GaitNotFoundError as exc:
         raise _no_gait(args.slope, exc) from exc
     cycle = gaits[0]

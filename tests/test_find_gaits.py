@@ -81,7 +81,6 @@ def test_passive_gaits_are_fixed_points_in_the_one_order(
     assert [g.stable for g in gaits] == sorted((g.stable for g in gaits), reverse=True)
 
 
-@pytest.mark.slow
 def test_powered_gaits_two_at_one_target_stable_first(capsys: pytest.CaptureFixture[str]
                                                       ) -> None:
     """A powered gait is a fixed point with one more unknown (the push-off impulse) and one

@@ -83,7 +83,7 @@ def run(quick: bool = False) -> dict[str, Any]:
     rows: list[dict[str, Any]] = []
     notes: list[str] = []
     w = load_phased_walker("kneed")
-    zstar = np.asarray(find_model_gait(w, slope=SLOPE).cycle.fixed_point)
+    zstar = np.asarray(find_model_gait(w, slope=SLOPE).fixed_point)
     rng = np.random.default_rng(0)
     n_walk, steps = (100, 10) if quick else (400, 20)
     Z = zstar + rng.normal(scale=[0.005, 0.02, 0.02], size=(n_walk, zstar.size))

@@ -45,7 +45,8 @@ from typing import Any
 import numpy as np
 from _common import machine, run_main
 
-from heelstrike.analysis.model_gaits import ModelGait, find_model_gait
+from heelstrike.analysis.gaits import Gait
+from heelstrike.analysis.model_gaits import find_model_gait
 from heelstrike.dynamics.phased import load_phased_walker
 
 SLOPE = math.radians(3.0)
@@ -77,11 +78,11 @@ def _timed(fn: Any, reps: int) -> tuple[float, Any]:
     return statistics.median(times), out
 
 
-def _difference(a: ModelGait, b: ModelGait) -> float:
+def _difference(a: Gait, b: Gait) -> float:
     pairs: list[tuple[Any, Any]] = [
-        (a.cycle.fixed_point, b.cycle.fixed_point),
-        (a.cycle.period, b.cycle.period),
-        (a.cycle.step_length, b.cycle.step_length),
+        (a.fixed_point, b.fixed_point),
+        (a.period, b.period),
+        (a.step_length, b.step_length),
         ([e.kinetic_energy_constrained for e in a.impacts],
          [e.kinetic_energy_constrained for e in b.impacts]),
     ]
@@ -151,10 +152,10 @@ def run(quick: bool = False) -> dict[str, Any]:
     rows.append({"table": "gait",
                  "path": "`heelstrike gait --model kneed --backend scipy` (new process)",
                  "seconds": ts_cli, "ratio": 1.0})
-    fp = ", ".join(f"{v:.8f}" for v in g_c.cycle.fixed_point)
+    fp = ", ".join(f"{v:.8f}" for v in g_c.fixed_point)
     notes.append(
         f"gait: fixed point ({', '.join(w.section_names)}) = ({fp}), period "
-        f"{g_c.cycle.period:.6f} s, {len(g_c.impacts)} impacts per step; compiled vs scipy "
+        f"{g_c.period:.6f} s, {len(g_c.impacts)} impacts per step; compiled vs scipy "
         f"max abs difference (fixed point, period, step length, T_c of each impact): "
         f"{diff:.1e} in process, {diff_cli:.1e} between the two commands' JSON"
     )

@@ -76,14 +76,14 @@ def _cases(quick: bool) -> list[tuple[str, PoincareMap, np.ndarray, tuple[str, .
         return out
     kneed = load_phased_walker("kneed")
     gait = find_model_gait(kneed, slope=0.0504, guess=[-0.2647694, 1.2181144, -1.0955048])
-    out.append(("kneed", PoincareMap(walker=kneed, slope=0.0504), gait.cycle.fixed_point,
+    out.append(("kneed", PoincareMap(walker=kneed, slope=0.0504), gait.fixed_point,
                 PARAMETERS["kneed"]))
     torso = load_phased_walker("torso")
     law, push = TorsoPD(walker=torso), PushOff(impulse=2.0)
     gait = find_model_gait(torso, slope=0.0, torque=law, push_off=push,
                            guess=[-0.1180757, 0.1118158, 0.5531974, -0.0140899, -0.6214368])
     out.append(("torso", PoincareMap(walker=torso, slope=0.0, torque=law, push_off=push),
-                gait.cycle.fixed_point, PARAMETERS["torso"]))
+                gait.fixed_point, PARAMETERS["torso"]))
     return out
 
 

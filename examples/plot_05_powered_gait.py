@@ -17,7 +17,7 @@ from heelstrike.models import CompassGait
 
 walker = CompassGait(foot_radius=0.3)
 gait = find_powered_gait(walker, actuation="pushoff", speed=0.5)
-print(f"push-off impulse {gait.parameter:.4f} {gait.parameter_unit}, "
+print(f"push-off impulse {gait.actuation.parameter:.4f} {gait.actuation.parameter_unit}, "
       f"step length {gait.step_length:.3f} m, period {gait.period:.3f} s, stable: {gait.stable}")
 print(f"W_act = {gait.actuator_work:.5f} J, T_c = {gait.collision_loss:.5f} J, "
       f"books balance to {gait.energy_balance_error:.1e} J")
@@ -33,7 +33,7 @@ fig = Figure(figsize=(9, 3.6), layout="constrained")
 FigureCanvasAgg(fig)
 ax1, ax2 = fig.subplots(1, 2, width_ratios=[1, 2])
 names = ["push-off\n$W_{act}$", "collision\n$T_c$"]
-values = [gait.push_off_work, gait.collision_loss]
+values = [gait.actuation.push_off_work, gait.collision_loss]
 ax1.bar(names, values, color=["tab:green", "tab:red"], width=0.6)
 ax1.set_ylabel("energy per step (J)")
 ax1.set_title("energy books of one step", fontsize=10)

@@ -39,9 +39,9 @@ for label, path in (("shipped, R = 0.1 m", "kneed"), ("my_kneed.toml, R = 0.2 m"
     walker = load_walker(path)
     gait = find_model_gait(walker, slope=slope)
     gaits[label] = (walker, gait)
-    print(f"{label}: period {gait.cycle.period:.4f} s, step length "
-          f"{gait.cycle.step_length:.4f} m, speed {gait.cycle.speed:.3f} m/s, "
-          f"stable: {gait.cycle.stable}")
+    print(f"{label}: period {gait.period:.4f} s, step length "
+          f"{gait.step_length:.4f} m, speed {gait.speed:.3f} m/s, "
+          f"stable: {gait.stable}")
     for imp in gait.impacts:
         print(f"  {imp.kind:12s} T_c = {imp.kinetic_energy_constrained:.6f} J")
     print(f"  losses {gait.collision_loss:.6f} J = potential energy released "
@@ -51,7 +51,7 @@ for label, path in (("shipped, R = 0.1 m", "kneed"), ("my_kneed.toml, R = 0.2 m"
 # The link angles over one step of the walker with the larger feet: the swing knee flexes, then
 # locks at the knee strike.
 walker, gait = gaits["my_kneed.toml, R = 0.2 m"]
-walk = gait.cycle.walk
+walk = gait.walk
 angles = walker.link_angles(walk.q)
 fig = Figure(figsize=(7, 4), layout="constrained")
 FigureCanvasAgg(fig)

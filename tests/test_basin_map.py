@@ -234,7 +234,7 @@ def test_trailing_foot_presses_is_the_sign_of_the_clearance_rate(model):
     from heelstrike.models.builder import load_walker
 
     walker = PhasedWalker.from_built(load_walker(model))
-    z = np.asarray(find_model_gait(walker, slope=SLOPE3).cycle.fixed_point)
+    z = np.asarray(find_model_gait(walker, slope=SLOPE3).fixed_point)
     q, qd = walker.section_to_state(z)
     assert not walker.trailing_foot_presses(q, qd)
     assert float(walker.foot_clearance(q + 1e-6 * qd, "left")) > 0.0

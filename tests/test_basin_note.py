@@ -83,7 +83,7 @@ def test_model_basin_command_notes_the_unstable_torso_gait(
     from heelstrike.analysis.model_gaits import find_model_gait
     from heelstrike.dynamics.phased import load_phased_walker
 
-    gait = find_model_gait(load_phased_walker("torso"), slope=np.radians(3.0)).cycle
+    gait = find_model_gait(load_phased_walker("torso"), slope=np.radians(3.0))
     assert not gait.stable  # the premise (largest |multiplier| about 25)
     assert main(["basin", "--model", "torso", "--grid", "4x4", "--steps", "3",
                  "--out", str(tmp_path)]) == 0

@@ -82,7 +82,7 @@ def test_branch_segments_follow_the_branch_near_its_onset(kneed: PhasedWalker) -
     for k in range(x.size - 1):
         a, b = branch.cycles[k], branch.cycles[k + 1]
         mid = find_model_gait(kneed, slope=0.5 * (x[k] + x[k + 1]),
-                              guess=0.5 * (a.fixed_point + b.fixed_point)).cycle
+                              guess=0.5 * (a.fixed_point + b.fixed_point))
         misses.append(np.max(np.abs([mid.impact_angle, mid.period] - 0.5 * (y[k] + y[k + 1]))
                              / span))
     assert max(misses) < 2.5e-3  # 2e-3 by construction; Newton's tolerances aside
@@ -91,7 +91,7 @@ def test_branch_segments_follow_the_branch_near_its_onset(kneed: PhasedWalker) -
                                   record=1, continuation_points=4)
     a, b = coarse.cycles[0], coarse.cycles[1]
     mid = find_model_gait(kneed, slope=0.5 * (coarse.values[0] + coarse.values[1]),
-                          guess=0.5 * (a.fixed_point + b.fixed_point)).cycle
+                          guess=0.5 * (a.fixed_point + b.fixed_point))
     assert abs(mid.period - 0.5 * (a.period + b.period)) / span[1] > 10 * max(misses)
 
 

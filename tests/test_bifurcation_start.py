@@ -52,7 +52,7 @@ def test_the_kneed_onset_is_real(kneed: PhasedWalker, kneed_default_range) -> No
     _, branch = kneed_default_range
     onset = float(branch.values[0])
     above = find_model_gait(kneed, slope=onset + np.deg2rad(0.01))
-    assert above.cycle.stable
+    assert above.stable
     with pytest.raises(GaitNotFoundError):
         find_model_gait(kneed, slope=onset - np.deg2rad(0.01))
     for cycle in (branch.cycles[0], branch.cycles[1], branch.cycles[6]):
@@ -99,7 +99,7 @@ def test_an_unstable_gait_that_ends_does_not_start_the_diagram(kneed: PhasedWalk
     (|m| 18.5) whose family ends before the next slope; the diagram used to start from it and
     its branch had one point. It now starts where the stable family starts (2.158 deg)."""
     at_two = find_model_gait(kneed, slope=np.deg2rad(2.0))
-    assert not at_two.cycle.stable  # the premise: what the search finds at 2 deg
+    assert not at_two.stable  # the premise: what the search finds at 2 deg
     _, branch = model_bifurcation(kneed, np.deg2rad(np.linspace(2.0, 3.0, 9)), transient=10,
                                   record=2, continuation_points=6)
     assert 2.1 < float(np.degrees(branch.values[0])) < 2.2

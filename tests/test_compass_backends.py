@@ -313,7 +313,7 @@ def test_powered_gait_is_the_same_on_both_backends(radius: float, actuation: str
     got = find_powered_gait(w, actuation=family, speed=0.5, simulator=sim)
     ref = find_powered_gait(w, actuation=family, speed=0.5)
     np.testing.assert_allclose(got.fixed_point, ref.fixed_point, atol=1e-8)
-    assert got.parameter == pytest.approx(ref.parameter, abs=1e-8)
+    assert got.actuation.parameter == pytest.approx(ref.actuation.parameter, abs=1e-8)
     assert got.collision_loss == pytest.approx(ref.collision_loss, abs=1e-8)
     assert got.speed == pytest.approx(0.5, abs=1e-9)
     # eqs. 14-15 on the periodic level gait: the actuator supplies T_c

@@ -128,13 +128,16 @@ def test_a_gait_of_undecided_stability_is_neither_stable_nor_unstable() -> None:
 
     from heelstrike.analysis.cost_study import _row
 
-    g = SimpleNamespace(
-        cost_of_transport=0.0, eta=0.0, actuator_work=1e-13, push_off_work=1e-13, torque_work=0.0,
-        collision_loss=1e-13, step_length=0.5, period=0.6, speed=0.8, impact_angle=0.25,
-        parameter=0.0, multipliers=np.array([1.0 + 1e-9, 0.3]), stable=False,
-        energy_balance_error=0.0, leg_crossings=1, gains={})
-    assert _row(g)["stable"] == 0.0  # type: ignore[arg-type]
-    assert np.isnan(_row(g, undecided=True)["stable"])  # type: ignore[arg-type]
+    def gait(undecided: bool) -> SimpleNamespace:
+        act = SimpleNamespace(push_off_work=1e-13, torque_work=0.0, parameter=0.0, gains={})
+        return SimpleNamespace(
+            cost_of_transport=0.0, eta=0.0, actuator_work=1e-13, collision_loss=1e-13,
+            step_length=0.5, period=0.6, speed=0.8, impact_angle=0.25, actuation=act,
+            multipliers=np.array([1.0 + 1e-9, 0.3]), stable=False, energy_balance_error=0.0,
+            leg_crossings=1, stability_undecided=undecided)
+
+    assert _row(gait(False))["stable"] == 0.0  # type: ignore[arg-type]
+    assert np.isnan(_row(gait(True))["stable"])  # type: ignore[arg-type]
     ds = _study(np.ones((1, 2, 3)))
     ds["stable"][0, 1] = [np.nan, np.nan, np.nan]  # the wheel's row: undecided
     crosses = [ln for ln in cost_figure(ds).axes[0].get_lines() if ln.get_marker() == "x"]

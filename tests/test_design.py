@@ -35,7 +35,7 @@ FOOT6 = Path(__file__).resolve().parents[1] / "examples" / "walkers" / "compass_
 def compass_gait():  # type: ignore[no-untyped-def]
     w = load_walker("compass", R=0.3)
     g = find_model_gait(w, slope=SLOPE, backend="scipy")
-    s = gait_gradients(w, g.cycle.fixed_point, ["R", "slope", "m"], slope=SLOPE,
+    s = gait_gradients(w, g.fixed_point, ["R", "slope", "m"], slope=SLOPE,
                          spectral_radius=False)
     return w, g, s
 
@@ -45,9 +45,8 @@ def _converged(walker, z0, values: dict[str, float]) -> np.ndarray:  # type: ign
     sl = values.get("slope", SLOPE)
     g = find_model_gait(walker.replace(**params) if params else walker, slope=sl,
                         backend="scipy", guess=z0, tol=1e-13)
-    c = g.cycle
     lift = g.impacts[-1].trailing_normal_velocity
-    return np.concatenate((c.fixed_point, [c.step_length, c.period, c.speed, g.collision_loss,
+    return np.concatenate((g.fixed_point, [g.step_length, g.period, g.speed, g.collision_loss,
                                            g.eta, lift]))
 
 
@@ -59,8 +58,8 @@ def test_sensitivities_agree_with_central_differences_of_converged_gaits(
     v0 = float(s.values[j])
     # steps within the central difference's plateau (truncation h^2, round-off tol/h)
     h = {"R": 1e-4, "slope": 1e-5, "m": 1e-3}[name]
-    plus = _converged(w, g.cycle.fixed_point, {name: v0 + h})
-    minus = _converged(w, g.cycle.fixed_point, {name: v0 - h})
+    plus = _converged(w, g.fixed_point, {name: v0 + h})
+    minus = _converged(w, g.fixed_point, {name: v0 - h})
     fd = (plus - minus) / (2 * h)
     fields = ("step_length", "period", "speed", "collision_loss", "eta", "lift_velocity")
     ift = np.concatenate((s.fixed_point_derivative[:, j], [s.derivatives[f][j] for f in fields]))
@@ -141,9 +140,9 @@ def test_foot_outline_of_the_arc_is_the_circle_about_its_centre() -> None:
 def test_profile_parameter_sensitivities_agree_with_converged_gaits() -> None:
     w = load_walker(FOOT6)
     g = find_model_gait(w, slope=SLOPE, backend="scipy")
-    s = gait_gradients(w, g.cycle.fixed_point, ["k2", "d"], slope=SLOPE,
+    s = gait_gradients(w, g.fixed_point, ["k2", "d"], slope=SLOPE,
                          spectral_radius=False)
-    z0 = g.cycle.fixed_point
+    z0 = g.fixed_point
 
     def central(name: str, h: float) -> np.ndarray:
         return (_converged(w, z0, {name: h}) - _converged(w, z0, {name: -h})) / (2 * h)
@@ -220,7 +219,7 @@ def test_design_gradients_are_the_exact_sensitivities(compass_gait) -> None:  # 
     from heelstrike.dynamics.phased import PhasedWalker
 
     w, g, s = compass_gait
-    ref = gait_sensitivity(PhasedWalker.from_built(w), g.cycle.fixed_point, list(s.parameters),
+    ref = gait_sensitivity(PhasedWalker.from_built(w), g.fixed_point, list(s.parameters),
                            slope=SLOPE)
     assert all(ref.exact)
     assert np.allclose(s.fixed_point_derivative, ref.fixed_point, rtol=1e-9, atol=1e-12)

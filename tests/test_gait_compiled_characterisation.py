@@ -3,7 +3,7 @@
 ``find_limit_cycles(..., method="compiled")`` no longer re-simulates every gait with the scipy
 reference: period, step length, energies and Floquet multipliers come from the compiled map and
 the compiled pre-impact state. They must equal the scipy reference's characterisation of the
-same gait to 1e-8; the trajectory (``LimitCycle.walk``) is the scipy reference's, simulated on
+same gait to 1e-8; the trajectory (``Gait.walk``) is the scipy reference's, simulated on
 first access. A described walker's gait (compiled step simulator throughout) must equal the
 scipy reference's from the automatic guess too.
 """
@@ -15,7 +15,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from heelstrike.analysis.limit_cycle import LimitCycle, find_limit_cycle, find_limit_cycles
+from heelstrike.analysis.gaits import Gait
+from heelstrike.analysis.limit_cycle import find_limit_cycle, find_limit_cycles
 from heelstrike.models import CompassGait
 
 TOL = 1e-8
@@ -29,12 +30,12 @@ KNEED_SLOPE = 0.0504
 
 
 @pytest.fixture(scope="module")
-def compiled_gaits() -> tuple[LimitCycle, ...]:
+def compiled_gaits() -> tuple[Gait, ...]:
     return find_limit_cycles(CompassGait(foot_radius=0.3), slope=SLOPE, method="compiled")
 
 
 def test_compiled_search_characterisation_equals_scipy_reference(
-    compiled_gaits: tuple[LimitCycle, ...],
+    compiled_gaits: tuple[Gait, ...],
 ) -> None:
     walker = CompassGait(foot_radius=0.3)
     assert len(compiled_gaits) >= 2  # the stable gait and the unstable long-step gait
@@ -53,7 +54,7 @@ def test_compiled_search_characterisation_equals_scipy_reference(
 
 
 def test_compiled_guess_path_characterisation_equals_search(
-    compiled_gaits: tuple[LimitCycle, ...],
+    compiled_gaits: tuple[Gait, ...],
 ) -> None:
     """``find_limit_cycle(guess=...)`` on the compiled map characterises on the compiled
     backend too, and agrees with the search's gait."""
@@ -66,7 +67,7 @@ def test_compiled_guess_path_characterisation_equals_search(
 
 
 def test_walk_of_a_compiled_gait_is_the_scipy_period_on_demand(
-    compiled_gaits: tuple[LimitCycle, ...],
+    compiled_gaits: tuple[Gait, ...],
 ) -> None:
     c = compiled_gaits[0]
     assert "_walk_value" in vars(c) and not hasattr(vars(c)["_walk_value"], "impacts")
@@ -84,12 +85,12 @@ def test_walk_of_a_compiled_gait_is_the_scipy_period_on_demand(
         c.walk = walk  # type: ignore[misc]
 
 
-def test_limit_cycle_needs_a_walk(compiled_gaits: tuple[LimitCycle, ...]) -> None:
+def test_limit_cycle_needs_a_walk(compiled_gaits: tuple[Gait, ...]) -> None:
     c = compiled_gaits[0]
     fields = {f.name: getattr(c, f.name) for f in dataclasses.fields(c) if f.name != "walk"}
     with pytest.raises(TypeError, match="walk"):
-        LimitCycle(**fields)
-    given = LimitCycle(**fields, walk=c.walk)
+        Gait(**fields)
+    given = Gait(**fields, walk=c.walk)
     assert given.walk is c.walk
 
 
@@ -101,9 +102,9 @@ def test_kneed_automatic_gait_same_on_both_backends() -> None:
     w = load_walker("kneed")
     got = find_model_gait(w, slope=KNEED_SLOPE, backend="compiled")
     ref = find_model_gait(w, slope=KNEED_SLOPE, backend="scipy")
-    np.testing.assert_allclose(got.cycle.fixed_point, ref.cycle.fixed_point, rtol=0, atol=TOL)
+    np.testing.assert_allclose(got.fixed_point, ref.fixed_point, rtol=0, atol=TOL)
     for name in ("period", "step_length", "collision_loss", "potential_energy_released"):
-        assert getattr(got.cycle, name) == pytest.approx(getattr(ref.cycle, name), abs=TOL)
+        assert getattr(got, name) == pytest.approx(getattr(ref, name), abs=TOL)
     assert got.collision_loss == pytest.approx(ref.collision_loss, abs=TOL)
     np.testing.assert_allclose([e.kinetic_energy_constrained for e in got.impacts],
                                [e.kinetic_energy_constrained for e in ref.impacts], atol=TOL)

@@ -23,8 +23,8 @@ import numpy as np
 import pytest
 
 from heelstrike.analysis._gait_order import gait_order, is_stable, ordered_gaits
+from heelstrike.analysis.gaits import Gait
 from heelstrike.analysis.powered import (
-    PoweredGait,
     actuation_family,
     family_simulator,
     powered_gaits,
@@ -37,17 +37,17 @@ from heelstrike.models.compass import CompassGait
 Capture = pytest.CaptureFixture[str]
 
 
-def _step(walker: CompassGait, gait: PoweredGait, z: np.ndarray) -> np.ndarray:
+def _step(walker: CompassGait, gait: Gait, z: np.ndarray) -> np.ndarray:
     """One step of the walker with the gait's push-off from section point ``z``."""
-    family = actuation_family(gait.actuation)
-    torque, push_off = family.build(walker, gait.parameter)
+    family = actuation_family(gait.actuation.name)
+    torque, push_off = family.build(walker, gait.actuation.parameter)
     sim = family_simulator(walker, family, "compiled")
     st = powered_step(walker, z, torque, push_off, rtol=1e-11, atol=1e-11, simulator=sim)
     assert st.ok
     return st.z_next
 
 
-def _check_gait(walker: CompassGait, gait: PoweredGait) -> float:
+def _check_gait(walker: CompassGait, gait: Gait) -> float:
     """Assert the gait's physics; return the spectral radius measured here."""
     z = np.asarray(gait.fixed_point, dtype=float)
     assert np.linalg.norm(_step(walker, gait, z) - z) < 1e-8  # periodic
@@ -62,7 +62,7 @@ def _check_gait(walker: CompassGait, gait: PoweredGait) -> float:
     return rho
 
 
-def _decays(walker: CompassGait, gait: PoweredGait, steps: int = 120) -> bool:
+def _decays(walker: CompassGait, gait: Gait, steps: int = 120) -> bool:
     """Whether a 1e-3 perturbation of the fixed point dies out under the walker's own steps."""
     z0 = np.asarray(gait.fixed_point, dtype=float)
     z = z0 + 1e-3 * np.ones(z0.size) / np.sqrt(z0.size)
@@ -135,9 +135,11 @@ def test_powered_finds_both_gaits_of_a_walker_with_light_legs(capsys: Capture) -
     assert "2 distinct gaits meet this target" in out and "stable no" in out
 
 
-def _fake(work: float, rho: float, multi: bool = False) -> SimpleNamespace:
+def _fake(work: float, rho: float, multi: bool = False, undecided: bool = False
+          ) -> SimpleNamespace:
     return SimpleNamespace(actuator_work=work, multipliers=np.array([rho, 0.1]),
-                           multi_swing=multi, name=f"{work}/{rho}/{multi}")
+                           multi_swing=multi, stability_undecided=undecided,
+                           name=f"{work}/{rho}/{multi}")
 
 
 def test_the_one_order_of_gaits() -> None:
@@ -153,9 +155,10 @@ def test_the_one_order_of_gaits() -> None:
     assert is_stable([0.999]) and not is_stable([1.0]) and not is_stable([np.nan])
     assert gait_order(_fake(1.0, 1.0))[1] is True  # |m| = 1 is not stable
     # McGeer's wheel: stability undecided (a neutral family), the cheapest first
-    wheel = [_fake(0.2, 0.999), _fake(0.0, 1.0 + 1e-9)]
-    assert [g.actuator_work for g in ordered_gaits(wheel, undecided=True)] == [0.0, 0.2]
-    assert [g.actuator_work for g in ordered_gaits(wheel)] == [0.2, 0.0]
+    wheel = [_fake(0.2, 0.999, undecided=True), _fake(0.0, 1.0 + 1e-9, undecided=True)]
+    assert [g.actuator_work for g in ordered_gaits(wheel)] == [0.0, 0.2]
+    decided = [_fake(0.2, 0.999), _fake(0.0, 1.0 + 1e-9)]
+    assert [g.actuator_work for g in ordered_gaits(decided)] == [0.2, 0.0]
 
 
 def test_gait_and_map_rank_passive_gaits_by_the_same_order() -> None:

@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from heelstrike.analysis.limit_cycle import LimitCycle, find_limit_cycle
+from heelstrike.analysis.gaits import Gait
+from heelstrike.analysis.limit_cycle import find_limit_cycle
 from heelstrike.analysis.sensitivity import GAIT_QUANTITY_UNITS, gait_sensitivity
 from heelstrike.models import CompassGait
 
@@ -16,14 +17,14 @@ NAMES = ("foot_radius", "leg_com_from_hip", "hip_mass")
 
 
 @pytest.fixture(scope="module")
-def gait() -> tuple[CompassGait, LimitCycle]:
+def gait() -> tuple[CompassGait, Gait]:
     walker = CompassGait(foot_radius=0.3)
     return walker, find_limit_cycle(walker, slope=SLOPE, **TIGHT)
 
 
 @pytest.mark.parametrize("k", range(len(NAMES)))
 def test_sensitivities_match_central_differences_of_converged_gaits(
-    gait: tuple[CompassGait, LimitCycle], k: int
+    gait: tuple[CompassGait, Gait], k: int
 ) -> None:
     walker, cycle = gait
     sens = gait_sensitivity(walker, cycle.fixed_point, NAMES, slope=SLOPE)
@@ -45,7 +46,7 @@ def test_sensitivities_match_central_differences_of_converged_gaits(
         assert sens.values[q] == pytest.approx(getattr(cycle, q), rel=1e-9)
 
 
-def test_eta_sensitivity_closed_form(gait: tuple[CompassGait, LimitCycle]) -> None:
+def test_eta_sensitivity_closed_form(gait: tuple[CompassGait, Gait]) -> None:
     """A passive gait's collision loss is the potential energy released,
     ``(mH + 2 m) g L sin(slope)``, so ``eta = (mH + 2 m) g sin(slope)``: its derivative is
     ``g sin(slope)`` in each mass and 0 in the geometry."""
@@ -57,7 +58,7 @@ def test_eta_sensitivity_closed_form(gait: tuple[CompassGait, LimitCycle]) -> No
     assert np.allclose(sens.quantities["eta"], expected, rtol=0, atol=1e-6)
 
 
-def test_unknown_parameter(gait: tuple[CompassGait, LimitCycle]) -> None:
+def test_unknown_parameter(gait: tuple[CompassGait, Gait]) -> None:
     walker, cycle = gait
     with pytest.raises(ValueError, match="'R' is not a parameter of CompassGait"):
         gait_sensitivity(walker, cycle.fixed_point, ["R"], slope=SLOPE)
@@ -97,7 +98,7 @@ def test_cli_sensitivity_table_and_json(capsys: pytest.CaptureFixture[str]) -> N
 
 
 def test_multiplier_sensitivities_match_converged_gaits(
-    gait: tuple[CompassGait, LimitCycle]
+    gait: tuple[CompassGait, Gait]
 ) -> None:
     """``d|lambda_i|/dp`` by eigenvalue perturbation against central differences of the
     converged gaits' multipliers (each the eigenvalues of an exact Jacobian)."""

@@ -24,7 +24,7 @@ SLOPE = float(np.deg2rad(3.0))
 @pytest.fixture(scope="module")
 def kneed_states() -> tuple[PhasedWalker, np.ndarray]:
     w = load_phased_walker("kneed")
-    z = np.asarray(find_model_gait(w, slope=SLOPE).cycle.fixed_point)
+    z = np.asarray(find_model_gait(w, slope=SLOPE).fixed_point)
     Z = z + np.random.default_rng(7).normal(scale=0.03, size=(120, z.size))
     return w, Z
 

@@ -30,7 +30,7 @@ def test_the_lock_torque_balances_the_measured_accelerations() -> None:
     # independent of the reduced solve: accelerations from the walk's own velocities (central
     # differences of dense samples), then the knee row of M q_ddot + h
     walker = load_walker("kneed")
-    gait = find_model_gaits(walker, slope=SLOPE)[0].cycle
+    gait = find_model_gaits(walker, slope=SLOPE)[0]
     walk = simulate(walker, gait.q, gait.q_dot, slope=SLOPE, steps=1, rtol=1e-12, atol=1e-12,
                     max_step=gait.period / 4000)
     held = lock_torques(walker, walk)["stance_knee"]
@@ -63,7 +63,7 @@ def test_gait_notes_a_lock_that_must_pull(capsys: pytest.CaptureFixture[str]) ->
     assert len(notes) == 1 and "'stance_knee' holds it with torques of both signs" in notes[0]
     # the same ranges from the scipy reference's walk
     walker = load_walker("kneed")
-    gait = find_model_gaits(walker, slope=SLOPE)[0].cycle
+    gait = find_model_gaits(walker, slope=SLOPE)[0]
     ref = lock_torque_ranges(walker, gait, backend="scipy")
     np.testing.assert_allclose(ref["stance_knee"], (lo, hi), rtol=1e-3)
     assert list(two_sided_locks(walker, ref)) == ["stance_knee"]  # the swing knee only pushes
@@ -71,7 +71,7 @@ def test_gait_notes_a_lock_that_must_pull(capsys: pytest.CaptureFixture[str]) ->
 
 def test_walkers_without_locks_have_no_lock_torques() -> None:
     walker = load_walker("compass")
-    gait = find_model_gaits(walker, slope=SLOPE)[0].cycle
+    gait = find_model_gaits(walker, slope=SLOPE)[0]
     assert lock_torque_ranges(walker, gait) == {}
 
 
@@ -80,7 +80,7 @@ def test_gait_locks_names_the_stance_knee_two_sided() -> None:
     the stance knee's lock holds it with -0.18 to +0.22 N m (the values of the test above and
     of QA sweep 13), the swing knee's with one sign only; the compass walker has no locks."""
     walker = load_walker("kneed")
-    gait = find_model_gaits(walker, slope=SLOPE)[0].cycle
+    gait = find_model_gaits(walker, slope=SLOPE)[0]
     locks = gait_locks(walker, gait, backend="scipy")
     assert set(locks.ranges) == {"stance_knee", "swing_knee"}
     lo, hi = locks.ranges["stance_knee"]
@@ -89,5 +89,5 @@ def test_gait_locks_names_the_stance_knee_two_sided() -> None:
     assert 0 < s_lo <= s_hi
     assert locks.two_sided == {"stance_knee": (lo, hi)}
     compass = load_walker("compass")
-    none = gait_locks(compass, find_model_gaits(compass, slope=SLOPE)[0].cycle)
+    none = gait_locks(compass, find_model_gaits(compass, slope=SLOPE)[0])
     assert none.ranges == {} and none.two_sided == {}

@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 
 from heelstrike.analysis.basin import model_basin_of_attraction
-from heelstrike.analysis.model_gaits import ModelGait, find_model_gait
+from heelstrike.analysis.gaits import Gait
+from heelstrike.analysis.model_gaits import find_model_gait
 from heelstrike.cli import main
 from heelstrike.dynamics.compiled_phased import (
     STATUS_NAMES,
@@ -37,13 +38,13 @@ def kneed() -> PhasedWalker:
 
 
 @pytest.fixture(scope="module")
-def kneed_gait(kneed: PhasedWalker) -> ModelGait:
+def kneed_gait(kneed: PhasedWalker) -> Gait:
     return find_model_gait(kneed, slope=SLOPE)
 
 
-def _states(gait: ModelGait) -> np.ndarray:
+def _states(gait: Gait) -> np.ndarray:
     """Section points: the gait, small and large perturbations, a backward fall, a stuck foot."""
-    z = np.asarray(gait.cycle.fixed_point)
+    z = np.asarray(gait.fixed_point)
     return np.array([
         z,
         z + np.array([0.01, 0.05, -0.05]),
@@ -56,7 +57,7 @@ def _states(gait: ModelGait) -> np.ndarray:
 # -- the ensemble runner -------------------------------------------------------------------------
 @pytest.mark.parametrize("parallel", [False, True])
 def test_ensemble_equals_single_walker_runs(
-    kneed: PhasedWalker, kneed_gait: ModelGait, parallel: bool
+    kneed: PhasedWalker, kneed_gait: Gait, parallel: bool
 ) -> None:
     Z = _states(kneed_gait)
     ens = ensemble_walk_phased(kneed, Z, slope=SLOPE, steps=4, parallel=parallel)
@@ -73,7 +74,7 @@ def test_ensemble_equals_single_walker_runs(
 
 
 @pytest.mark.slow
-def test_ensemble_matches_scipy_reference(kneed: PhasedWalker, kneed_gait: ModelGait) -> None:
+def test_ensemble_matches_scipy_reference(kneed: PhasedWalker, kneed_gait: Gait) -> None:
     Z = _states(kneed_gait)[:4]
     ens = ensemble_walk_phased(kneed, Z, slope=SLOPE, steps=2, rtol=1e-11, atol=1e-11)
     for i, z in enumerate(Z):
@@ -85,7 +86,7 @@ def test_ensemble_matches_scipy_reference(kneed: PhasedWalker, kneed_gait: Model
         np.testing.assert_allclose(ens.q_dot[i], ref.final_q_dot, rtol=TOL, atol=TOL)
 
 
-def test_ensemble_states_input_and_stop_near(kneed: PhasedWalker, kneed_gait: ModelGait) -> None:
+def test_ensemble_states_input_and_stop_near(kneed: PhasedWalker, kneed_gait: Gait) -> None:
     Z = _states(kneed_gait)
     Q, QD = section_states(kneed, Z)
     for i, z in enumerate(Z):  # the batched conversion is the walker's own
@@ -97,7 +98,7 @@ def test_ensemble_states_input_and_stop_near(kneed: PhasedWalker, kneed_gait: Mo
     np.testing.assert_array_equal(a.status, b.status)
     np.testing.assert_allclose(a.q, b.q, atol=1e-12)
     # a walker on the fixed point stops after its first step; the others walk on
-    zstar = np.asarray(kneed_gait.cycle.fixed_point)
+    zstar = np.asarray(kneed_gait.fixed_point)
     s = ensemble_walk_phased(kneed, Z[:2], slope=SLOPE, steps=5, stop_near=(zstar, 1e-6))
     assert list(s.steps) == [1, 5]
     assert np.linalg.norm(s.z[0] - zstar) < 1e-6
@@ -110,9 +111,9 @@ def test_ensemble_states_input_and_stop_near(kneed: PhasedWalker, kneed_gait: Mo
 
 # -- basin -----------------------------------------------------------------------------------------
 def test_model_basin_fixed_point_converges_far_point_falls(
-    kneed: PhasedWalker, kneed_gait: ModelGait
+    kneed: PhasedWalker, kneed_gait: Gait
 ) -> None:
-    z = np.asarray(kneed_gait.cycle.fixed_point)
+    z = np.asarray(kneed_gait.fixed_point)
     basin = model_basin_of_attraction(
         kneed, SLOPE, grid=(3, 3), ranges=((z[0] - 0.2, z[0] + 0.2), (z[1] - 0.9, z[1] + 0.9)),
         steps=30, fixed_point=z,
@@ -153,12 +154,12 @@ def _sinks(walker: PhasedWalker, q: np.ndarray, qd: np.ndarray, dt: float = 1e-6
 
 @pytest.mark.slow
 def test_model_basin_flags_starts_whose_trailing_foot_sinks(
-    kneed: PhasedWalker, kneed_gait: ModelGait
+    kneed: PhasedWalker, kneed_gait: Gait
 ) -> None:
     """QA11 #5: on the default 20x16 slice, the two slowest stance-rate columns (40 cells) start
     with the trailing foot moving into the ground (QA11's own check counted 40): they are
     ``inadmissible_start``, not walked, on both backends; no other cell is."""
-    z = np.asarray(kneed_gait.cycle.fixed_point)
+    z = np.asarray(kneed_gait.fixed_point)
     ranges = ((z[0] - 0.25, z[0] + 0.2), (z[1] - 0.9, z[1] + 1.1))  # the documented default
     compiled = model_basin_of_attraction(kneed, SLOPE, grid=(20, 16), steps=3, fixed_point=z)
     ds = compiled.dataset
@@ -210,7 +211,7 @@ def test_basin_model_option_errors(
 
 # -- walk ------------------------------------------------------------------------------------------
 def test_walk_command_with_model(tmp_path: Path, capsys: pytest.CaptureFixture[str],
-                                 kneed_gait: ModelGait) -> None:
+                                 kneed_gait: Gait) -> None:
     import pandas as pd
 
     assert main(["walk", "--model", "kneed", "--steps", "2", "--fps", "10", "--out",
@@ -228,12 +229,12 @@ def test_walk_command_with_model(tmp_path: Path, capsys: pytest.CaptureFixture[s
         "swing_knee_dot_rad_s", "tangential_N", "normal_N", "required_friction"]
     assert step["t_s"].iloc[0] == 0.0
     assert step["stance_shank_rad"].iloc[0] == pytest.approx(
-        kneed_gait.cycle.fixed_point[0], abs=1e-9)
+        kneed_gait.fixed_point[0], abs=1e-9)
     assert np.all(step["stance_knee_rad"] == 0.0)  # locked through the step
     assert np.all(step["normal_N"] > 0) and np.all(step["required_friction"] < 1.0)
     # starts on the gait, and every heel strike drops the energy by its T_c
     portrait = pd.read_csv(tmp_path / "phase_portrait.csv")
-    z = kneed_gait.cycle.fixed_point
+    z = kneed_gait.fixed_point
     assert portrait["q3_rad"].iloc[0] == pytest.approx(z[0], abs=1e-9)
     assert portrait["q3_dot_rad_s"].iloc[0] == pytest.approx(z[1], abs=1e-9)
     impacts = pd.read_csv(tmp_path / "impacts.csv")

@@ -40,17 +40,17 @@ def _cli(*args: str) -> subprocess.CompletedProcess[str]:
 
 
 def test_stable_gait_found_first(gaits: tuple) -> None:
-    first = gaits[0].cycle
+    first = gaits[0]
     assert first.stable
     assert first.spectral_radius < 1.0
     # the unstable gait the grid search reaches is found too, and listed after it
     assert len(gaits) >= 2
-    assert not gaits[1].cycle.stable
-    assert gaits[1].cycle.spectral_radius > 1.0
+    assert not gaits[1].stable
+    assert gaits[1].spectral_radius > 1.0
     # distinct gaits: different fixed points and periods
-    assert np.linalg.norm(np.asarray(first.fixed_point) - gaits[1].cycle.fixed_point) > 1e-3
-    assert abs(first.period - gaits[1].cycle.period) > 1e-2
-    assert find_model_gait(load_walker("kneed", R=0.5), slope=SLOPE).cycle.stable
+    assert np.linalg.norm(np.asarray(first.fixed_point) - gaits[1].fixed_point) > 1e-3
+    assert abs(first.period - gaits[1].period) > 1e-2
+    assert find_model_gait(load_walker("kneed", R=0.5), slope=SLOPE).stable
 
 
 def test_found_gaits_are_periodic_on_the_scipy_reference(kneed_r05: PhasedWalker,
@@ -59,7 +59,7 @@ def test_found_gaits_are_periodic_on_the_scipy_reference(kneed_r05: PhasedWalker
     closes: the potential energy released equals the sum of T_c over its impacts."""
     pmap = PoincareMap(walker=kneed_r05, slope=SLOPE, rtol=1e-11, atol=1e-11)
     for g in gaits:
-        z = np.asarray(g.cycle.fixed_point)
+        z = np.asarray(g.fixed_point)
         np.testing.assert_allclose(pmap(z), z, atol=1e-8)
         assert abs(g.energy_residual) < 1e-8
         assert g.collision_loss == pytest.approx(
@@ -72,10 +72,10 @@ def test_the_stable_gait_is_the_one_map_follows(gaits: tuple) -> None:
 
     gmap = model_gait_map(load_walker("kneed"), "R", [0.5], [SLOPE])
     ds = gmap.dataset
-    np.testing.assert_allclose(ds["fixed_point"].values[0, 0], gaits[0].cycle.fixed_point,
+    np.testing.assert_allclose(ds["fixed_point"].values[0, 0], gaits[0].fixed_point,
                                atol=1e-8)
     assert float(ds["spectral_radius"].values[0, 0]) == pytest.approx(
-        gaits[0].cycle.spectral_radius, abs=1e-6)
+        gaits[0].spectral_radius, abs=1e-6)
 
 
 def test_passive_walker_on_level_ground_is_refused_with_the_reason() -> None:
@@ -160,6 +160,6 @@ def test_failure_message_says_what_was_searched() -> None:
 def test_scipy_backend_finds_the_same_stable_gait(gaits: tuple,
                                                   kneed_r05: PhasedWalker) -> None:
     ref = find_model_gaits(kneed_r05, slope=SLOPE, backend="scipy")
-    assert ref[0].cycle.stable
-    np.testing.assert_allclose(ref[0].cycle.fixed_point, gaits[0].cycle.fixed_point, atol=1e-8)
-    assert ref[0].cycle.period == pytest.approx(gaits[0].cycle.period, abs=1e-8)
+    assert ref[0].stable
+    np.testing.assert_allclose(ref[0].fixed_point, gaits[0].fixed_point, atol=1e-8)
+    assert ref[0].period == pytest.approx(gaits[0].period, abs=1e-8)

@@ -55,10 +55,10 @@ def test_compass_file_hip_law_gaits_equal_the_compass_gaits(actuation: str,
                                 speed=0.5)
     # compass.toml's section (stance_leg, stance_leg_dot, hip_dot) is (q3, q3_dot, q4_dot)
     np.testing.assert_allclose(g.fixed_point, ref.fixed_point, rtol=0, atol=1e-8)
-    assert g.parameter == pytest.approx(ref.parameter, rel=1e-8, abs=1e-8)
+    assert g.actuation.parameter == pytest.approx(ref.actuation.parameter, rel=1e-8, abs=1e-8)
     assert g.collision_loss == pytest.approx(ref.collision_loss, rel=1e-8, abs=1e-10)
     assert g.actuator_work == pytest.approx(g.collision_loss, abs=1e-8)  # eqs. 14-15
-    assert g.push_off_work == 0.0 and g.torque_joint == "hip"
+    assert g.actuation.push_off_work == 0.0 and g.actuation.torque_joint == "hip"
 
 
 @pytest.fixture(scope="module")
@@ -98,11 +98,12 @@ def test_kneed_hip_law_gait_same_on_both_backends(actuation: str) -> None:
     for g in (compiled, scipy):
         assert g.speed == pytest.approx(0.5, abs=1e-8) and g.residual < 1e-8
         # level ground, periodic: the hip's work is the loss of every strike (heel and knees)
-        assert g.torque_work == pytest.approx(g.collision_loss, abs=1e-8)
-        assert g.push_off_work == 0.0 and g.hip_work == g.torque_work
+        assert g.actuation.torque_work == pytest.approx(g.collision_loss, abs=1e-8)
+        assert g.actuation.push_off_work == 0.0 and g.actuation.hip_work == g.actuation.torque_work
         assert g.collision_loss > 0
     np.testing.assert_allclose(compiled.fixed_point, scipy.fixed_point, rtol=0, atol=1e-8)
-    assert compiled.parameter == pytest.approx(scipy.parameter, rel=1e-8, abs=1e-8)
+    assert compiled.actuation.parameter == pytest.approx(scipy.actuation.parameter, rel=1e-8,
+                                                         abs=1e-8)
     assert compiled.collision_loss == pytest.approx(scipy.collision_loss, rel=1e-8)
 
 
@@ -139,11 +140,11 @@ def test_scaled_walkers_walk_the_same_gait_with_their_default_gains(actuation: s
     assert heavy.period == pytest.approx(ref.period, rel=1e-7)
     assert moon.period == pytest.approx(2 * ref.period, rel=1e-7)
     if energy is None:  # the target energy (J) scales with m g l
-        assert heavy.parameter == pytest.approx(2 * ref.parameter, rel=1e-7)
-        assert moon.parameter == pytest.approx(ref.parameter / 4, rel=1e-7)
+        assert heavy.actuation.parameter == pytest.approx(2 * ref.actuation.parameter, rel=1e-7)
+        assert moon.actuation.parameter == pytest.approx(ref.actuation.parameter / 4, rel=1e-7)
     else:  # the amplitude (rad) is dimensionless
-        assert heavy.parameter == pytest.approx(ref.parameter, rel=1e-7)
-        assert moon.parameter == pytest.approx(ref.parameter, rel=1e-7)
+        assert heavy.actuation.parameter == pytest.approx(ref.actuation.parameter, rel=1e-7)
+        assert moon.actuation.parameter == pytest.approx(ref.actuation.parameter, rel=1e-7)
 
 
 def test_torso_walker_refuses_the_hip_laws() -> None:
@@ -169,7 +170,7 @@ def test_cli_powered_model_kneed_hip_pd(capsys: pytest.CaptureFixture[str],
     assert d["speed"] == pytest.approx(0.5, abs=1e-8)
     assert d["hip_work"] == pytest.approx(d["collision_loss"], abs=1e-8)
     lib = find_model_powered_gait(load_walker("kneed"), actuation="hip-pd", speed=0.5)
-    assert d["parameter"] == pytest.approx(lib.parameter, abs=1e-9)
+    assert d["parameter"] == pytest.approx(lib.actuation.parameter, abs=1e-9)
     # explicit gains reach the law: a softer hip takes a longer step at the same speed
     assert main(["powered", "--model", "kneed", "--actuation", "hip-pd", "--speed", "0.5",
                  "--kp", "3", "--json"]) == 0

@@ -23,10 +23,10 @@ import re
 import numpy as np
 import pytest
 
+from heelstrike.analysis.gaits import Gait
 from heelstrike.analysis.limit_cycle import GaitNotFoundError, PoincareMap
 from heelstrike.analysis.powered import (
     HOMOTOPY_SLOPES,
-    PoweredGait,
     PoweredGaitNotFoundError,
     declared_posture_law,
     find_model_powered_gait,
@@ -47,7 +47,7 @@ def walker() -> PhasedWalker:
 
 
 @pytest.fixture(scope="module")
-def gait() -> PoweredGait:
+def gait() -> Gait:
     return find_model_powered_gait(load_walker("kneed"), speed=SPEED)
 
 
@@ -58,9 +58,9 @@ def slow_error() -> str:
     return str(info.value)
 
 
-def _reference_step(walker: PhasedWalker, g: PoweredGait) -> PhasedWalkResult:
+def _reference_step(walker: PhasedWalker, g: Gait) -> PhasedWalkResult:
     walk = simulate_phased(walker, *walker.section_to_state(g.fixed_point), slope=0.0, steps=1,
-                           push_off=PushOff(impulse=g.parameter), rtol=1e-12, atol=1e-12)
+                           push_off=PushOff(impulse=g.actuation.parameter), rtol=1e-12, atol=1e-12)
     assert isinstance(walk, PhasedWalkResult) and walk.ok
     return walk
 
@@ -71,7 +71,7 @@ def test_kneed_declares_no_posture_law(walker: PhasedWalker) -> None:
 
 
 def test_level_gait_is_periodic_at_the_target_speed(walker: PhasedWalker,
-                                                    gait: PoweredGait) -> None:
+                                                    gait: Gait) -> None:
     g = gait
     walk = _reference_step(walker, g)
     z_next = walker.state_to_section(walk.final_q, walk.final_q_dot)
@@ -80,18 +80,19 @@ def test_level_gait_is_periodic_at_the_target_speed(walker: PhasedWalker,
     assert abs(rec.step_length / rec.step_duration - SPEED) < 1e-8
     assert abs(g.speed - SPEED) < 1e-9
     assert g.residual < 1e-8
-    assert g.parameter > 0.0  # the push-off does the work
+    assert g.actuation.parameter > 0.0  # the push-off does the work
     # a knee strike, then the heel strike, in the period
     assert [e.kind for e in walk.events] == ["knee_strike", "heel_strike"]
 
 
-def test_level_gait_energy_book_closes(walker: PhasedWalker, gait: PoweredGait) -> None:
+def test_level_gait_energy_book_closes(walker: PhasedWalker, gait: Gait) -> None:
     g = gait
     walk = _reference_step(walker, g)
     rec = walk.impacts[0]
     q0, qd0 = walker.section_to_state(g.fixed_point)
     E_start = float(mechanical_energy(walker, q0, qd0))
-    dq, _ = push_off_velocity_change(walker, rec.q, g.parameter, walk.events[-1].lock_rows)
+    dq, _ = push_off_velocity_change(walker, rec.q, g.actuation.parameter,
+                                     walk.events[-1].lock_rows)
     qd_before_push = rec.q_dot_minus - dq
     M = walker.mass_matrix(rec.q)
     W_push = float(kinetic_energy(M, rec.q_dot_minus) - kinetic_energy(M, qd_before_push))
@@ -106,22 +107,23 @@ def test_level_gait_energy_book_closes(walker: PhasedWalker, gait: PoweredGait) 
     # periodic level gait: push-off work = knee-strike loss + heel-strike loss
     assert abs(W_push - (knee + heel)) < 1e-8
     # ... and the reported (compiled) books say the same
-    assert abs(g.push_off_work - W_push) < 1e-8
+    assert abs(g.actuation.push_off_work - W_push) < 1e-8
     assert abs(g.collision_loss - (knee + heel)) < 1e-8
-    assert abs(g.actuator_work - g.push_off_work) < 1e-12 and g.torque_work == pytest.approx(0.0)
+    assert abs(g.actuator_work - g.actuation.push_off_work) < 1e-12
+    assert g.actuation.torque_work == pytest.approx(0.0)
     assert abs(g.energy_balance_error) < 1e-8
 
 
 def test_level_gait_multipliers_match_reference_map(walker: PhasedWalker,
-                                                    gait: PoweredGait) -> None:
+                                                    gait: Gait) -> None:
     P = PoincareMap(walker=walker, simulator=simulate_phased,
-                    push_off=PushOff(impulse=gait.parameter), rtol=1e-12, atol=1e-12)
+                    push_off=PushOff(impulse=gait.actuation.parameter), rtol=1e-12, atol=1e-12)
     mult = np.sort(np.abs(np.linalg.eigvals(P.jacobian(gait.fixed_point, 1e-5))))[::-1]
     assert np.allclose(mult, np.abs(gait.multipliers), atol=1e-3)
     assert gait.stable == bool(np.all(mult < 1.0))
 
 
-def test_push_off_holds_the_locked_knees(walker: PhasedWalker, gait: PoweredGait) -> None:
+def test_push_off_holds_the_locked_knees(walker: PhasedWalker, gait: Gait) -> None:
     """Both knees are locked when the trailing foot pushes off, and hold through the impulse
     (QA sweep 11: it was applied with the knees free, so the stance knee jumped to 85 rad/s,
     the heel strike took that motion back, and the books counted 2.54993 J of push-off work
@@ -135,12 +137,12 @@ def test_push_off_holds_the_locked_knees(walker: PhasedWalker, gait: PoweredGait
     n, k = walker.n_coordinates, L.shape[0]
     M = walker.mass_matrix(q)
     f = walker.contact_jacobian(q, "right").T @ (
-        gait.parameter * np.array([-np.sin(q[2]), np.cos(q[2])]))
+        gait.actuation.parameter * np.array([-np.sin(q[2]), np.cos(q[2])]))
     # M dq = f + L^T lam, L dq = 0
     kkt = np.block([[M, -L.T], [L, np.zeros((k, k))]])
     sol = np.linalg.solve(kkt, np.concatenate([f, np.zeros(k)]))
     dq_ref, lam = sol[:n], sol[n:]
-    dq, f_got = push_off_velocity_change(walker, q, gait.parameter, L)
+    dq, f_got = push_off_velocity_change(walker, q, gait.actuation.parameter, L)
     np.testing.assert_allclose(f_got, f, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(dq, dq_ref, rtol=1e-10, atol=1e-10)
     # the simulated walk applied exactly this jump: the knees are at rest before the heel
@@ -151,21 +153,21 @@ def test_push_off_holds_the_locked_knees(walker: PhasedWalker, gait: PoweredGait
     w_push = float(kinetic_energy(M, heel.q_dot_minus) - kinetic_energy(M, qd_before))
     # with the knees free the same impulse does more work, by exactly the kinetic energy of
     # the locks' impulse, 1/2 |M^-1 L^T lam|_M^2 (the pre-impact knees are at rest)
-    free, _ = push_off_velocity_change(walker, q, gait.parameter)
+    free, _ = push_off_velocity_change(walker, q, gait.actuation.parameter)
     w_free = float(kinetic_energy(M, qd_before + free) - kinetic_energy(M, qd_before))
     x = np.linalg.solve(M, L.T @ lam)
     assert w_free - w_push == pytest.approx(0.5 * float(x @ M @ x), rel=1e-8)
-    assert abs(gait.push_off_work - w_push) < 1e-8
+    assert abs(gait.actuation.push_off_work - w_push) < 1e-8
     # QA sweep 11's own model (sympy/scipy, no heelstrike code) of this gait: 0.58312 J
-    assert gait.push_off_work == pytest.approx(0.58312, abs=2e-5)
+    assert gait.actuation.push_off_work == pytest.approx(0.58312, abs=2e-5)
 
 
 @pytest.mark.slow
-def test_scipy_backend_homotopy_finds_the_same_gait(gait: PoweredGait) -> None:
+def test_scipy_backend_homotopy_finds_the_same_gait(gait: Gait) -> None:
     # the whole search (seeds, homotopy, continuation, polish) on the scipy reference
     ref = find_model_powered_gait(load_walker("kneed"), speed=SPEED, backend="scipy")
     assert np.max(np.abs(ref.fixed_point - gait.fixed_point)) < 1e-8
-    assert abs(ref.parameter - gait.parameter) < 1e-8
+    assert abs(ref.actuation.parameter - gait.actuation.parameter) < 1e-8
     assert abs(ref.collision_loss - gait.collision_loss) < 1e-8
 
 
@@ -182,13 +184,13 @@ def test_slow_target_error_says_what_was_tried(slow_error: str) -> None:
     assert SLOW < lo < hi and end == lo  # the family ends above the target, at a fold
 
 
-def test_reported_end_of_the_family_is_real(slow_error: str, gait: PoweredGait) -> None:
+def test_reported_end_of_the_family_is_real(slow_error: str, gait: Gait) -> None:
     # a gait exists just above the speed the message says the level gaits end at
     m = re.search(r"end near ([0-9.]+) m/s", slow_error)
     assert m is not None
     lo = float(m.group(1))
     near = find_model_powered_gait(load_walker("kneed"), speed=lo + 0.01,
-                                   guess=np.append(gait.fixed_point, gait.parameter))
+                                   guess=np.append(gait.fixed_point, gait.actuation.parameter))
     assert abs(near.speed - (lo + 0.01)) < 1e-9 and near.residual < 1e-8
 
 
@@ -216,10 +218,10 @@ def test_cli_kneed_default_speed_fails_with_one_specific_line(
     assert "speed 0.5" in lines[0] and "homotopy" in lines[0] and "deg slope" in lines[0]
 
 
-def test_cli_kneed_json(capsys: pytest.CaptureFixture[str], gait: PoweredGait) -> None:
+def test_cli_kneed_json(capsys: pytest.CaptureFixture[str], gait: Gait) -> None:
     assert main(["powered", "--model", "kneed", "--speed", str(SPEED), "--json"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert d["model"] == "kneed" and d["torque_work"] == pytest.approx(0.0)
     assert abs(d["speed"] - SPEED) < 1e-9
-    assert abs(d["parameter"] - gait.parameter) < 1e-8
+    assert abs(d["parameter"] - gait.actuation.parameter) < 1e-8
     assert abs(d["push_off_work"] - d["collision_loss"]) < 1e-8

@@ -9,7 +9,7 @@ import pytest
 
 from heelstrike.analysis.limit_cycle import find_limit_cycle
 from heelstrike.analysis.model_gaits import (
-    ModelGait,
+    Gait,
     find_model_gait,
     model_heel_strike,
     symmetric_heel_strike_state,
@@ -42,12 +42,12 @@ def torso() -> PhasedWalker:
 
 
 @pytest.fixture(scope="module")
-def kneed_gait(kneed: PhasedWalker) -> ModelGait:
+def kneed_gait(kneed: PhasedWalker) -> Gait:
     return find_model_gait(kneed, slope=KNEED_SLOPE, guess=KNEED_GUESS)
 
 
 @pytest.fixture(scope="module")
-def torso_gait(torso: PhasedWalker) -> ModelGait:
+def torso_gait(torso: PhasedWalker) -> Gait:
     return find_model_gait(
         torso, slope=0.0, guess=TORSO_GUESS, torque=TorsoPD(walker=torso),
         push_off=PushOff(impulse=TORSO_PUSH),
@@ -98,7 +98,7 @@ def test_energy_conserved_in_every_phase_compass_and_torso(torso: PhasedWalker) 
 
 
 @pytest.mark.slow  # kneed gait: sympy + numba build on a cold cache (~90 s)
-def test_knee_strike_is_an_inert_lock(kneed: PhasedWalker, kneed_gait: ModelGait) -> None:
+def test_knee_strike_is_an_inert_lock(kneed: PhasedWalker, kneed_gait: Gait) -> None:
     knee = [e for e in kneed_gait.impacts if e.kind == "knee_strike"]
     assert len(knee) == 1
     ev = knee[0]
@@ -117,7 +117,7 @@ def test_knee_strike_is_an_inert_lock(kneed: PhasedWalker, kneed_gait: ModelGait
 
 
 @pytest.mark.slow  # kneed gait: sympy + numba build on a cold cache (~90 s)
-def test_complementarity_agrees_with_single_contact(kneed_gait: ModelGait,
+def test_complementarity_agrees_with_single_contact(kneed_gait: Gait,
                                                     kneed: PhasedWalker) -> None:
     hs = next(e for e in kneed_gait.impacts if e.kind == "heel_strike")
     assert hs.trailing_mode == "separate" and hs.trailing_normal_velocity > 0
@@ -144,10 +144,10 @@ def test_builder_compass_gait_equals_compass_gait() -> None:
                            guess=[-0.27, 1.09, -0.70])
     w = load_phased_walker("compass")
     g = find_model_gait(w, slope=COMPASS_SLOPE, guess=[-0.25, 1.0, -0.6])
-    np.testing.assert_allclose(g.cycle.fixed_point, ref.fixed_point, atol=1e-8)
-    assert g.cycle.period == pytest.approx(ref.period, abs=1e-8)
+    np.testing.assert_allclose(g.fixed_point, ref.fixed_point, atol=1e-8)
+    assert g.period == pytest.approx(ref.period, abs=1e-8)
     assert g.collision_loss == pytest.approx(ref.collision_loss, rel=1e-7)
-    np.testing.assert_allclose(np.abs(g.cycle.multipliers), np.abs(ref.multipliers), atol=1e-5)
+    np.testing.assert_allclose(np.abs(g.multipliers), np.abs(ref.multipliers), atol=1e-5)
     assert abs(g.energy_residual) < 1e-8
 
 
@@ -161,16 +161,16 @@ def test_automatic_model_gait_is_the_stable_one_the_compass_path_finds() -> None
     ref = find_limit_cycles(CompassGait(), slope=COMPASS_SLOPE)[0]
     assert ref.stable
     g = find_model_gait(load_phased_walker("compass"), slope=COMPASS_SLOPE)
-    assert g.cycle.stable
-    np.testing.assert_allclose(g.cycle.fixed_point, ref.fixed_point, atol=1e-8)
-    assert g.cycle.spectral_radius == pytest.approx(ref.spectral_radius, abs=1e-5)
+    assert g.stable
+    np.testing.assert_allclose(g.fixed_point, ref.fixed_point, atol=1e-8)
+    assert g.spectral_radius == pytest.approx(ref.spectral_radius, abs=1e-5)
 
 
 @pytest.mark.slow  # kneed gait: sympy + numba build on a cold cache (~90 s)
-def test_kneed_passive_gait_energy_book(kneed_gait: ModelGait) -> None:
+def test_kneed_passive_gait_energy_book(kneed_gait: Gait) -> None:
     g = kneed_gait
-    assert g.cycle.residual < 1e-10
-    assert g.cycle.stable
+    assert g.residual < 1e-10
+    assert g.stable
     kinds = [e.kind for e in g.impacts]
     assert kinds == ["knee_strike", "heel_strike"]
     assert g.actuator_work == 0.0
@@ -178,19 +178,19 @@ def test_kneed_passive_gait_energy_book(kneed_gait: ModelGait) -> None:
                                                  for e in g.impacts), rel=1e-14)
     assert g.potential_energy_released == pytest.approx(g.collision_loss, rel=1e-8)
     assert abs(g.energy_residual) < 1e-8
-    assert g.cycle.step_length > 0.3
+    assert g.step_length > 0.3
 
 
 @pytest.mark.slow
-def test_torso_powered_level_gait_energy_book(torso_gait: ModelGait) -> None:
+def test_torso_powered_level_gait_energy_book(torso_gait: Gait) -> None:
     g = torso_gait
-    assert g.cycle.slope == 0.0
-    assert g.cycle.residual < 1e-10
-    assert g.cycle.stable
+    assert g.slope == 0.0
+    assert g.residual < 1e-10
+    assert g.stable
     assert abs(g.potential_energy_released) < 1e-8  # level ground, periodic
     assert g.actuator_work > 0
     assert g.actuator_work == pytest.approx(g.collision_loss, rel=1e-7)
     assert abs(g.energy_residual) < 1e-8
     # the torso is held up: its absolute angle stays near vertical all step
-    walk = g.cycle.walk
+    walk = g.walk
     assert np.max(np.abs(walk.q[:, 2] + walk.q[:, 4])) < 0.1

@@ -152,10 +152,11 @@ def test_periodic_gait_energy_books(name, request):
 def test_gaits_meet_their_targets_and_are_fixed_points(pushoff_gait, pd_gait):
     assert pushoff_gait.speed == pytest.approx(0.5, abs=1e-8)
     assert pd_gait.step_length == pytest.approx(0.4, abs=1e-8)
-    assert pushoff_gait.push_off_work == pytest.approx(pushoff_gait.actuator_work)
-    assert pd_gait.push_off_work == 0.0
+    assert pushoff_gait.actuation.push_off_work == pytest.approx(pushoff_gait.actuator_work)
+    assert pd_gait.actuation.push_off_work == 0.0
     w = CompassGait(foot_radius=0.3)
-    st = powered_step(w, pushoff_gait.fixed_point, None, PushOff(impulse=pushoff_gait.parameter))
+    st = powered_step(w, pushoff_gait.fixed_point, None,
+                      PushOff(impulse=pushoff_gait.actuation.parameter))
     np.testing.assert_allclose(st.z_next, pushoff_gait.fixed_point, atol=1e-8)
     # Kuo (2002): pre-emptive push-off is much cheaper than hip actuation at the same gait size
     assert pushoff_gait.actuator_work < 0.5 * pd_gait.actuator_work

@@ -34,9 +34,9 @@ import numpy as np
 import pytest
 
 import heelstrike
+from heelstrike.analysis.gaits import Gait
 from heelstrike.analysis.limit_cycle import PoincareMap
 from heelstrike.analysis.powered import (
-    PoweredGait,
     declared_posture_law,
     find_model_powered_gait,
 )
@@ -209,7 +209,7 @@ def _reference_walk(walker: PhasedWalker, fixed_point: np.ndarray,
 
 
 @pytest.fixture(scope="module", params=["torso", "kneed"])
-def declared(request: pytest.FixtureRequest) -> tuple[str, float, PoweredGait]:
+def declared(request: pytest.FixtureRequest) -> tuple[str, float, Gait]:
     """The walker, its declared speed and the library's gait there (no time limit: a cold
     compile happens here, not inside the command's time limit)."""
     name = str(request.param)
@@ -219,7 +219,7 @@ def declared(request: pytest.FixtureRequest) -> tuple[str, float, PoweredGait]:
     return name, speed, find_model_powered_gait(w, speed=speed)
 
 
-def test_default_command_finds_the_declared_gait(declared: tuple[str, float, PoweredGait],
+def test_default_command_finds_the_declared_gait(declared: tuple[str, float, Gait],
                                                  capsys: Capture) -> None:
     name, speed, gait = declared
     d = _json(["powered", "--model", name, "--json"], capsys)
@@ -228,7 +228,7 @@ def test_default_command_finds_the_declared_gait(declared: tuple[str, float, Pow
     assert d["target_speed"] == speed and d["target_step_length"] is None
     assert abs(d["speed"] - speed) < 1e-6
     assert d["speed"] == pytest.approx(d["step_length"] / d["period"], rel=1e-12)
-    assert abs(d["parameter"] - gait.parameter) < 1e-8  # the library's gait at that speed
+    assert abs(d["parameter"] - gait.actuation.parameter) < 1e-8  # the library's gait at that speed
     assert d["parameter"] > 0.0  # the push-off does positive work
     # the energy book of the periodic level gait: push-off + posture work = sum of T_c
     assert d["collision_loss"] > 1e-3
@@ -238,7 +238,7 @@ def test_default_command_finds_the_declared_gait(declared: tuple[str, float, Pow
     assert np.all(np.isfinite(mods)) and d["stable"] == bool(mods[0] < 1.0)
 
 
-def test_default_text_output_names_the_target(declared: tuple[str, float, PoweredGait],
+def test_default_text_output_names_the_target(declared: tuple[str, float, Gait],
                                               capsys: Capture) -> None:
     name, speed, _ = declared
     assert main(["powered", "--model", name]) == 0
@@ -249,10 +249,10 @@ def test_default_text_output_names_the_target(declared: tuple[str, float, Powere
 
 
 def test_declared_gait_is_periodic_on_the_reference_map(
-        declared: tuple[str, float, PoweredGait]) -> None:
+        declared: tuple[str, float, Gait]) -> None:
     name, speed, gait = declared
     pw = PhasedWalker.from_built(load_walker(name))
-    walk = _reference_walk(pw, gait.fixed_point, gait.parameter)
+    walk = _reference_walk(pw, gait.fixed_point, gait.actuation.parameter)
     z_next = pw.state_to_section(walk.final_q, walk.final_q_dot)
     assert np.max(np.abs(z_next - gait.fixed_point)) < 1e-8
     rec = walk.impacts[0]
@@ -263,7 +263,7 @@ def test_declared_gait_is_periodic_on_the_reference_map(
     assert lost > 0.0 and abs(lost - gait.collision_loss) < BOOK_TOL
     # the same multipliers on the reference map
     P = PoincareMap(walker=pw, simulator=simulate_phased, torque=declared_posture_law(pw),
-                    push_off=PushOff(impulse=gait.parameter), rtol=1e-12, atol=1e-12)
+                    push_off=PushOff(impulse=gait.actuation.parameter), rtol=1e-12, atol=1e-12)
     mult = np.sort(np.abs(np.linalg.eigvals(P.jacobian(gait.fixed_point, 1e-5))))[::-1]
     assert np.allclose(mult, np.abs(gait.multipliers), atol=1e-3)
 
@@ -277,20 +277,20 @@ def test_kneed_default_energy_book_from_states() -> None:
     gait = find_model_powered_gait(w, speed=speed)
     pw = PhasedWalker.from_built(w)
     assert declared_posture_law(pw) is None
-    walk = _reference_walk(pw, gait.fixed_point, gait.parameter)
+    walk = _reference_walk(pw, gait.fixed_point, gait.actuation.parameter)
     rec = walk.impacts[0]
-    dq, _ = push_off_velocity_change(pw, rec.q, gait.parameter, walk.events[-1].lock_rows)
+    dq, _ = push_off_velocity_change(pw, rec.q, gait.actuation.parameter, walk.events[-1].lock_rows)
     M = pw.mass_matrix(rec.q)
     w_push = float(kinetic_energy(M, rec.q_dot_minus) - kinetic_energy(M, rec.q_dot_minus - dq))
     kinds = [e.kind for e in walk.events]
     assert kinds == ["knee_strike", "heel_strike"]
     lost = sum(e.kinetic_energy_constrained for e in walk.events)
     assert w_push > 0.0 and abs(w_push - lost) < BOOK_TOL
-    assert abs(gait.push_off_work - w_push) < BOOK_TOL
+    assert abs(gait.actuation.push_off_work - w_push) < BOOK_TOL
 
 
 @pytest.mark.slow
-def test_scipy_backend_agrees_on_the_default(declared: tuple[str, float, PoweredGait],
+def test_scipy_backend_agrees_on_the_default(declared: tuple[str, float, Gait],
                                              capsys: Capture) -> None:
     name, speed, gait = declared
     # the search's wall-clock guard (DEFAULT_TIME_LIMIT, 45 s) depends on the machine's load:
@@ -298,7 +298,7 @@ def test_scipy_backend_agrees_on_the_default(declared: tuple[str, float, Powered
     d = _json(["powered", "--model", name, "--backend", "scipy", "--time-limit", "600",
                "--json"], capsys)
     assert d["target_source"] == "walker" and d["target_speed"] == speed
-    assert abs(d["parameter"] - gait.parameter) < 1e-8
+    assert abs(d["parameter"] - gait.actuation.parameter) < 1e-8
     fp = np.array(list(d["fixed_point"].values()))
     assert np.max(np.abs(fp - gait.fixed_point)) < 1e-8
     assert abs(d["collision_loss"] - gait.collision_loss) < 1e-8

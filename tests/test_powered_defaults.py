@@ -118,7 +118,7 @@ def test_gait_matches_between_library_and_cli_options(capsys: Capture) -> None:
     b = json.loads(capsys.readouterr().out)
     assert a["parameter"] == pytest.approx(b["parameter"], abs=1e-9)
     g = find_powered_gait(CompassGait(foot_radius=0.0), actuation="hip-pd", speed=0.5)
-    assert g.parameter == pytest.approx(a["parameter"], abs=1e-7)
+    assert g.actuation.parameter == pytest.approx(a["parameter"], abs=1e-7)
 
 
 @pytest.mark.parametrize("option", ["--gain", "--max-torque"])

@@ -23,9 +23,9 @@ import numpy as np
 import pytest
 
 import heelstrike
+from heelstrike.analysis.gaits import Gait
 from heelstrike.analysis.limit_cycle import PoincareMap
 from heelstrike.analysis.powered import (
-    PoweredGait,
     declared_posture_law,
     find_model_powered_gait,
     find_powered_gait,
@@ -44,7 +44,7 @@ SPEED = 0.4  # m/s: inside the range of the torso walker's push-off gaits (a fol
 
 
 @pytest.fixture(scope="module")
-def torso_gait() -> PoweredGait:
+def torso_gait() -> Gait:
     return find_model_powered_gait(load_walker("torso"), speed=SPEED)
 
 
@@ -106,17 +106,17 @@ def test_control_law_needs_an_actuated_joint_on_the_root() -> None:
 
 
 # -- the torso walker's powered gait --------------------------------------------------------------
-def test_torso_energy_book_closes(torso_gait: PoweredGait) -> None:
+def test_torso_energy_book_closes(torso_gait: Gait) -> None:
     g = torso_gait
     pw = PhasedWalker.from_built(load_walker("torso"))
     law = declared_posture_law(pw)
     walk = simulate_phased(pw, *pw.section_to_state(g.fixed_point), steps=1, torque=law,
-                           push_off=PushOff(impulse=g.parameter), rtol=1e-12, atol=1e-12)
+                           push_off=PushOff(impulse=g.actuation.parameter), rtol=1e-12, atol=1e-12)
     assert isinstance(walk, PhasedWalkResult) and walk.ok
     rec = walk.impacts[0]
     q0, qd0 = pw.section_to_state(g.fixed_point)
     E_start = float(mechanical_energy(pw, q0, qd0))
-    dq, _ = push_off_velocity_change(pw, rec.q, g.parameter)
+    dq, _ = push_off_velocity_change(pw, rec.q, g.actuation.parameter)
     qd_before_push = rec.q_dot_minus - dq
     M = pw.mass_matrix(rec.q)
     # single support: only the posture torque works (hip passive)
@@ -132,19 +132,20 @@ def test_torso_energy_book_closes(torso_gait: PoweredGait) -> None:
     # periodic level gait: total actuator work = collision losses
     assert abs(W_posture + W_push - T_c) < 1e-8
     # ... and the reported (compiled) books say the same
-    assert abs(g.torque_work - W_posture) < 1e-8
-    assert abs(g.push_off_work - W_push) < 1e-8
+    assert abs(g.actuation.torque_work - W_posture) < 1e-8
+    assert abs(g.actuation.push_off_work - W_push) < 1e-8
     assert abs(g.collision_loss - T_c) < 1e-8
     assert abs(g.energy_balance_error) < 1e-8
-    assert g.torque_joint == "torso" and g.hip_work == 0.0
-    assert g.torque_work != 0.0  # the law does work, so the book is not the push-off's alone
+    assert g.actuation.torque_joint == "torso" and g.actuation.hip_work == 0.0
+    # the law does work, so the book is not the push-off's alone
+    assert g.actuation.torque_work != 0.0
 
 
-def test_torso_compiled_fixed_point_is_scipy_fixed_point(torso_gait: PoweredGait) -> None:
+def test_torso_compiled_fixed_point_is_scipy_fixed_point(torso_gait: Gait) -> None:
     g = torso_gait
     pw = PhasedWalker.from_built(load_walker("torso"))
     P = PoincareMap(walker=pw, simulator=simulate_phased, torque=declared_posture_law(pw),
-                    push_off=PushOff(impulse=g.parameter), rtol=1e-12, atol=1e-12)
+                    push_off=PushOff(impulse=g.actuation.parameter), rtol=1e-12, atol=1e-12)
     assert np.max(np.abs(P(g.fixed_point) - g.fixed_point)) < 1e-8
     rec = P.walk(g.fixed_point).impacts[0]
     assert abs(rec.step_length / rec.step_duration - SPEED) < 1e-6
@@ -156,10 +157,11 @@ def test_torso_compiled_fixed_point_is_scipy_fixed_point(torso_gait: PoweredGait
 
 
 @pytest.mark.slow
-def test_torso_scipy_backend_agrees(torso_gait: PoweredGait) -> None:
+def test_torso_scipy_backend_agrees(torso_gait: Gait) -> None:
     ref = find_model_powered_gait(load_walker("torso"), speed=SPEED, backend="scipy",
-                                  guess=np.append(torso_gait.fixed_point, torso_gait.parameter))
-    assert abs(ref.parameter - torso_gait.parameter) < 1e-6
+                                  guess=np.append(torso_gait.fixed_point,
+                                                  torso_gait.actuation.parameter))
+    assert abs(ref.actuation.parameter - torso_gait.actuation.parameter) < 1e-6
     assert np.max(np.abs(ref.fixed_point - torso_gait.fixed_point)) < 1e-7
     assert abs(ref.collision_loss - torso_gait.collision_loss) < 1e-8
 
@@ -169,31 +171,31 @@ def test_model_compass_matches_compass_path() -> None:
     ref = find_powered_gait(CompassGait(), actuation="pushoff", speed=0.5)
     got = find_model_powered_gait(load_walker("compass"), speed=0.5)
     assert abs(got.speed - ref.speed) < 1e-6
-    assert abs(got.parameter - ref.parameter) < 1e-6
+    assert abs(got.actuation.parameter - ref.actuation.parameter) < 1e-6
     assert abs(got.collision_loss - ref.collision_loss) < 1e-6
     assert np.max(np.abs(got.fixed_point - ref.fixed_point)) < 1e-6
-    assert got.torque_work == 0.0
+    assert got.actuation.torque_work == 0.0
 
 
-def test_gait_needs_the_declared_law(torso_gait: PoweredGait) -> None:
+def test_gait_needs_the_declared_law(torso_gait: Gait) -> None:
     # the same start and impulse without the posture law is not periodic: the law was used
     pw = PhasedWalker.from_built(load_walker("torso"))
     walk = simulate_phased(pw, *pw.section_to_state(torso_gait.fixed_point), steps=1,
-                           push_off=PushOff(impulse=torso_gait.parameter))
+                           push_off=PushOff(impulse=torso_gait.actuation.parameter))
     assert not walk.ok or np.max(np.abs(
         pw.state_to_section(walk.final_q, walk.final_q_dot) - torso_gait.fixed_point)) > 1e-3
 
 
 # -- CLI -----------------------------------------------------------------------------------------
 def test_cli_powered_model_torso_json(capsys: pytest.CaptureFixture[str],
-                                      torso_gait: PoweredGait) -> None:
+                                      torso_gait: Gait) -> None:
     assert main(["powered", "--model", "torso", "--speed", str(SPEED), "--json"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert d["model"] == "torso" and d["hip_work"] == 0.0  # the torque acts on the torso
-    assert abs(d["actuator_work"] - d["push_off_work"] - torso_gait.torque_work) < 1e-8
+    assert abs(d["actuator_work"] - d["push_off_work"] - torso_gait.actuation.torque_work) < 1e-8
     assert set(d["units"]) == set(d) - {"units"}  # every key has its unit
     assert abs(d["speed"] - SPEED) < 1e-6
-    assert abs(d["parameter"] - torso_gait.parameter) < 1e-8
+    assert abs(d["parameter"] - torso_gait.actuation.parameter) < 1e-8
     assert abs(d["actuator_work"] - d["collision_loss"]) < 1e-8
     assert tuple(d["fixed_point"]) == PhasedWalker.from_built(load_walker("torso")).section_names
 
@@ -227,7 +229,7 @@ def test_cli_refusals_are_one_line(argv: list[str], needle: str,
 
 def test_cli_powered_out_writes_the_energy_books(tmp_path: Path,
                                                   capsys: pytest.CaptureFixture[str],
-                                                  torso_gait: PoweredGait) -> None:
+                                                  torso_gait: Gait) -> None:
     import pandas as pd
 
     assert main(["powered", "--model", "torso", "--speed", str(SPEED), "--out", str(tmp_path),
@@ -241,8 +243,8 @@ def test_cli_powered_out_writes_the_energy_books(tmp_path: Path,
     g = torso_gait
     # the sampled single support gains the posture law's work, the push-off its own, and the
     # heel strike takes T_c, back to the start value
-    assert abs(total[-3] - total[0] - g.torque_work) < 1e-8
-    assert abs(total[-2] - total[-3] - g.push_off_work) < 1e-8
+    assert abs(total[-3] - total[0] - g.actuation.torque_work) < 1e-8
+    assert abs(total[-2] - total[-3] - g.actuation.push_off_work) < 1e-8
     assert abs(total[-2] - total[-1] - g.collision_loss) < 1e-8
     assert abs(total[-1] - total[0]) < 1e-8
     # the three rows at the heel-strike time say which is which

@@ -33,7 +33,7 @@ def test_gait_found_at_other_gravity(gravity: float) -> None:
     assert abs(g.speed - 0.5) < 1e-8 and g.residual < 1e-8
     # periodic level gait: the push-off work is the collision loss, and the cost of transport
     # uses this walker's gravity
-    assert abs(g.push_off_work - g.collision_loss) < 1e-8
+    assert abs(g.actuation.push_off_work - g.collision_loss) < 1e-8
     m_total = float(w.total_mass)
     assert g.cost_of_transport == pytest.approx(
         g.actuator_work / (m_total * gravity * g.step_length), rel=1e-12)
@@ -74,7 +74,7 @@ def test_light_hip_compass_reaches_level_ground_by_the_slope_homotopy() -> None:
                           passive_gait=passive_gait_finder(w, family, sim))
     ref = find_model_powered_gait(load_walker("compass", mH=4.0), speed=0.5)
     np.testing.assert_allclose(g.fixed_point, ref.fixed_point, atol=1e-8)
-    assert g.parameter == pytest.approx(ref.parameter, abs=1e-8)
+    assert g.actuation.parameter == pytest.approx(ref.actuation.parameter, abs=1e-8)
     assert g.actuator_work == pytest.approx(g.collision_loss, abs=1e-8)  # eqs. 14-15
     # the hip laws act at every parameter value: no passive start for them
     for name in ("hip-energy", "hip-pd"):

@@ -26,9 +26,9 @@ from typing import Any
 import numpy as np
 import pytest
 
+from heelstrike.analysis.gaits import Gait
 from heelstrike.analysis.limit_cycle import PoincareMap
 from heelstrike.analysis.powered import (
-    PoweredGait,
     PoweredGaitNotFoundError,
     declared_posture_law,
     find_model_powered_gait,
@@ -65,7 +65,7 @@ def end() -> tuple[float, float]:
 
 
 @pytest.fixture(scope="module")
-def near_end(end: tuple[float, float]) -> PoweredGait:
+def near_end(end: tuple[float, float]) -> Gait:
     return find_model_powered_gait(load_walker("torso"), speed=end[0] - 1e-3)
 
 
@@ -82,18 +82,18 @@ def test_targets_past_the_fold_name_it(speed: float, end: tuple[float, float]) -
 
 
 def test_reported_end_is_a_real_gait_near_a_multiplier_of_one(
-    end: tuple[float, float], near_end: PoweredGait
+    end: tuple[float, float], near_end: Gait
 ) -> None:
     g = near_end
     assert 0.48 < end[0] < 0.495  # the family does not reach the old claimed 0.4993 m/s
     assert abs(g.speed - (end[0] - 1e-3)) < 1e-9 and g.residual < 1e-8
-    assert abs(g.parameter - end[1]) < 0.05  # the impulse the message names
-    P = _reference_map(g.parameter)
+    assert abs(g.actuation.parameter - end[1]) < 0.05  # the impulse the message names
+    P = _reference_map(g.actuation.parameter)
     assert np.max(np.abs(P(g.fixed_point) - g.fixed_point)) < 1e-8
     rec = P.walk(g.fixed_point).impacts[0]
     assert abs(rec.step_length / rec.step_duration - g.speed) < 1e-8
     # energy book of the periodic level gait: push-off + posture work = sum T_c
-    assert abs(g.push_off_work + g.torque_work - g.collision_loss) < 1e-8
+    assert abs(g.actuation.push_off_work + g.actuation.torque_work - g.collision_loss) < 1e-8
     assert abs(g.energy_balance_error) < 1e-8
     # near a fold: the largest multiplier is real, stable and close to +1 (a complex pair at
     # 0.45 m/s, modulus 0.85)
@@ -113,9 +113,9 @@ def test_multipliers_approach_one_as_a_saddle_node(end: tuple[float, float]) -> 
     assert abs(fold - end[0]) < 1e-3
 
 
-def test_no_gait_just_past_the_end(end: tuple[float, float], near_end: PoweredGait) -> None:
+def test_no_gait_just_past_the_end(end: tuple[float, float], near_end: Gait) -> None:
     # not even Newton started from the gait next to the fold reaches 3 mm/s further
-    msg = _error(end[0] + 3e-3, guess=np.append(near_end.fixed_point, near_end.parameter),
+    msg = _error(end[0] + 3e-3, guess=np.append(near_end.fixed_point, near_end.actuation.parameter),
                  fallback=False)
     assert "stalled" in msg or "slowly" in msg
 
@@ -136,14 +136,15 @@ def test_cli_default_torso_error_is_one_line(capsys: pytest.CaptureFixture[str],
 
 @pytest.mark.slow
 def test_scipy_backend_names_the_same_end(end: tuple[float, float],
-                                          near_end: PoweredGait) -> None:
+                                          near_end: Gait) -> None:
     msg = _error(0.5, backend="scipy")
     m = END.search(msg)
     assert m is not None, msg
     assert abs(float(m.group(1)) - end[0]) < 1e-3
     ref = find_model_powered_gait(load_walker("torso"), speed=near_end.speed, backend="scipy",
-                                  guess=np.append(near_end.fixed_point, near_end.parameter))
-    assert abs(ref.parameter - near_end.parameter) < 1e-8
+                                  guess=np.append(near_end.fixed_point,
+                                                  near_end.actuation.parameter))
+    assert abs(ref.actuation.parameter - near_end.actuation.parameter) < 1e-8
     assert np.max(np.abs(ref.fixed_point - near_end.fixed_point)) < 1e-8
     assert abs(ref.collision_loss - near_end.collision_loss) < 1e-8
 
@@ -156,11 +157,11 @@ def test_targets_far_below_the_seed_are_reached(speed: float) -> None:
     the target speed, and its energy book closes."""
     g = find_model_powered_gait(load_walker("torso"), speed=speed)
     assert abs(g.speed - speed) < 1e-9 and g.residual < 1e-8
-    P = _reference_map(g.parameter)
+    P = _reference_map(g.actuation.parameter)
     assert np.max(np.abs(P(g.fixed_point) - g.fixed_point)) < 1e-8
     rec = P.walk(g.fixed_point).impacts[0]
     assert abs(rec.step_length / rec.step_duration - speed) < 1e-8
-    assert abs(g.push_off_work + g.torque_work - g.collision_loss) < 1e-8
+    assert abs(g.actuation.push_off_work + g.actuation.torque_work - g.collision_loss) < 1e-8
 
 
 def test_a_seed_past_the_fold_is_called_what_it_is() -> None:

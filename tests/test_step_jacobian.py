@@ -92,7 +92,7 @@ def kneed() -> PhasedWalker:
 
 def test_kneed_exact_jacobian_through_the_knee_strike(kneed: PhasedWalker) -> None:
     gait = find_model_gait(kneed, slope=KNEED_SLOPE, guess=KNEED_GUESS)
-    z = gait.cycle.fixed_point
+    z = gait.fixed_point
     pmap = PoincareMap(walker=kneed, slope=KNEED_SLOPE)
     res = pmap.exact_jacobian(z)
     assert res.events == ("knee_strike", "heel_strike")
@@ -108,7 +108,7 @@ def test_torso_exact_jacobian_with_torque_and_push_off() -> None:
     torso = load_phased_walker("torso")
     law, push = TorsoPD(walker=torso), PushOff(impulse=2.0)
     gait = find_model_gait(torso, slope=0.0, guess=TORSO_GUESS, torque=law, push_off=push)
-    z = gait.cycle.fixed_point
+    z = gait.fixed_point
     pmap = PoincareMap(walker=torso, slope=0.0, torque=law, push_off=push)
     exact = pmap.exact_jacobian(z).jacobian
     errors = [np.max(np.abs(pmap.jacobian(z, h) - exact)) for h in (1e-3, 1e-4)]

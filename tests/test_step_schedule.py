@@ -99,7 +99,7 @@ def test_kneed_walk_energy_and_impacts_through_the_one_loop() -> None:
 
     kneed = PhasedWalker.from_built(load_walker("kneed"))
     gait = find_model_gait(kneed, slope=0.0504)
-    walk = simulate(kneed, *kneed.section_to_state(gait.cycle.fixed_point), slope=0.0504, steps=2)
+    walk = simulate(kneed, *kneed.section_to_state(gait.fixed_point), slope=0.0504, steps=2)
     assert walk.ok
     kinds = [e.kind for e in walk.events]
     assert kinds == ["knee_strike", "heel_strike"] * 2

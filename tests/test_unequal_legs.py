@@ -11,8 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from heelstrike.analysis.gaits import Gait
 from heelstrike.analysis.limit_cycle import PoincareMap, find_limit_cycle
-from heelstrike.analysis.model_gaits import ModelGait, find_model_gaits
+from heelstrike.analysis.model_gaits import find_model_gaits
 from heelstrike.dynamics.backends import simulator
 from heelstrike.dynamics.hybrid import simulate
 from heelstrike.dynamics.phased import PhasedWalker, load_phased_walker
@@ -34,7 +35,7 @@ class _Alternating(PhasedWalker):
 
 
 @pytest.fixture(scope="module")
-def amputee_gait() -> ModelGait:
+def amputee_gait() -> Gait:
     return find_model_gaits(load_phased_walker(AMPUTEE), slope=SLOPE, backend="scipy")[0]
 
 
@@ -80,8 +81,8 @@ def test_equal_legs_written_as_unequal_reproduce_the_compass_gait() -> None:
     assert w.steps_per_period == 1
     compass = load_phased_walker("compass")
     start = np.array([-0.26, 1.08, -0.70])
-    a = find_model_gaits(w, slope=SLOPE, backend="scipy", guess=start)[0].cycle
-    b = find_model_gaits(compass, slope=SLOPE, backend="scipy", guess=start)[0].cycle
+    a = find_model_gaits(w, slope=SLOPE, backend="scipy", guess=start)[0]
+    b = find_model_gaits(compass, slope=SLOPE, backend="scipy", guess=start)[0]
     np.testing.assert_allclose(a.fixed_point, b.fixed_point, atol=1e-8)
     np.testing.assert_allclose(np.abs(a.multipliers), np.abs(b.multipliers), atol=1e-6)
 
@@ -116,15 +117,15 @@ def test_stride_of_equal_legs_is_two_steps_of_the_step_map() -> None:
 
 
 def test_asymmetric_walker_has_a_stride_gait_whose_steps_differ(
-        amputee_gait: ModelGait) -> None:
+        amputee_gait: Gait) -> None:
     """The shipped amputee: a stride-periodic gait whose two steps differ; the books close
     over the stride (sum of T_c = potential energy released, passive) though not per step
     (the kinetic energy one step gains the other loses); two steps from the fixed point
     return to it; and the mid-stride state is the gait of the walker after the swap."""
     g = amputee_gait
-    assert len(g.steps) == 2 and g.cycle.leg_crossings == 1
+    assert len(g.steps) == 2 and g.leg_crossings == 1
     s0, s1 = g.steps
-    assert g.cycle.stable  # the documented stable stride (0.74 s on leg A, 0.65 s on leg B)
+    assert g.stable  # the documented stable stride (0.74 s on leg A, 0.65 s on leg B)
     np.testing.assert_allclose([s0.duration, s1.duration], [0.74, 0.65], atol=0.005)
     assert abs(s0.step_length - s1.step_length) > 0.005
     assert abs(s0.collision_loss - s1.collision_loss) > 0.02
@@ -141,11 +142,11 @@ def test_asymmetric_walker_has_a_stride_gait_whose_steps_differ(
     mg = float(w.total_mass * w.scale.gravity)
     np.testing.assert_allclose(released, mg * np.sin(SLOPE) * (s0.step_length + s1.step_length),
                                rtol=1e-9)
-    walk = simulate(w, g.cycle.q, g.cycle.q_dot, slope=SLOPE, steps=2)
+    walk = simulate(w, g.q, g.q_dot, slope=SLOPE, steps=2)
     assert walk.ok and [r.step for r in walk.impacts] == [0, 1]
     z2 = w.state_to_section(walk.final_q, walk.final_q_dot)
-    np.testing.assert_allclose(z2, g.cycle.fixed_point, atol=1e-8)
-    np.testing.assert_allclose(g.cycle.period, s0.duration + s1.duration, rtol=1e-12)
+    np.testing.assert_allclose(z2, g.fixed_point, atol=1e-8)
+    np.testing.assert_allclose(g.period, s0.duration + s1.duration, rtol=1e-12)
     # each step's samples conserve the energy of the walker taking it
     for k in (0, 1):
         E = np.asarray(walk.mechanical_energy)[np.asarray(walk.step) == k]
@@ -153,17 +154,17 @@ def test_asymmetric_walker_has_a_stride_gait_whose_steps_differ(
     # the state after the first step is the gait of the walker after the swap
     other = w.after_swap()
     assert isinstance(other, PhasedWalker)
-    mid_walk = simulate(w, g.cycle.q, g.cycle.q_dot, slope=SLOPE, steps=1)
+    mid_walk = simulate(w, g.q, g.q_dot, slope=SLOPE, steps=1)
     mid = other.state_to_section(mid_walk.final_q, mid_walk.final_q_dot)
     c = find_limit_cycle(other, slope=SLOPE, guess=mid + 0.005,
                          simulator=simulator(other, "scipy"))
     np.testing.assert_allclose(c.fixed_point, mid, atol=1e-8)
-    np.testing.assert_allclose(c.period, g.cycle.period, rtol=1e-9)
+    np.testing.assert_allclose(c.period, g.period, rtol=1e-9)
     np.testing.assert_allclose(np.sort(np.abs(c.multipliers)),
-                               np.sort(np.abs(g.cycle.multipliers)), rtol=1e-4)
+                               np.sort(np.abs(g.multipliers)), rtol=1e-4)
 
 
-def test_gait_json_lists_the_stride_books(amputee_gait: ModelGait) -> None:
+def test_gait_json_lists_the_stride_books(amputee_gait: Gait) -> None:
     d = amputee_gait.to_dict()
     assert d["steps_per_period"] == 2
     assert [s["step"] for s in d["steps"]] == [0, 1]
@@ -290,14 +291,14 @@ def test_swap_without_mirrors_is_refused(tmp_path: Path) -> None:
         load_walker(path)
 
 
-def test_walk_tables_use_the_walker_of_each_step(amputee_gait: ModelGait) -> None:
+def test_walk_tables_use_the_walker_of_each_step(amputee_gait: Gait) -> None:
     """The energy tables of a walk of a walker whose legs differ: each step's samples with the
     walker taking it, so the total is constant within every step and drops by ``T_c`` at every
     heel strike (with the first walker's energies throughout, the odd steps would not be)."""
     from heelstrike.analysis.walk_tables import walk_energy_table, walk_impact_table
 
     w = load_phased_walker(AMPUTEE)
-    g = amputee_gait.cycle
+    g = amputee_gait
     walk = simulate(w, g.q, g.q_dot, slope=SLOPE, steps=3)
     energy = walk_energy_table(w, walk)
     scale = float(w.total_mass * w.scale.gravity * w.scale.leg_length)
@@ -341,7 +342,7 @@ def test_powered_gaits_of_a_stride_walker_are_refused() -> None:
     assert np.all(np.isfinite(step.z_next))
 
 
-def test_basin_of_a_stride_walker_walks_strides(amputee_gait: ModelGait) -> None:
+def test_basin_of_a_stride_walker_walks_strides(amputee_gait: Gait) -> None:
     """Each point of a stride walker's basin (scipy reference) has the fate of one long walk
     from it (:func:`simulate` alternates the legs): it converged exactly where that walk ends
     within the tolerance of the stride's fixed point (a basin that kept leg A in stance every
@@ -350,7 +351,7 @@ def test_basin_of_a_stride_walker_walks_strides(amputee_gait: ModelGait) -> None
     from heelstrike.dynamics.hybrid import WalkStatus
 
     w = load_phased_walker(AMPUTEE)
-    zstar = amputee_gait.cycle.fixed_point
+    zstar = amputee_gait.fixed_point
     steps, tol = 30, 1e-3
     basin = model_basin_of_attraction(
         w, SLOPE, grid=(3, 3), ranges=((-0.30, -0.25), (1.0, 1.15)), steps=steps, tol=tol,

@@ -240,7 +240,7 @@ def test_animation_frames_follow_the_walk_on_a_uniform_clock() -> None:
         walk_frames(w, walk, 0.0)
 
     kneed = load_phased_walker("kneed")
-    gait = find_model_gait(kneed, slope=SLOPE).cycle
+    gait = find_model_gait(kneed, slope=SLOPE)
     q, qd = kneed.section_to_state(gait.fixed_point)
     mwalk = simulate_phased(kneed, q, qd, slope=SLOPE, steps=1, max_step=0.02)
     mframes = model_walk_frames(kneed, mwalk, fps)

@@ -44,7 +44,7 @@ def kneed() -> PhasedWalker:
 @pytest.fixture(scope="module")
 def kneed_start(kneed: PhasedWalker) -> tuple[np.ndarray, np.ndarray]:
     """A post-impact state near (not on) the kneed walker's gait."""
-    z = np.asarray(find_model_gait(kneed, slope=SLOPE).cycle.fixed_point)
+    z = np.asarray(find_model_gait(kneed, slope=SLOPE).fixed_point)
     q, qd = kneed.section_to_state(list(z + np.array([0.01, 0.05, -0.05])))
     return np.asarray(q), np.asarray(qd)
 
@@ -197,7 +197,7 @@ def test_walk_model_cli_writes_every_impact_and_shows_progress(
                                    "stance_foot", "swing_foot", "hip"}
     walker = load_phased_walker("kneed")
     walk: Any = simulate(walker, *walker.section_to_state(
-        list(find_model_gait(walker, slope=SLOPE).cycle.fixed_point)), backend="compiled",
+        list(find_model_gait(walker, slope=SLOPE).fixed_point)), backend="compiled",
         slope=SLOPE, steps=2, rtol=1e-9, atol=1e-9, max_step=0.05)
     final = float(walker.kinetic_energy(walk.final_q, walk.final_q_dot)
                   + walker.potential_energy(walk.final_q, walk.slope))
@@ -297,7 +297,7 @@ def test_model_strobe_is_the_walker_s_own_geometry(
 
 def test_model_strobe_torso_belongs_to_neither_leg() -> None:
     torso = load_phased_walker("torso")
-    z = find_model_gait(torso, slope=SLOPE).cycle.fixed_point
+    z = find_model_gait(torso, slope=SLOPE).fixed_point
     walk = simulate(torso, *torso.section_to_state(list(z)), backend="compiled", slope=SLOPE,
                     steps=1)
     s = model_strobe_table(torso, walk, 0, frames=3)

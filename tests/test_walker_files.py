@@ -99,12 +99,12 @@ def test_own_walker_file_finds_the_stable_gait_of_the_same_physics(tmp_path: Pat
                                        leg_inertia=0.3), slope=slope)
     assert ref.stable
     gaits = find_model_gaits(load_walker(str(path)), slope=slope)
-    assert gaits[0].cycle.stable
-    np.testing.assert_allclose(gaits[0].cycle.fixed_point, ref.fixed_point, atol=1e-8)
+    assert gaits[0].stable
+    np.testing.assert_allclose(gaits[0].fixed_point, ref.fixed_point, atol=1e-8)
     # the loss per step is the potential energy gravity releases (m_total g L sin(slope))
     g = gaits[0]
     assert g.collision_loss == pytest.approx(
-        26.0 * 9.81 * g.cycle.step_length * np.sin(slope), rel=1e-7)
+        26.0 * 9.81 * g.step_length * np.sin(slope), rel=1e-7)
 
 
 def test_bent_knee_is_free_in_an_impact_and_said(capsys: pytest.CaptureFixture[str]) -> None:

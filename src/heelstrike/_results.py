@@ -5,7 +5,7 @@ basins, gait maps, robot impacts, ...) is a frozen dataclass deriving from
 :class:`ResultDictMixin`, so that ``json.dumps(result.to_dict())`` works for all of them; the
 compiled paths' few small results are :class:`typing.NamedTuple` (unpackable, cheap to build
 per call) whose ``to_dict()`` is :func:`tuple_dict`.
-Results that define their own summary (e.g. :meth:`~heelstrike.analysis.LimitCycle.to_dict`,
+Results that define their own summary (e.g. :meth:`~heelstrike.analysis.Gait.to_dict`,
 whose keys the CLI's ``--json`` output promises) keep it.
 """
 

@@ -26,10 +26,10 @@ if TYPE_CHECKING:
     from heelstrike._typing import FloatArray
     from heelstrike.analysis.basin import Basin
     from heelstrike.analysis.gait_map import GaitMap
+    from heelstrike.analysis.gaits import Gait
     from heelstrike.analysis.limit_cycle import BifurcationDiagram, Continuation
     from heelstrike.analysis.model_gaits import ImpactMap
     from heelstrike.analysis.paper import PaperFigureData
-    from heelstrike.analysis.powered import PoweredGait
     from heelstrike.dynamics.hybrid import WalkResult
     from heelstrike.models.compass import CompassGait
 
@@ -458,14 +458,14 @@ def write_impact_map(
 
 # -- powered gaits and the cost study ------------------------------------------------------------
 def write_powered_energy(
-    gait: PoweredGait, energy: pd.DataFrame, impacts: pd.DataFrame, out_dir: str | Path
+    gait: Gait, energy: pd.DataFrame, impacts: pd.DataFrame, out_dir: str | Path
 ) -> tuple[Path, Path]:
     """Write the energy of one period of a powered gait: ``powered_energy.png`` and ``.csv``.
 
     Parameters
     ----------
-    gait : PoweredGait
-        The gait (its speed, works and ``T_c`` title the figure).
+    gait : Gait
+        A powered gait (its ``actuation`` set): its speed, works and ``T_c`` title the figure.
     energy, impacts : pandas.DataFrame
         From :func:`heelstrike.analysis.powered.energy_book_tables` (energies in J, times in s).
     out_dir : str or Path
@@ -479,13 +479,16 @@ def write_powered_energy(
     from heelstrike.plots.gait import energy_figure
 
     out = _directory(out_dir)
-    name = gait.model or "compass gait"
+    act = gait.actuation
+    if act is None:
+        raise ValueError("write_powered_energy draws a powered gait (its actuation is None)")
+    name = act.model or "compass gait"
     # each impact's own loss (a kneed walker's knee strike, then the heel strike)
     losses = ", ".join(f"{str(r.kind).replace('_', ' ')} loses $T_c$ = {float(r.T_c_J):.4f} J"
                        for r in impacts.itertuples(index=False))
     fig = energy_figure(energy, impacts, title=(
-        f"{name}, powered gait at {gait.speed:.3g} m/s: {gait.torque_joint} torque "
-        f"{gait.torque_work:+.4f} J over the step,\npush-off {gait.push_off_work:+.4f} J "
+        f"{name}, powered gait at {gait.speed:.3g} m/s: {act.torque_joint} torque "
+        f"{act.torque_work:+.4f} J over the step,\npush-off {act.push_off_work:+.4f} J "
         f"(jump at heel strike){',' if len(impacts) < 2 else chr(10)} {losses}"))
     png = out / "powered_energy.png"
     save_figure(fig, png, metadata=_metadata("png"))

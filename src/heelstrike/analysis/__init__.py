@@ -6,6 +6,9 @@ find_limit_cycle``); each name is loaded from its submodule on first use, so
 
 Main entry points:
 
+- :func:`~heelstrike.analysis.gaits.find_gaits`: every gait of a walker, passive on a slope or
+  powered by an actuation family at a target speed or step length, as one result type
+  (:class:`~heelstrike.analysis.gaits.Gait`), the cheapest stable gait first;
 - :func:`~heelstrike.analysis.heel_strike.heel_strike_study`: energy split ``T_c`` / ``T_a``
   at heel strike over impact angles and foot radii;
 - :func:`~heelstrike.analysis.limit_cycle.find_limit_cycle`,
@@ -54,20 +57,20 @@ _PUBLIC: dict[str, tuple[str, ...]] = {
     "basin": ("Basin", "basin_of_attraction", "model_basin_of_attraction"),
     "cost_study": ("cheapest_gaits",),
     "design": ("DesignResult",),  # the function is heelstrike.analysis.design.design
+    "gaits": ("Actuation", "Gait", "find_gaits"),
     "gait_map": ("GaitMap", "compass_bifurcation", "model_bifurcation", "model_gait_map"),
     "heel_strike": ("HeelStrikeStudy", "heel_strike_study"),
     "limit_cycle": (
-        "BifurcationDiagram", "Continuation", "GaitNotFoundError", "LimitCycle", "PoincareMap",
-        "bifurcation_diagram", "continue_limit_cycle", "find_limit_cycle", "find_limit_cycles",
+        "BifurcationDiagram", "Continuation", "GaitNotFoundError", "PoincareMap",
+        "bifurcation_diagram", "continue_limit_cycle", "find_limit_cycle",
     ),
     "model_gaits": (
-        "ImpactMap", "ModelGait", "ModelHeelStrike", "find_model_gaits",
-        "impact_map", "model_heel_strike",
+        "ImpactMap", "ModelHeelStrike", "impact_map", "model_heel_strike",
     ),
     "newton": ("NewtonSolution", "newton_solve"),
     "paper": ("PaperFigureData", "paper_figure_data"),
     "powered": (
-        "PoweredGait", "PoweredGaitNotFoundError", "find_model_powered_gait",
+        "PoweredGaitNotFoundError", "find_model_powered_gait",
         "find_powered_gait", "max_walking_speed",
     ),
     "sensitivity": ("GaitSensitivity", "gait_sensitivity"),

@@ -49,18 +49,16 @@ def is_stable(multipliers: ArrayLike) -> bool:
     return bool(stable_radius(spectral_radius(multipliers)))
 
 
-def gait_order(gait: Any, *, undecided: bool = False) -> tuple[bool, bool, float, float]:
+def gait_order(gait: Any) -> tuple[bool, bool, float, float]:
     """Sort key of a gait: cheapest stable first.
 
     Parameters
     ----------
-    gait : LimitCycle or PoweredGait
+    gait : Gait
         Any gait with ``multipliers``, ``actuator_work`` (J per step; 0 for a passive gait)
-        and ``multi_swing``.
-    undecided : bool
-        The gaits' stability is undecided (McGeer's wheel, ``R = l``: its gaits at one target
-        form a neutral family, a multiplier of 1 to round-off): it is not part of the key, the
-        cheapest comes first.
+        and ``multi_swing``; its ``stability_undecided`` (McGeer's wheel, ``R = l``: its gaits
+        at one target form a neutral family, a multiplier of 1 to round-off; False if absent)
+        leaves stability out of the key: the cheapest comes first.
 
     Returns
     -------
@@ -70,30 +68,28 @@ def gait_order(gait: Any, *, undecided: bool = False) -> tuple[bool, bool, float
         then the most attracting (passive gaits all need no work).
     """
     rho = spectral_radius(gait.multipliers)
-    unstable = False if undecided else not stable_radius(rho)
+    unstable = False if getattr(gait, "stability_undecided", False) else not stable_radius(rho)
     return (bool(gait.multi_swing), unstable, float(gait.actuator_work),
             rho if np.isfinite(rho) else float("inf"))
 
 
-def ordered_gaits(gaits: Iterable[_G], *, undecided: bool = False) -> list[_G]:
+def ordered_gaits(gaits: Iterable[_G]) -> list[_G]:
     """The gaits in the one reporting order (:func:`gait_order`): the first is the one a
     command reports, the cheapest stable gait where there is one.
 
     Parameters
     ----------
-    gaits : iterable of LimitCycle or PoweredGait
-    undecided : bool
-        Their stability is undecided (McGeer's wheel): cheapest first (:func:`gait_order`).
+    gaits : iterable of Gait
 
     Returns
     -------
     list
     """
-    return sorted(gaits, key=lambda g: gait_order(g, undecided=undecided))
+    return sorted(gaits, key=gait_order)
 
 
-def first_gait(gaits: Sequence[_G], *, undecided: bool = False) -> _G:
+def first_gait(gaits: Sequence[_G]) -> _G:
     """The gait a command reports among ``gaits`` (non-empty): ``ordered_gaits(gaits)[0]``."""
     if not gaits:
         raise ValueError("no gaits to choose from")
-    return min(gaits, key=lambda g: gait_order(g, undecided=undecided))
+    return min(gaits, key=gait_order)

@@ -43,7 +43,7 @@ from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
 from heelstrike.analysis._defaults import BASIN_STEPS, BASIN_TOLERANCE
 from heelstrike.analysis._memory import available_memory, require_budget
-from heelstrike.analysis.limit_cycle import LimitCycle, find_limit_cycle
+from heelstrike.analysis.limit_cycle import Gait, find_limit_cycle
 from heelstrike.dynamics.backends import check_one_walker
 from heelstrike.dynamics.compiled import ensemble_walk
 from heelstrike.dynamics.hybrid import WalkStatus
@@ -221,7 +221,7 @@ def _walk_slice(
 def _make_basin(
     coords: dict[str, Any], attrs: dict[str, Any], outcome: NDArray[np.int8],
     taken: NDArray[np.int64], dist: FloatArray, zstar: FloatArray, elapsed: float,
-    axes: tuple[int, int] = (0, 1), gait: LimitCycle | None = None,
+    axes: tuple[int, int] = (0, 1), gait: Gait | None = None,
     hanging: tuple[str, ...] = (),
 ) -> Basin:
     """The :class:`Basin` of a walked slice (compass and described walkers alike); ``gait``:
@@ -546,7 +546,7 @@ def model_basin_of_attraction(
     d = len(names)
     gait = None
     if fixed_point is None:
-        gait = find_model_gait(w, slope=slope, backend=backend).cycle
+        gait = find_model_gait(w, slope=slope, backend=backend)
         zstar = np.asarray(gait.fixed_point)
     else:
         zstar = np.asarray(fixed_point, dtype=float).reshape(d)

@@ -45,12 +45,13 @@ from numpy.typing import ArrayLike, NDArray
 from heelstrike._typing import FloatArray
 from heelstrike.analysis._gait_order import gait_order, ordered_gaits
 from heelstrike.analysis._memory import require_budget
+from heelstrike.analysis.gaits import Gait
 from heelstrike.analysis.heel_strike import heel_strike_study
 from heelstrike.analysis.powered import (
     ACTUATIONS,
     BOOKS_FLOOR,
-    PoweredGait,
     PoweredGaitNotFoundError,
+    _augmented,
     _count_distinct,
     _fresh_gaits,
     _other_gaits,
@@ -121,27 +122,31 @@ def paper_eta(walker: CompassGait, step_length: float) -> tuple[float, float]:
     return float(st.eta), float(st.energy_lost)
 
 
-def _row(g: PoweredGait, undecided: bool = False) -> dict[str, float]:
-    """The study's variables of one gait; ``stable`` is NaN where stability is ``undecided``
-    (McGeer's wheel: a neutral family, a multiplier of 1, whose flags would alternate 1, 0)."""
+def _row(g: Gait) -> dict[str, float]:
+    """The study's variables of one powered gait; ``stable`` is NaN where its stability is
+    undecided (:attr:`~heelstrike.analysis.gaits.Gait.stability_undecided`: McGeer's wheel, a
+    neutral family, a multiplier of 1, whose flags would alternate 1, 0)."""
+    a = g.actuation
+    if a is None:
+        raise ValueError("the cost study's gaits are powered (a passive gait has no actuation)")
     return {
         "cost_of_transport": g.cost_of_transport,
         "eta": g.eta,
         "actuator_work": g.actuator_work,
-        "push_off_work": g.push_off_work,
-        "torque_work": g.torque_work,
+        "push_off_work": a.push_off_work,
+        "torque_work": a.torque_work,
         "collision_loss": g.collision_loss,
         "work_per_metre": g.actuator_work / g.step_length,
         "period": g.period,
         "step_length": g.step_length,
         "speed": g.speed,
         "impact_angle": g.impact_angle,
-        "parameter": g.parameter,
+        "parameter": a.parameter,
         "spectral_radius": float(np.max(np.abs(g.multipliers))),
-        "stable": np.nan if undecided else float(g.stable),
+        "stable": np.nan if g.stability_undecided else float(g.stable),
         "energy_balance_error": g.energy_balance_error,
         "leg_crossings": np.nan if g.leg_crossings is None else float(g.leg_crossings),
-        **{k: g.gains.get(k, np.nan) for k in ("gain", "kp", "kd", "max_torque")},
+        **{k: a.gains.get(k, np.nan) for k in ("gain", "kp", "kd", "max_torque")},
     }
 
 
@@ -553,7 +558,7 @@ def _study_row(
         length = float(v) if kind == "step_length" else None
         # Newton from each neighbour (previous radius, previous target); where gaits
         # coexist keep the one needing the least work; seed search if none converges
-        gaits: list[PoweredGait] = []
+        gaits: list[Gait] = []
         for key in ((i - 1, j), (i, j - 1)):
             if key not in found:
                 continue
@@ -566,7 +571,7 @@ def _study_row(
                 for r_sub in np.linspace(r_from, r, n_sub + 1)[1:]:
                     g_sub = solve(float(r_sub), guess=x, speed=speed, step_length=length,
                                   fallback=False, **kwargs)
-                    x = np.append(g_sub.fixed_point, g_sub.parameter)
+                    x = _augmented(g_sub)
                 gaits.append(g_sub)
             except (PoweredGaitNotFoundError, ValueError):
                 pass
@@ -586,24 +591,23 @@ def _study_row(
             # unstable one; a multi-swing gait (its swing foot through the ground away from
             # mid-stance: QA sweep 6) only where no other meets the target
             # (McGeer's wheel: stability undecided, the cheapest)
-            wheel = bool(_seed_walker(base, model, r).is_wheel)
-            best = min(range(len(gaits)), key=lambda k: gait_order(gaits[k], undecided=wheel))
+            best = min(range(len(gaits)), key=lambda k: gait_order(gaits[k]))
             g = gaits[best]
             if g.residual > float(kwargs.get("tol", 1e-9)):
                 # a fresh start's looser tolerance: polish it so that its energy book closes
                 # (the compass gait's too, QA sweep 12: its books were open by 6.5e-8 J; where
                 # Newton stalls at the integrator's noise floor, near the wheel, it is kept)
                 try:
-                    g = solve(r, guess=np.append(g.fixed_point, g.parameter), speed=speed,
+                    g = solve(r, guess=_augmented(g), speed=speed,
                               step_length=length, fallback=False, **kwargs)
                 except (PoweredGaitNotFoundError, ValueError):
                     pass
             branch[j] = 0.0 if best < n_continued else 1.0
             n_found[j] = _count_distinct(gaits)
-            for k, val in _row(g, wheel).items():
+            for k, val in _row(g).items():
                 out[k][j] = val
-            _list_gaits(listed, j, g, [gaits[k] for k in range(len(gaits)) if k != best], wheel)
-            found[(i, j)] = np.append(g.fixed_point, g.parameter)
+            _list_gaits(listed, j, g, [gaits[k] for k in range(len(gaits)) if k != best])
+            found[(i, j)] = _augmented(g)
             n = min(found[(i, j)].size, _SEED_WIDTH)
             seed[j, :n], seed_size[j] = found[(i, j)][:n], n
     rows: dict[str, NDArray[Any]] = dict(out)
@@ -613,17 +617,16 @@ def _study_row(
 
 
 def _list_gaits(
-    listed: dict[str, FloatArray], j: int, kept: PoweredGait, others: list[PoweredGait],
-    undecided: bool,
+    listed: dict[str, FloatArray], j: int, kept: Gait, others: list[Gait],
 ) -> None:
     """Fill row ``j`` of the ``listed`` arrays (``LISTED_VARIABLES``): the ``kept`` gait,
-    then the distinct ``others`` in the one order of gaits (``undecided``: McGeer's wheel,
-    cheapest first), at most ``LISTED_GAITS``."""
-    distinct: list[PoweredGait] = [kept]
-    for g in ordered_gaits(others, undecided=undecided):
+    then the distinct ``others`` in the one order of gaits (McGeer's wheel, its stability
+    undecided: cheapest first), at most ``LISTED_GAITS``."""
+    distinct: list[Gait] = [kept]
+    for g in ordered_gaits(others):
         if all(not _same_gait(g, d) for d in distinct):
             distinct.append(g)
     for n, g in enumerate(distinct[:LISTED_GAITS]):
-        row = _row(g, undecided)
+        row = _row(g)
         for k in LISTED_VARIABLES:
             listed[k][j, n] = row[k]

@@ -365,12 +365,12 @@ def design(
         w, sl = params_of(x)
         if state["x"] is None:
             return np.asarray(find_model_gait(w, slope=sl, guess=guess, backend="scipy")
-                              .cycle.fixed_point, dtype=float)
+                              .fixed_point, dtype=float)
         xp, zp, dzp = state["x"], state["z"], state["dz"]
         try:
             return np.asarray(find_model_gait(w, slope=sl, guess=zp + dzp @ (x - xp),
                                               backend="scipy", max_iter=CONTINUATION_NEWTON)
-                              .cycle.fixed_point, dtype=float)
+                              .fixed_point, dtype=float)
         except GaitNotFoundError:
             pass
         for m in CONTINUATION_SUBSTEPS:
@@ -382,7 +382,7 @@ def design(
                     z = np.asarray(find_model_gait(
                         wi, slope=si, guess=z + dzp @ ((x - xp) / m), backend="scipy",
                         max_iter=CONTINUATION_NEWTON)
-                        .cycle.fixed_point, dtype=float)
+                        .fixed_point, dtype=float)
                 return z
             except GaitNotFoundError:
                 continue

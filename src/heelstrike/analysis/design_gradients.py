@@ -221,7 +221,7 @@ def gait_gradients(
     walker : BuiltWalker
         A described walker at the gait's parameter values.
     fixed_point : array_like, shape (d,)
-        The gait's fixed point ``z*`` (converged, e.g. ``ModelGait.cycle.fixed_point``).
+        The gait's fixed point ``z*`` (converged, e.g. ``Gait.fixed_point``).
     parameters : sequence of str
         Names of walker parameters, or ``"slope"``.
     slope : float

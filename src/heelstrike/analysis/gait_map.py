@@ -56,7 +56,7 @@ if TYPE_CHECKING:
     from heelstrike.analysis.limit_cycle import (
         BifurcationDiagram,
         Continuation,
-        LimitCycle,
+        Gait,
     )
     from heelstrike.dynamics.phased import PhasedWalker
     from heelstrike.models.builder import BuiltWalker
@@ -465,7 +465,7 @@ class GaitMap(ResultDictMixin):
     hanging_cells : int
         Described walkers (:func:`model_gait_map`): the number of cells whose gait carries a
         link described upright hanging
-        (:attr:`~heelstrike.analysis.model_gaits.ModelGait.hanging_links`); 0 otherwise.
+        (:attr:`~heelstrike.analysis.gaits.Gait.hanging_links`); 0 otherwise.
     hanging_links : tuple of str
         The links those gaits carry hanging (sorted; empty if none).
     upright_links : tuple of str
@@ -665,8 +665,8 @@ def _model_multiplier(
         g = find_model_gait(walker, slope=slope, guess=guess, backend=backend)
     except ValueError as exc:
         raise GaitNotFoundError(str(exc)) from exc
-    mnr = _smallest_real(np.asarray(g.cycle.multipliers))
-    return (np.nan if mnr is None else mnr), np.asarray(g.cycle.fixed_point, dtype=float)
+    mnr = _smallest_real(np.asarray(g.multipliers))
+    return (np.nan if mnr is None else mnr), np.asarray(g.fixed_point, dtype=float)
 
 
 def model_gait_map(
@@ -765,8 +765,8 @@ def model_gait_map(
             g = find_model_gait(w, slope=slope, guess=guess, backend=backend, max_iter=max_iter)
         except ValueError as exc:
             raise GaitNotFoundError(str(exc)) from exc
-        m = _smallest_real(np.asarray(g.cycle.multipliers))
-        return (g, np.asarray(g.cycle.fixed_point, dtype=float), int(g.cycle.iterations),
+        m = _smallest_real(np.asarray(g.multipliers))
+        return (g, np.asarray(g.fixed_point, dtype=float), int(g.iterations),
                 float("nan") if m is None else float(m))
 
     def point(value: float, found: tuple[Any, FloatArray, int, float]) -> Point:
@@ -833,13 +833,13 @@ def model_gait_map(
                 if at is None:
                     continue
                 g = at.gait
-                out["spectral_radius"][i, j] = float(np.max(np.abs(g.cycle.multipliers)))
-                out["period"][i, j] = g.cycle.period
-                out["step_length"][i, j] = g.cycle.step_length
+                out["spectral_radius"][i, j] = float(np.max(np.abs(g.multipliers)))
+                out["period"][i, j] = g.period
+                out["step_length"][i, j] = g.step_length
                 out["collision_loss"][i, j] = g.collision_loss
-                out["impact_angle"][i, j] = g.cycle.impact_angle
+                out["impact_angle"][i, j] = g.impact_angle
                 out["smallest_real_multiplier"][i, j] = at.mnr
-                fixed[i, j] = g.cycle.fixed_point
+                fixed[i, j] = g.fixed_point
                 hanging[i, j] = g.hanging_links
             prev = (value, points)
             bracket = _pd_bracket(points, any_sign=False)
@@ -888,12 +888,12 @@ _ONSET_TOL = 1e-5
 
 
 def _first_gait(
-    auto: Callable[[float], LimitCycle],
-    near: Callable[[float, FloatArray], LimitCycle],
+    auto: Callable[[float], Gait],
+    near: Callable[[float, FloatArray], Gait],
     start: float,
     stop: float,
     points: int,
-) -> list[tuple[float, LimitCycle]]:
+) -> list[tuple[float, Gait]]:
     """The first slope of ``[start, stop]`` (rad) with a gait, and that gait.
 
     ``auto(slope)`` is the walker's automatic gait search and ``near(slope, z)`` Newton from
@@ -909,7 +909,7 @@ def _first_gait(
 
     Returns
     -------
-    list of (float, LimitCycle)
+    list of (float, Gait)
         The gaits of the family found on the way, by increasing slope (rad): the first is the
         answer, the others (none if there is a gait at ``start``) lead away from it.
 
@@ -919,7 +919,7 @@ def _first_gait(
         If ``auto`` finds no gait at any scanned slope.
     """
     scan = np.linspace(start, stop, max(points, 2))
-    at_start: LimitCycle | None = None
+    at_start: Gait | None = None
     try:
         at_start = auto(start)
         if at_start.stable:
@@ -931,7 +931,7 @@ def _first_gait(
     # an unstable gait at the start whose family ends before the next scanned slope is kept
     # only if no stable gait turns up further on (the kneed walker below 2.16 deg: a
     # long-period unstable gait, where the stable family has not started)
-    first: tuple[int, LimitCycle] | None = None if at_start is None else (0, at_start)
+    first: tuple[int, Gait] | None = None if at_start is None else (0, at_start)
     for k in range(1, scan.size):
         try:
             cycle = auto(float(scan[k]))
@@ -1048,14 +1048,14 @@ def compass_bifurcation(
     )
 
 
-def _nearest_gait(family: list[tuple[float, LimitCycle]], slope: float) -> FloatArray:
+def _nearest_gait(family: list[tuple[float, Gait]], slope: float) -> FloatArray:
     """Fixed point of the ``family`` gait (``(slope, gait)`` pairs) whose slope is nearest."""
     at = np.array([s for s, _ in family])
     return family[int(np.argmin(np.abs(at - slope)))][1].fixed_point
 
 
 def _diagram_and_branch(
-    walker: Any, slopes: FloatArray, family: list[tuple[float, LimitCycle]], simulator: Any, *,
+    walker: Any, slopes: FloatArray, family: list[tuple[float, Gait]], simulator: Any, *,
     transient: int, record: int, continuation_points: int | None, progress: bool,
     walk_tolerances: dict[str, Any], branch_tolerances: dict[str, Any],
 ) -> tuple[BifurcationDiagram, Continuation]:
@@ -1092,7 +1092,7 @@ def _diagram_and_branch(
         if branch.cycles:
             starts.insert(0, branch.cycles[int(np.argmin(np.abs(branch.values - slope)))]
                           .fixed_point)
-        found: list[LimitCycle] = []
+        found: list[Gait] = []
         for start in starts:
             try:
                 found.append(find_limit_cycle(walker, slope=slope, guess=start,
@@ -1121,7 +1121,7 @@ def _diagram_and_branch(
 
 
 def _continued_branch(
-    walker: Any, slopes: FloatArray, family: list[tuple[float, LimitCycle]], simulator: Any, *,
+    walker: Any, slopes: FloatArray, family: list[tuple[float, Gait]], simulator: Any, *,
     onset: float, z0: FloatArray, continuation_points: int | None, progress: bool,
     branch_tolerances: dict[str, Any],
 ) -> Continuation:
@@ -1135,7 +1135,7 @@ def _continued_branch(
         values = np.linspace(onset, slopes[-1], max(int(continuation_points), 1))
     kw = {"progress": progress, "simulator": simulator, **branch_tolerances}
 
-    def gait_at(v: float, z: FloatArray) -> LimitCycle:
+    def gait_at(v: float, z: FloatArray) -> Gait:
         return find_limit_cycle(walker, slope=v, guess=z, simulator=simulator,
                                 **branch_tolerances)
 
@@ -1183,7 +1183,7 @@ _BRANCH_DEPTH = 8
 _BRANCH_EXTRA = 4
 
 
-def _chord_miss(a: LimitCycle, m: LimitCycle, b: LimitCycle, scale: FloatArray) -> float:
+def _chord_miss(a: Gait, m: Gait, b: Gait, scale: FloatArray) -> float:
     """The miss of the chord from ``a`` to ``b`` at the gait ``m`` halfway (in slope), in
     ``scale`` units of impact angle and period (the larger of the two)."""
     mid = 0.5 * (np.array([a.impact_angle, a.period]) + np.array([b.impact_angle, b.period]))
@@ -1191,7 +1191,7 @@ def _chord_miss(a: LimitCycle, m: LimitCycle, b: LimitCycle, scale: FloatArray) 
 
 
 def _refine_branch(
-    branch: Continuation, gait_at: Callable[[float, FloatArray], LimitCycle], *,
+    branch: Continuation, gait_at: Callable[[float, FloatArray], Gait], *,
     tol: float = _BRANCH_TOL, depth: int = _BRANCH_DEPTH,
 ) -> Continuation:
     """The branch with gaits added where straight segments between its gaits would miss it.
@@ -1209,7 +1209,7 @@ def _refine_branch(
     branch : Continuation
         A period-one branch in the slope, by increasing slope.
     gait_at : callable
-        ``gait_at(slope, z) -> LimitCycle`` from the section point ``z``; may raise
+        ``gait_at(slope, z) -> Gait`` from the section point ``z``; may raise
         :class:`~heelstrike.analysis.limit_cycle.GaitNotFoundError`.
     tol : float
         Largest miss, as a fraction of the branch's span in impact angle and in period.
@@ -1241,8 +1241,8 @@ def _refine_branch(
 
     budget = [_BRANCH_EXTRA * x.size + 16]  # gaits that may still be added
 
-    def between(a: float, ca: LimitCycle, b: float, cb: LimitCycle, level: int
-                ) -> list[tuple[float, LimitCycle]]:
+    def between(a: float, ca: Gait, b: float, cb: Gait, level: int
+                ) -> list[tuple[float, Gait]]:
         if budget[0] <= 0:
             return []
         budget[0] -= 1
@@ -1260,7 +1260,7 @@ def _refine_branch(
         return [*between(a, ca, m, cm, level - 1), (m, cm), *between(m, cm, b, cb, level - 1)]
 
     xs: list[float] = [float(x[0])]
-    out: list[LimitCycle] = [cycles[0]]
+    out: list[Gait] = [cycles[0]]
     for k in range(x.size - 1):
         if predicted[k] > tol / 4 or x.size == 2:
             for v, c in between(float(x[k]), cycles[k], float(x[k + 1]), cycles[k + 1], depth):
@@ -1333,8 +1333,8 @@ def model_bifurcation(
     sl = np.asarray(slopes, dtype=float).ravel()
     _check_slopes(sl)
     family = _first_gait(
-        lambda s: find_model_gait(w, slope=s, backend=backend).cycle,
-        lambda s, z: find_model_gait(w, slope=s, guess=z, backend=backend).cycle,
+        lambda s: find_model_gait(w, slope=s, backend=backend),
+        lambda s, z: find_model_gait(w, slope=s, guess=z, backend=backend),
         float(sl[0]), float(sl[-1]), min(_ONSET_SCAN_POINTS, sl.size),
     )
     # the branch: each gait by Newton from the previous fixed point with find_model_gait's

@@ -17,7 +17,7 @@ from __future__ import annotations
 import time
 import warnings
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
@@ -27,6 +27,7 @@ from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
 from heelstrike.analysis._defaults import BIFURCATION_RECORD, BIFURCATION_TRANSIENT
 from heelstrike.analysis._gait_order import is_stable
+from heelstrike.analysis.gaits import ENERGY_BOOKS_RTOL, Gait
 from heelstrike.analysis.heel_strike import loss_per_metre
 from heelstrike.analysis.newton import floquet_multipliers
 from heelstrike.dynamics.backends import (
@@ -49,7 +50,6 @@ __all__ = [
     "BifurcationDiagram",
     "Continuation",
     "GaitNotFoundError",
-    "LimitCycle",
     "PoincareMap",
     "bifurcation_diagram",
     "continue_limit_cycle",
@@ -252,32 +252,6 @@ class PoincareMap:
                              max_step_duration=self.max_step_duration, max_step=self.max_step)
 
 
-class _WalkField:
-    """Data descriptor of :attr:`LimitCycle.walk`: holds a :class:`WalkResult`, or a
-    zero-argument callable that simulates it, called on first access (then kept).
-
-    A gait characterised on the compiled backend needs no trajectory; its ``walk`` (the scipy
-    reference's samples of one period) is simulated only if asked for.
-    """
-
-    def __set_name__(self, owner: type, name: str) -> None:
-        self._slot = f"_{name}_value"
-
-    def __get__(self, obj: object | None, objtype: type | None = None) -> WalkResult:
-        if obj is None:
-            raise AttributeError("walk is set per instance")
-        value = obj.__dict__[self._slot]
-        if not isinstance(value, WalkResult):
-            value = value()
-            obj.__dict__[self._slot] = value
-        return cast(WalkResult, value)
-
-    def __set__(self, obj: object, value: WalkResult | Callable[[], WalkResult]) -> None:
-        if isinstance(value, _WalkField):  # the dataclass default: the argument was left out
-            raise TypeError(f"{type(obj).__name__}() needs the keyword argument 'walk'")
-        obj.__dict__[self._slot] = value
-
-
 @dataclass(frozen=True, kw_only=True)
 class _OneStep:
     """``pmap.walk(z, steps_per_period)`` deferred (picklable, unlike a closure)."""
@@ -337,128 +311,6 @@ def _sign_changes(hip_angles: ArrayLike) -> int | None:
     sign = np.sign(a)
     sign = sign[sign != 0]
     return int(np.count_nonzero(sign[1:] != sign[:-1]))
-
-
-@dataclass(frozen=True, kw_only=True)
-class LimitCycle(ResultDictMixin):
-    """A period-one gait and its energetics.
-
-    Attributes
-    ----------
-    fixed_point : ndarray, shape (d,)
-        Section coordinates just after heel strike (names in ``section_names``).
-    q, q_dot : ndarray, shape (n,)
-        Full post-impact state (stance contact at x = 0).
-    period : float
-        Step duration (s): the duration of the period of
-        :attr:`~heelstrike.models.base.PlanarWalker.steps_per_period` steps (the stride, two
-        steps, for a walker whose legs differ; then ``step_length``, the energies of the
-        step and ``collision_loss`` are the stride's too, and ``impact_angle``, ``T`` and
-        ``T_a`` those of its first heel strike).
-    step_length : float
-        Distance walked along the ground per step (m).
-    speed : float
-        Mean walking speed along the ground, ``step_length / period`` (m/s).
-    impact_angle : float
-        Stance-leg angle ``q3`` at heel strike (rad).
-    multipliers : ndarray of complex, shape (d,)
-        Floquet multipliers, largest modulus first.
-    stable : bool
-        All multipliers inside the unit circle.
-    collision_loss : float
-        Kinetic energy lost at heel strike per step, ``T_c`` for an inert impact (J).
-    kinetic_energy_pre, kinetic_energy_admissible : float
-        ``T`` and ``T_a`` just before impact (J).
-    eta : float
-        Collision loss per distance, ``collision_loss / step_length`` (J/m), paper eq. (16).
-    potential_energy_released : float
-        Potential energy released per step (J); balances the losses on a passive gait.
-    actuator_work : float
-        Actuator work per step (J).
-    residual : float
-        ``|P(z*) - z*|`` at convergence.
-    iterations : int
-        Newton iterations used.
-    slope : float
-        Ground slope (rad).
-    leg_crossings : int or None
-        Times the swing leg crosses the stance leg in the step (:func:`leg_crossings`): 1 for
-        an ordinary step; more for a multi-swing gait, whose swing foot goes through the
-        ground away from mid-stance (:attr:`multi_swing`). None if not counted.
-    walk : WalkResult
-        One simulated period from the fixed point (the map's simulator; for a gait
-        characterised on the compiled backend the scipy reference, simulated on first access).
-        The constructor also takes a zero-argument callable returning it.
-    """
-
-    fixed_point: FloatArray
-    section_names: tuple[str, ...]
-    q: FloatArray
-    q_dot: FloatArray
-    period: float
-    step_length: float
-    speed: float
-    impact_angle: float
-    multipliers: NDArray[np.complex128]
-    stable: bool
-    collision_loss: float
-    kinetic_energy_pre: float
-    kinetic_energy_admissible: float
-    eta: float
-    potential_energy_released: float
-    actuator_work: float
-    residual: float
-    iterations: int
-    slope: float
-    leg_crossings: int | None = None
-    walk: _WalkField = field(default=_WalkField(), repr=False, compare=False)
-
-    @property
-    def multi_swing(self) -> bool:
-        """Whether the swing leg crosses the stance leg more than once in the step (its foot
-        then goes through the ground away from mid-stance, outside the scuffing convention:
-        QA sweep 13, a 1.93 s "gait" at R = 0.3 m, 18 mm under the ground after mid-stance)."""
-        return self.leg_crossings is not None and self.leg_crossings > 1
-
-    @property
-    def spectral_radius(self) -> float:
-        """Largest multiplier modulus."""
-        return float(np.max(np.abs(self.multipliers)))
-
-    @property
-    def energy_books_close(self) -> bool:
-        """Whether the step's energy books close: the collision loss equals the potential
-        energy released plus the actuator work, both positive, to within
-        :data:`ENERGY_BOOKS_RTOL` of the larger (a periodic step neither gains nor loses
-        energy). Only passive gaits are checked by the search (a push-off's work is not in
-        ``actuator_work``)."""
-        supplied = self.potential_energy_released + self.actuator_work
-        loss = self.collision_loss
-        if not (np.isfinite(supplied) and np.isfinite(loss) and supplied > 0 and loss > 0):
-            return False
-        return abs(loss - supplied) <= ENERGY_BOOKS_RTOL * max(loss, supplied)
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready summary (SI units; angles in rad)."""
-        return {
-            "period": self.period,
-            "step_length": self.step_length,
-            "speed": self.speed,
-            "impact_angle": self.impact_angle,
-            "multipliers": [float(abs(m)) for m in self.multipliers],
-            "multipliers_complex": [[float(m.real), float(m.imag)] for m in self.multipliers],
-            "stable": bool(self.stable),
-            "collision_loss": self.collision_loss,
-            "eta": self.eta,
-            "potential_energy_released": self.potential_energy_released,
-            "actuator_work": self.actuator_work,
-            "kinetic_energy_pre": self.kinetic_energy_pre,
-            "kinetic_energy_admissible": self.kinetic_energy_admissible,
-            "fixed_point": dict(zip(self.section_names, map(float, self.fixed_point), strict=True)),
-            "slope": self.slope,
-            "residual": self.residual,
-            "leg_crossings": self.leg_crossings,
-        }
 
 
 def _default_guesses(walker: PlanarWalker) -> list[FloatArray]:
@@ -522,13 +374,6 @@ _CONTINUATION_MIN_STEP = 1.0 / 1024.0
 #: Two fixed points closer than this (Euclidean norm in section coordinates) are the same gait.
 SAME_GAIT_TOL = 1e-6
 
-#: Relative tolerance of a passive gait's energy books: the collision loss per step must equal
-#: the potential energy released per step to within this fraction of the larger. The books of
-#: the compass gait close to about 1e-7 at 1e-6 rad and to 0.6 % at 1e-9 rad; on slopes so small
-#: that the step's energies reach the round-off of the potential energy (about 1e-14 of
-#: ``m g l``), Newton still converges on "gaits" whose books disagree many times over (40x at
-#: 1e-300 rad): those are no gaits, and are not returned.
-ENERGY_BOOKS_RTOL = 0.05
 
 #: Accuracy of the Floquet multipliers' moduli (central differences of the step map, passive
 #: and powered gaits alike; a passive gait's exact Jacobian on the scipy reference agrees with
@@ -740,10 +585,11 @@ def _newton(
     return sol.x[0], float(sol.residual_norm[0]), int(sol.iterations[0])
 
 
-def _preference(c: LimitCycle) -> tuple[bool, bool, float, float]:
+def _preference(c: Gait) -> tuple[bool, bool, float, float]:
     """Sort key: the one order of gaits (:func:`~heelstrike.analysis._gait_order.gait_order`):
-    ordinary steps before multi-swing gaits (:attr:`LimitCycle.multi_swing`), stable gaits
-    first, the least actuator work (none for a passive gait), the most attracting first."""
+    ordinary steps before multi-swing gaits
+    (:attr:`~heelstrike.analysis.gaits.Gait.multi_swing`), stable gaits first, the least
+    actuator work (none for a passive gait), the most attracting first."""
     from heelstrike.analysis._gait_order import gait_order
 
     return gait_order(c)
@@ -764,7 +610,7 @@ def find_limit_cycles(
     method: str = "scipy",
     simulator: Callable[..., WalkResult] | None = None,
     time_limit: float = SEARCH_TIME_LIMIT,
-) -> tuple[LimitCycle, ...]:
+) -> tuple[Gait, ...]:
     """Find every period-one gait the automatic search reaches, best first.
 
     For the passive :class:`~heelstrike.models.CompassGait` the seeds come from the batched
@@ -790,7 +636,7 @@ def find_limit_cycles(
 
     Returns
     -------
-    tuple of LimitCycle
+    tuple of Gait
         Distinct gaits, stable ones first, each group by increasing spectral radius (the most
         attracting gait first). Empty only if none was found (then
         :class:`GaitNotFoundError` is raised instead).
@@ -865,8 +711,9 @@ def find_limit_cycles(
     return tuple(sorted(cycles, key=_preference))
 
 
-def _closed_books(cycles: list[LimitCycle], pmap: PoincareMap) -> list[LimitCycle]:
-    """The passive gaits whose energy books close (:attr:`LimitCycle.energy_books_close`);
+def _closed_books(cycles: list[Gait], pmap: PoincareMap) -> list[Gait]:
+    """The passive gaits whose energy books close
+    (:attr:`~heelstrike.analysis.gaits.Gait.energy_books_close`);
     actuated ones all, and those of a step simulator given to the map (a described walker's,
     whose step may hold knee strikes besides the heel strike of ``collision_loss``: its books
     are checked by :func:`~heelstrike.analysis.model_gaits.find_model_gaits`). Raise
@@ -915,7 +762,7 @@ def find_limit_cycle(
     progress: bool = False,
     method: str = "scipy",
     simulator: Callable[..., WalkResult] | None = None,
-) -> LimitCycle:
+) -> Gait:
     """Find a period-one gait with Newton's method on the Poincare map.
 
     Parameters
@@ -953,7 +800,7 @@ def find_limit_cycle(
 
     Returns
     -------
-    LimitCycle
+    Gait
 
     Raises
     ------
@@ -999,7 +846,7 @@ def _multiplier_jacobian(pmap: PoincareMap, z: FloatArray, fd_step: float) -> Fl
 
 def _characterise(
     pmap: PoincareMap, z: FloatArray, residual: float, iterations: int, fd_step: float
-) -> LimitCycle:
+) -> Gait:
     walker = pmap.walker
     Jac = _multiplier_jacobian(pmap, z, fd_step)
     mult = floquet_multipliers(Jac)
@@ -1034,21 +881,21 @@ def _cycle(
     pmap: PoincareMap, z: FloatArray, multipliers: NDArray[np.complex128], *, period: float,
     step_length: float, collision_loss: float, iterations: int, walk: Any,
     leg_crossings: int | None, **values: float,
-) -> LimitCycle:
-    """The :class:`LimitCycle` at the fixed point ``z`` of ``pmap``: its speed, stability and
-    ``eta`` from the step's ``period`` (s), ``step_length`` (m), ``collision_loss`` (J) and
-    ``multipliers``; ``values`` are the other float fields (the step's energies,
-    ``impact_angle``, the Newton ``residual``)."""
+) -> Gait:
+    """The :class:`~heelstrike.analysis.gaits.Gait` at the fixed point ``z`` of ``pmap``: its
+    speed, stability and ``eta`` from the step's ``period`` (s), ``step_length`` (m),
+    ``collision_loss`` (J) and ``multipliers``; ``values`` are the other float fields (the
+    step's energies, ``impact_angle``, the Newton ``residual``)."""
     q, q_dot = pmap.walker.section_to_state(z)
     mult = np.asarray(multipliers, dtype=complex)
-    return LimitCycle(
+    return Gait(
         fixed_point=np.array(z, dtype=float), section_names=pmap.walker.section_names, q=q,
         q_dot=q_dot, period=float(period), step_length=float(step_length),
         speed=float(step_length) / float(period), multipliers=mult,
         stable=is_stable(mult), collision_loss=float(collision_loss),
         eta=float(loss_per_metre(collision_loss, step_length)), slope=float(pmap.slope),
         iterations=int(iterations), walk=walk, leg_crossings=leg_crossings,
-        **{k: float(v) for k, v in values.items()},
+        **cast(dict[str, Any], {k: float(v) for k, v in values.items()}),
     )
 
 
@@ -1059,7 +906,7 @@ def _characterise_compiled(
     multipliers: NDArray[np.complex128],
     residual: float,
     iterations: int,
-) -> LimitCycle:
+) -> Gait:
     """A gait of the compiled map characterised on the compiled backend.
 
     The pre-impact state is the compiled integration of single support from the fixed point
@@ -1111,7 +958,7 @@ class Continuation(ResultDictMixin):
         Name of the varied parameter (``"slope"`` or a walker field).
     values : ndarray, shape (K,)
         Parameter values where a gait was found (SI units; rad for the slope).
-    cycles : tuple of LimitCycle
+    cycles : tuple of Gait
         The gait at each value.
     period_doubling : ndarray, shape (P,)
         Parameter values (linearly interpolated) where a real multiplier crosses -1.
@@ -1121,7 +968,7 @@ class Continuation(ResultDictMixin):
 
     parameter: str
     values: FloatArray
-    cycles: tuple[LimitCycle, ...]
+    cycles: tuple[Gait, ...]
     period_doubling: FloatArray
     stopped: str | None
 
@@ -1197,7 +1044,7 @@ def continue_limit_cycle(
 
     last_error: list[GaitNotFoundError] = []
 
-    def correct(v: float, z: FloatArray, it: int) -> tuple[LimitCycle, FloatArray, int, float]:
+    def correct(v: float, z: FloatArray, it: int) -> tuple[Gait, FloatArray, int, float]:
         w, s = at(v)
         try:
             c = find_limit_cycle(w, slope=s, guess=z, **{**kwargs, "max_iter": it})
@@ -1206,7 +1053,7 @@ def continue_limit_cycle(
             raise
         return c, c.fixed_point, c.iterations, float("nan")
 
-    cycles: list[LimitCycle] = []
+    cycles: list[Gait] = []
     found: list[float] = []
     stopped = None
     max_iter = int(kwargs.get("max_iter", 20))

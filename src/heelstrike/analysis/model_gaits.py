@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, cast
 
 import numpy as np
@@ -27,10 +27,10 @@ from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
 from heelstrike.analysis._continuation import PARAMETER_STEP, SLOPE_STEP, Point, follow
 from heelstrike.analysis._memory import require_budget
+from heelstrike.analysis.gaits import Gait, StepBook
 from heelstrike.analysis.heel_strike import loss_per_metre, trailing_foot_lifts
 from heelstrike.analysis.limit_cycle import (
     GaitNotFoundError,
-    LimitCycle,
     PoincareMap,
     _add_distinct,
     _check_passive_slope,
@@ -42,7 +42,6 @@ from heelstrike.core.complementarity import CandidateContact, resolve_impact
 from heelstrike.dynamics.backends import simulator as backend_simulator
 from heelstrike.dynamics.hybrid import PushOff
 from heelstrike.dynamics.phased import (
-    PhasedImpact,
     PhasedWalker,
     PhasedWalkResult,
 )
@@ -59,9 +58,7 @@ __all__ = [
     "TWO_SIDED_FLOOR",
     "GaitLocks",
     "ImpactMap",
-    "ModelGait",
     "ModelHeelStrike",
-    "StepBook",
     "check_impact_map_memory",
     "find_model_gait",
     "find_model_gaits",
@@ -80,137 +77,6 @@ ANGLE = "angle"
 
 
 # -- gaits --------------------------------------------------------------------------------------
-@dataclass(frozen=True, kw_only=True)
-class StepBook(ResultDictMixin):
-    """The energy book of one step of a gait's period (Font & Kövecses 2008, eqs. 14-15).
-
-    Attributes
-    ----------
-    step : int
-        Step index in the period (0-based; 0 and 1 for the stride of a walker whose legs
-        differ, leg A then leg B in stance).
-    duration : float
-        Step duration (s).
-    step_length : float
-        Distance walked along the ground (m).
-    collision_loss : float
-        Sum of ``T_c`` over the step's impacts (knee strikes and its heel strike) (J).
-    potential_energy_released : float
-        Potential energy released from the step's start to its heel strike (J).
-    actuator_work : float
-        Actuator work in the step, push-off included (J).
-    kinetic_energy_gained : float
-        ``actuator_work + potential_energy_released - collision_loss`` (J): the kinetic
-        energy the step hands on to the next (just after its heel strike minus just after the
-        previous one); zero on each step of a symmetric walker's gait, opposite on the two
-        steps of a stride.
-    kinetic_energy_pre, kinetic_energy_admissible : float
-        ``T`` and ``T_a`` (J) just before each of the step's impacts, summed over them as
-        ``collision_loss`` sums ``T_c`` (eq. 10 impact by impact: ``T = T_c + T_a``), so
-        ``kinetic_energy_pre = collision_loss + kinetic_energy_admissible``.
-    impact_angle : float
-        Stance-leg angle at the step's heel strike (rad).
-    """
-
-    step: int
-    duration: float
-    step_length: float
-    collision_loss: float
-    potential_energy_released: float
-    actuator_work: float
-    kinetic_energy_gained: float
-    kinetic_energy_pre: float = 0.0
-    kinetic_energy_admissible: float = 0.0
-    impact_angle: float = 0.0
-
-
-@dataclass(frozen=True, kw_only=True)
-class ModelGait(ResultDictMixin):
-    """A period-one gait of a described walker with its energy book.
-
-    The period is :attr:`~heelstrike.models.base.PlanarWalker.steps_per_period` steps: one,
-    or for a walker whose legs differ the stride (a step on each leg), whose totals are given
-    here and each step's book in ``steps``.
-
-    Attributes
-    ----------
-    cycle : LimitCycle
-        Fixed point, period, multipliers... (``cycle.collision_loss`` is the heel strikes' only).
-    impacts : tuple of PhasedImpact
-        Every impact of one period (knee strikes, then the heel strike, step by step).
-    collision_loss : float
-        Sum of ``T_c`` over the period's impacts (J).
-    actuator_work : float
-        Actuator work per period, push-off included (J).
-    potential_energy_released : float
-        Potential energy released per period (J).
-    energy_residual : float
-        ``actuator_work + potential_energy_released - collision_loss`` (J); ~0 on the gait.
-    hanging_links : tuple of str
-        The links described upright that the gait carries hanging, at its post-impact
-        configuration (:func:`hanging_links`): a gait of the hanging link, not of the upright
-        one. Empty for walkers without such links.
-    steps : tuple of StepBook
-        The energy book of each step of the period.
-    """
-
-    cycle: LimitCycle
-    impacts: tuple[PhasedImpact, ...]
-    collision_loss: float
-    actuator_work: float
-    potential_energy_released: float
-    energy_residual: float
-    hanging_links: tuple[str, ...] = ()
-    steps: tuple[StepBook, ...] = ()
-
-    @property
-    def eta(self) -> float:
-        """Total collision loss per metre walked (J/m)."""
-        return float(loss_per_metre(self.collision_loss, self.cycle.step_length))
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready summary: the compass-gait keys over one period, ``"per"`` saying which
-        (``"step"``, or ``"stride"`` for a walker whose legs differ), ``impacts`` listing each
-        impact's kind, ``T``, ``T_c``, ``T_a`` (J) and ``steps`` each step's
-        :class:`StepBook`.
-
-        Every energy at the top level is the period's: ``collision_loss`` (= the added
-        ``kinetic_energy_constrained``), ``kinetic_energy_pre`` and
-        ``kinetic_energy_admissible`` are the sums of ``T_c``, ``T`` and ``T_a`` over the
-        period's impacts (knee strikes included; equal to the sums over ``steps``), so that
-        ``kinetic_energy_pre = collision_loss + kinetic_energy_admissible``; the work, the
-        potential energy released, ``period``, ``step_length`` and ``speed`` are the period's
-        too, ``eta`` the loss per metre. ``impact_angle`` is the first step's heel strike's
-        (each step's is in ``steps``); ``multipliers`` are the period map's.
-        """
-        d = self.cycle.to_dict()
-        d["per"] = "stride" if len(self.steps) > 1 else "step"
-        d["collision_loss"] = self.collision_loss
-        d["kinetic_energy_pre"] = float(sum(e.kinetic_energy for e in self.impacts))
-        d["kinetic_energy_constrained"] = float(
-            sum(e.kinetic_energy_constrained for e in self.impacts))
-        d["kinetic_energy_admissible"] = float(
-            sum(e.kinetic_energy_admissible for e in self.impacts))
-        d["eta"] = self.eta
-        d["actuator_work"] = self.actuator_work
-        d["potential_energy_released"] = self.potential_energy_released
-        d["energy_residual"] = self.energy_residual
-        d["impacts"] = [
-            {
-                "kind": e.kind,
-                "T": e.kinetic_energy,
-                "T_c": e.kinetic_energy_constrained,
-                "T_a": e.kinetic_energy_admissible,
-                "time": e.time,
-                "step": e.step,
-            }
-            for e in self.impacts
-        ]
-        d["steps_per_period"] = len(self.steps)
-        d["steps"] = [b.to_dict() for b in self.steps]
-        return d
-
-
 def _grid_guesses(walker: PhasedWalker, *, fine: bool = False) -> list[FloatArray]:
     """Seeds on the walker's section: stance angles, stance and swing rates
     (:meth:`~heelstrike.models.base.PlanarWalker.section_point`), the rates scaled by the
@@ -245,9 +111,11 @@ ATTRACTOR_SEEDS, ATTRACTOR_STEPS = 40, 50
 REFERENCE_SLOPE = float(np.deg2rad(3.0))
 
 
-def _energy_book(cycle: LimitCycle, walker: PlanarWalker) -> ModelGait:
-    """The gait's energy book from its one-step walk (every impact of the period), and the
-    ``walker``'s links it carries hanging."""
+def _energy_book(cycle: Gait, walker: PlanarWalker) -> Gait:
+    """The gait ``cycle`` (its ``collision_loss`` the heel strikes') with the energy book of
+    its one-period walk (every impact of the period) and the ``walker``'s links it carries
+    hanging: ``collision_loss``, ``eta``, ``actuator_work`` and ``potential_energy_released``
+    become the period's totals over every impact."""
     walk = cycle.walk
     assert isinstance(walk, PhasedWalkResult)
     impacts = walk.events
@@ -268,13 +136,16 @@ def _energy_book(cycle: LimitCycle, walker: PlanarWalker) -> ModelGait:
     loss = float(sum(b.collision_loss for b in books))
     work = float(sum(b.actuator_work for b in books))
     released = float(sum(b.potential_energy_released for b in books))
-    return ModelGait(
-        cycle=cycle,
+    return replace(
+        cycle,
         impacts=impacts,
         collision_loss=loss,
+        eta=float(loss_per_metre(loss, cycle.step_length)),
         actuator_work=work,
         potential_energy_released=released,
         energy_residual=work + released - loss,
+        kinetic_energy_pre=float(sum(b.kinetic_energy_pre for b in books)),
+        kinetic_energy_admissible=float(sum(b.kinetic_energy_admissible for b in books)),
         hanging_links=hanging_links(walker, cycle.q, cycle.slope),
         steps=tuple(books),
     )
@@ -339,7 +210,7 @@ def find_model_gaits(
     backend: str = "compiled",
     from_reference: bool = True,
     every_start: bool = False,
-) -> tuple[ModelGait, ...]:
+) -> tuple[Gait, ...]:
     """Find the period-one gaits of a described walker, the stable one first, with energy books.
 
     Without ``guess`` the search has two stages:
@@ -388,7 +259,7 @@ def find_model_gaits(
 
     Returns
     -------
-    tuple of ModelGait
+    tuple of Gait
         The distinct gaits found (fixed points further apart than ``SAME_GAIT_TOL``): stable
         before unstable, then by increasing spectral radius.
 
@@ -414,11 +285,11 @@ def find_model_gaits(
     # stage 1: Newton from each start until a stable gait is found (on the compiled backend
     # then from the finer grid's attractors and most nearly periodic seeds)
     last: Exception | None = None
-    found: list[LimitCycle] = []
+    found: list[Gait] = []
     points: list[FloatArray] = []
     finer = ""
 
-    def add(cycle: LimitCycle) -> None:
+    def add(cycle: Gait) -> None:
         if _add_distinct(points, np.asarray(cycle.fixed_point, dtype=float)):
             found.append(cycle)
 
@@ -472,7 +343,7 @@ def find_model_gaits(
     return gaits
 
 
-def _closed_model_books(gaits: tuple[ModelGait, ...], slope: float) -> tuple[ModelGait, ...]:
+def _closed_model_books(gaits: tuple[Gait, ...], slope: float) -> tuple[Gait, ...]:
     """The passive gaits whose energy books close: the step's collision losses (every
     impact's) equal the potential energy released, both positive, to within
     :data:`~heelstrike.analysis.limit_cycle.ENERGY_BOOKS_RTOL` of the larger; raise
@@ -480,7 +351,7 @@ def _closed_model_books(gaits: tuple[ModelGait, ...], slope: float) -> tuple[Mod
     energies on a slope too small to resolve)."""
     from heelstrike.analysis.limit_cycle import ENERGY_BOOKS_RTOL
 
-    def closes(g: ModelGait) -> bool:
+    def closes(g: Gait) -> bool:
         loss, supplied = g.collision_loss, g.potential_energy_released + g.actuator_work
         return bool(np.isfinite(loss) and np.isfinite(supplied) and loss > 0 and supplied > 0
                     and abs(loss - supplied) <= ENERGY_BOOKS_RTOL * max(loss, supplied))
@@ -527,7 +398,7 @@ def _follow_reference(
                                  atol=atol, backend=backend, from_reference=False)[0]
     except (GaitNotFoundError, ValueError):
         return None
-    if not start.cycle.stable:
+    if not start.stable:
         return None
     # the sub-step bound: at most SLOPE_STEP of slope and PARAMETER_STEP (relative) of each
     # changed parameter per sub-step, as in map
@@ -553,8 +424,8 @@ def _follow_reference(
                                                          push_off=push_off))
         return c, np.asarray(c.fixed_point, dtype=float), int(c.iterations), float("nan")
 
-    z0 = np.asarray(start.cycle.fixed_point, dtype=float)
-    (end,), _ = follow(solve, Point(value=0.0, z=z0, mnr=float("nan"), gait=start.cycle),
+    z0 = np.asarray(start.fixed_point, dtype=float)
+    (end,), _ = follow(solve, Point(value=0.0, z=z0, mnr=float("nan"), gait=start),
                         [1.0], h)
     return None if end is None else end.z
 
@@ -571,7 +442,7 @@ def find_model_gait(
     rtol: float = 1e-11,
     atol: float = 1e-11,
     backend: str = "compiled",
-) -> ModelGait:
+) -> Gait:
     """Find a period-one gait of a described walker and its energy book: the first (preferred)
     gait of :func:`find_model_gaits` (a stable one when one is found).
 
@@ -583,7 +454,7 @@ def find_model_gait(
 
     Returns
     -------
-    ModelGait
+    Gait
 
     Raises
     ------
@@ -650,7 +521,7 @@ LOCK_TORQUE_SAMPLES = 200
 
 
 def lock_torque_ranges(
-    walker: PlanarWalker, cycle: LimitCycle, *, backend: str = "compiled"
+    walker: PlanarWalker, cycle: Gait, *, backend: str = "compiled"
 ) -> dict[str, tuple[float, float]]:
     """The smallest and largest torque each lock exerts over one step of a gait.
 
@@ -664,7 +535,7 @@ def lock_torque_ranges(
     ----------
     walker : PlanarWalker
         A described walker with lockable joints (others: an empty dict).
-    cycle : LimitCycle
+    cycle : Gait
         Its gait (``q``, ``q_dot``, ``period``, ``slope``).
     backend : {"compiled", "scipy"}
         Where to walk the step.
@@ -723,7 +594,7 @@ class GaitLocks(ResultDictMixin):
     two_sided: dict[str, tuple[float, float]]
 
 
-def gait_locks(walker: PlanarWalker, cycle: LimitCycle, *, backend: str = "compiled") -> GaitLocks:
+def gait_locks(walker: PlanarWalker, cycle: Gait, *, backend: str = "compiled") -> GaitLocks:
     """The torques the locks of ``walker`` exert over one step of its gait ``cycle``, and which
     of them are two-sided (:func:`lock_torque_ranges`, :func:`two_sided_locks`).
 
@@ -731,7 +602,7 @@ def gait_locks(walker: PlanarWalker, cycle: LimitCycle, *, backend: str = "compi
     ----------
     walker : PlanarWalker
         A described walker (without lockable joints: no ranges).
-    cycle : LimitCycle
+    cycle : Gait
         Its gait.
     backend : {"compiled", "scipy"}
         Where to walk the step.

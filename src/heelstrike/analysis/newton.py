@@ -36,7 +36,7 @@ Residual = Callable[[FloatArray], FloatArray]
 
 class SearchTimeLimitWarning(UserWarning):
     """A search reached its time limit: what it found by then is returned, and it may have
-    missed solutions (e.g. :func:`heelstrike.analysis.find_limit_cycles`)."""
+    missed solutions (e.g. :func:`heelstrike.analysis.limit_cycle.find_limit_cycles`)."""
 
 
 @dataclass(frozen=True, kw_only=True)

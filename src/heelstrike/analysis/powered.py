@@ -50,7 +50,7 @@ normal velocity is exactly zero, so :func:`heelstrike.dynamics.hybrid.simulate` 
 ``trailing_foot_stays``. Here that outcome is accepted *only* for a wheel (``R = l``) and only if
 the trailing foot's normal velocity is zero to round-off (it grazes: the "other" contact is the
 same point); the legs are then relabelled by hand and the gait is flagged
-:attr:`PoweredGait.trailing_foot_grazes`. For ``R < l`` the outcome remains a failure.
+:attr:`Gait.trailing_foot_grazes`. For ``R < l`` the outcome remains a failure.
 """
 
 from __future__ import annotations
@@ -62,12 +62,13 @@ from dataclasses import dataclass, field
 from typing import Any, Literal, TypeVar
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
 from heelstrike._units import UNITS
 from heelstrike.analysis._gait_order import first_gait, is_stable, ordered_gaits
+from heelstrike.analysis.gaits import Actuation, Gait
 from heelstrike.analysis.heel_strike import loss_per_metre
 from heelstrike.analysis.limit_cycle import leg_crossings
 from heelstrike.analysis.newton import floquet_multipliers
@@ -94,7 +95,6 @@ __all__ = [
     "ACTUATIONS",
     "WHEEL_FAMILY",
     "ActuationFamily",
-    "PoweredGait",
     "PoweredGaitNotFoundError",
     "SearchLimitError",
     "actuation_family",
@@ -450,162 +450,6 @@ def powered_step(
         energy_end=float(mechanical_energy(walker, qf, qdf)),
         trailing_foot_grazes=grazes,
     )
-
-
-@dataclass(frozen=True, kw_only=True)
-class PoweredGait(ResultDictMixin):
-    """A period-one powered gait on level ground and its energy books (per step).
-
-    Attributes
-    ----------
-    actuation : str
-        Actuation model name.
-    parameter_name, parameter_unit : str
-        The actuation parameter found by Newton and its unit.
-    parameter : float
-        Its value (N s, J or rad).
-    fixed_point : ndarray, shape (d,)
-        Section coordinates just after heel strike (``section_names``).
-    period : float
-        Step duration (s).
-    step_length : float
-        Distance per step along the ground (m), ``L_S``.
-    speed : float
-        ``step_length / period`` (m/s).
-    impact_angle : float
-        ``q3`` at heel strike (rad).
-    actuator_work : float
-        ``W_act`` per step (J), push-off included.
-    push_off_work : float
-        Work of the push-off impulse alone (J).
-    collision_loss : float
-        ``|W_col| = T_c`` per step (J), eq. (15).
-    energy_change : float
-        Change of mechanical energy ``T + V`` over the step (J); 0 on a periodic gait.
-    energy_balance_error : float
-        ``W_act - T_c - energy_change`` (J): the integration error of the books.
-    cost_of_transport : float
-        ``W_act / (m_total g L_S)`` (dimensionless), ``W_act`` the net actuator work.
-    eta : float
-        ``T_c / L_S`` (J/m), eq. (16).
-    multipliers : ndarray of complex, shape (d,)
-        Floquet multipliers of the map at fixed actuation parameter, largest modulus first.
-    stable : bool
-        All multipliers inside the unit circle.
-    residual : float
-        Norm of the augmented Newton residual at convergence.
-    iterations : int
-        Newton iterations (summed over continuation steps).
-    trailing_foot_lift_velocity : float
-        Normal velocity of the trailing foot just after heel strike (m/s).
-    trailing_foot_grazes : bool
-        Wheel case ``R = l`` (module docstring).
-    walk : WalkResult
-        One simulated period.
-    torque_joint : str
-        The joint the torque law acts across (``"hip"``, or a posture law's joint).
-    model : str or None
-        The described walker's name (None: the compass gait).
-    gains : dict
-        The torque law's gains as used (:func:`law_gains`; empty for the push-off alone): what
-        reproduces the gait, the hip laws' defaults being scaled to the walker.
-    leg_crossings : int or None
-        How many times the swing leg crosses the stance leg during the step
-        (:func:`leg_crossings`): 1 for an ordinary step; more for a multi-swing gait, whose
-        swing foot passes through the ground away from mid-stance, outside the scuffing
-        convention (see :func:`preferred_gait`). None if the walk was not sampled densely.
-    """
-
-    actuation: str
-    parameter_name: str
-    parameter_unit: str
-    parameter: float
-    fixed_point: FloatArray
-    section_names: tuple[str, ...]
-    period: float
-    step_length: float
-    speed: float
-    impact_angle: float
-    actuator_work: float
-    push_off_work: float
-    collision_loss: float
-    energy_change: float
-    energy_balance_error: float
-    cost_of_transport: float
-    eta: float
-    multipliers: NDArray[np.complex128]
-    stable: bool
-    residual: float
-    iterations: int
-    trailing_foot_lift_velocity: float
-    trailing_foot_grazes: bool
-    walk: WalkResult = field(repr=False)
-    torque_joint: str = "hip"
-    model: str | None = None
-    gains: dict[str, float] = field(default_factory=dict)
-    leg_crossings: int | None = None
-
-    @property
-    def multi_swing(self) -> bool:
-        """Whether the swing leg crosses the stance leg more than once in the step."""
-        return self.leg_crossings is not None and self.leg_crossings > 1
-
-    @property
-    def torque_work(self) -> float:
-        """Work of the torque law during single support (J), across :attr:`torque_joint`."""
-        return self.actuator_work - self.push_off_work
-
-    @property
-    def hip_work(self) -> float:
-        """Work of the hip torque during single support (J); 0 if the torque acts elsewhere."""
-        return self.torque_work if self.torque_joint == "hip" else 0.0
-
-    @property
-    def books_gap(self) -> float:
-        """How far the gait's energy books are from closing, relative to their size
-        (:func:`books_gap`); a report notes it above :data:`BOOKS_NOTE`."""
-        return books_gap(self)
-
-    @property
-    def books_noted(self) -> bool:
-        """Whether :attr:`books_gap` exceeds :data:`BOOKS_NOTE`: the gait is resolved no
-        better than that (a report says so)."""
-        return self.books_gap > BOOKS_NOTE
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready summary (SI units)."""
-        return {
-            "actuation": self.actuation,
-            "parameter_name": self.parameter_name,
-            "parameter_unit": self.parameter_unit,
-            "parameter": self.parameter,
-            "period": self.period,
-            "step_length": self.step_length,
-            "speed": self.speed,
-            "impact_angle": self.impact_angle,
-            "actuator_work": self.actuator_work,
-            "push_off_work": self.push_off_work,
-            "hip_work": self.hip_work,
-            "torque_joint": self.torque_joint,
-            "torque_work": self.torque_work,
-            "model": self.model,
-            "gains": dict(self.gains),
-            "collision_loss": self.collision_loss,
-            "energy_change": self.energy_change,
-            "energy_balance_error": self.energy_balance_error,
-            "cost_of_transport": self.cost_of_transport,
-            "eta": self.eta,
-            "stable": bool(self.stable),
-            "multipliers": [float(abs(m)) for m in self.multipliers],
-            "multipliers_complex": [[float(m.real), float(m.imag)] for m in self.multipliers],
-            "fixed_point": dict(zip(self.section_names, map(float, self.fixed_point), strict=True)),
-            "residual": self.residual,
-            "trailing_foot_lift_velocity": self.trailing_foot_lift_velocity,
-            "trailing_foot_grazes": bool(self.trailing_foot_grazes),
-            "leg_crossings": self.leg_crossings,
-        }
-
-
 
 
 #: Integrator tolerance (``rtol = atol``) of the search stage: the seed, Newton from the seed and
@@ -1257,7 +1101,7 @@ def find_powered_gait(
     seed_sections: tuple[tuple[float, ...], ...] | None = None,
     passive_gait: Callable[[float], ArrayLike] | None = None,
     other_than: Sequence[ArrayLike] | None = None,
-) -> PoweredGait:
+) -> Gait:
     """Find a period-one level-ground gait with a given speed or step length.
 
     Several gaits can meet one target. This returns the one its search reaches: the seed gait
@@ -1332,7 +1176,7 @@ def find_powered_gait(
 
     Returns
     -------
-    PoweredGait
+    Gait
 
     Raises
     ------
@@ -1399,7 +1243,7 @@ def find_powered_gait(
 def _find(
     prob: _Problem, target: Target, value: float, guess: ArrayLike | None, tol: float,
     max_iter: int, fd_step: float, max_continuation: int, fallback: bool,
-) -> PoweredGait:
+) -> Gait:
     """The search of :func:`find_powered_gait`.
 
     Two stages. The *search* runs on the map integrated at :data:`SEARCH_TOLERANCE`: Newton
@@ -1414,7 +1258,7 @@ def _find(
     s_h = max(fd_step, SEARCH_FD_STEP)
     accept = 10.0 * s_tol
 
-    def finish(x: FloatArray, J: FloatArray, its: int) -> PoweredGait:
+    def finish(x: FloatArray, J: FloatArray, its: int) -> Gait:
         x, res, it = _polish(prob, x, value, tol, J, max_iter, fd_step)
         gait = _characterise(prob, x, res, its + it, fd_step)
         return _books_refined(prob, gait, x, value, tol, J, max_iter, fd_step)
@@ -1579,7 +1423,7 @@ def _find(
 def _find_other(
     prob: _Problem, value: float, known: list[FloatArray], tol: float, max_iter: int,
     fd_step: float,
-) -> PoweredGait:
+) -> Gait:
     """The ``other_than`` search of :func:`find_powered_gait`: a gait at the target ``value``
     other than the ``known`` ones (each shape (d + 1,)), by :func:`_deflated_gaits` on the
     search map, then polished and measured on the accurate map as :func:`_find` does."""
@@ -1669,12 +1513,20 @@ def _rescue(
     return x, it, J
 
 
-def books_gap(gait: PoweredGait) -> float:
+def _augmented(gait: Gait) -> FloatArray:
+    """The powered ``gait``'s unknowns of the augmented map: its fixed point and actuation
+    parameter, shape (d + 1,)."""
+    if gait.actuation is None:
+        raise ValueError("a passive gait has no actuation parameter")
+    return np.append(gait.fixed_point, gait.actuation.parameter)
+
+
+def books_gap(gait: Gait) -> float:
     """How far a powered gait's energy books are from closing, relative to their size.
 
     Parameters
     ----------
-    gait : PoweredGait
+    gait : Gait
 
     Returns
     -------
@@ -1689,9 +1541,9 @@ def books_gap(gait: PoweredGait) -> float:
 
 
 def _books_refined(
-    prob: _Problem, gait: PoweredGait, x: FloatArray, value: float, tol: float, J: FloatArray,
+    prob: _Problem, gait: Gait, x: FloatArray, value: float, tol: float, J: FloatArray,
     max_iter: int, fd_step: float,
-) -> PoweredGait:
+) -> Gait:
     """``gait`` converged again at tighter tolerances if its books disagree by more than
     :data:`BOOKS_RTOL` (:func:`books_gap`), else ``gait``.
 
@@ -1732,7 +1584,7 @@ def _section_jacobian(prob: _Problem, x: FloatArray, fd_step: float) -> FloatArr
 
 def _characterise(
     prob: _Problem, x: FloatArray, residual: float, iterations: int, fd_step: float
-) -> PoweredGait:
+) -> Gait:
     """The gait at ``x`` on the accurate map: books, and multipliers of ``DP``.
 
     ``DP`` by central differences (``2 d`` steps), step ``max(fd_step, sqrt(rtol))`` times
@@ -1759,35 +1611,49 @@ def _characterise(
             else rec.energy_lost)
     desc = walker.description
     law, _ = prob.family.build(walker, float(x[-1]))
-    return PoweredGait(
-        actuation=prob.family.name,
-        parameter_name=prob.family.parameter_name,
-        parameter_unit=prob.family.parameter_unit,
-        parameter=float(x[-1]),
+    q, q_dot = walker.section_to_state(np.asarray(z, dtype=float))
+    work = float(rec.actuator_work)
+    return Gait(
         fixed_point=np.asarray(z, dtype=float),
         section_names=tuple(walker.section_names),
+        q=np.asarray(q, dtype=float),
+        q_dot=np.asarray(q_dot, dtype=float),
         period=rec.step_duration,
         step_length=L,
         speed=L / rec.step_duration,
         impact_angle=rec.impact_angle,
-        actuator_work=rec.actuator_work,
-        push_off_work=rec.push_off_work,
-        collision_loss=loss,
-        energy_change=dE,
-        energy_balance_error=rec.actuator_work - loss - dE,
-        cost_of_transport=rec.actuator_work / (m * g * L),
-        eta=float(loss_per_metre(loss, L)),
         multipliers=mult,
         stable=is_stable(mult),
+        collision_loss=loss,
+        kinetic_energy_pre=float(rec.kinetic_energy),
+        kinetic_energy_admissible=float(rec.kinetic_energy_admissible),
+        eta=float(loss_per_metre(loss, L)),
+        potential_energy_released=float(rec.potential_energy_released),
+        actuator_work=work,
         residual=residual,
         iterations=iterations,
+        slope=float(prob.slope),
+        leg_crossings=leg_crossings(walker, st.walk),
+        impacts=tuple(events),
+        energy_residual=work + float(rec.potential_energy_released) - loss,
+        energy_change=dE,
+        energy_balance_error=work - loss - dE,
+        cost_of_transport=work / (m * g * L),
         trailing_foot_lift_velocity=rec.trailing_normal_velocity,
         trailing_foot_grazes=st.trailing_foot_grazes,
+        stability_undecided=bool(walker.is_wheel),
+        actuation=Actuation(
+            name=prob.family.name,
+            parameter_name=prob.family.parameter_name,
+            parameter_unit=prob.family.parameter_unit,
+            parameter=float(x[-1]),
+            push_off_work=float(rec.push_off_work),
+            torque_work=work - float(rec.push_off_work),
+            torque_joint=prob.family.torque_joint,
+            gains=law_gains(law),
+            model=None if desc is None else str(desc.name),
+        ),
         walk=st.walk,
-        torque_joint=prob.family.torque_joint,
-        model=None if desc is None else str(desc.name),
-        gains=law_gains(law),
-        leg_crossings=leg_crossings(walker, st.walk),
     )
 
 
@@ -1920,7 +1786,7 @@ def find_model_powered_gait(
     posture: bool = True,
     actuation_options: Mapping[str, float] | None = None,
     **options: Any,
-) -> PoweredGait:
+) -> Gait:
     """Level-ground powered gait of a described walker: push-off plus its posture law, or a
     hip law.
 
@@ -1933,7 +1799,7 @@ def find_model_powered_gait(
 
     .. math:: W_{push} + W_{posture} = \\sum T_c,
 
-    since ``T + V`` returns to its value (:attr:`PoweredGait.energy_balance_error` is the
+    since ``T + V`` returns to its value (:attr:`Gait.energy_balance_error` is the
     integration error of that book; ``sum T_c`` counts the knee strikes too).
 
     Walkers without a level-ground seed gait (the kneed walker: its passive gaits end at a
@@ -1973,7 +1839,7 @@ def find_model_powered_gait(
 
     Returns
     -------
-    PoweredGait
+    Gait
         ``torque_joint`` names the law's joint: the posture law's, ``"hip"`` for a hip law or
         without a law (zero work).
 
@@ -2016,7 +1882,7 @@ def find_model_powered_gait(
         gait = find_model_gait(walker, slope=slope, torque=law, backend=backend,
                                tol=PASSIVE_TOLERANCE, rtol=SEARCH_TOLERANCE * 0.1,
                                atol=SEARCH_TOLERANCE * 0.1)
-        return np.asarray(gait.cycle.fixed_point, dtype=float)
+        return np.asarray(gait.fixed_point, dtype=float)
 
     options.setdefault("passive_gait", passive_gait)
     return find_powered_gait(w, actuation=family, speed=speed, step_length=step_length,
@@ -2052,7 +1918,7 @@ def check_model_actuation(walker: Any, actuation: str) -> None:
 def _find_model_hip_law_gait(
     walker: Any, actuation: str, actuation_options: dict[str, float], *,
     speed: float | None, step_length: float | None, backend: str, **options: Any,
-) -> PoweredGait:
+) -> Gait:
     """:func:`find_model_powered_gait` with a hip law (``walker`` a
     :class:`~heelstrike.dynamics.phased.PhasedWalker`)."""
     from heelstrike.dynamics.backends import simulator as backend_simulator
@@ -2067,7 +1933,7 @@ def _find_model_hip_law_gait(
                              simulator=simulator, **options)
 
 
-def energy_book_tables(walker: PlanarWalker, gait: PoweredGait) -> tuple[Any, Any]:
+def energy_book_tables(walker: PlanarWalker, gait: Gait) -> tuple[Any, Any]:
     """The energy of one period of a powered gait, for
     :func:`heelstrike.plots.gait.energy_figure`.
 
@@ -2075,7 +1941,7 @@ def energy_book_tables(walker: PlanarWalker, gait: PoweredGait) -> tuple[Any, An
     ----------
     walker : PlanarWalker
         The walker the gait was found for.
-    gait : PoweredGait
+    gait : Gait
 
     Returns
     -------
@@ -2168,14 +2034,14 @@ _FRESH_STARTS = ((0.6, -0.3), (0.9, -0.3))
 def _solver(
     base: CompassGait, model: Any | None, actuation: str, actuation_options: dict[str, float],
     backend: str | None,
-) -> Callable[..., PoweredGait]:
+) -> Callable[..., Gait]:
     """``solve(radius, **options)``: the powered gait of the compass gait ``base`` (or of the
     described ``model``) with foot radius ``radius`` (m), by
     :func:`~heelstrike.analysis.powered.find_powered_gait` (or
     :func:`~heelstrike.analysis.powered.find_model_powered_gait`) on ``backend``."""
     family = actuation_family(actuation, **actuation_options)
 
-    def solve(radius: float, **opts: Any) -> PoweredGait:
+    def solve(radius: float, **opts: Any) -> Gait:
         if model is None:
             w = base.replace(foot_radius=radius)
             sim = family_simulator(w, family, backend)
@@ -2200,7 +2066,7 @@ def powered_gaits(
     backend: str | None = None,
     actuation_options: dict[str, float] | None = None,
     **kwargs: Any,
-) -> list[PoweredGait]:
+) -> list[Gait]:
     """Every distinct powered gait the cost study meets at one design point, cheapest first.
 
     The study's fresh search at a grid point without neighbours: the seed search of
@@ -2244,7 +2110,7 @@ def powered_gaits(
 
     Returns
     -------
-    list of PoweredGait
+    list of Gait
         Distinct gaits (fixed point and parameter differing by more than 1e-4): ordinary steps
         first, stable before unstable, each group by actuator work (a multi-swing gait last).
 
@@ -2272,11 +2138,11 @@ def powered_gaits(
     gaits += _other_gaits(solve, float(radius), _seed_walker(base, model, float(radius)),
                           gaits, speed, step_length, kwargs)
     tol = float(kwargs.get("tol", 1e-9))
-    polished: list[PoweredGait] = []
+    polished: list[Gait] = []
     for g in gaits:
         if g.residual > tol:  # a fresh start's looser tolerance
             try:
-                g = solve(float(radius), guess=np.append(g.fixed_point, g.parameter),
+                g = solve(float(radius), guess=_augmented(g),
                           speed=speed, step_length=step_length, fallback=False, **kwargs)
             except (PoweredGaitNotFoundError, ValueError):
                 continue
@@ -2285,8 +2151,7 @@ def powered_gaits(
     if not polished:
         assert err is not None
         raise err
-    wheel = bool(_seed_walker(base, model, float(radius)).is_wheel)  # stability undecided
-    return ordered_gaits(polished, undecided=wheel)
+    return ordered_gaits(polished)  # McGeer's wheel: each gait's stability_undecided
 
 
 #: Foot radius (fraction of the leg length) above which :func:`powered_gaits` also continues the
@@ -2301,10 +2166,10 @@ NEAR_WHEEL_STEP = 0.05
 
 
 def _gaits_from_farther_radius(
-    solve: Callable[..., PoweredGait], base: CompassGait, model: Any | None,
+    solve: Callable[..., Gait], base: CompassGait, model: Any | None,
     family: ActuationFamily, r: float, speed: float | None, length: float | None,
     kwargs: dict[str, Any],
-) -> list[PoweredGait]:
+) -> list[Gait]:
     """Gaits at radius ``r`` (m) continued in the radius from ``NEAR_WHEEL l``, when ``r`` is
     above it (else none): the fresh search there, then Newton along radii at most
     ``NEAR_WHEEL_STEP l`` apart."""
@@ -2315,14 +2180,14 @@ def _gaits_from_farther_radius(
     start, _ = _fresh_gaits(solve, r0, _seed_walker(base, model, r0), family, speed, length,
                             kwargs)
     n_sub = max(1, int(np.ceil((r - r0) / (NEAR_WHEEL_STEP * leg) - 1e-9)))
-    found: list[PoweredGait] = []
+    found: list[Gait] = []
     for g in start:
-        x = np.append(g.fixed_point, g.parameter)
+        x = _augmented(g)
         try:
             for r_sub in np.linspace(r0, r, n_sub + 1)[1:]:
                 g = solve(float(r_sub), guess=x, speed=speed, step_length=length,
                           fallback=False, **kwargs)
-                x = np.append(g.fixed_point, g.parameter)
+                x = _augmented(g)
         except (PoweredGaitNotFoundError, ValueError):
             continue
         found.append(g)
@@ -2345,9 +2210,9 @@ ANCHOR_STEPS = 4
 
 
 def _gaits_from_anchor_targets(
-    solve: Callable[..., PoweredGait], r: float, speed: float | None, length: float | None,
+    solve: Callable[..., Gait], r: float, speed: float | None, length: float | None,
     kwargs: dict[str, Any],
-) -> list[PoweredGait]:
+) -> list[Gait]:
     """Gaits at the target continued from the seed search at :data:`ANCHOR_FACTORS` times it
     (radius ``r``, m); none where a search or a continuation fails. A time limit in
     ``kwargs`` bounds all of them together."""
@@ -2355,7 +2220,7 @@ def _gaits_from_anchor_targets(
     value = float(speed if speed is not None else length)  # type: ignore[arg-type]
     limit = kwargs.get("time_limit")
     deadline = time.monotonic() + float(limit) if limit is not None else float("inf")
-    found: list[PoweredGait] = []
+    found: list[Gait] = []
     for factor in ANCHOR_FACTORS:
         left = deadline - time.monotonic()
         if left <= 0:
@@ -2364,7 +2229,7 @@ def _gaits_from_anchor_targets(
         try:
             g = solve(r, **{target: value * factor}, **opts)
             for v in np.geomspace(value * factor, value, ANCHOR_STEPS + 1)[1:]:
-                g = solve(r, guess=np.append(g.fixed_point, g.parameter), fallback=False,
+                g = solve(r, guess=_augmented(g), fallback=False,
                           **{target: float(v)}, **opts)
         except (PoweredGaitNotFoundError, ValueError):
             continue
@@ -2372,12 +2237,12 @@ def _gaits_from_anchor_targets(
     return found
 
 
-def preferred_gait(gaits: Sequence[PoweredGait], *, undecided: bool = False) -> PoweredGait:
+def preferred_gait(gaits: Sequence[Gait]) -> Gait:
     """The gait ``heelstrike powered`` and ``study cost`` report among several meeting one
     target: the first in the one order of gaits
     (:func:`~heelstrike.analysis._gait_order.gait_order`), the stable one needing the least
     actuator work, else (none stable) the one needing the least work; among ordinary steps
-    first, a multi-swing gait (:attr:`PoweredGait.multi_swing`, its swing foot through the
+    first, a multi-swing gait (:attr:`Gait.multi_swing`, its swing foot through the
     ground away from mid-stance) only where no other meets the target.
 
     A stable gait is one the walker walks with this actuation alone (as ``gait`` prefers the
@@ -2385,20 +2250,19 @@ def preferred_gait(gaits: Sequence[PoweredGait], *, undecided: bool = False) -> 
 
     Parameters
     ----------
-    gaits : sequence of PoweredGait
-        Non-empty, e.g. :func:`powered_gaits`.
-    undecided : bool
-        Their stability is undecided (McGeer's wheel, :data:`WHEEL_FAMILY`): the one needing
-        the least work.
+    gaits : sequence of Gait
+        Non-empty, e.g. :func:`powered_gaits`. Gaits whose stability is undecided
+        (:attr:`~heelstrike.analysis.gaits.Gait.stability_undecided`: McGeer's wheel,
+        :data:`WHEEL_FAMILY`) are ordered by work alone: the one needing the least first.
     """
-    return first_gait(gaits, undecided=undecided)
+    return first_gait(gaits)
 
 
-def _same_gait(a: PoweredGait, b: PoweredGait, tol: float = 1e-4) -> bool:
+def _same_gait(a: Gait, b: Gait, tol: float = 1e-4) -> bool:
     """Whether two gaits are one (fixed point and parameter within ``tol``: the study's fresh
     starts converge to 1e-7 only, and met one gait 1.1e-6 from its polished self, which was
     counted twice at 1e-6; the distinct gaits of issue 32 lie 1e-2 apart)."""
-    xa, xb = np.append(a.fixed_point, a.parameter), np.append(b.fixed_point, b.parameter)
+    xa, xb = _augmented(a), _augmented(b)
     return float(np.linalg.norm(xa - xb)) <= tol
 
 
@@ -2427,11 +2291,11 @@ def _fresh_start(w: Any, q3: float, w3: float, w4: float, p0: float) -> FloatArr
 def _fresh_gaits(
     solve: Any, r: float, w: Any, family: Any, speed: float | None, length: float | None,
     kwargs: dict[str, Any],
-) -> tuple[list[PoweredGait], Exception | None]:
+) -> tuple[list[Gait], Exception | None]:
     """Gaits found without continuation at radius ``r``: the seed search of ``solve`` (the
     compass or described walker's ``find_*powered_gait``) and Newton from
     :data:`_FRESH_STARTS`. Returns the gaits and the seed search's failure (or None)."""
-    gaits: list[PoweredGait] = []
+    gaits: list[Gait] = []
     err: Exception | None = None
     try:
         gaits.append(solve(r, speed=speed, step_length=length, **kwargs))
@@ -2497,30 +2361,30 @@ OTHER_GAIT_ROUNDS = 3
 
 
 def _other_gaits(
-    solve: Callable[..., PoweredGait], r: float, w: Any, gaits: Sequence[PoweredGait],
+    solve: Callable[..., Gait], r: float, w: Any, gaits: Sequence[Gait],
     speed: float | None, length: float | None, kwargs: dict[str, Any],
-) -> list[PoweredGait]:
+) -> list[Gait]:
     """Gaits at radius ``r`` (m) beside the ``gaits`` found, by the deflated search of
     :func:`find_powered_gait` (``other_than``), one more per round while one is found (at most
     :data:`OTHER_GAIT_ROUNDS`); none for McGeer's wheel ``w`` (its gaits at one target form a
     neutral family, :data:`WHEEL_FAMILY`)."""
     if w.is_wheel or not gaits:
         return []
-    known = [np.append(g.fixed_point, g.parameter) for g in gaits]
-    found: list[PoweredGait] = []
+    known = [_augmented(g) for g in gaits]
+    found: list[Gait] = []
     for _ in range(OTHER_GAIT_ROUNDS):
         try:
             g = solve(r, speed=speed, step_length=length, other_than=known, **kwargs)
         except (PoweredGaitNotFoundError, ValueError):
             break
         found.append(g)
-        known.append(np.append(g.fixed_point, g.parameter))
+        known.append(_augmented(g))
     return found
 
 
-def _count_distinct(gaits: Sequence[PoweredGait]) -> int:
+def _count_distinct(gaits: Sequence[Gait]) -> int:
     """Number of distinct gaits (:func:`_same_gait`)."""
-    kept: list[PoweredGait] = []
+    kept: list[Gait] = []
     for g in gaits:
         if all(not _same_gait(g, k) for k in kept):
             kept.append(g)

@@ -141,7 +141,7 @@ def gait_sensitivity(
         :func:`~heelstrike.dynamics.variational.step_jacobian`).
     fixed_point : array_like, shape (d,)
         The gait's fixed point ``z*`` (e.g. the ``fixed_point`` of a
-        :class:`~heelstrike.analysis.limit_cycle.LimitCycle`), converged at about ``rtol``.
+        :class:`~heelstrike.analysis.gaits.Gait`), converged at about ``rtol``.
     parameters : sequence of str
         Names in :attr:`~heelstrike.models.base.PlanarWalker.parameters` (SI units), or
         ``"slope"`` (rad).

@@ -157,8 +157,9 @@ def _print_sensitivity(sens: dict[str, Any]) -> None:
 def _run_gait_model(args: argparse.Namespace) -> int:
     import numpy as np
 
+    from heelstrike.analysis.gaits import find_gaits
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
-    from heelstrike.analysis.model_gaits import REFERENCE_SLOPE, find_model_gaits, gait_locks
+    from heelstrike.analysis.model_gaits import REFERENCE_SLOPE, gait_locks
 
     walker = model_from_args(args)
     backend = args.backend or ("compiled" if walker.supports("compiled") else "scipy")
@@ -168,8 +169,8 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     try:
         # every start on the compiled backend, as the compass search (QA sweep 9: --model
         # compass listed 1 of its 2 gaits); the scipy reference's steps cost ~1000x more
-        gaits = find_model_gaits(walker, slope=args.slope, guess=guess, backend=backend,
-                                 every_start=backend == "compiled")
+        gaits = find_gaits(walker, args.slope, guess=guess, backend=backend,
+                           every_start=backend == "compiled")
     except GaitNotFoundError as exc:
         raise _no_gait(args.slope, exc) from exc
     gait = gaits[0]
@@ -177,13 +178,12 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     d["model"] = walker.description.name
     hanging = [g.hanging_links for g in gaits]
     d["hanging_links"] = list(gait.hanging_links)
-    locks = gait_locks(walker, gait.cycle, backend=backend)
+    locks = gait_locks(walker, gait, backend=backend)
     d["lock_torque_range"] = {k: list(v) for k, v in locks.ranges.items()}
     # each gait's collision loss is its step's total (knee strikes included), as in d
-    d["gaits"] = [_gait_summary(g.cycle) | {"collision_loss": g.collision_loss,
-                                            "hanging_links": list(h)}
+    d["gaits"] = [_gait_summary(g) | {"hanging_links": list(h)}
                   for g, h in zip(gaits, hanging, strict=True)]
-    if guess is None and not gait.cycle.stable:
+    if guess is None and not gait.stable:
         # QA sweep 10: this said "where it has a stable one" of the torso walker, which has none
         reference = abs(float(args.slope) - REFERENCE_SLOPE) <= 1e-12 and all(
             np.array_equal(np.asarray(v, dtype=float),
@@ -203,8 +203,8 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     if args.json:
         print_json(d)
         return 0
-    c = gait.cycle
-    _print_gait_list([g.cycle for g in gaits], hanging)
+    c = gait
+    _print_gait_list(list(gaits), hanging)
     print(f"passive gait of '{d['model']}', slope = {math.degrees(args.slope):g} deg")
     print(f"  fixed point (just after heel strike): {fixed_point_text(d['fixed_point'])}")
     if hanging[0]:
@@ -300,11 +300,8 @@ def _print_gait_list(gaits: Sequence[Any], hanging: Sequence[Sequence[str]] = ()
 
 
 def _run_gait(args: argparse.Namespace) -> int:
-    from heelstrike.analysis.limit_cycle import (
-        GaitNotFoundError,
-        find_limit_cycle,
-        find_limit_cycles,
-    )
+    from heelstrike.analysis.gaits import find_gaits
+    from heelstrike.analysis.limit_cycle import GaitNotFoundError
 
     if not args.slope > 0:
         raise CliError(
@@ -328,13 +325,8 @@ def _run_gait(args: argparse.Namespace) -> int:
         _sensitivity_names(args.sensitivity, walker)  # refuse a bad name before the search
     guess = parse_guess(args.guess)
     try:
-        if guess is None:
-            gaits = find_limit_cycles(
-                walker, slope=args.slope, method=args.backend or "compiled", progress=True
-            )
-        else:
-            gaits = (find_limit_cycle(walker, slope=args.slope, guess=guess,
-                                      method=args.backend or "compiled"),)
+        gaits = find_gaits(walker, args.slope, guess=guess, backend=args.backend or "compiled",
+                           progress=guess is None)
     except GaitNotFoundError as exc:
         raise _no_gait(args.slope, exc) from exc
     cycle = gaits[0]
@@ -420,7 +412,7 @@ def _walk_model(args: argparse.Namespace, walker: Any, out: Any, to_dir: bool) -
         z = parse_floats(args.guess, "--guess", len(walker.section_names))
     else:
         try:
-            cycle = find_model_gait(walker, slope=args.slope, backend=backend).cycle
+            cycle = find_model_gait(walker, slope=args.slope, backend=backend)
         except GaitNotFoundError as exc:
             raise CliError(f"no gait found to start from: {exc}") from exc
         z = list(cycle.fixed_point)

@@ -119,11 +119,12 @@ def add_powered(sub: Any) -> None:
 
 
 def _run_powered(args: argparse.Namespace) -> int:
+    from heelstrike.analysis.gaits import find_gaits
     from heelstrike.analysis.powered import (
+        BOOKS_NOTE,
         DEFAULT_TIME_LIMIT,
         PoweredGaitNotFoundError,
-        powered_gaits,
-        preferred_gait,
+        books_gap,
     )
 
     refuse_unused_gains(args, [args.actuation])
@@ -153,10 +154,8 @@ def _run_powered(args: argparse.Namespace) -> int:
     try:
         # the gaits study cost meets at this design point, in the one order of gaits (the
         # cheapest stable first, issue 32)
-        gaits = powered_gaits(
-            radius, speed=speed, step_length=step_length, actuation=args.actuation,
-            walker=walker if args.model is None else None,
-            model=walker if args.model is not None else None,
+        gaits = find_gaits(
+            walker, 0.0, control=args.actuation, target={target: value},
             backend=args.backend if args.model is None else backend,
             actuation_options=actuation_options(args) or None,
             progress=True, time_limit=limit)
@@ -169,9 +168,12 @@ def _run_powered(args: argparse.Namespace) -> int:
             f"{'m/s' if target == 'speed' else 'm'}"
             f"{declared_note} at R = {radius:g} m: {exc}{hint}"
         ) from exc
-    # McGeer's wheel: every gait's stability is undecided (WHEEL_FAMILY), show the cheapest
-    gait = preferred_gait(gaits, undecided=walker.is_wheel)
-    _note_wheel(walker)
+    # the first in the one order of gaits (McGeer's wheel: every gait's stability is
+    # undecided, WHEEL_FAMILY: the cheapest)
+    gait = gaits[0]
+    _note_wheel(gaits)
+    act = gait.actuation
+    assert act is not None  # a powered gait
     others = [g for g in gaits if g is not gait]
     d = {**gait.to_dict(), "target_speed": speed, "target_step_length": step_length,
          "target_source": source, "backend": backend, "gaits_found": len(gaits),
@@ -186,50 +188,52 @@ def _run_powered(args: argparse.Namespace) -> int:
     if args.json:
         print_json(d)
         return 0
-    label = f"{args.actuation}, {backend} backend" if gait.model is None else \
-        f"{args.actuation}, model {gait.model}, {backend} backend"
+    label = f"{args.actuation}, {backend} backend" if act.model is None else \
+        f"{args.actuation}, model {act.model}, {backend} backend"
     print(f"powered gait ({label}), R = {radius:g} m, level ground")
     unit = "m/s" if target == "speed" else "m"
     given = "the walker's declared target" if source == "walker" else source
     print(f"  target          {target.replace('_', ' ')} {value:g} {unit} ({given})")
     from heelstrike.analysis.powered import actuation_family
 
-    print(f"  {gait.parameter_name:15s} {gait.parameter:10.6g} {gait.parameter_unit} "
-          f"({actuation_family(gait.actuation).parameter_meaning})")
-    if gait.gains:
+    print(f"  {act.parameter_name:15s} {act.parameter:10.6g} {act.parameter_unit} "
+          f"({actuation_family(act.name).parameter_meaning})")
+    if act.gains:
         from heelstrike.analysis.powered import GAIN_UNITS
 
         print("  gains           " + ", ".join(
-            f"{k} {v:g} {GAIN_UNITS[k]}" for k, v in gait.gains.items()))
+            f"{k} {v:g} {GAIN_UNITS[k]}" for k, v in act.gains.items()))
     print(f"  fixed point (just after impact): {fixed_point_text(d['fixed_point'])}")
     print_step_lines(gait)
     print_stability_lines(gait)
     print("  energy books per step")
     # six significant digits: a slow gait's work is ~1e-9 J (it read 0.000000 J)
     print(f"    actuator work   {gait.actuator_work:12.6g} J (push-off "
-          f"{gait.push_off_work:.6g} J, {gait.torque_joint} {gait.torque_work:.6g} J)")
+          f"{act.push_off_work:.6g} J, {act.torque_joint} {act.torque_work:.6g} J)")
     losses = gait.walk.impact_losses()
     split = (" = " + " + ".join(f"{kind} {loss:.6g} J" for kind, loss in losses)
              if len(losses) > 1 else "")
     print(f"    collision loss  {gait.collision_loss:12.6g} J (T_c{split})")
     print(f"    change of T + V {gait.energy_change:12.3e} J")
     print(f"    imbalance       {gait.energy_balance_error:12.3e} J")
-    if gait.books_noted:
-        print(f"  note: the books close to {gait.books_gap:.1e} of the work only (change of "
+    gap = books_gap(gait)
+    if gap > BOOKS_NOTE:
+        print(f"  note: the books close to {gap:.1e} of the work only (change of "
               "T + V and imbalance): the gait is resolved no better than that; tighter tolerances "
               "(find_powered_gait's tol, rtol, atol) would resolve it further")
     print(f"  cost of transport {gait.cost_of_transport:10.6g} (net actuator work / (m g L))")
     print(f"  eta             {gait.eta:10.6g} J/m")
     if others:
         which = ("this is the one needing the least actuator work (McGeer's wheel: their "
-                 "stability is undecided)" if walker.is_wheel else
+                 "stability is undecided)" if gait.stability_undecided else
                  "this is the stable one needing the least actuator work" if gait.stable else
                  "none is stable: this is the one needing the least actuator work")
         print(f"  note: {len(gaits)} distinct gaits meet this target; {which} (study cost "
               "keeps the same one); the others:")
         for g in others:
             o = _gait_summary(g)
-            print(f"    {g.parameter_name} {g.parameter:.6g} {g.parameter_unit}: actuator work "
+            print(f"    {act.parameter_name} {o['parameter']:.6g} {o['parameter_unit']}: "
+                  f"actuator work "
                   f"{g.actuator_work:.6g} J, speed {g.speed:.5f} m/s, step length "
                   f"{g.step_length:.5f} m, stable {'yes' if g.stable else 'no'} (|m| "
                   f"{multipliers_text([o['spectral_radius']])})"
@@ -253,11 +257,12 @@ def _run_powered(args: argparse.Namespace) -> int:
     return 0
 
 
-def _note_wheel(walker: Any) -> None:
-    """Say on stderr what a powered gait of McGeer's wheel is (``WHEEL_FAMILY``)."""
+def _note_wheel(gaits: Sequence[Any]) -> None:
+    """Say on stderr what a powered gait of McGeer's wheel is (``WHEEL_FAMILY``): gaits whose
+    stability is undecided (their ``stability_undecided``)."""
     from heelstrike.analysis.powered import WHEEL_FAMILY
 
-    if walker.is_wheel:
+    if any(g.stability_undecided for g in gaits):
         print(f"heelstrike: note: {WHEEL_FAMILY}", file=sys.stderr)
 
 
@@ -265,7 +270,8 @@ def _gait_summary(gait: Any) -> dict[str, Any]:
     """What tells another gait at the same target apart (``other_gaits`` of the JSON)."""
     import numpy as np
 
-    return {"parameter": gait.parameter, "parameter_unit": gait.parameter_unit,
+    a = gait.actuation
+    return {"parameter": a.parameter, "parameter_unit": a.parameter_unit,
             "actuator_work": gait.actuator_work, "collision_loss": gait.collision_loss,
             "period": gait.period, "step_length": gait.step_length, "speed": gait.speed,
             "stable": bool(gait.stable),

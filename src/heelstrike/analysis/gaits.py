@@ -461,7 +461,7 @@ def find_gaits(
     from heelstrike.analysis._gait_order import ordered_gaits
     from heelstrike.models.builder import BuiltWalker
 
-    described = isinstance(walker, BuiltWalker)
+    described = walker.description is not None  # built from a walker file (the contract)
     if control is None:
         if target is not None:
             raise ValueError(f"target {dict(target)!r} is for a powered gait: give control "

@@ -649,9 +649,7 @@ def _ended_message(
     over the stage (it rises through zero at the strike, so from there it cannot fire), the
     event that stopped the integration named in the message. Otherwise the status's message.
     """
-    from heelstrike.models.builder import BuiltWalker
-
-    if status is WalkStatus.OFF_PROFILE and isinstance(walker, BuiltWalker):
+    if status is WalkStatus.OFF_PROFILE:
         where = walker.profile_excursion(qs[-1])
         if where is not None:
             return status, f"{status.message}: {where} (step {k}, t = {t:.6g} s)"
@@ -697,9 +695,7 @@ def cut_off_profile(walker: PlanarWalker, walk: PhasedWalkResult,
     PhasedWalkResult
         ``walk`` itself, or the walk cut (its samples, impacts and events up to the cut).
     """
-    from heelstrike.models.builder import BuiltWalker
-
-    if not isinstance(walker, BuiltWalker) or walker.is_batched or walk.t.size == 0:
+    if walker.is_batched or walk.t.size == 0:
         return walk
     if walker.profile_ranges == (None, None):
         return walk

@@ -303,6 +303,24 @@ class PlanarWalker(ABC):
         return None
 
     @property
+    def profile_ranges(self) -> tuple[tuple[float, float] | None, tuple[float, float] | None]:
+        """``(phi_min, phi_max)`` (rad) over which the stance and the swing foot's roll-over
+        profile is given, None for a foot defined at every contact angle (an arc or a point:
+        the default). A walker file's ``[[foot]] phi_range`` sets it."""
+        return (None, None)
+
+    def profile_margin(self, q: ArrayLike, foot: Foot) -> FloatArray:
+        """How far (rad) a foot's contact angle is inside its profile's range, shape (...):
+        negative beyond it; ``+inf`` for a foot defined at every angle (the default)."""
+        return np.full(np.shape(np.asarray(q, dtype=float))[:-1], np.inf)
+
+    def profile_excursion(self, q: ArrayLike, tol: float = 1e-9) -> str | None:
+        """Which foot's contact angle is at or beyond its profile's range at ``q`` (shape
+        (n,)), in words, or None (the default: no foot has a range). The message of a walk
+        ending in ``off_profile``."""
+        return None
+
+    @property
     def section_solved_coordinate(self) -> int | None:
         """The coordinate the Poincare section solves for from the others (a described
         walker's touchdown configuration: the hip, placing the swing foot on the ground), or

@@ -9,6 +9,9 @@ steps: the passive period-one gait ``P(z) - z = 0`` (:mod:`~heelstrike.analysis.
   values, with a row of NaN where the walker fails to take a step. All pending iterates and
   their finite-difference neighbours go to the residual in one call per iteration, so a
   compiled ensemble evaluates them in one kernel launch;
+- where the residual's Jacobian is known exactly (the passive step map on the scipy
+  reference: :meth:`~heelstrike.analysis.limit_cycle.PoincareMap.exact_jacobian`),
+  ``jacobian="exact"`` takes it with every evaluation instead of differences;
 - failures are returned per start (diffrax's idea), never raised: a
   :class:`~heelstrike.status.SolveStatus` says what happened and carries its message.
 """

@@ -28,6 +28,7 @@ from heelstrike.analysis.limit_cycle import (
     _exact_newton_ok,
     _exact_pairs,
     find_limit_cycle,
+    find_limit_cycles,
 )
 from heelstrike.analysis.newton import newton_solve
 from heelstrike.dynamics.backends import simulator as backend_simulator
@@ -132,6 +133,8 @@ def test_unknown_jacobian_is_refused() -> None:
     with pytest.raises(ValueError, match="jacobian must be one of 'exact', 'central', got "
                                          "'forward'"):
         find_limit_cycle(CompassGait(), slope=SLOPE, guess=GUESS, jacobian="forward")
+    with pytest.raises(ValueError, match="jacobian must be one of"):  # before any search
+        find_limit_cycles(CompassGait(), slope=SLOPE, jacobian="forward", time_limit=1e-9)
     with pytest.raises(ValueError, match="jacobian='exact' needs derivative"):
         newton_solve(lambda X: X, [1.0], tol=1e-12, jacobian="exact")
 

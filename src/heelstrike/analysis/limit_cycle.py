@@ -731,6 +731,13 @@ def _radius_continuation_seeds(
 NEWTON_JACOBIANS = ("exact", "central")
 
 
+def _check_jacobian(jacobian: str) -> None:
+    """Raise ValueError unless ``jacobian`` is one of :data:`NEWTON_JACOBIANS`."""
+    if jacobian not in NEWTON_JACOBIANS:
+        raise ValueError(f"jacobian must be one of {', '.join(map(repr, NEWTON_JACOBIANS))}, "
+                         f"got {jacobian!r}")
+
+
 def _exact_newton_ok(pmap: PoincareMap) -> bool:
     """Whether Newton can run on the exact Jacobian of ``pmap``: a passive walk (as
     :func:`_multiplier_jacobian`: a torque law need not take complex states) on the scipy
@@ -817,9 +824,7 @@ def _newton(
     """
     from heelstrike.analysis.newton import newton_solve
 
-    if jacobian not in NEWTON_JACOBIANS:
-        raise ValueError(f"jacobian must be one of {', '.join(map(repr, NEWTON_JACOBIANS))}, "
-                         f"got {jacobian!r}")
+    _check_jacobian(jacobian)
     if jacobian == "exact" and _exact_newton_ok(pmap):
         used: set[str] = set()
         sol = newton_solve(lambda Z: pmap.many(Z) - Z, z, tol=tol, max_iter=max_iter,
@@ -911,6 +916,7 @@ def find_limit_cycles(
     )
     _check_passive_slope(pmap.slope, torque=pmap.torque, push_off=pmap.push_off,
                          walker=walker)
+    _check_jacobian(jacobian)
     deadline = time.monotonic() + float(time_limit)
     if _compiled_ok(pmap):
         gaits = _compiled_seeds(

@@ -30,7 +30,7 @@ from heelstrike.analysis.limit_cycle import (
     find_limit_cycle,
     find_limit_cycles,
 )
-from heelstrike.analysis.newton import newton_solve
+from heelstrike.analysis.newton import floquet_multipliers, newton_solve
 from heelstrike.dynamics.backends import simulator as backend_simulator
 from heelstrike.dynamics.phased import load_phased_walker
 from heelstrike.models import CompassGait
@@ -160,3 +160,19 @@ def test_exact_newton_on_a_closed_form_root() -> None:
     np.testing.assert_allclose(sol.x[0], [r2, r2], rtol=0, atol=1e-15)
     np.testing.assert_allclose(sol.jacobian[0], [[2 * r2, 2 * r2], [-1.0, 1.0]], atol=1e-14)
     assert all(c == 1 for c in calls) and len(calls) == sol.iterations[0]
+
+
+def test_a_stride_map_has_no_one_step_exact_jacobian() -> None:
+    """A walker whose legs differ maps a stride (two steps): the one-step exact Jacobian is not
+    its map's (its multipliers 0.55, 0.55, 0.22 against the stride map's 0.44, 0.22, 0.02), so
+    it is refused, and the gait's multipliers are central differences of the stride map."""
+    from heelstrike.dynamics.variational import ExactJacobianUnavailable
+
+    amputee = load_phased_walker(AMPUTEE)
+    pmap = PoincareMap(walker=amputee, slope=SLOPE)
+    with pytest.raises(ExactJacobianUnavailable, match="stride map"):
+        pmap.exact_jacobian([-0.3, 1.2, -0.8])
+    gait = find_limit_cycle(amputee, slope=SLOPE, guess=[-0.3, 1.2, -0.8])
+    assert gait.newton_jacobian == "central"
+    stride = floquet_multipliers(pmap.jacobian(gait.fixed_point))
+    np.testing.assert_allclose(gait.multipliers, stride, rtol=0, atol=1e-6)

@@ -238,8 +238,12 @@ class PoincareMap:
         ------
         ValueError
             On a compiled map (``method="compiled"`` or a ``simulator``).
+        heelstrike.dynamics.variational.ExactJacobianUnavailable
+            For a walker whose legs differ (its map is the stride map, two steps; the exact
+            Jacobian is of one step), and as
+            :func:`~heelstrike.dynamics.variational.step_jacobian`.
         """
-        from heelstrike.dynamics.variational import step_jacobian
+        from heelstrike.dynamics.variational import ExactJacobianUnavailable, step_jacobian
 
         sim = self.simulator
         reference = sim is None or sim is simulate or (
@@ -247,6 +251,10 @@ class PoincareMap:
         if self.method != "scipy" or not reference:
             raise ValueError("the exact Jacobian runs on the scipy reference: a PoincareMap "
                              "with method='scipy' and no simulator")
+        if self.walker.steps_per_period != 1:
+            raise ExactJacobianUnavailable(
+                "this walker's legs differ: its Poincare map is the stride map (two steps), "
+                "the exact Jacobian is of one step; use central differences")
         return step_jacobian(self.walker, z, slope=self.slope, torque=self.torque,
                              push_off=self.push_off, rtol=self.rtol, atol=self.atol,
                              max_step_duration=self.max_step_duration, max_step=self.max_step)

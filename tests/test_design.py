@@ -212,18 +212,66 @@ def test_a_point_without_gait_is_stepped_back_from(tmp_path: Path) -> None:
     assert all(it.values.tolist() != marked["values"] for it in res.history)
 
 
-def test_design_gradients_are_the_exact_sensitivities(compass_gait) -> None:  # type: ignore[no-untyped-def]
+def test_design_gradients_are_the_sensitivities_checked_by_converged_gaits(compass_gait) -> None:  # type: ignore[no-untyped-def]
     """The design's fixed-point derivatives and its step length / period / loss derivatives are
-    those of :func:`gait_sensitivity` (one exact machinery: the same numbers to round-off)."""
+    :func:`gait_sensitivity`'s (one implicit-function solve, which the design calls; their
+    numbers against central differences of converged gaits: the test above), and its spectral
+    radius's derivative (the largest multiplier's modulus derivative) is the central
+    difference of the spectral radii of *re-converged* gaits (Newton at p +- h, each gait's
+    multipliers from the exact Jacobian at its root): an independent route, to 1e-6."""
     from heelstrike.analysis.sensitivity import gait_sensitivity
     from heelstrike.dynamics.phased import PhasedWalker
 
     w, g, s = compass_gait
     ref = gait_sensitivity(PhasedWalker.from_built(w), g.fixed_point, list(s.parameters),
-                           slope=SLOPE)
+                           slope=SLOPE, rtol=1e-11, atol=1e-11, multipliers=False)
     assert all(ref.exact)
-    assert np.allclose(s.fixed_point_derivative, ref.fixed_point, rtol=1e-9, atol=1e-12)
+    assert np.all(np.isnan(ref.multiplier_derivatives))  # not asked for
+    assert np.allclose(s.fixed_point_derivative, ref.fixed_point, rtol=1e-12, atol=0.0)
     for field in ("step_length", "period", "speed", "collision_loss", "eta"):
         scale = float(np.max(np.abs(ref.quantities[field])))  # d eta/dR is 0: noise at 1e-10
         assert np.allclose(s.derivatives[field], ref.quantities[field], rtol=1e-9,
                            atol=1e-11 * scale)
+    z0 = g.fixed_point
+    rho = gait_gradients(w, z0, ["R", "slope", "m"], slope=SLOPE, lift=False)
+    assert rho.fields["spectral_radius"] == pytest.approx(g.spectral_radius, rel=1e-12)
+
+    def radius(values: dict[str, float]) -> float:
+        params = {k: v for k, v in values.items() if k != "slope"}
+        again = find_model_gait(w.replace(**params) if params else w,
+                                slope=values.get("slope", SLOPE), backend="scipy", guess=z0,
+                                tol=1e-13)
+        assert again.newton_jacobian == "exact"
+        return again.spectral_radius
+
+    for j, name in enumerate(rho.parameters):
+        v0 = float(rho.values[j])
+        h = {"R": 1e-4, "slope": 5e-6, "m": 1e-3}[name]
+        fd = (radius({name: v0 + h}) - radius({name: v0 - h})) / (2 * h)
+        assert abs(rho.derivatives["spectral_radius"][j] - fd) <= 1e-6 * abs(fd), (name, fd)
+
+
+@pytest.mark.slow
+def test_kneed_gradients_with_the_knee_strikes_loss_agree_with_converged_gaits() -> None:
+    """A step with a knee strike: the collision loss sums both impacts (the knee strike's share
+    by the chain rule on gait_sensitivity's ``dz*/dp``), checked with the lift velocity and the
+    spectral radius against central differences of re-converged gaits, to 1e-6."""
+    w = load_walker("kneed")
+    slope = 0.0504
+    g = find_model_gait(w, slope=slope, backend="scipy", guess=[-0.2647694, 1.2181144,
+                                                                -1.0955048])
+    z0 = g.fixed_point
+    assert len(g.impacts) == 2  # the knee strike, then the heel strike
+    s = gait_gradients(w, z0, ["mH"], slope=slope)
+
+    def fields(mH: float) -> np.ndarray:
+        again = find_model_gait(w.replace(mH=mH), slope=slope, backend="scipy", guess=z0,
+                                tol=1e-13)
+        return np.array([again.collision_loss, again.impacts[-1].trailing_normal_velocity,
+                         again.spectral_radius])
+
+    mH, h = float(w.parameters["mH"]), 1e-4
+    fd = (fields(mH + h) - fields(mH - h)) / (2 * h)
+    ift = [s.derivatives[f][0] for f in ("collision_loss", "lift_velocity", "spectral_radius")]
+    np.testing.assert_allclose(ift, fd, rtol=1e-6)
+    assert s.fields["collision_loss"] == pytest.approx(g.collision_loss, rel=1e-9)

@@ -1,36 +1,30 @@
 """Gradients of a periodic gait for design (:func:`heelstrike.analysis.design.design`), by the
 implicit function theorem.
 
-Unlike the general sensitivities of :mod:`heelstrike.analysis.sensitivity`, these take the slope
-as a parameter, sum the collision loss over every impact of the step (knee strikes included),
-give the cost of transport and the spectral radius's derivative, and use a fourth-order stencil
-for the one-step partial derivatives (the design's known-answer tests need 1e-7 at small slopes).
-
-A period-one gait is a fixed point ``z*(p) = P(z*(p), p)`` of the step map ``P`` of a described
-walker; differentiating the periodicity condition gives
+The implicit-function solve is :func:`heelstrike.analysis.sensitivity.gait_sensitivity`'s (one
+machinery): a period-one gait is a fixed point ``z*(p) = P(z*(p), p)`` of the step map ``P`` of
+a described walker; differentiating the periodicity condition gives
 
 .. math::
 
     \\frac{dz^*}{dp} = (I - D_z P)^{-1} D_p P,
 
-and any field ``F(z, p)`` of the step from ``z`` (step length, period, collision loss) has the
-total derivative ``dF/dp = D_z F dz*/dp + D_p F``; the derived fields follow by the chain rule
-(``speed = L / T``, ``eta = T_c / L``, the mechanical cost of transport ``T_c / (M g L)``).
+with ``D_z P``, ``D_p P`` and the partial derivatives of the step length, period and heel-strike
+``T_c`` exact (:func:`heelstrike.dynamics.variational.step_jacobian` with ``parameters``:
+variational equations with saltation matrices; central differences for a parameter the exact
+machinery refuses, e.g. a lock angle, as ``gait_sensitivity`` does), and the derivative of the
+spectral radius the modulus derivative of the largest multiplier
+(:attr:`~heelstrike.analysis.sensitivity.GaitSensitivity.modulus_derivatives`).
 
-``D_z P``, ``D_p P`` and the partial derivatives of the step length, period and heel-strike
-``T_c`` in ``z`` and ``p`` are exact (:func:`heelstrike.dynamics.variational.step_jacobian` with
-``parameters``: variational equations with saltation matrices, the same machinery as
-:func:`heelstrike.analysis.sensitivity.gait_sensitivity`). What that machinery does not give is
-taken by fourth-order central differences of one step (:data:`STENCIL_STEP`; a step, not a
-converged gait, so no Newton tolerance enters), and only when it is asked for: the trailing
-foot's lift velocity (``lift=True``), the collision loss of the knee strikes of a step that has
-them, and every partial derivative for a parameter the exact machinery refuses
-(:class:`~heelstrike.dynamics.variational.ExactJacobianUnavailable`, e.g. a lock angle). The
-walker's weight ``M g`` is a function of the parameters only (central differences of it, no
-step). The derivative of the spectral radius (a second derivative of the map) is the central
-difference of the exact Jacobian's largest multiplier modulus at ``(z* +- h dz*/dp, p +- h)``:
-the first-order prediction of the moved fixed point, whose second-order error cancels in the
-difference.
+What this module adds for design: the slope as a parameter, the collision loss summed over
+every impact of the step (knee strikes included), the cost of transport and the trailing foot's
+lift velocity. A field ``F(z, p)`` of the step from ``z`` has the total derivative
+``dF/dp = D_z F dz*/dp + D_p F``; the partial derivatives ``gait_sensitivity`` does not give
+(the knee strikes' share of the collision loss, the lift velocity, only when asked for) are
+fourth-order central differences of one step (:data:`STENCIL_STEP`; a step, not a converged
+gait, so no Newton tolerance enters). The walker's weight ``M g`` is a function of the
+parameters only (central differences of it, no step). The derived fields follow by the chain
+rule (``speed = L / T``, ``eta = T_c / L``, the mechanical cost of transport ``T_c / (M g L)``).
 """
 
 from __future__ import annotations
@@ -216,6 +210,13 @@ def gait_gradients(
 ) -> GaitGradients:
     """Derivatives of a converged passive gait with respect to ``parameters``.
 
+    ``dz*/dp`` and the derivatives of the step length, period and heel-strike collision loss
+    are :func:`~heelstrike.analysis.sensitivity.gait_sensitivity`'s (the implicit function
+    theorem on the exact step-map Jacobians); the spectral radius's is its largest
+    multiplier's modulus derivative. The collision loss of a step with knee strikes (their
+    share), the walker's weight and the lift velocity are differentiated here (the chain rule
+    on ``dz*/dp``), and the derived fields follow from :func:`_derived`.
+
     Parameters
     ----------
     walker : BuiltWalker
@@ -241,7 +242,8 @@ def gait_gradients(
     GradientError
         For an unknown parameter name or a failed step.
     """
-    from heelstrike.dynamics.variational import ExactJacobianUnavailable, step_jacobian
+    from heelstrike.analysis.sensitivity import gait_sensitivity
+    from heelstrike.dynamics.variational import StepFailedError
 
     names = tuple(parameters)
     known = set(walker.parameters)
@@ -262,55 +264,38 @@ def gait_gradients(
 
     g0 = G(x0)  # (P(z), L, T, C, W, V): the values, and the loss over every impact
     pmap = _setup(walker, base, slope)
-    D = np.full((d + 5, d + k), np.nan)  # D[:, j]: d/dx_j of (P, L, T, C, W, V)
     try:
-        sj = step_jacobian(pmap.walker, z, slope=pmap.slope, parameters=names,
-                           rtol=pmap.rtol, atol=pmap.atol)
-    except ExactJacobianUnavailable:
-        sj = None
-    if sj is not None:
-        D[:d, :d], D[:d, d:] = sj.jacobian, sj.parameter_jacobian
-        for row, q in ((d, "step_length"), (d + 1, "period"), (d + 2, "collision_loss")):
-            D[row, :d] = sj.quantity_state_gradients[q]
-            D[row, d:] = sj.quantity_parameter_gradients[q]
-        if sj.events != ("heel_strike",):  # knee strikes lose energy too: their share
-            D[d + 2] = [_stencil(G, x0, j)[d + 2] for j in range(d + k)]
-    else:  # no exact derivative for some parameter: every partial by the stencil
-        D[:d + 3] = np.stack([_stencil(G, x0, j) for j in range(d + k)], axis=1)[:d + 3]
-    D[d + 3, :d] = 0.0  # the weight depends on the parameters only
-    for j, name in enumerate(names):
+        sens = gait_sensitivity(pmap.walker, z, names, slope=pmap.slope, rtol=pmap.rtol,
+                                atol=pmap.atol, multipliers=spectral_radius)
+    except StepFailedError as exc:  # a step it differentiates does not complete
+        raise GradientError(f"no gait sensitivity at {base}: {exc}") from None
+    dz = sens.fixed_point  # (d, k)
+    dbasic = np.full((5, k), np.nan)  # d/dp of L, T, C, W, V along the gait
+    dbasic[0], dbasic[1] = sens.quantities["step_length"], sens.quantities["period"]
+    if len(pmap.walker.step_schedule().phases) > 1:  # knee strikes lose energy too
+        dC = np.array([_stencil(G, x0, j)[d + 2] for j in range(d + k)])
+        dbasic[2] = dC[:d] @ dz + dC[d:]
+    else:
+        dbasic[2] = sens.quantities["collision_loss"]
+    for j, name in enumerate(names):  # the weight depends on the parameters only
         if name == "slope":
-            D[d + 3, d + j] = 0.0
+            dbasic[3, j] = 0.0
             continue
         h = STENCIL_STEP * max(1.0, abs(p0[j]))
-        D[d + 3, d + j] = (_weight(walker, {**base, name: p0[j] + h})
-                           - _weight(walker, {**base, name: p0[j] - h})) / (2 * h)
+        dbasic[3, j] = (_weight(walker, {**base, name: p0[j] + h})
+                        - _weight(walker, {**base, name: p0[j] - h})) / (2 * h)
     if lift:
-        D[d + 4] = [_stencil(G, x0, j)[d + 4] for j in range(d + k)]
-    DPz, DPp = D[:d, :d], D[:d, d:]
-    dz = np.linalg.solve(np.eye(d) - DPz, DPp)  # (d, k)
-    dbasic = D[d:, :d] @ dz + D[d:, d:]  # (5, k): L, T, C, W, V
+        dV = np.array([_stencil(G, x0, j)[d + 4] for j in range(d + k)])
+        dbasic[4] = dV[:d] @ dz + dV[d:]
     vals, jac = _derived(*g0[d:])
     dfields = jac @ np.nan_to_num(dbasic, nan=0.0)
     dfields[-1] = dbasic[4]  # the lift velocity: NaN where not asked for
-    mult = np.linalg.eigvals(DPz)
-    mult = mult[np.argsort(-np.abs(mult), kind="stable")]
+    mult = np.asarray(sens.multipliers, dtype=complex)
     fields = dict(zip(GRADIENT_FIELDS, map(float, vals), strict=True))
     derivs = {f: dfields[i].copy() for i, f in enumerate(GRADIENT_FIELDS)}
     fields["spectral_radius"] = float(np.max(np.abs(mult)))
     if spectral_radius:
-        drho = np.empty(k)
-        for j in range(k):
-            h = STENCIL_STEP * max(1.0, abs(p0[j]))
-
-            def rho(sign: float, j: int = j, h: float = h) -> float:
-                vj = dict(base)
-                vj[names[j]] = base[names[j]] + sign * h
-                J = _setup(walker, vj, slope).exact_jacobian(z + sign * h * dz[:, j]).jacobian
-                return float(np.max(np.abs(np.linalg.eigvals(J))))
-
-            drho[j] = (rho(1.0) - rho(-1.0)) / (2 * h)
-        derivs["spectral_radius"] = drho
+        derivs["spectral_radius"] = np.asarray(sens.modulus_derivatives[0], dtype=float)
     return GaitGradients(parameters=names, values=p0,
                          section_names=tuple(pmap.walker.section_names), fixed_point=z.copy(),
                          fixed_point_derivative=np.asarray(dz, dtype=float), fields=fields,

@@ -239,6 +239,11 @@ class Gait(ResultDictMixin):
         of its key, and reports say "undecided".
     actuation : Actuation or None
         How a powered gait is driven (None for a passive gait).
+    newton_jacobian : str
+        The Jacobian of Newton's iterations (``jacobian`` of
+        :func:`~heelstrike.analysis.limit_cycle.find_limit_cycle`): ``"exact"`` (variational
+        equations at every iterate), ``"central"`` (differences of the map), ``"mixed"`` (exact
+        where it could be formed, differences elsewhere).
     walk : WalkResult
         One simulated period from the fixed point (the map's simulator; for a gait
         characterised on the compiled backend the scipy reference, simulated on first access).
@@ -265,6 +270,7 @@ class Gait(ResultDictMixin):
     iterations: int
     slope: float
     leg_crossings: int | None = None
+    newton_jacobian: str = "central"
     impacts: tuple[PhasedImpact, ...] = ()
     energy_residual: float = float("nan")
     hanging_links: tuple[str, ...] = ()

@@ -238,8 +238,12 @@ class PoincareMap:
         ------
         ValueError
             On a compiled map (``method="compiled"`` or a ``simulator``).
+        heelstrike.dynamics.variational.ExactJacobianUnavailable
+            For a walker whose legs differ (its map is the stride map, two steps; the exact
+            Jacobian is of one step), and as
+            :func:`~heelstrike.dynamics.variational.step_jacobian`.
         """
-        from heelstrike.dynamics.variational import step_jacobian
+        from heelstrike.dynamics.variational import ExactJacobianUnavailable, step_jacobian
 
         sim = self.simulator
         reference = sim is None or sim is simulate or (
@@ -247,6 +251,10 @@ class PoincareMap:
         if self.method != "scipy" or not reference:
             raise ValueError("the exact Jacobian runs on the scipy reference: a PoincareMap "
                              "with method='scipy' and no simulator")
+        if self.walker.steps_per_period != 1:
+            raise ExactJacobianUnavailable(
+                "this walker's legs differ: its Poincare map is the stride map (two steps), "
+                "the exact Jacobian is of one step; use central differences")
         return step_jacobian(self.walker, z, slope=self.slope, torque=self.torque,
                              push_off=self.push_off, rtol=self.rtol, atol=self.atol,
                              max_step_duration=self.max_step_duration, max_step=self.max_step)
@@ -565,11 +573,97 @@ def _radius_continuation_seeds(
     return out
 
 
+#: The Jacobians Newton's method may use on the Poincare map (``jacobian`` of
+#: :func:`find_limit_cycle`): ``"exact"`` (variational equations and saltation matrices,
+#: :meth:`PoincareMap.exact_jacobian`, where it applies) or ``"central"`` (differences).
+NEWTON_JACOBIANS = ("exact", "central")
+
+
+def _check_jacobian(jacobian: str) -> None:
+    """Raise ValueError unless ``jacobian`` is one of :data:`NEWTON_JACOBIANS`."""
+    if jacobian not in NEWTON_JACOBIANS:
+        raise ValueError(f"jacobian must be one of {', '.join(map(repr, NEWTON_JACOBIANS))}, "
+                         f"got {jacobian!r}")
+
+
+def _exact_newton_ok(pmap: PoincareMap) -> bool:
+    """Whether Newton can run on the exact Jacobian of ``pmap``: a passive walk (as
+    :func:`_multiplier_jacobian`: a torque law need not take complex states) on the scipy
+    reference (``method="scipy"``, no simulator or the scipy one) of one walker whose period is
+    one step (:func:`~heelstrike.dynamics.variational.step_jacobian` differentiates one step).
+    Whether the walker's equations can be differentiated is found at the first iterate."""
+    sim = pmap.simulator
+    reference = sim is None or sim is simulate or (
+        isinstance(sim, BoundSimulator) and sim.backend == "scipy")
+    passive = pmap.torque is None and pmap.push_off is None
+    return (pmap.method == "scipy" and reference and passive
+            and pmap.walker.steps_per_period == 1 and not pmap.walker.is_batched)
+
+
+def _exact_pairs(pmap: PoincareMap, fd_step: float, used: set[str]
+                 ) -> Callable[[FloatArray], tuple[FloatArray, FloatArray]]:
+    """``Z -> (P(Z) - Z, DP(Z) - I)`` row by row, shapes (B, d) and (B, d, d), for
+    :func:`~heelstrike.analysis.newton.newton_solve`'s ``derivative``.
+
+    ``DP`` is :meth:`PoincareMap.exact_jacobian` (one step and its variational equations give
+    ``P(z)`` and ``DP(z)`` together); where it cannot be formed it is central differences with
+    ``fd_step`` (:meth:`PoincareMap.jacobian`): at a grazing event or a step that skips a phase
+    of its schedule for that row, and for every later row once the walker or its actuation
+    cannot be differentiated at all. A row whose step fails is NaN. ``used`` collects the
+    kinds used (``"exact"``, ``"central"``).
+    """
+    from heelstrike.core.saltation import GrazingEventError
+    from heelstrike.dynamics.variational import (
+        ExactJacobianUnavailable,
+        StepFailedError,
+        UnscheduledStepError,
+    )
+
+    exact = [True]
+
+    def pairs(Z: FloatArray) -> tuple[FloatArray, FloatArray]:
+        Z_ = np.atleast_2d(np.asarray(Z, dtype=float))
+        B, d = Z_.shape
+        F, J = np.full((B, d), np.nan), np.full((B, d, d), np.nan)
+        for i, z in enumerate(Z_):
+            if exact[0]:
+                try:
+                    sj = pmap.exact_jacobian(z)
+                except ExactJacobianUnavailable:
+                    exact[0] = False  # the walker's equations: not at any other point either
+                except (GrazingEventError, UnscheduledStepError):
+                    pass  # this point only: differences below
+                except StepFailedError:
+                    continue  # no step: a row of NaN
+                else:
+                    F[i], J[i] = sj.z_next - z, sj.jacobian - np.eye(d)
+                    used.add("exact")
+                    continue
+            F[i] = pmap(z) - z
+            if np.all(np.isfinite(F[i])):
+                J[i] = pmap.jacobian(z, fd_step) - np.eye(d)
+                used.add("central")
+        return F, J
+
+    return pairs
+
+
 def _newton(
-    pmap: PoincareMap, z: FloatArray, tol: float, max_iter: int, fd_step: float
-) -> tuple[FloatArray, float, int]:
+    pmap: PoincareMap, z: FloatArray, tol: float, max_iter: int, fd_step: float,
+    jacobian: str = "central",
+) -> tuple[FloatArray, float, int, str, FloatArray | None]:
     """Newton's method for ``P(z) = z`` on ``pmap`` (the one engine,
-    :func:`~heelstrike.analysis.newton.newton_solve`); returns ``(z*, residual, iterations)``.
+    :func:`~heelstrike.analysis.newton.newton_solve`).
+
+    With ``jacobian="exact"`` where :func:`_exact_newton_ok` (else central differences),
+    every iterate is evaluated with its exact Jacobian (:func:`_exact_pairs`).
+
+    Returns
+    -------
+    tuple
+        ``(z*, residual, iterations, kind, DP)``: ``kind`` the Jacobians Newton used
+        (``"exact"``, ``"central"`` or ``"mixed"``), ``DP`` the map's Jacobian at ``z*``
+        Newton evaluated there (exact runs; None otherwise).
 
     Raises
     ------
@@ -578,11 +672,21 @@ def _newton(
     """
     from heelstrike.analysis.newton import newton_solve
 
-    sol = newton_solve(lambda Z: pmap.many(Z) - Z, z, tol=tol,
-                       max_iter=max_iter, fd_step=fd_step, jacobian_at_root=False)
+    _check_jacobian(jacobian)
+    if jacobian == "exact" and _exact_newton_ok(pmap):
+        used: set[str] = set()
+        sol = newton_solve(lambda Z: pmap.many(Z) - Z, z, tol=tol, max_iter=max_iter,
+                           fd_step=fd_step, jacobian="exact",
+                           derivative=_exact_pairs(pmap, fd_step, used))
+        kind = "mixed" if len(used) > 1 else (used.pop() if used else "exact")
+        J_root = sol.jacobian[0] + np.eye(z.size)
+    else:
+        sol = newton_solve(lambda Z: pmap.many(Z) - Z, z, tol=tol,
+                           max_iter=max_iter, fd_step=fd_step, jacobian_at_root=False)
+        kind, J_root = "central", None
     if not sol.converged[0]:
         raise GaitNotFoundError(sol.message(0, pmap.walker.section_labels))
-    return sol.x[0], float(sol.residual_norm[0]), int(sol.iterations[0])
+    return sol.x[0], float(sol.residual_norm[0]), int(sol.iterations[0]), kind, J_root
 
 
 def _preference(c: Gait) -> tuple[bool, bool, float, float]:
@@ -610,6 +714,7 @@ def find_limit_cycles(
     method: str = "scipy",
     simulator: Callable[..., WalkResult] | None = None,
     time_limit: float = SEARCH_TIME_LIMIT,
+    jacobian: str = "exact",
 ) -> tuple[Gait, ...]:
     """Find every period-one gait the automatic search reaches, best first.
 
@@ -628,6 +733,9 @@ def find_limit_cycles(
     ----------
     walker, slope, torque, push_off, tol, max_iter, fd_step, rtol, atol, method, simulator
         As :func:`find_limit_cycle`.
+    jacobian : {"exact", "central"}
+        As :func:`find_limit_cycle` (the final Newton on ``method``'s map; the compiled
+        seeding stage runs on differences).
     progress : bool
         Progress bar on stderr (shown after 2 s).
     time_limit : float
@@ -657,6 +765,7 @@ def find_limit_cycles(
     )
     _check_passive_slope(pmap.slope, torque=pmap.torque, push_off=pmap.push_off,
                          walker=walker)
+    _check_jacobian(jacobian)
     deadline = time.monotonic() + float(time_limit)
     if _compiled_ok(pmap):
         gaits = _compiled_seeds(
@@ -698,12 +807,13 @@ def find_limit_cycles(
         if time.monotonic() > deadline and cycles:
             break
         try:
-            z, residual, it = _newton(pmap, np.asarray(z0, dtype=float), tol, max_iter, fd_step)
+            z, residual, it, kind, DP = _newton(pmap, np.asarray(z0, dtype=float), tol,
+                                                max_iter, fd_step, jacobian)
         except GaitNotFoundError as exc:
             last = exc
             continue
         if _add_distinct(zs, z):
-            cycles.append(_characterise(pmap, z, residual, it, fd_step))
+            cycles.append(_characterise(pmap, z, residual, it, fd_step, kind, DP))
     if not cycles:
         raise GaitNotFoundError(str(last) if last else "no period-one gait found")
     cycles = _closed_books(cycles, pmap)
@@ -762,6 +872,7 @@ def find_limit_cycle(
     progress: bool = False,
     method: str = "scipy",
     simulator: Callable[..., WalkResult] | None = None,
+    jacobian: str = "exact",
 ) -> Gait:
     """Find a period-one gait with Newton's method on the Poincare map.
 
@@ -797,6 +908,16 @@ def find_limit_cycle(
     simulator : callable, optional
         Step simulator (see :class:`PoincareMap`), e.g.
         :func:`heelstrike.dynamics.phased.simulate_phased` for described walkers.
+    jacobian : {"exact", "central"}
+        Newton's Jacobian (:data:`NEWTON_JACOBIANS`). ``"exact"`` (default): the exact
+        Jacobian of the map at every iterate (:meth:`PoincareMap.exact_jacobian`; one step
+        with its variational equations gives ``P(z)`` and ``DP(z)`` together, quadratic
+        convergence, and the gait's multipliers from the Jacobian at the root) where it
+        applies: a passive walk on the scipy reference, a walker whose period is one step and
+        whose equations can be differentiated; central differences (``2 d`` step maps per
+        iterate) elsewhere,
+        and at a point where the exact one cannot be formed (a grazing event). ``"central"``:
+        differences everywhere. The choice is recorded in the cycle's ``newton_jacobian``.
 
     Returns
     -------
@@ -811,6 +932,7 @@ def find_limit_cycle(
     kw: dict[str, Any] = dict(
         slope=slope, torque=torque, push_off=push_off, tol=tol, max_iter=max_iter,
         fd_step=fd_step, rtol=rtol, atol=atol, method=method, simulator=simulator,
+        jacobian=jacobian,
     )
     if guess is None:
         return find_limit_cycles(walker, progress=progress, **kw)[0]
@@ -818,8 +940,9 @@ def find_limit_cycle(
         walker=walker, slope=slope, torque=torque, push_off=push_off, rtol=rtol, atol=atol,
         method=method, simulator=simulator,
     )
-    z, residual, it = _newton(pmap, np.asarray(guess, dtype=float), tol, max_iter, fd_step)
-    return _closed_books([_characterise(pmap, z, residual, it, fd_step)], pmap)[0]
+    z, residual, it, kind, DP = _newton(pmap, np.asarray(guess, dtype=float), tol, max_iter,
+                                        fd_step, jacobian)
+    return _closed_books([_characterise(pmap, z, residual, it, fd_step, kind, DP)], pmap)[0]
 
 
 def _multiplier_jacobian(pmap: PoincareMap, z: FloatArray, fd_step: float) -> FloatArray:
@@ -845,10 +968,17 @@ def _multiplier_jacobian(pmap: PoincareMap, z: FloatArray, fd_step: float) -> Fl
 
 
 def _characterise(
-    pmap: PoincareMap, z: FloatArray, residual: float, iterations: int, fd_step: float
+    pmap: PoincareMap, z: FloatArray, residual: float, iterations: int, fd_step: float,
+    newton_jacobian: str = "central", jacobian: FloatArray | None = None,
 ) -> Gait:
+    """The gait at Newton's root ``z``; its multipliers from ``jacobian`` (``DP(z)``, the
+    Jacobian Newton evaluated at ``z``) if given and finite, else
+    :func:`_multiplier_jacobian`."""
     walker = pmap.walker
-    Jac = _multiplier_jacobian(pmap, z, fd_step)
+    if jacobian is not None and np.all(np.isfinite(jacobian)):
+        Jac = jacobian
+    else:
+        Jac = _multiplier_jacobian(pmap, z, fd_step)
     mult = floquet_multipliers(Jac)
     if pmap.method == "compiled":
         from heelstrike.dynamics.compiled import step_map_compiled
@@ -874,13 +1004,14 @@ def _characterise(
         potential_energy_released=sum(r.potential_energy_released for r in recs),
         actuator_work=sum(r.actuator_work for r in recs), residual=residual,
         iterations=iterations, walk=walk, leg_crossings=leg_crossings(walker, walk),
+        newton_jacobian=newton_jacobian,
     )
 
 
 def _cycle(
     pmap: PoincareMap, z: FloatArray, multipliers: NDArray[np.complex128], *, period: float,
     step_length: float, collision_loss: float, iterations: int, walk: Any,
-    leg_crossings: int | None, **values: float,
+    leg_crossings: int | None, newton_jacobian: str = "central", **values: float,
 ) -> Gait:
     """The :class:`~heelstrike.analysis.gaits.Gait` at the fixed point ``z`` of ``pmap``: its
     speed, stability and ``eta`` from the step's ``period`` (s), ``step_length`` (m),
@@ -895,6 +1026,7 @@ def _cycle(
         stable=is_stable(mult), collision_loss=float(collision_loss),
         eta=float(loss_per_metre(collision_loss, step_length)), slope=float(pmap.slope),
         iterations=int(iterations), walk=walk, leg_crossings=leg_crossings,
+        newton_jacobian=newton_jacobian,
         **cast(dict[str, Any], {k: float(v) for k, v in values.items()}),
     )
 

@@ -9,6 +9,9 @@ steps: the passive period-one gait ``P(z) - z = 0`` (:mod:`~heelstrike.analysis.
   values, with a row of NaN where the walker fails to take a step. All pending iterates and
   their finite-difference neighbours go to the residual in one call per iteration, so a
   compiled ensemble evaluates them in one kernel launch;
+- where the residual's Jacobian is known exactly (the passive step map on the scipy
+  reference: :meth:`~heelstrike.analysis.limit_cycle.PoincareMap.exact_jacobian`),
+  ``jacobian="exact"`` takes it with every evaluation instead of differences;
 - failures are returned per start (diffrax's idea), never raised: a
   :class:`~heelstrike.status.SolveStatus` says what happened and carries its message.
 """
@@ -32,6 +35,8 @@ __all__ = [
 ]
 
 Residual = Callable[[FloatArray], FloatArray]
+#: ``derivative(X) -> (F, J)``: the residual at ``(B, n)`` points and its Jacobians ``(B, m, n)``.
+Derivative = Callable[[FloatArray], tuple[FloatArray, FloatArray]]
 
 
 class SearchTimeLimitWarning(UserWarning):
@@ -56,13 +61,18 @@ class NewtonSolution(ResultDictMixin):
         central-difference Jacobian is dropped after each step). With ``jacobian="central"``
         and ``jacobian_at_root=True`` a converged start holds the central-difference Jacobian
         at ``x``: for a fixed point ``F = P - id`` the Floquet multipliers are the
-        eigenvalues of ``jacobian + I``. With ``"broyden"`` it is the updated Broyden matrix.
+        eigenvalues of ``jacobian + I``. With ``"broyden"`` it is the updated Broyden matrix;
+        with ``"exact"`` the ``derivative``'s Jacobian at ``x`` (every start that has an
+        iterate with a finite ``F``).
     iterations : ndarray of int, shape (K,)
         Residual evaluations at an iterate (1 when the start already solves ``F = 0``).
     status : tuple of SolveStatus, length K
         How each start ended.
     max_iter : int
         The iteration limit the solve ran with.
+    method : str
+        The ``jacobian`` option of the solve (``"central"``, ``"broyden"``, ``"chord"`` or
+        ``"exact"``).
     """
 
     x: FloatArray
@@ -72,6 +82,7 @@ class NewtonSolution(ResultDictMixin):
     iterations: NDArray[np.int_]
     status: tuple[SolveStatus, ...]
     max_iter: int
+    method: str = "central"
 
     def message(self, k: int, labels: Sequence[tuple[str, str]] | None = None) -> str:
         """One line on how start ``k`` ended, with its iterate or residual where they help.
@@ -136,6 +147,16 @@ def _evaluate(residual: Residual, X: FloatArray, n: int) -> FloatArray:
     return np.asarray(residual(X), dtype=float).reshape(-1, n)
 
 
+def _evaluate_pairs(derivative: Derivative, X: FloatArray, n: int
+                    ) -> tuple[FloatArray, FloatArray]:
+    """``derivative(X)`` as ``(B, n)`` and ``(B, n, n)`` floats; no call for an empty batch."""
+    if X.shape[0] == 0:
+        return np.empty((0, n)), np.empty((0, n, n))
+    F, J = derivative(X)
+    return (np.asarray(F, dtype=float).reshape(-1, n),
+            np.asarray(J, dtype=float).reshape(-1, n, n))
+
+
 def newton_solve(
     residual: Residual,
     x0: ArrayLike,
@@ -143,8 +164,9 @@ def newton_solve(
     tol: float,
     max_iter: int = 20,
     fd_step: float = 1e-6,
-    jacobian: Literal["central", "broyden", "chord"] = "central",
+    jacobian: Literal["central", "broyden", "chord", "exact"] = "central",
     jacobian0: ArrayLike | None = None,
+    derivative: Derivative | None = None,
     contraction: float = 0.2,
     jacobian_at_root: bool = True,
     line_search: Literal["finite", "decrease"] = "finite",
@@ -174,8 +196,12 @@ def newton_solve(
         Newton steps per start.
     fd_step : float
         Relative finite-difference step of the Jacobian.
-    jacobian : {"central", "broyden", "chord"}
-        ``central``: central differences at every iterate (``2n`` evaluations). ``broyden``:
+    jacobian : {"central", "broyden", "chord", "exact"}
+        ``central``: central differences at every iterate (``2n`` evaluations). ``exact``:
+        every iterate and every trial of the line search is evaluated by ``derivative``,
+        which gives ``F`` with its Jacobian (no differences; a trial that is taken brings its
+        Jacobian, so an iteration costs one call, and a converged start holds the Jacobian at
+        its root: Newton's quadratic convergence to the integrator's accuracy). ``broyden``:
         forward differences (``n`` evaluations) once, then Broyden's rank-one update after each
         step (recomputed once when the line search fails with a stale Jacobian). ``chord``: the
         same Jacobian at every iterate (``jacobian0``, else forward differences) and full steps
@@ -186,6 +212,11 @@ def newton_solve(
         a nearby point, e.g. a coarse stage's, on an expensive accurate residual).
     jacobian0 : array_like, shape (K, n, n), optional
         Initial Jacobians (``broyden``, ``chord``); a non-finite one is computed instead.
+    derivative : callable, optional
+        ``derivative(X)``, ``X`` of shape ``(B, n)``, returns ``(F, J)`` of shapes ``(B, m)``
+        and ``(B, m, n)``: the residual (as ``residual``) and its Jacobian ``dF/dx`` at each
+        point; rows of NaN where the walker fails. Required by, and only used with,
+        ``jacobian="exact"``.
     contraction : float
         ``chord``: the fold reduction a step must reach for the Jacobian to be kept.
     jacobian_at_root : bool
@@ -216,7 +247,15 @@ def newton_solve(
     NewtonSolution
         Per start: the iterate, ``F`` and its norm, the central-difference Jacobian at a
         converged iterate, iterations and status.
+
+    Raises
+    ------
+    ValueError
+        For ``jacobian="exact"`` without ``derivative``.
     """
+    exact = jacobian == "exact"
+    if exact and derivative is None:
+        raise ValueError("jacobian='exact' needs derivative (the residual with its Jacobian)")
     X = np.atleast_2d(np.asarray(x0, dtype=float)).copy()
     K, n = X.shape
     floor = 10.0 * tol if accept is None else accept
@@ -244,6 +283,12 @@ def newton_solve(
                 status[k] = SolveStatus.TIME_LIMIT
             break
         x = X[active]
+        if exact:  # F and its Jacobian together, where either is missing
+            assert derivative is not None
+            need = ~have_F[active] | np.array([J_cur[k] is None for k in active], dtype=bool)
+            F_new, J_new = _evaluate_pairs(derivative, x[need], n)
+            for j, k in enumerate(active[need]):
+                F_cur[k], J_cur[k], have_F[k] = F_new[j], J_new[j], True
         new_F = ~have_F[active]
         need_jac = np.array([central or J_cur[k] is None for k in active], dtype=bool)
         if not jacobian_at_root:  # F first; neighbours only of the iterates not yet converged
@@ -300,12 +345,18 @@ def newton_solve(
         pending = keep & ~retry
         ok = np.zeros(active.size, dtype=bool)
         F_try = np.full_like(x, np.nan)
+        J_try = np.full((x.shape[0], n, n), np.nan)
         while np.any(pending):
             idx = np.flatnonzero(pending)
             trial = x[idx] + lam[idx, None] * step[idx]
             if project is not None:
                 trial = project(trial)
-            Ft = _evaluate(residual, trial, n)
+            if exact:
+                assert derivative is not None
+                Ft, Jt = _evaluate_pairs(derivative, trial, n)
+                J_try[idx] = Jt
+            else:
+                Ft = _evaluate(residual, trial, n)
             fine = np.all(np.isfinite(Ft), axis=1)
             if chord:  # full steps only: a failed or worse trial is judged below
                 F_try[idx] = Ft
@@ -339,7 +390,7 @@ def newton_solve(
                 # a trial that stepped is the new iterate: its F is known (not evaluated again)
                 F_cur[k] = F_try[a]
                 have_F[k] = bool(ok[a])
-                J_cur[k] = None
+                J_cur[k] = J_try[a] if exact and ok[a] else None
                 continue
             if not ok[a]:
                 if jacobian == "broyden" and not fresh[k]:
@@ -364,7 +415,7 @@ def newton_solve(
                 J_cur[k] = Jk + np.outer(F_try[a] - F[a] - Jk @ s, s) / float(s @ s)
                 fresh[k] = False
             else:
-                J_cur[k] = None
+                J_cur[k] = J_try[a] if exact else None
             X[k], F_cur[k] = x_new, F_try[a]
         active = active[keep]
     for i, J_end in enumerate(J_cur):
@@ -378,4 +429,5 @@ def newton_solve(
         iterations=iters,
         status=tuple(status),
         max_iter=max_iter,
+        method=str(jacobian),
     )

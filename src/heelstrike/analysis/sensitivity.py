@@ -68,7 +68,8 @@ class GaitSensitivity(ResultDictMixin):
         The Floquet multipliers at the gait, largest modulus first
         (:func:`~heelstrike.analysis.newton.floquet_multipliers` of the exact Jacobian).
     multiplier_derivatives : ndarray of complex, shape (d, k)
-        ``d lambda_i / dp`` (per parameter unit), rows in the order of ``multipliers``.
+        ``d lambda_i / dp`` (per parameter unit), rows in the order of ``multipliers``; NaN
+        if not asked for (``gait_sensitivity(..., multipliers=False)``).
     exact : tuple of bool
         Per parameter: True if its partial derivatives are exact, False if central
         differences (``method="central"``, or a parameter with no exact derivative).
@@ -131,6 +132,7 @@ def gait_sensitivity(
     rel_step: float = 1e-5,
     rtol: float = 1e-12,
     atol: float = 1e-12,
+    multipliers: bool = True,
 ) -> GaitSensitivity:
     """Sensitivities of a passive gait to walker parameters (implicit function theorem).
 
@@ -160,6 +162,9 @@ def gait_sensitivity(
         ``max(1, |z_i|)`` in ``z``).
     rtol, atol : float
         Integrator tolerances.
+    multipliers : bool
+        Also differentiate the Floquet multipliers (``2 k`` exact Jacobians); False: their
+        derivatives are NaN.
 
     Returns
     -------
@@ -227,6 +232,9 @@ def gait_sensitivity(
             dQdp = np.sum([w * _quantities(m, z) for _, w, m in stencil], axis=0) / h
         dz_all[:, k] = np.linalg.solve(np.eye(d) - DP, dPdp)
         dQ[:, k] = DQz @ dz_all[:, k] + dQdp
+        if not multipliers:
+            dlam[:, k] = np.nan
+            continue
         dDP = np.sum([w * m.exact_jacobian(z + s * h * dz_all[:, k]).jacobian
                       for s, w, m in stencil], axis=0) / h
         dlam[:, k] = np.einsum("ji,jk,ki->i", W.conj(), dDP, V)

@@ -65,6 +65,7 @@ __all__ = [
     "ExactJacobianUnavailable",
     "StepFailedError",
     "StepJacobian",
+    "UnscheduledStepError",
     "step_jacobian",
 ]
 
@@ -82,6 +83,12 @@ class ExactJacobianUnavailable(ValueError):
 
 class StepFailedError(ValueError):
     """The step from the given section point does not complete (a fall, no heel strike...)."""
+
+
+class UnscheduledStepError(StepFailedError):
+    """The step completes, but not through its schedule's phases (a phase skipped), or the
+    variational equations fail: the step map is defined there, its exact Jacobian is not (a
+    caller may fall back to differences of the map)."""
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -450,7 +457,7 @@ class _PhaseField:
         sol = solve_ivp(rhs, (t0, t1), w0, method="DOP853", rtol=rtol, atol=atol,
                         max_step=max_step)
         if sol.status < 0:
-            raise StepFailedError(f"the variational equations failed: {sol.message}")
+            raise UnscheduledStepError(f"the variational equations failed: {sol.message}")
         w1 = sol.y[:, -1]
         return w1[:n], w1[n:].reshape(n, n)
 
@@ -575,7 +582,9 @@ def step_jacobian(
     ValueError
         For a name that is neither a parameter of the walker nor ``"slope"``.
     StepFailedError
-        If the step does not complete.
+        If the step does not complete (:class:`UnscheduledStepError`, a subclass: it
+        completes, but with a phase of its schedule skipped, or the variational equations
+        fail).
     ExactJacobianUnavailable
         If a part of the step cannot be differentiated exactly (see the class), or a
         parameter: one that does not enter the generated equations as one entry of their
@@ -607,7 +616,7 @@ def step_jacobian(
     phases: tuple[Phase, ...] = schedule.phases
     events = walk.events
     if len(events) != len(phases):
-        raise StepFailedError(
+        raise UnscheduledStepError(
             f"the step had {len(events)} resets for {len(phases)} phases (a phase skipped)")
     lock_angle = dict(schedule.lock_angles)
     n = walker.n_coordinates

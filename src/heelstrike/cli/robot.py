@@ -528,6 +528,7 @@ def run_robot_impact(args: argparse.Namespace) -> int:
             "pulling_contacts": {"frame": None, "normal_impulse": "N s"},
             "tilting_contacts": None, "restitution_law": None, "outcomes": "1",
             "unique": None, "active_sets": "1", "solutions": v_units,
+            "impulse_unique": None, "velocity_range": v_units, "kkt_residual": "1",
         }
         print_json(d, {k: units[k] for k in d})
         return 0

@@ -210,3 +210,64 @@ def test_kkt_residual_sees_a_violation() -> None:
     bad = np.array([5.0, -12.0, 0.0])  # |lambda_t| = 12 > mu lambda_n = 10
     assert _kkt_residual(M, v, v + ROWS.T @ bad, ROWS, none, bad, np.zeros(0), *args) > 0.1
     assert _kkt_residual(M, v, vp + 0.1, ROWS, none, f, np.zeros(0), *args) > 1e-3
+
+
+# -- a robot: the symmetric body on two soles, through robot_impact and the command line ------
+def _two_sole_body(path) -> object:  # noqa: ANN001
+    pytest.importorskip("pinocchio")
+    from heelstrike.robots import load_mjcf
+
+    path.write_text(f"""<mujoco model="block">
+  <worldbody>
+    <body name="body" pos="0 0 {HEIGHT}">
+      <freejoint name="root"/>
+      <inertial pos="0 0 0" mass="{MASS - 1.0}" diaginertia="0.9 0.7 0.5"/>
+      <body name="wheel" pos="0 0 0">
+        <joint name="spin" type="hinge" axis="0 0 1"/>
+        <inertial pos="0 0 0" mass="1" diaginertia="0.01 0.01 0.02"/>
+      </body>
+      <site name="left_sole" pos="0 {SPREAD} {-HEIGHT}"/>
+      <site name="right_sole" pos="0 {-SPREAD} {-HEIGHT}"/>
+    </body>
+  </worldbody>
+</mujoco>
+""")
+    return load_mjcf(path)
+
+
+@pytest.mark.parametrize(("kind", "mu"), [("flat-bilateral", 0.5), ("flat", np.inf)])
+def test_robot_landing_flat_on_two_soles_reports_the_split_undetermined(
+        tmp_path, capsys, kind: str, mu: float) -> None:
+    """The closed form above on a robot file (MJCF, free body, two sole sites, a wheel
+    spinning about the vertical through the centre of mass, its centre of mass on the axis: it
+    couples to ``omega_z`` only, so the in-plane argument holds with the wheel's rate in
+    ``q_p``): ``qdot_plus = 0``, unique; the impulse split between the soles is not
+    (``impulse_unique`` false), the vertical impulses add up to the momentum ``MASS * 1
+    m/s``."""
+    import json
+
+    from heelstrike.cli import main
+    from heelstrike.robots import parse_contact, robot_impact
+
+    robot = _two_sole_body(tmp_path / "block.xml")
+    sole = f":{kind}:{SOLE_X},{SOLE_Y}"
+    q = [0.0, 0.0, HEIGHT, 0.0, 0.0, 0.0, 1.0, 0.0]
+    v = [0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0]
+    strike = [parse_contact(f"{f}{sole}") for f in ("left_sole", "right_sole")]
+    d = robot_impact(robot, q, v, strike=strike, friction=mu).to_dict()
+    assert d["unique"] is True and d["impulse_unique"] is False and d["outcomes"] == 1
+    np.testing.assert_allclose(d["qdot_plus"], 0.0, atol=1e-12)
+    np.testing.assert_allclose(d["velocity_range"], 0.0, atol=1e-12)
+    assert sum(c["force_impulse"][2] for c in d["contacts"]) == pytest.approx(MASS, rel=1e-12)
+    assert d["T_c"] == pytest.approx(0.5 * MASS, rel=1e-12) and d["kkt_residual"] < 1e-10
+    state = tmp_path / "state.json"
+    state.write_text(json.dumps({"q": q, "v": v}))
+    argv = ["impact", "--mjcf", str(tmp_path / "block.xml"), "--state", str(state),
+            "--friction", str(mu)]
+    for s in strike:
+        argv += ["--strike", f"{s.frame}{sole}"]
+    assert main([*argv, "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["impulse_unique"] is False and out["unique"] is True
+    assert set(out["units"]) == set(out) - {"units"}
+    assert out["units"]["velocity_range"] == ["m/s"] * 3 + ["rad/s"] * 4

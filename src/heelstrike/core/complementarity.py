@@ -31,10 +31,12 @@ modes come first because walkers' feet are assumed not to slip, and ``"slip"`` i
 when no stick/separate assignment is consistent (a Painlevé-type situation of infinite
 friction).
 
-The second solver here, :func:`solve_point_contacts`, is the exact law of striking point
-contacts with Coulomb friction (a pyramid cone), Newton or energetic restitution, rows of any
-rank, and every outcome reported (issue #34); :mod:`heelstrike.core.contact_laws` and the
-robots' sole polygons use it.
+The second solver here, :func:`solve_point_contacts`, is the exact law of striking contacts
+with Coulomb friction (a pyramid cone), Newton or energetic restitution, rows of any rank, and
+every outcome reported (issue #34): whether ``q_dot+`` and the impulses are unique, decided by
+the enumeration of the active sets and the null directions of each set's Delassus system,
+and a KKT certificate of the returned outcome. :mod:`heelstrike.core.contact_laws` (every
+striking contact: points, arcs, a sole's corners, a sole held flat) and the robots use it.
 
 Energy: the final active rows ``A`` (bilateral, stick: normal + tangential, slip: normal) define
 the projectors of :func:`heelstrike.core.impact.impact`, so ``q_dot+ = P_a q_dot-`` and the

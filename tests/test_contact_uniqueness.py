@@ -9,6 +9,7 @@ the oracles here are closed forms derived in the docstrings (no optimiser, no it
 from __future__ import annotations
 
 import itertools
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -213,7 +214,7 @@ def test_kkt_residual_sees_a_violation() -> None:
 
 
 # -- a robot: the symmetric body on two soles, through robot_impact and the command line ------
-def _two_sole_body(path) -> object:  # noqa: ANN001
+def _two_sole_body(path: Path) -> Any:
     pytest.importorskip("pinocchio")
     from heelstrike.robots import load_mjcf
 
@@ -237,7 +238,7 @@ def _two_sole_body(path) -> object:  # noqa: ANN001
 
 @pytest.mark.parametrize(("kind", "mu"), [("flat-bilateral", 0.5), ("flat", np.inf)])
 def test_robot_landing_flat_on_two_soles_reports_the_split_undetermined(
-        tmp_path, capsys, kind: str, mu: float) -> None:
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], kind: str, mu: float) -> None:
     """The closed form above on a robot file (MJCF, free body, two sole sites, a wheel
     spinning about the vertical through the centre of mass, its centre of mass on the axis: it
     couples to ``omega_z`` only, so the in-plane argument holds with the wheel's rate in

@@ -642,11 +642,6 @@ def _try_set(
     if cols_B:
         SB = np.array(cols_B)
         GB = G @ SB.T  # (k, p)
-        H = SB @ GB
-        F = np.flatnonzero(free)
-        rank = _rank_psd(H)
-        if rank - _rank_psd(H[np.ix_(F, F)]) < len(free) - F.size:
-            return None  # bounded impulses dependent modulo the free ones: a smaller set
         K = GB[rows_C]
         rhs = np.array(target) - u0[rows_C]
         # least-norm solution by the SVD: free impulses redundant (the same q_dot+), or a
@@ -676,6 +671,11 @@ def _try_set(
     tols = np.array([vtol if c[0] in ("s", "g") else ftol for c in cons])
     if np.any(vals < -tols):
         return None
+    if cols_B:  # (tested last: the cheaper tests above reject most sets)
+        H = SB @ GB
+        F = np.flatnonzero(free)
+        if _rank_psd(H) - _rank_psd(H[np.ix_(F, F)]) < len(free) - F.size:
+            return None  # bounded impulses dependent modulo the free ones: a smaller set
     n_slip = sum(1 for md in modes if isinstance(md, tuple) for a in md if a in (1, -1))
     n_act = sum(1 for md in modes if md != _SEP)
     out = _SetSolution(f=f, fb=fb, key=(n_slip, n_act), impulse_free=False, ends=[],

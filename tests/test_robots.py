@@ -185,7 +185,7 @@ def test_direct_inert_robot_impact_equals_the_reference_path(robots, name, seed)
         res = robot_impact(robot, q, v, strike=[], keep=specs)
         ref, M, jacs = _reference_inert(robot, q, v, specs)
         _assert_same(res.result, ref)
-        assert res.result.modes == ref.modes and res.result.iterations == ref.iterations
+        assert res.result.modes == ref.modes
         np.testing.assert_array_equal(res.M, M)  # the same crba, symmetrised the same way
         for J_fast, J_ref in zip(res.jacobians, jacs, strict=True):
             np.testing.assert_array_equal(J_fast, J_ref)
@@ -326,11 +326,15 @@ def test_friction_limits_on_talos(robots) -> None:
         r = robot_impact(talos, q, v, strike=strike, keep=keep, friction=mu).result
         lam = r.impulse[:3]
         modes.add(r.modes[0])
-        assert np.hypot(lam[0], lam[1]) <= mu * lam[2] * (1 + 1e-9)
+        assert np.all(np.abs(lam[:2]) <= mu * lam[2] * (1 + 1e-9))  # the pyramid cone
         assert r.T_post <= r.T * (1 + 1e-12)
+        assert r.kkt_residual < 1e-9
         if r.modes[0] == "slip":
             slip = r.contact_velocity_post[0][:2]
             assert lam[:2] @ slip < 0
+            for a in (0, 1):  # a sliding row: on the cone's edge, against its slip
+                if abs(slip[a]) > 1e-9:
+                    assert lam[a] == pytest.approx(-mu * lam[2] * np.sign(slip[a]), rel=1e-9)
         # linear momentum changes by the striking and the kept contacts' forces
         lin0, _ = _momentum_about(talos, q, v, np.zeros(3))
         lin1, _ = _momentum_about(talos, q, r.velocity_post, np.zeros(3))
@@ -368,7 +372,7 @@ def test_trailing_foot_lift_is_decided(robots, name, L) -> None:
         assert u_trail[2] >= -1e-12
     else:  # stays: pushes, does not penetrate, inside the cone
         assert lam[1, 2] > 0 and u_trail[2] == pytest.approx(0.0, abs=1e-10)
-        assert np.hypot(*lam[1, :2]) <= 0.8 * lam[1, 2] * (1 + 1e-9)
+        assert np.all(np.abs(lam[1, :2]) <= 0.8 * lam[1, 2] * (1 + 1e-9))  # pyramid
     # the paper's way (trailing foot left free): where it lifts, the decided law agrees
     free = robot_impact(robot, q, v, strike=[lead], friction=0.8).result
     if contact_velocity(robot, q, free.velocity_post, trail)[2] > 0:

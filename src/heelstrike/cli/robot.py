@@ -325,7 +325,9 @@ def add_robot_impact_options(p: argparse.ArgumentParser) -> None:
         "held flat (kept: also FRAME:flat), and tilting_contacts names the kept soles whose "
         "centre of pressure leaves the polygon (a corner would pull). Where the law admits "
         "several outcomes, outcomes/unique/solutions say so (every active set is examined when "
-        "there are few enough; otherwise unique is null and active_sets bounds them). "
+        "there are few enough; otherwise unique is null and active_sets bounds them); "
+        "impulse_unique is false where the impulses' split between redundant contacts (two "
+        "soles of one body) is not determined. "
         "STATE.json holds q and v in Pinocchio's conventions: the base's linear and angular "
         "velocity in the base's own frame (not the world's), then the joint rates. Each "
         "contact's T_c_normal and T_c_tangential are nested shares in contact order (the "
@@ -528,6 +530,7 @@ def run_robot_impact(args: argparse.Namespace) -> int:
             "pulling_contacts": {"frame": None, "normal_impulse": "N s"},
             "tilting_contacts": None, "restitution_law": None, "outcomes": "1",
             "unique": None, "active_sets": "1", "solutions": v_units,
+            "impulse_unique": None, "velocity_range": v_units, "kkt_residual": "1",
         }
         print_json(d, {k: units[k] for k in d})
         return 0

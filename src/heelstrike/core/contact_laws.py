@@ -16,43 +16,39 @@ Contacts
     - ``"separate"``: no impulse; the principal normal velocity satisfies
       ``u_n+ >= -e_i min(u_n-, 0)``;
     - ``"stick"``: ``u_N+ = -e_i u_N-`` on the normal rows (``min(u_n-, 0)`` for the principal
-      one), ``u_T+ = 0``, impulse inside the cone ``||w * lambda_T|| <= mu_i lambda_n``,
-      ``lambda_n >= 0``;
-    - ``"slip"``: same normal rows, ``lambda_T`` on the cone's boundary and opposite to the
-      post-impact slip velocity (maximum dissipation): ``w * lambda_T = -mu_i lambda_n
-      (u_T+ / w) / ||u_T+ / w||``.
+      one), ``u_T+ = 0``, impulse inside the cone ``|w_a lambda_a| <= mu_i lambda_n`` for
+      every tangential row ``a``, ``lambda_n >= 0``;
+    - ``"slip"``: same normal rows, some tangential row sliding, its impulse on the cone's
+      edge and opposite to its post-impact velocity (maximum dissipation per row:
+      ``w_a lambda_a = -mu_i lambda_n sign(u_a+)``).
 
-    ``w`` are per-row tangential weights (1 for forces; ``1 / rho`` for a twisting moment with
-    torsional radius ``rho``, the elliptic limit surface of a flat sole).
+    The friction cone is the **pyramid**, one Coulomb law per tangential row; ``w`` are the
+    rows' weights (1 for forces; ``1 / rho`` for a twisting moment with torsional radius
+    ``rho``). A contact's further normal rows (a flat sole held flat: the tilt moments) are
+    held with any impulse while it is active, and free when it separates: all rows or none.
 
 Solver (the choice stated): a **complementarity** formulation, *not* a convex QP relaxation (the
 convex QP of Anitescu and of MuJoCo makes slipping contacts drift apart, ``u_n+ = mu ||u_T+||``;
-here slipping contacts stay closed). Bilateral rows are eliminated exactly (Schur complement of
-their Delassus block). Each striking contact's local problem is solved exactly: separation is
-decided by the sign of the frictionless normal impulse, stick is tried first, and slip reduces
-to one scalar secular equation in the multiplier ``beta`` of the disc constraint,
-``||x(beta)|| = mu lambda_n(x(beta))`` with ``x(beta) = -(S + beta I)^-1 c``, solved by Brent's
-method to machine precision. Several striking contacts are coupled by a block (non-smooth)
-Gauss-Seidel iteration over contacts; with one striking contact it is exact in one sweep.
-Uniqueness is not checked on this path (Painlevé-type configurations can have several
-outcomes; the first root is returned: ``solutions`` is empty, ``unique`` None).
-A contact with several normal rows (a flat sole held flat) is resolved all rows or none: where
-holding it needs a pull yet releasing it leaves it moving into the ground (an edge or corner
-landing), :func:`resolve_contact_impact` raises :class:`~heelstrike.core.impact.ImpactInputError`
-rather than report a contact passing through the ground: give such a sole as its corners.
-
-Active-set path (issue #34): striking *point* contacts (one normal row, up to two tangential
-rows: a sole's corners, points, arcs) can instead be solved exactly by
-:func:`heelstrike.core.complementarity.solve_point_contacts` (``method="active-set"``; taken
-automatically for rank-deficient rows and for the energetic restitution law): friction is the
-pyramid ``|lambda_t| <= mu lambda_n`` per tangential row, every active set is enumerated (up
-to :data:`~heelstrike.core.complementarity.ENUMERATION_BUDGET`; above it Lemke's method gives
-one outcome), the outcomes found are ``solutions`` (``unique``, ``exhaustive``,
-``active_sets``), and redundant rows (two heel corners, a four-corner sole) give the unique
-``q_dot+`` with the impulses of the smallest consistent active set (Carathéodory) and the kept
-rows' least-norm impulses. Its energy split is the nested one below with pseudo-inverses
-(:func:`energy_split` with ``redundant=True``): rows that repeat earlier ones add nothing, so
-their energy goes to the contacts before them in the stated order.
+here slipping contacts stay closed), solved **exactly** for every striking contact (points,
+arcs, a sole's corners, a sole held flat) by one solver,
+:func:`heelstrike.core.complementarity.solve_point_contacts`'s: bilateral rows are eliminated
+(pseudo-inverse Schur complement of their Delassus block), every active set (per contact:
+separate, or each tangential row sticking or sliding either way) is enumerated up to
+:data:`~heelstrike.core.complementarity.ENUMERATION_BUDGET` (above it Lemke's method gives one
+outcome) and each is one linear system with sign checks. The outcomes found are ``solutions``
+(``unique``, ``exhaustive``, ``active_sets``); ``impulse_unique`` says whether the impulses are
+determined too (not where contacts are redundant: two soles of one body), ``continuum`` whether
+an active set admits a segment of outcomes (singular along a direction that moves ``q_dot+``),
+``kkt_residual`` certifies the returned outcome in the full coordinates. Redundant rows (two heel
+corners, a four-corner sole) give the unique ``q_dot+`` with the impulses of the smallest
+consistent active set (Carathéodory) and the kept rows' least-norm impulses. A sole held flat
+whose hold needs a pull while releasing it leaves it moving into the ground (an edge or corner
+landing) has no consistent outcome: :func:`resolve_contact_impact` raises
+:class:`~heelstrike.core.impact.ImpactInputError` rather than report a contact passing through
+the ground: give such a sole as its corners. The energy split of a striking impact is the
+nested one below with pseudo-inverses (:func:`energy_split` with ``redundant=True``): rows that
+repeat earlier ones add nothing, so their energy goes to the contacts before them in the stated
+order.
 
 Energy split (every law)
 ------------------------
@@ -90,12 +86,17 @@ from typing import Literal
 
 import numpy as np
 import scipy.linalg
-import scipy.optimize
 from numpy.typing import ArrayLike, NDArray
 
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
-from heelstrike.core.complementarity import RestitutionLaw, _pinv_psd, solve_point_contacts
+from heelstrike.core.complementarity import (
+    ENUMERATION_BUDGET,
+    RestitutionLaw,
+    _Layout,
+    _pinv_psd,
+    _solve_contacts,
+)
 from heelstrike.core.impact import ImpactInputError, impact
 
 __all__ = [
@@ -115,7 +116,6 @@ __all__ = [
 ]
 
 ImpactMode = Literal["stick", "slip", "separate"]
-SolverMethod = Literal["auto", "gauss-seidel", "active-set"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -227,18 +227,29 @@ class ContactImpact(ResultDictMixin):
         and ``T - T_post`` (J).
     T_c_normal, T_c_tangential : ndarray, shape (contacts,)
         Per-contact normal and tangential shares of ``T_c`` (J); they add up to ``T_c``.
-    iterations : int
-        Gauss-Seidel sweeps used (0 for the exact active-set solver).
     solutions : tuple of ndarray
-        ``q_dot+`` (n,) of every distinct outcome the law admits, the returned one first, when
-        the active sets were examined (:func:`heelstrike.core.complementarity.
-        solve_point_contacts`); empty when they were not (the Gauss-Seidel path).
+        ``q_dot+`` (n,) of every distinct outcome the law admits, the returned one first (and
+        the finite ends of any continuum), when the active sets were examined (a striking
+        contact); empty when nothing was to decide (bilateral contacts only).
     exhaustive : bool
         Whether every active set was examined (``solutions`` is then complete).
     active_sets : int
         Number of active sets of the law (a bound on the number of outcomes; 0 if unknown).
     restitution_law : str
         ``"newton"`` or ``"energetic"``.
+    impulse_unique : bool or None
+        Whether the impulses are determined by the law (False: their split between redundant
+        contacts is not, e.g. a body landing flat on two soles); None when not examined.
+    continuum : bool
+        Some active set admits a segment of outcomes ``q_dot+`` (then ``unique`` is False and
+        ``solutions`` holds its finite ends).
+    velocity_range : ndarray, shape (2, n), or None
+        Componentwise smallest and largest ``q_dot+`` over the outcomes (``-inf``/``inf``
+        where a continuum is unbounded); None when not examined.
+    kkt_residual : float
+        Largest relative violation of the law's conditions by the returned outcome, checked
+        in the full coordinates (:class:`heelstrike.core.complementarity.
+        PointContactSolution`); 0 when not examined.
     """
 
     velocity_pre: FloatArray
@@ -255,11 +266,14 @@ class ContactImpact(ResultDictMixin):
     energy_lost: float
     T_c_normal: FloatArray
     T_c_tangential: FloatArray
-    iterations: int
     solutions: tuple[FloatArray, ...] = ()
     exhaustive: bool = False
     active_sets: int = 0
     restitution_law: str = "newton"
+    impulse_unique: bool | None = None
+    continuum: bool = False
+    velocity_range: FloatArray | None = None
+    kkt_residual: float = 0.0
 
     @property
     def outcomes(self) -> int:
@@ -268,8 +282,9 @@ class ContactImpact(ResultDictMixin):
 
     @property
     def unique(self) -> bool | None:
-        """Whether the law has one outcome: None when the active sets were not all examined."""
-        return len(self.solutions) == 1 if self.exhaustive else None
+        """Whether ``q_dot+`` is determined by the law (one outcome, no continuum): None when
+        the active sets were not all examined."""
+        return len(self.solutions) == 1 and not self.continuum if self.exhaustive else None
 
 
 def _check_M(M: ArrayLike) -> tuple[FloatArray, tuple[FloatArray, bool]]:
@@ -367,112 +382,12 @@ def energy_split(
     return float(shares.sum()), shares
 
 
-def _solve_local(
-    G: FloatArray,
-    u0: FloatArray,
-    target_n: FloatArray,
-    c: ContactRows,
-) -> tuple[FloatArray, ImpactMode]:
-    """Exact impulse of one unilateral contact given its free velocity ``u0`` (see module doc)."""
-    N, T = list(c.normal), list(c.tangential)
-    lam = np.zeros(c.rows)
-    G_NN = G[np.ix_(N, N)]
-    lam_N0 = np.linalg.solve(G_NN, target_n - u0[N])
-    if lam_N0[0] <= 0.0:
-        return lam, "separate"
-    mu = c.law.friction
-    if not T or mu == 0.0:
-        lam[N] = lam_N0
-        return lam, "slip" if T else "stick"
-    # Stick.
-    rhs = -u0.copy()
-    rhs[N] += target_n
-    lam_st: FloatArray = np.asarray(np.linalg.solve(G, rhs), dtype=float)
-    w = np.asarray(c.tangential_weights, dtype=float)
-    if lam_st[N[0]] > 0.0 and np.linalg.norm(w * lam_st[T]) <= mu * lam_st[N[0]]:
-        return lam_st, "stick"
-    # Slip: reduce to the tangential rows, scaled x = w * lambda_T. An infinite coefficient
-    # reaches here only when sticking would pull (Painlevé-like); take the large-mu limit.
-    mu = min(mu, 1e12)
-    G_NT, G_TN, G_TT = G[np.ix_(N, T)], G[np.ix_(T, N)], G[np.ix_(T, T)]
-    H = np.linalg.solve(G_NN, G_NT)  # lambda_N = lambda_N0 - H lambda_T
-    S = G_TT - G_TN @ H
-    S = 0.5 * (S + S.T)
-    cvec = u0[T] + G_TN @ lam_N0  # u_T+ = c + S lambda_T
-    Dinv = 1.0 / w
-    Sx = Dinv[:, None] * S * Dinv[None, :]
-    cx = Dinv * cvec
-    hx = Dinv * H[0]
-    evals, Q = np.linalg.eigh(Sx)
-    cq = Q.T @ cx
-
-    def x_of(beta: float) -> FloatArray:
-        return np.asarray(-(Q @ (cq / (evals + beta))))
-
-    def F(beta: float) -> float:
-        x = x_of(beta)
-        return float(np.linalg.norm(x) - mu * (lam_N0[0] - hx @ x))
-
-    hi = max(float(evals.max()), 1e-300)
-    while F(hi) >= 0.0:
-        hi *= 4.0
-        if hi > 1e300:  # pragma: no cover - cannot happen for lam_N0[0] > 0
-            raise ImpactInputError(f"contact {c.name!r}: slip equation has no root")
-    beta = 0.0 if F(0.0) <= 0.0 else scipy.optimize.brentq(F, 0.0, hi, xtol=1e-300, rtol=1e-15)
-    lam_T = x_of(beta) / w
-    lam[T] = lam_T
-    lam[N] = lam_N0 - H @ lam_T
-    if lam[N[0]] <= 0.0:
-        return np.zeros(c.rows), "separate"
-    return lam, "slip"
-
-
-#: Relative tolerance (of the largest striking-contact velocity) on the separation condition
-#: ``u_n+ >= -e min(u_n-, 0)`` of a contact reported as separating: it absorbs round-off.
-SEPARATION_TOLERANCE = 1e-9
-
-
-def _check_separations(
-    contacts: Sequence[ContactRows],
-    uni: list[int],
-    modes: list[ImpactMode],
-    targets: list[FloatArray],
-    u_post: FloatArray,
-    offs: list[slice],
-    u_pre: FloatArray,
-) -> None:
-    """Raise unless every contact reported as separating really separates.
-
-    A contact with several normal rows (a flat sole: the normal force and the moments
-    that hold it flat) is resolved as all of them active or none. When holding it needs a pull
-    and releasing it lets it move on into the ground, neither is consistent: the sole lands on
-    an edge or a corner, which these laws do not model. Such a result is refused, not reported.
-    """
-    scale = max(float(np.max(np.abs(u_pre), initial=0.0)),
-                float(np.max(np.abs(u_post), initial=0.0)), 1e-300)
-    for j, i in enumerate(uni):
-        if modes[j] != "separate":
-            continue
-        c = contacts[i]
-        u_n = float(u_post[offs[j]][c.normal[0]])
-        if u_n < float(targets[j][0]) - SEPARATION_TOLERANCE * scale:
-            raise ImpactInputError(
-                f"contact {c.name!r}: no consistent impact: holding its {len(c.normal)} normal "
-                "rows (the sole flat on the ground) needs a pull, and releasing it leaves it "
-                f"moving into the ground at {u_n:.4g} m/s; the sole lands on an edge or a "
-                "corner, which this contact law does not model (give it as a point contact)"
-            )
-
-
 def resolve_contact_impact(
     M: ArrayLike,
     q_dot: ArrayLike,
     contacts: Sequence[ContactRows],
     *,
-    max_sweeps: int = 500,
-    tol: float = 1e-13,
     restitution_law: RestitutionLaw = "newton",
-    method: SolverMethod = "auto",
 ) -> ContactImpact:
     """Resolve an impact with per-contact inert/restitution/friction laws (module doc).
 
@@ -484,21 +399,10 @@ def resolve_contact_impact(
         Pre-impact velocities ``q_dot-``.
     contacts : sequence of ContactRows
         Bilateral (persistent) and unilateral (striking) contacts, in report order.
-    max_sweeps : int
-        Maximum Gauss-Seidel sweeps over the unilateral contacts.
-    tol : float
-        Relative convergence tolerance on the impulses.
     restitution_law : {"newton", "energetic"}
         Newton's kinematic law (can gain energy with sticking friction: Kane's paradox) or
         the energetic two-phase law of :func:`heelstrike.core.complementarity.
-        solve_point_contacts`, which cannot (it uses the active-set solver).
-    method : {"auto", "gauss-seidel", "active-set"}
-        ``"gauss-seidel"``: the block Gauss-Seidel over contacts with round friction cones
-        (full-rank rows only). ``"active-set"``: exact active-set enumeration with pyramid
-        cones (:func:`~heelstrike.core.complementarity.solve_point_contacts`; every striking
-        contact a point: one normal row, at most two tangential rows; any rank; reports every
-        outcome). ``"auto"`` (default): active-set when the rows are rank deficient or the law
-        is energetic, else Gauss-Seidel.
+        solve_point_contacts`, which cannot.
 
     Returns
     -------
@@ -507,9 +411,16 @@ def resolve_contact_impact(
     Raises
     ------
     ImpactInputError
-        On malformed input, rank-deficient rows that the active-set solver cannot take (only
-        bilateral contacts, or a striking contact with several normal rows), or no
-        convergence.
+        On malformed input, rank-deficient rows when every contact is bilateral, or a
+        striking contact with several normal rows that has no consistent outcome (an edge or
+        corner landing of a sole held flat).
+
+    Notes
+    -----
+    With a striking contact the exact active-set solver decides (module doc: every active set
+    of the pyramid-cone law up to :data:`~heelstrike.core.complementarity.ENUMERATION_BUDGET`,
+    ``unique``, ``impulse_unique``, ``kkt_residual``); with bilateral contacts only, the
+    impact is the inert projection of :func:`heelstrike.core.impact.impact` (full-rank rows).
     """
     M_, cho = _check_M(M)
     n = M_.shape[0]
@@ -523,125 +434,37 @@ def resolve_contact_impact(
             raise ImpactInputError(
                 f"contact {c.name!r}: jacobian has {c.jacobian.shape[1]} columns, expected {n}"
             )
-    bil = [i for i, c in enumerate(contacts) if c.bilateral]
-    uni = [i for i, c in enumerate(contacts) if not c.bilateral]
-    A_all = np.vstack([c.jacobian for c in contacts])
-    sv = np.linalg.svd(A_all, compute_uv=False)
-    deficient = A_all.shape[0] > n or sv[-1] <= 1e-12 * max(A_all.shape) * sv[0]
-    if method not in ("auto", "gauss-seidel", "active-set"):
-        raise ImpactInputError(f"method must be auto, gauss-seidel or active-set, got {method!r}")
-    if uni and (method == "active-set" or (method == "auto" and (
-            deficient or restitution_law == "energetic"))):
+    if restitution_law not in ("newton", "energetic"):
+        raise ImpactInputError(
+            f"restitution law must be newton or energetic, got {restitution_law!r}")
+    if any(not c.bilateral for c in contacts):
         return _resolve_active_set(M_, v, contacts, restitution_law)
-    if restitution_law != "newton":
-        raise ImpactInputError("the energetic restitution law needs the active-set solver")
-    if A_all.shape[0] > n:
-        raise ImpactInputError(f"{A_all.shape[0]} contact rows exceed the {n} coordinates")
-    if deficient:
+    A_b = np.vstack([c.jacobian for c in contacts])
+    if A_b.shape[0] > n:
+        raise ImpactInputError(f"{A_b.shape[0]} contact rows exceed the {n} coordinates")
+    sv = np.linalg.svd(A_b, compute_uv=False)
+    if sv[-1] <= 1e-12 * max(A_b.shape) * sv[0]:
         raise ImpactInputError("contact rows are rank deficient (redundant contacts?)")
-
-    A_b = (
-        np.vstack([contacts[i].jacobian for i in bil]) if bil else np.zeros((0, n))
-    )
-    A_s = (
-        np.vstack([contacts[i].jacobian for i in uni]) if uni else np.zeros((0, n))
-    )
-    X_b = scipy.linalg.cho_solve(cho, A_b.T) if bil else np.zeros((n, 0))
-    X_s = scipy.linalg.cho_solve(cho, A_s.T) if uni else np.zeros((n, 0))
-    if bil:
-        W_bb = A_b @ X_b
-        W_bb = 0.5 * (W_bb + W_bb.T)
-        cho_b = scipy.linalg.cho_factor(W_bb)
-        v0 = v - X_b @ scipy.linalg.cho_solve(cho_b, A_b @ v)
-        Y = X_s - X_b @ scipy.linalg.cho_solve(cho_b, A_b @ X_s) if uni else X_s
-    else:
-        v0 = v.copy()
-        Y = X_s
-    G = A_s @ Y
-    G = 0.5 * (G + G.T)
-    # Offsets of each unilateral contact within A_s.
-    offs: list[slice] = []
-    start = 0
-    for i in uni:
-        offs.append(slice(start, start + contacts[i].rows))
-        start += contacts[i].rows
-    u_pre_s = A_s @ v
-    u_free = A_s @ v0
-    targets: list[FloatArray] = []
-    for j, i in enumerate(uni):
-        c = contacts[i]
-        un = u_pre_s[offs[j]][list(c.normal)]
-        tgt = -c.law.restitution * un
-        tgt[0] = -c.law.restitution * min(un[0], 0.0)
-        targets.append(tgt)
-    lam_s = np.zeros(A_s.shape[0])
-    modes_s: list[ImpactMode] = ["separate"] * len(uni)
-    sweeps = 0
-    for sweeps in range(1, max_sweeps + 1):  # noqa: B007
-        change = 0.0
-        for j, i in enumerate(uni):
-            sl = offs[j]
-            u0 = u_free[sl] + G[sl, :] @ lam_s - G[sl, sl] @ lam_s[sl]
-            new, modes_s[j] = _solve_local(G[sl, sl], u0, targets[j], contacts[i])
-            change = max(change, float(np.max(np.abs(new - lam_s[sl]), initial=0.0)))
-            lam_s[sl] = new
-        scale = max(float(np.max(np.abs(lam_s), initial=0.0)), 1e-300)
-        if len(uni) <= 1 or change <= tol * scale:
-            break
-    else:
-        raise ImpactInputError(f"Gauss-Seidel over contacts did not converge in {max_sweeps}")
-    v_plus = v0 + Y @ lam_s
-    _check_separations(contacts, uni, modes_s, targets, A_s @ v_plus, offs, u_pre_s)
-    if bil:
-        lam_b = -scipy.linalg.cho_solve(cho_b, A_b @ v + A_b @ X_s @ lam_s)
-    else:
-        lam_b = np.zeros(0)
-    # Assemble impulses and modes in contact order.
-    modes: list[ImpactMode] = []
-    lam_parts: list[FloatArray] = []
-    bpos, spos = 0, 0
-    j = 0
-    for c in contacts:
-        if c.bilateral:
-            lam_parts.append(lam_b[bpos : bpos + c.rows])
-            bpos += c.rows
-            modes.append("stick")
-        else:
-            lam_parts.append(lam_s[spos : spos + c.rows])
-            spos += c.rows
-            modes.append(modes_s[j])
-            j += 1
-    lam = np.concatenate(lam_parts)
-    f = A_all.T @ lam
-    # Energy split over the active rows: normal groups first, then tangential groups.
-    normal_groups: list[FloatArray] = []
-    tangential_groups: list[FloatArray] = []
-    for c, mode in zip(contacts, modes, strict=True):
-        Jn = c.jacobian[list(c.normal)]
-        Jt = c.jacobian[list(c.tangential)]
-        if mode == "separate":
-            Jn, Jt = Jn[:0], Jt[:0]
-        elif mode == "slip":
-            Jt = Jt[:0]
-        normal_groups.append(Jn)
-        tangential_groups.append(Jt)
+    X_b = scipy.linalg.cho_solve(cho, A_b.T)
+    W_bb = A_b @ X_b
+    cho_b = scipy.linalg.cho_factor(0.5 * (W_bb + W_bb.T))
+    lam = -scipy.linalg.cho_solve(cho_b, A_b @ v)
+    v_plus = v + X_b @ lam
+    # Energy split over the rows: normal groups first, then tangential groups.
+    normal_groups = [c.jacobian[list(c.normal)] for c in contacts]
+    tangential_groups = [c.jacobian[list(c.tangential)] for c in contacts]
     _, shares = energy_split(M_, v, normal_groups + tangential_groups, check=False)
     m = len(contacts)
-    A_act = np.vstack(normal_groups + tangential_groups)
-    if A_act.shape[0]:
-        split = impact(M_, A_act, v, check=False)  # the paper's projectors, eqs. (6)-(10)
-        T, T_c = float(split.kinetic_energy), float(split.kinetic_energy_constrained)
-        T_a = float(split.kinetic_energy_admissible)
-    else:
-        T = 0.5 * float(v @ M_ @ v)
-        T_c, T_a = 0.0, T
+    split = impact(M_, np.vstack(normal_groups + tangential_groups), v, check=False)
+    T, T_c = float(split.kinetic_energy), float(split.kinetic_energy_constrained)
+    T_a = float(split.kinetic_energy_admissible)
     T_post = 0.5 * float(v_plus @ M_ @ v_plus)
     return ContactImpact(
         velocity_pre=v,
         velocity_post=v_plus,
         impulse=lam,
-        generalized_impulse=f,
-        modes=tuple(modes),
+        generalized_impulse=A_b.T @ lam,
+        modes=tuple("stick" for _ in contacts),
         contact_velocity_pre=tuple(c.jacobian @ v for c in contacts),
         contact_velocity_post=tuple(c.jacobian @ v_plus for c in contacts),
         T=T,
@@ -651,7 +474,6 @@ def resolve_contact_impact(
         energy_lost=T - T_post,
         T_c_normal=shares[:m],
         T_c_tangential=shares[m:],
-        iterations=sweeps,
     )
 
 
@@ -660,22 +482,42 @@ def _resolve_active_set(M: FloatArray, v: FloatArray, contacts: Sequence[Contact
     """:func:`resolve_contact_impact` by exact active sets (pyramid cones, any rank)."""
     n = M.shape[0]
     uni = [c for c in contacts if not c.bilateral]
-    for c in uni:
-        if len(c.normal) != 1 or len(c.tangential) > 2:
-            raise ImpactInputError(
-                f"contact {c.name!r}: the active-set solver takes striking point contacts (one "
-                "normal row, at most two tangential rows): give a sole as its corners")
-    m = len(uni)
-    N = np.array([c.jacobian[c.normal[0]] for c in uni])
-    Tt = np.zeros((m, 2, n))
-    for j, c in enumerate(uni):
-        for a, t in enumerate(c.tangential):
-            Tt[j, a] = c.jacobian[t]
+    rows: list[FloatArray] = []
+    principal: list[int] = []
+    extra: list[tuple[int, ...]] = []
+    tangential: list[tuple[int, ...]] = []
+    where: list[int] = []  # first stacked row of each striking contact
+    for c in uni:  # stacked in the contact's own row order, tangential rows scaled by 1/w
+        start = len(rows)
+        where.append(start)
+        weight = dict(zip(c.tangential, c.tangential_weights or (), strict=True))
+        rows += [c.jacobian[r] / weight.get(r, 1.0) for r in range(c.rows)]
+        principal.append(start + c.normal[0])
+        extra.append(tuple(start + r for r in c.normal[1:]))
+        tangential.append(tuple(start + r for r in c.tangential))
+    R = np.array(rows).reshape(-1, n)
+    lay = _Layout(principal=tuple(principal), extra=tuple(extra), tangential=tuple(tangential))
     mu = np.array([c.law.friction if c.tangential else 0.0 for c in uni])
     e = np.array([c.law.restitution for c in uni])
     bil = [c.jacobian for c in contacts if c.bilateral]
-    sol = solve_point_contacts(M, v, N, tangential=Tt, bilateral=np.vstack(bil) if bil else None,
-                               friction=mu, restitution=e, law=law)
+    A_b = np.vstack(bil) if bil else np.zeros((0, n))
+    try:
+        sol = _solve_contacts(M, v, R, lay, A_b, mu, e, law, ENUMERATION_BUDGET)
+    except ImpactInputError as exc:
+        held = [c for c in uni if len(c.normal) > 1]
+        if "no consistent active set" not in str(exc) or not held:
+            raise
+        c = held[0]
+        v0 = v  # released (no impulse of its own), with the kept rows still holding
+        if A_b.shape[0]:
+            X = np.linalg.solve(M, A_b.T)
+            v0 = v - X @ (_pinv_psd(A_b @ X) @ (A_b @ v))
+        u_n = float(c.jacobian[c.normal[0]] @ v0)
+        raise ImpactInputError(
+            f"contact {c.name!r}: no consistent impact: holding its {len(c.normal)} normal "
+            "rows (the sole flat on the ground) needs a pull, and releasing it leaves it "
+            f"moving into the ground at {u_n:.4g} m/s; the sole lands on an edge or a corner, "
+            "which this contact law does not model (give the sole as its corners)") from None
     modes: list[ImpactMode] = []
     lam_parts: list[FloatArray] = []
     normal_groups: list[FloatArray] = []
@@ -688,15 +530,14 @@ def _resolve_active_set(M: FloatArray, v: FloatArray, contacts: Sequence[Contact
             bpos += c.rows
             modes.append("stick")
         else:
-            lam = np.zeros(c.rows)
-            lam[c.normal[0]] = sol.impulse[j, 0]
-            for a, t in enumerate(c.tangential):
-                lam[t] = sol.impulse[j, 1 + a]
+            lam = sol.impulse[where[j]:where[j] + c.rows].copy()
+            for r, w in zip(c.tangential, c.tangential_weights or (), strict=True):
+                lam[r] /= w  # the scaled row's impulse is w lambda
             lam_parts.append(lam)
             modes.append(sol.modes[j])
             if sol.modes[j] == "separate":
                 Jn = Jn[:0]
-            Jt = Jt[[a for a in range(len(c.tangential)) if sol.stick_rows[j, a]]]
+            Jt = Jt[[a for a, r in enumerate(c.tangential) if sol.stick[where[j] + r]]]
             j += 1
         normal_groups.append(Jn)
         tangential_groups.append(Jt)
@@ -721,11 +562,14 @@ def _resolve_active_set(M: FloatArray, v: FloatArray, contacts: Sequence[Contact
         energy_lost=T - T_post,
         T_c_normal=shares[:k],
         T_c_tangential=shares[k:],
-        iterations=0,
         solutions=sol.solutions,
         exhaustive=sol.exhaustive,
         active_sets=sol.active_sets,
         restitution_law=law,
+        impulse_unique=sol.impulse_unique,
+        continuum=sol.continuum,
+        velocity_range=sol.velocity_range,
+        kkt_residual=sol.kkt_residual,
     )
 
 
@@ -943,7 +787,7 @@ def inert_contact_impact(
     Returns
     -------
     ContactImpact
-        Every contact in mode ``"stick"``, ``iterations = 1`` (as the reference path reports).
+        Every contact in mode ``"stick"`` (as the reference path reports).
 
     Raises
     ------
@@ -1000,7 +844,6 @@ def inert_contact_impact(
         energy_lost=T - T_post,
         T_c_normal=shares[:m],
         T_c_tangential=shares[m:],
-        iterations=1,
     )
 
 

@@ -22,7 +22,7 @@ A contact is a frame of the robot and a type:
 ``flat-bilateral`` (6 rows)
     a sole held flat: the frame's linear and angular velocity ``(x, y, z, wx, wy, wz)``;
     normal rows ``z, wx, wy`` (the principal one is ``z``), tangential rows ``x, y, wz`` (the
-    twist weighted by ``1 / torsion_radius`` in the friction cone). Striking, it is resolved
+    twist weighted by ``1 / torsion_radius`` in the pyramid friction cone). Striking, it is resolved
     all rows or none with restitution on all three normal rows, so in a heel-first landing
     with ``e > 0`` it reverses the tilt too and can drive the toe into the ground: strike
     with ``flat`` unless the sole really lands flat.
@@ -426,8 +426,7 @@ class _InertPath:
             contact_velocity_post=tuple(u_post[sl] for sl in slices),
             T=T, T_c=float(out[c["T_c"]]), T_a=T_post, T_post=T_post,
             energy_lost=float(out[c["energy_lost"]]),
-            T_c_normal=out[c["T_c_normal"]], T_c_tangential=out[c["T_c_tangential"]],
-            iterations=1)
+            T_c_normal=out[c["T_c_normal"]], T_c_tangential=out[c["T_c_tangential"]])
 
     def single(self, v: FloatArray) -> InertImpactBatch:
         """The last single solve as :class:`InertImpactBatch` of one state (a copy)."""
@@ -632,8 +631,13 @@ class RobotImpact(ResultDictMixin):
         :meth:`pulling_contacts`), ``tilting_contacts`` (:attr:`tilting`), and the outcome
         count of the law: ``restitution_law``, ``outcomes`` (distinct ``q_dot+`` found),
         ``unique`` (true/false when every active set was examined, null when not),
-        ``active_sets`` (their number: the bound on ``outcomes``; 0 when not counted) and
-        ``solutions`` (``q_dot+`` of every outcome found, the one reported first).
+        ``active_sets`` (their number: the bound on ``outcomes``; 0 when not counted),
+        ``solutions`` (``q_dot+`` of every outcome found, the one reported first),
+        ``impulse_unique`` (whether the impulses are determined too: false where contacts are
+        redundant, e.g. two soles of one body; null when not examined), ``velocity_range``
+        (componentwise smallest and largest ``q_dot+`` over the outcomes; null entries where
+        a continuum of outcomes is unbounded) and ``kkt_residual`` (the returned outcome's
+        certificate: largest relative violation of the law, 0 when nothing was decided).
 
         Per contact: ``frame``, ``type``, ``role`` (strike/keep), ``mode``, ``T_c_normal``,
         ``T_c_tangential`` (J), ``force_impulse`` (N s, world axes), ``moment_impulse`` (N m s
@@ -690,8 +694,13 @@ class RobotImpact(ResultDictMixin):
             "restitution_law": r.restitution_law,
             "outcomes": r.outcomes,
             "unique": r.unique,
+            "impulse_unique": r.impulse_unique,
             "active_sets": r.active_sets,
             "solutions": [[float(x) for x in s] for s in (r.solutions or (r.velocity_post,))],
+            "velocity_range": [[float(x) if np.isfinite(x) else None for x in row] for row in (
+                r.velocity_range if r.velocity_range is not None
+                else (r.velocity_post, r.velocity_post))],
+            "kkt_residual": r.kkt_residual,
         }
 
 
@@ -755,8 +764,9 @@ def robot_impact(
     friction : float
         Coulomb coefficient of the striking contacts (``inf``: an unbounded cone; a contact
         then slips only where sticking would need the ground to pull, a Painlevé-type case).
-        Sole corners use the pyramid ``|lambda_x|, |lambda_y| <= mu lambda_z``, other striking
-        contacts the round cone unless a sole strikes too (then all use the pyramid).
+        Every striking contact uses the pyramid ``|lambda_x|, |lambda_y| <= mu lambda_z``
+        (a ``flat-bilateral`` sole also ``|tau_z| <= rho mu lambda_z``), solved exactly
+        with every active set (``result.unique``, ``result.impulse_unique``).
     restitution : float
         Coefficient ``e`` of the striking contacts' normal rows, in [0, 1].
     restitution_law : {"newton", "energetic"}
@@ -786,7 +796,6 @@ def robot_impact(
         place = _pin().updateFramePlacement
         rot = {i: np.array(place(robot.model, robot.data, plan.items[i][0]).rotation)
                for i in flats}
-    patched = any(sp.kind == "flat" and not b for sp, b in zip(specs, bil, strict=True))
     try:
         if any(not J.any() for J in jacs):  # a frame that does not move: no contact at all
             raise ImpactInputError("contact rows are rank deficient (redundant contacts?)")
@@ -826,9 +835,7 @@ def robot_impact(
             orders.append(())
             offsets.append(np.zeros((0, 3)))
             out_jacs.append(J)
-        res = resolve_contact_impact(
-            M, v_, rows, restitution_law=restitution_law,
-            method="active-set" if patched or restitution_law == "energetic" else "auto")
+        res = resolve_contact_impact(M, v_, rows, restitution_law=restitution_law)
     except ImpactInputError as exc:
         raise ImpactInputError(f"{exc}{_why(robot, M, jacs, specs, str(exc))}") from None
     return RobotImpact(contacts=specs, bilateral=bil, result=res, M=M,

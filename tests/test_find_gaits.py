@@ -153,3 +153,65 @@ def test_bad_requests_are_refused(kwargs: dict[str, object], match: str) -> None
 def test_a_powered_search_is_on_level_ground() -> None:
     with pytest.raises(ValueError, match="level ground"):
         find_gaits(CompassGait(), SLOPE, control="pushoff", target={"speed": 0.5})
+
+
+def test_a_powered_search_keeps_a_profile_foot_walker_as_given() -> None:
+    """Review finding: for a profile foot the search's design radius was the rolling radius
+    at ``phi = 0`` (``R + 4 k2`` here), which the search writes back into ``R``: it searched
+    a walker with another foot (0.38 m for R = 0.3 m, 23 % less work). The design radius is
+    the walker's own ``R``, so the walker searched is the one given."""
+    from pathlib import Path
+
+    from heelstrike.analysis.powered import _at_radius, design_radius
+    from heelstrike.models.builder import load_walker
+
+    path = Path(__file__).parents[1] / "examples" / "walkers" / "compass_foot6.toml"
+    w = load_walker(str(path)).replace(k2=0.02)
+    # the rolling radius at phi = 0 is R + k2 (1 + 3 cos 0) = 0.38 m: not the foot's R
+    assert float(w.foot_radii[0]) == pytest.approx(0.38, abs=1e-12)
+    assert design_radius(w) == 0.3
+    searched = _at_radius(w, design_radius(w))
+    assert dict(searched.parameters) == dict(w.parameters)
+    # the compass gait's design radius is its foot radius
+    assert design_radius(CompassGait(foot_radius=0.25)) == 0.25
+
+
+def test_a_powered_search_of_a_batch_is_refused_clearly() -> None:
+    """Review finding: a batch of walkers raised numpy's 'only 0-dimensional arrays' from
+    deep inside; the passive search refuses it by name, and so does the powered one."""
+    with pytest.raises(ValueError, match="one walker at a time"):
+        find_gaits(CompassGait(foot_radius=np.array([0.2, 0.3])), control="pushoff",
+                   target={"speed": 0.5})
+
+
+def test_a_powered_search_of_a_stride_walker_names_the_reason() -> None:
+    """Review finding: a walker whose legs differ was sent to the compiled backend, which it
+    does not support, and the error named the backend instead of the reason (its powered
+    map would be a stride). The search runs on a backend the walker supports."""
+    from pathlib import Path
+
+    from heelstrike.models.builder import load_walker
+
+    w = load_walker(str(Path(__file__).parents[1] / "examples" / "walkers" / "amputee.toml"))
+    with pytest.raises(ValueError, match="legs differ") as err:
+        find_gaits(w, control="pushoff", target={"speed": 0.5})
+    assert "backend" not in str(err.value)
+
+
+def test_the_wheels_powered_gaits_are_reported_undecided(
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """Review finding: McGeer's wheel's report said the stability is undecided, then called
+    the gait "stable no, barely", the others "stable yes" (|m| 0.9999999965) and noted that
+    no stable gait was met. Each gait's ``stability_undecided`` is what the report and the
+    JSON say, and a neutral multiplier (|m| = 1 to round-off) is why."""
+    assert main(["powered", "--radius", "1", "--speed", "0.5", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["stability_undecided"] is True
+    assert d["other_gaits"] and all(o["stability_undecided"] for o in d["other_gaits"])
+    for m in [d["multipliers"][0]] + [o["spectral_radius"] for o in d["other_gaits"]]:
+        assert abs(m - 1.0) < 1e-6  # the neutral family's multiplier
+    assert main(["powered", "--radius", "1", "--speed", "0.5"]) == 0
+    out = capsys.readouterr().out
+    assert "stable          undecided" in out
+    assert "stable yes" not in out and "stable no" not in out
+    assert "met no stable gait" not in out

@@ -46,7 +46,7 @@ UNITS: dict[str, str | None] = {
     "gain": "s/rad", "kp": "N m/rad", "kd": "N m s/rad", "max_torque": "N m", "angle": "rad",
     # not quantities
     "trailing_foot_lifts": None, "trailing_foot_held": None, "degenerate_wheel": None,
-    "stable": None,
+    "stable": None, "stability_undecided": None,
     "trailing_foot_grazes": None, "model": None, "torque_joint": None, "coordinates": None,
     "actuation": None, "target_source": None, "backend": None,
     "parameter_name": None, "parameter_unit": None, "kind": None, "figure": None,

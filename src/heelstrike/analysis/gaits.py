@@ -168,8 +168,8 @@ class Gait(ResultDictMixin):
         Step duration (s): the duration of the period of
         :attr:`~heelstrike.models.base.PlanarWalker.steps_per_period` steps (the stride, two
         steps, for a walker whose legs differ; then ``step_length``, the energies of the
-        step and ``collision_loss`` are the stride's too, and ``impact_angle``, ``T`` and
-        ``T_a`` those of its first heel strike).
+        step, ``collision_loss`` and the kinetic energies ``T``, ``T_a`` (sums over the
+        impacts) are the stride's too, and ``impact_angle`` that of its first heel strike).
     step_length : float
         Distance walked along the ground per step (m).
     speed : float
@@ -301,8 +301,8 @@ class Gait(ResultDictMixin):
         """Whether the step's energy books close: the collision loss equals the potential
         energy released plus the actuator work, both positive, to within
         :data:`ENERGY_BOOKS_RTOL` of the larger (a periodic step neither gains nor loses
-        energy). Only passive gaits are checked by the search (a push-off's work is not in
-        ``actuator_work``)."""
+        energy). Only passive gaits are checked by the search; a powered gait's books are
+        :attr:`energy_balance_error` (its ``actuator_work`` includes the push-off's)."""
         supplied = self.potential_energy_released + self.actuator_work
         loss = self.collision_loss
         if not (np.isfinite(supplied) and np.isfinite(loss) and supplied > 0 and loss > 0):
@@ -381,6 +381,7 @@ class Gait(ResultDictMixin):
             "cost_of_transport": self.cost_of_transport,
             "eta": self.eta,
             "stable": bool(self.stable),
+            "stability_undecided": bool(self.stability_undecided),
             "multipliers": [float(abs(m)) for m in self.multipliers],
             "multipliers_complex": [[float(m.real), float(m.imag)] for m in self.multipliers],
             "fixed_point": dict(zip(self.section_names, map(float, self.fixed_point), strict=True)),
@@ -488,7 +489,7 @@ def find_gaits(
                      (find_limit_cycle(walker, slope=slope, guess=guess, method=method,
                                        **options),))
         return tuple(ordered_gaits(found))
-    from heelstrike.analysis.powered import ACTUATIONS, powered_gaits
+    from heelstrike.analysis.powered import ACTUATIONS, design_radius, powered_gaits
 
     if control not in ACTUATIONS:
         raise ValueError(f"control {control!r} is not an actuation family (one of "
@@ -499,7 +500,7 @@ def find_gaits(
         raise ValueError(f"powered gaits are found on level ground (slope 0), got slope "
                          f"{slope:g} rad")
     goal = _target(target)
-    radius = float(np.asarray(walker.foot_radii[0], dtype=float))
+    radius = design_radius(walker)
     gaits = powered_gaits(
         radius, speed=goal.get("speed"), step_length=goal.get("step_length"),
         actuation=control, walker=None if described else cast(Any, walker),

@@ -2048,7 +2048,8 @@ def _solver(
             opts.setdefault("passive_gait", passive_gait_finder(w, family, sim))
             return find_powered_gait(w, actuation=family, simulator=sim, **opts)
         return find_model_powered_gait(
-            _at_radius(model, radius), actuation=actuation, backend=backend or "compiled",
+            _at_radius(model, radius), actuation=actuation,
+            backend=backend or ("compiled" if model.supports("compiled") else "scipy"),
             actuation_options=None if actuation == "pushoff" else dict(actuation_options),
             **opts)
 
@@ -2273,6 +2274,30 @@ def _seed_walker(base: CompassGait, model: Any | None, r: float) -> Any:
     from heelstrike.dynamics.phased import PhasedWalker
 
     return PhasedWalker.from_built(_at_radius(model, r))
+
+
+def design_radius(walker: PlanarWalker) -> float:
+    """The foot radius (m) that names a walker's design point in :func:`powered_gaits` and
+    the cost study: its parameter ``R`` if it has one (a walker file's arc radius, or a
+    profile's circle term), else its stance foot's radius (the compass gait's
+    ``foot_radius``).
+
+    A profile foot's rolling radius at ``phi = 0`` (``foot_radii``) is not its ``R``:
+    :func:`powered_gaits` writes the radius back into ``R``, so passing the rolling radius
+    would search another walker.
+
+    Raises
+    ------
+    ValueError
+        For a batch of walkers (one design point at a time).
+    """
+    if walker.is_batched:
+        raise ValueError("powered gaits are searched for one walker at a time, not a batch "
+                         f"(parameter shape {walker.parameter_shape})")
+    params = walker.parameters
+    if walker.description is not None and "R" in params:
+        return float(np.asarray(params["R"], dtype=float))
+    return float(np.asarray(walker.foot_radii[0], dtype=float))
 
 
 def _at_radius(model: Any, r: float) -> Any:

@@ -120,6 +120,10 @@ def print_stability_lines(gait: Any) -> None:
     from heelstrike.analysis.limit_cycle import MULTIPLIER_ACCURACY
 
     print(f"  |multipliers|   {multipliers_text(gait.multipliers)}")
+    if gait.stability_undecided:  # McGeer's wheel: a neutral family of gaits at one target
+        print("  stable          undecided (a neutral family of gaits: a multiplier of 1 to "
+              "round-off)")
+        return
     verdict = "yes" if gait.stable else "no"
     largest = max((abs(m) for m in gait.multipliers), default=0.0)
     if abs(largest - 1.0) < MULTIPLIER_ACCURACY:

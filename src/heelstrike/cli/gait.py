@@ -309,7 +309,8 @@ def _run_gait(args: argparse.Namespace) -> int:
             "isolated gait only on a downhill slope > 0 (on level ground nothing replaces the "
             "energy its heel strikes lose; a walker whose strikes can lose nothing, such as "
             "wheel.toml, walks there a continuum of gaits, one per energy, none isolated: "
-            "'heelstrike walk' simulates one); e.g. --slope 3deg, or see 'heelstrike powered' "
+            "'heelstrike walk --model wheel --slope 0 --guess=-0.2,0.6,0' simulates one); "
+            "e.g. --slope 3deg, or see 'heelstrike powered' "
             "for level ground"
         )
     if not args.slope < math.pi / 2:

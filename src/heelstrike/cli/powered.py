@@ -125,6 +125,7 @@ def _run_powered(args: argparse.Namespace) -> int:
         DEFAULT_TIME_LIMIT,
         PoweredGaitNotFoundError,
         books_gap,
+        design_radius,
     )
 
     refuse_unused_gains(args, [args.actuation])
@@ -144,7 +145,7 @@ def _run_powered(args: argparse.Namespace) -> int:
     if not (math.isfinite(value) and value > 0):
         raise CliError(f"--{target.replace('_', '-')} must be finite and > 0, got {value:g}")
     speed, step_length = (value, None) if target == "speed" else (None, value)
-    radius = float(walker.foot_radii[0]) if args.model is not None else args.radius
+    radius = design_radius(walker) if args.model is not None else args.radius
     out = None if args.out is None else writable_dir(args.out)
     backend = args.backend or "compiled"
     if args.model is None:
@@ -235,14 +236,14 @@ def _run_powered(args: argparse.Namespace) -> int:
             print(f"    {act.parameter_name} {o['parameter']:.6g} {o['parameter_unit']}: "
                   f"actuator work "
                   f"{g.actuator_work:.6g} J, speed {g.speed:.5f} m/s, step length "
-                  f"{g.step_length:.5f} m, stable {'yes' if g.stable else 'no'} (|m| "
+                  f"{g.step_length:.5f} m, stable {_verdict(g)} (|m| "
                   f"{multipliers_text([o['spectral_radius']])})"
                   + (f", legs cross {g.leg_crossings} times a step" if g.multi_swing else ""))
     if gait.multi_swing:
         print(f"  note: the swing leg crosses the stance leg {gait.leg_crossings} times a step: "
               "its foot passes through the ground away from mid-stance, outside the scuffing "
               "convention (one crossing, near mid-stance); no ordinary step was found")
-    if not gait.stable:
+    if not gait.stable and not gait.stability_undecided:
         # the search is local (seeds, continuation, a few fresh starts): QA sweep 6 found a
         # stable gait needing 1/61 of this work at --step-length 0.05, reached by continuing
         # from the 0.1 m/s gait
@@ -266,6 +267,11 @@ def _note_wheel(gaits: Sequence[Any]) -> None:
         print(f"heelstrike: note: {WHEEL_FAMILY}", file=sys.stderr)
 
 
+def _verdict(gait: Any) -> str:
+    """``yes``, ``no`` or ``undecided`` (the gait's ``stability_undecided``)."""
+    return "undecided" if gait.stability_undecided else "yes" if gait.stable else "no"
+
+
 def _gait_summary(gait: Any) -> dict[str, Any]:
     """What tells another gait at the same target apart (``other_gaits`` of the JSON)."""
     import numpy as np
@@ -274,7 +280,7 @@ def _gait_summary(gait: Any) -> dict[str, Any]:
     return {"parameter": a.parameter, "parameter_unit": a.parameter_unit,
             "actuator_work": gait.actuator_work, "collision_loss": gait.collision_loss,
             "period": gait.period, "step_length": gait.step_length, "speed": gait.speed,
-            "stable": bool(gait.stable),
+            "stable": bool(gait.stable), "stability_undecided": bool(gait.stability_undecided),
             "spectral_radius": float(np.max(np.abs(gait.multipliers))),
             "leg_crossings": gait.leg_crossings,
             "fixed_point": dict(zip(gait.section_names, map(float, gait.fixed_point),

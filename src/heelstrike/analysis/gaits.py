@@ -146,9 +146,15 @@ class _LocksField:
 
 
 class GaitNote(CodedStatus):
-    """What a report of a gait must say besides its numbers: the notes of :attr:`Gait.notes`,
-    decided where the gait is found (:func:`find_gaits`). Each member is its string name with
-    a stable integer ``code`` and a ``message`` (reports may word it at more length)."""
+    """What a report of a gait must say besides its numbers: the notes of
+    :attr:`~heelstrike.analysis.gaits.Gait.notes`, decided where the gait is found
+    (:func:`~heelstrike.analysis.gaits.find_gaits`), not by the reports. Each member is its
+    string name with a stable integer ``code`` and a ``message`` (reports may word it at more
+    length); the search's notes (``NO_STABLE_GAIT``: no gait of a search without ``guess`` is
+    stable; ``REFERENCE_FOLLOWED``) are given to every gait it returns, the others to the
+    gaits whose fields decide them (``BOOKS_OPEN``: a powered gait's
+    :func:`~heelstrike.analysis.powered.books_gap` above ``BOOKS_NOTE`` of
+    :mod:`heelstrike.analysis.powered`)."""
 
     HANGING_LINKS = (
         "hanging_links", 0,
@@ -171,8 +177,8 @@ class GaitNote(CodedStatus):
     )
     BOOKS_OPEN = (
         "books_open", 4,
-        "the energy books close only to more than BOOKS_NOTE of the work (the powered "
-        "search's books_gap): the gait is resolved no better than that",
+        "the energy books close only to more than BOOKS_NOTE of the work (books_gap): the "
+        "gait is resolved no better than that",
     )
     STABILITY_UNDECIDED = (
         "stability_undecided", 5,
@@ -320,8 +326,9 @@ class Gait(ResultDictMixin):
     actuation : Actuation or None
         How a powered gait is driven (None for a passive gait).
     notes : tuple of GaitNote
-        What a report of the gait must say (:class:`GaitNote`), decided by :func:`find_gaits`
-        from the gait and its search (empty for a gait built otherwise).
+        What a report of the gait must say (:class:`GaitNote`, in code order), decided by
+        :func:`find_gaits` from the gait's fields and its search (empty for a gait found
+        otherwise, e.g. by :func:`~heelstrike.analysis.model_gaits.find_model_gaits` alone).
     locks : GaitLocks or None
         The torques the walker's locks exert over one step of the gait
         (:func:`~heelstrike.analysis.model_gaits.gait_locks`: ranges, and which locks must
@@ -544,7 +551,9 @@ def find_gaits(
         steps before multi-swing gaits, stable before unstable (``stable`` marks each; a gait
         whose ``stability_undecided``, McGeer's wheel, is ordered by work alone), then the least
         actuator work, then the most attracting. Powered gaits carry their
-        :class:`Actuation`; passive ones have ``actuation`` None.
+        :class:`Actuation`; passive ones have ``actuation`` None. Each carries its
+        :attr:`~Gait.notes` (:class:`GaitNote`), and a described walker's passive gait its
+        lazy :attr:`~Gait.locks`.
 
     Raises
     ------

@@ -150,8 +150,10 @@ class GaitNote(CodedStatus):
     :attr:`~heelstrike.analysis.gaits.Gait.notes`, decided where the gait is found
     (:func:`~heelstrike.analysis.gaits.find_gaits`), not by the reports. Each member is its
     string name with a stable integer ``code`` and a ``message`` (reports may word it at more
-    length); the search's notes (``NO_STABLE_GAIT``: no gait of a search without ``guess`` is
-    stable; ``REFERENCE_FOLLOWED``) are given to every gait it returns, the others to the
+    length); the search's notes (``NO_STABLE_GAIT``: the first gait in the one order of
+    gaits of a search without ``guess`` is unstable, so that, stable gaits coming first, none
+    found is stable, or, McGeer's wheel's gaits ordered by work alone, the cheapest is not;
+    ``REFERENCE_FOLLOWED``) are given to every gait it returns, the others to the
     gaits whose fields decide them (``BOOKS_OPEN``: a powered gait's
     :func:`~heelstrike.analysis.powered.books_gap` above ``BOOKS_NOTE`` of
     :mod:`heelstrike.analysis.powered`)."""
@@ -588,15 +590,16 @@ def find_gaits(
                      if guess is None else
                      (find_limit_cycle(walker, slope=slope, guess=guess, method=method,
                                        **options),))
+        ordered = ordered_gaits(found)
         search: set[GaitNote] = set()
-        if guess is None and not any(g.stable for g in found):
+        if guess is None and ordered and not ordered[0].stable:
             search.add(GaitNote.NO_STABLE_GAIT)
             if described and options.get("from_reference", True):
                 from heelstrike.analysis.model_gaits import follows_reference
 
                 if follows_reference(cast(BuiltWalker, walker), slope):
                     search.add(GaitNote.REFERENCE_FOLLOWED)
-        return tuple(_noted(g, search) for g in ordered_gaits(found))
+        return tuple(_noted(g, search) for g in ordered)
     from heelstrike.analysis.powered import ACTUATIONS, powered_gaits
 
     if control not in ACTUATIONS:
@@ -616,10 +619,11 @@ def find_gaits(
         actuation_options=dict(actuation_options) if actuation_options else None, **options)
     from heelstrike.analysis.powered import BOOKS_NOTE, books_gap
 
-    search = {GaitNote.NO_STABLE_GAIT} if not any(g.stable for g in gaits) else set()
+    ordered = ordered_gaits(gaits)
+    search = {GaitNote.NO_STABLE_GAIT} if ordered and not ordered[0].stable else set()
     return tuple(_noted(g, search | ({GaitNote.BOOKS_OPEN} if books_gap(g) > BOOKS_NOTE
                                      else set()))
-                 for g in ordered_gaits(gaits))
+                 for g in ordered)
 
 
 def _noted(gait: Gait, search: set[GaitNote]) -> Gait:

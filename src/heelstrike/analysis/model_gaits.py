@@ -15,6 +15,7 @@
 
 from __future__ import annotations
 
+import functools
 import itertools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
@@ -158,8 +159,9 @@ def _energy_book(cycle: Gait, walker: PlanarWalker, *, backend: str | None = Non
 
 
 def _lazy_locks(walker: PlanarWalker, cycle: Gait, backend: str) -> Callable[[], GaitLocks]:
-    """:func:`gait_locks` of ``cycle``, deferred (one dense walk of its step)."""
-    return lambda: gait_locks(walker, cycle, backend=backend)
+    """:func:`gait_locks` of ``cycle``, deferred (one dense walk of its step; a partial of a
+    module function, picklable where the walker and gait are)."""
+    return functools.partial(gait_locks, walker, cycle, backend=backend)
 
 
 def _coarse_ensemble(w: PhasedWalker, Z: FloatArray, kw: dict[str, Any], steps: int) -> Any:

@@ -13,7 +13,7 @@ and of described walkers alike are :class:`Gait`, listed in the one order of gai
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
@@ -22,12 +22,22 @@ from numpy.typing import ArrayLike, NDArray
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
 from heelstrike.dynamics.hybrid import WalkResult
+from heelstrike.status import CodedStatus, check_codes
 
 if TYPE_CHECKING:
+    from heelstrike.analysis.model_gaits import GaitLocks
     from heelstrike.dynamics.phased import PhasedImpact
     from heelstrike.models.base import PlanarWalker
 
-__all__ = ["ENERGY_BOOKS_RTOL", "TARGETS", "Actuation", "Gait", "StepBook", "find_gaits"]
+__all__ = [
+    "ENERGY_BOOKS_RTOL",
+    "TARGETS",
+    "Actuation",
+    "Gait",
+    "GaitNote",
+    "StepBook",
+    "find_gaits",
+]
 
 #: Relative tolerance of a passive gait's energy books: the collision loss per step must equal
 #: the potential energy released per step to within this fraction of the larger. The books of
@@ -107,6 +117,84 @@ class _WalkField:
             raise TypeError(f"{type(obj).__name__}() needs the keyword argument 'walk'")
         obj.__dict__[self._slot] = value
 
+
+class _LocksField:
+    """Data descriptor of :attr:`Gait.locks`: holds a
+    :class:`~heelstrike.analysis.model_gaits.GaitLocks` or None, or a zero-argument callable
+    that computes it, called on first access (then kept).
+
+    The lock torques need one dense walk of the step: a search returning several gaits
+    walks again only the steps whose locks are asked for.
+    """
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self._slot = f"_{name}_value"
+
+    def __get__(self, obj: object | None, objtype: type | None = None) -> GaitLocks | None:
+        if obj is None:
+            raise AttributeError("locks is set per instance")
+        value = obj.__dict__[self._slot]
+        if callable(value):
+            value = value()
+            obj.__dict__[self._slot] = value
+        return cast("GaitLocks | None", value)
+
+    def __set__(
+        self, obj: object, value: GaitLocks | Callable[[], GaitLocks | None] | None
+    ) -> None:
+        obj.__dict__[self._slot] = None if isinstance(value, _LocksField) else value
+
+
+class GaitNote(CodedStatus):
+    """What a report of a gait must say besides its numbers: the notes of
+    :attr:`~heelstrike.analysis.gaits.Gait.notes`, decided where the gait is found
+    (:func:`~heelstrike.analysis.gaits.find_gaits`), not by the reports. Each member is its
+    string name with a stable integer ``code`` and a ``message`` (reports may word it at more
+    length); the search's notes (``NO_STABLE_GAIT``: the first gait in the one order of
+    gaits of a search without ``guess`` is unstable, so that, stable gaits coming first, none
+    found is stable, or, McGeer's wheel's gaits ordered by work alone, the cheapest is not;
+    ``REFERENCE_FOLLOWED``) are given to every gait it returns, the others to the
+    gaits whose fields decide them (``BOOKS_OPEN``: a powered gait's
+    :func:`~heelstrike.analysis.powered.books_gap` above ``BOOKS_NOTE`` of
+    :mod:`heelstrike.analysis.powered`)."""
+
+    HANGING_LINKS = (
+        "hanging_links", 0,
+        "a link described upright hangs in this gait (its centre of mass below its joint): a "
+        "gait of the hanging link, not of the upright one",
+    )
+    MULTI_SWING = (
+        "multi_swing", 1,
+        "the swing leg crosses the stance leg more than once a step: its foot passes through "
+        "the ground away from mid-stance, outside the scuffing convention",
+    )
+    NO_STABLE_GAIT = (
+        "no_stable_gait", 2,
+        "the search met no stable gait (it is local: one may still exist)",
+    )
+    REFERENCE_FOLLOWED = (
+        "reference_followed", 3,
+        "the search also followed the walker file's own parameters' stable gait at the "
+        "reference slope, if it has one, to these parameters and slope",
+    )
+    BOOKS_OPEN = (
+        "books_open", 4,
+        "the energy books close only to more than BOOKS_NOTE of the work (books_gap): the "
+        "gait is resolved no better than that",
+    )
+    STABILITY_UNDECIDED = (
+        "stability_undecided", 5,
+        "McGeer's wheel (R = l): the gaits at one target form a neutral family, their "
+        "stability undecided",
+    )
+    TRAILING_FOOT_GRAZES = (
+        "trailing_foot_grazes", 6,
+        "R = l (McGeer's wheel): the trailing foot's lift velocity is exactly 0; both contacts "
+        "are the same point, so the step was accepted",
+    )
+
+
+check_codes(GaitNote)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -239,6 +327,17 @@ class Gait(ResultDictMixin):
         of its key, and reports say "undecided".
     actuation : Actuation or None
         How a powered gait is driven (None for a passive gait).
+    notes : tuple of GaitNote
+        What a report of the gait must say (:class:`GaitNote`, in code order), decided by
+        :func:`find_gaits` from the gait's fields and its search (empty for a gait found
+        otherwise, e.g. by :func:`~heelstrike.analysis.model_gaits.find_model_gaits` alone).
+    locks : GaitLocks or None
+        The torques the walker's locks exert over one step of the gait
+        (:func:`~heelstrike.analysis.model_gaits.gait_locks`: ranges, and which locks must
+        pull as well as push); None for a walker without locked joints, and where not
+        computed (the compass gait's and powered searches). The constructor also takes a
+        zero-argument callable returning it, called on first access (one dense walk of the
+        step: :func:`~heelstrike.analysis.model_gaits.find_model_gaits` sets one per gait).
     newton_jacobian : str
         The Jacobian of Newton's iterations (``jacobian`` of
         :func:`~heelstrike.analysis.limit_cycle.find_limit_cycle`): ``"exact"`` (variational
@@ -282,6 +381,8 @@ class Gait(ResultDictMixin):
     trailing_foot_grazes: bool = False
     stability_undecided: bool = False
     actuation: Actuation | None = None
+    notes: tuple[GaitNote, ...] = ()
+    locks: _LocksField = field(default=_LocksField(), repr=False, compare=False)
     walk: _WalkField = field(default=_WalkField(), repr=False, compare=False)
 
     @property
@@ -453,7 +554,9 @@ def find_gaits(
         steps before multi-swing gaits, stable before unstable (``stable`` marks each; a gait
         whose ``stability_undecided``, McGeer's wheel, is ordered by work alone), then the least
         actuator work, then the most attracting. Powered gaits carry their
-        :class:`Actuation`; passive ones have ``actuation`` None.
+        :class:`Actuation`; passive ones have ``actuation`` None. Each carries its
+        :attr:`~Gait.notes` (:class:`GaitNote`), and a described walker's passive gait its
+        lazy :attr:`~Gait.locks`.
 
     Raises
     ------
@@ -488,7 +591,16 @@ def find_gaits(
                      if guess is None else
                      (find_limit_cycle(walker, slope=slope, guess=guess, method=method,
                                        **options),))
-        return tuple(ordered_gaits(found))
+        ordered = ordered_gaits(found)
+        search: set[GaitNote] = set()
+        if guess is None and ordered and not ordered[0].stable:
+            search.add(GaitNote.NO_STABLE_GAIT)
+            if described and options.get("from_reference", True):
+                from heelstrike.analysis.model_gaits import follows_reference
+
+                if follows_reference(cast(BuiltWalker, walker), slope):
+                    search.add(GaitNote.REFERENCE_FOLLOWED)
+        return tuple(_noted(g, search) for g in ordered)
     from heelstrike.analysis.powered import ACTUATIONS, design_radius, powered_gaits
 
     if control not in ACTUATIONS:
@@ -506,7 +618,33 @@ def find_gaits(
         actuation=control, walker=None if described else cast(Any, walker),
         model=walker if described else None, backend=backend,
         actuation_options=dict(actuation_options) if actuation_options else None, **options)
-    return tuple(ordered_gaits(gaits))
+    from heelstrike.analysis.powered import BOOKS_NOTE, books_gap
+
+    ordered = ordered_gaits(gaits)
+    # McGeer's wheel: its gaits' stability is undecided, not "none stable"
+    search = ({GaitNote.NO_STABLE_GAIT} if ordered and not ordered[0].stable
+              and not ordered[0].stability_undecided else set())
+    return tuple(_noted(g, search | ({GaitNote.BOOKS_OPEN} if books_gap(g) > BOOKS_NOTE
+                                     else set()))
+                 for g in ordered)
+
+
+def _noted(gait: Gait, search: set[GaitNote]) -> Gait:
+    """``gait`` with its :attr:`~Gait.notes`: those its own fields decide (hanging links, a
+    multi-swing step, undecided stability, a grazing trailing foot) and those of its search
+    (``search``), in code order. Its lazy ``walk`` and ``locks`` stay lazy (a
+    :func:`dataclasses.replace` would compute them)."""
+    own = {
+        GaitNote.HANGING_LINKS: bool(gait.hanging_links),
+        GaitNote.MULTI_SWING: gait.multi_swing,
+        GaitNote.STABILITY_UNDECIDED: gait.stability_undecided,
+        GaitNote.TRAILING_FOOT_GRAZES: gait.trailing_foot_grazes,
+    }
+    notes = tuple(n for n in GaitNote if own.get(n, False) or n in search)
+    kw = {f.name: getattr(gait, f.name) for f in fields(gait)
+          if f.name not in ("walk", "locks", "notes")}
+    return Gait(**kw, notes=notes, walk=gait.__dict__["_walk_value"],
+                locks=gait.__dict__["_locks_value"])
 
 
 def _target(target: Mapping[str, float] | None) -> dict[str, float]:

@@ -15,8 +15,9 @@
 
 from __future__ import annotations
 
+import functools
 import itertools
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import Any, cast
 
@@ -62,6 +63,7 @@ __all__ = [
     "check_impact_map_memory",
     "find_model_gait",
     "find_model_gaits",
+    "follows_reference",
     "gait_locks",
     "hanging_links",
     "impact_map",
@@ -111,11 +113,14 @@ ATTRACTOR_SEEDS, ATTRACTOR_STEPS = 40, 50
 REFERENCE_SLOPE = float(np.deg2rad(3.0))
 
 
-def _energy_book(cycle: Gait, walker: PlanarWalker) -> Gait:
+def _energy_book(cycle: Gait, walker: PlanarWalker, *, backend: str | None = None) -> Gait:
     """The gait ``cycle`` (its ``collision_loss`` the heel strikes') with the energy book of
-    its one-period walk (every impact of the period) and the ``walker``'s links it carries
-    hanging: ``collision_loss``, ``eta``, ``actuator_work`` and ``potential_energy_released``
-    become the period's totals over every impact."""
+    its one-period walk (every impact of the period), the ``walker``'s links it carries
+    hanging and its lock torques (:func:`gait_locks` on ``backend``, computed on first access
+    of :attr:`~heelstrike.analysis.gaits.Gait.locks`; None without locked joints, or with
+    ``backend`` None: an actuated gait, whose step :func:`gait_locks` cannot walk again):
+    ``collision_loss``, ``eta``, ``actuator_work`` and ``potential_energy_released`` become the
+    period's totals over every impact."""
     walk = cycle.walk
     assert isinstance(walk, PhasedWalkResult)
     impacts = walk.events
@@ -148,7 +153,15 @@ def _energy_book(cycle: Gait, walker: PlanarWalker) -> Gait:
         kinetic_energy_admissible=float(sum(b.kinetic_energy_admissible for b in books)),
         hanging_links=hanging_links(walker, cycle.q, cycle.slope),
         steps=tuple(books),
+        locks=(_lazy_locks(walker, cycle, backend)
+               if backend is not None and walker.step_schedule().lock_angles else None),
     )
+
+
+def _lazy_locks(walker: PlanarWalker, cycle: Gait, backend: str) -> Callable[[], GaitLocks]:
+    """:func:`gait_locks` of ``cycle``, deferred (one dense walk of its step; a partial of a
+    module function, picklable where the walker and gait are)."""
+    return functools.partial(gait_locks, walker, cycle, backend=backend)
 
 
 def _coarse_ensemble(w: PhasedWalker, Z: FloatArray, kw: dict[str, Any], steps: int) -> Any:
@@ -337,8 +350,10 @@ def find_model_gaits(
         raise GaitNotFoundError(
             f"Newton converged from none of the {len(starts)} most nearly periodic of "
             f"{len(Z)} automatic starts (the last: {last}){finer}{tried}")
-    gaits = tuple(_energy_book(c, w) for c in sorted(found, key=_preference))
-    if torque is None and push_off is None:
+    passive = torque is None and push_off is None
+    gaits = tuple(_energy_book(c, walker, backend=backend if passive else None)
+                  for c in sorted(found, key=_preference))
+    if passive:
         return _closed_model_books(gaits, slope)
     return gaits
 
@@ -366,6 +381,29 @@ def _closed_model_books(gaits: tuple[Gait, ...], slope: float) -> tuple[Gait, ..
         f"{g.potential_energy_released:.3g} J per step, which must agree within "
         f"{100 * ENERGY_BOOKS_RTOL:g} %): the step's energies are at the round-off of the "
         "walker's energy, so these are no gaits; give a larger slope")
+
+
+def follows_reference(walker: BuiltWalker, slope: float) -> bool:
+    """Whether stage 2 of :func:`find_model_gaits` has anything to follow for ``walker`` at
+    ``slope``: its parameters or the slope differ from the walker file's own at
+    :data:`REFERENCE_SLOPE` (there, stage 1 has searched the reference itself).
+
+    Parameters
+    ----------
+    walker : BuiltWalker
+        A described walker.
+    slope : float
+        Ground slope (rad).
+
+    Returns
+    -------
+    bool
+    """
+    desc = walker.description
+    same = abs(float(slope) - REFERENCE_SLOPE) <= 1e-12 and all(
+        np.array_equal(np.asarray(v, dtype=float), np.asarray(desc.default_params[k], dtype=float))
+        for k, v in walker.parameters.items())
+    return not same
 
 
 def _follow_reference(

@@ -155,11 +155,9 @@ def _print_sensitivity(sens: dict[str, Any]) -> None:
 
 
 def _run_gait_model(args: argparse.Namespace) -> int:
-    import numpy as np
-
-    from heelstrike.analysis.gaits import find_gaits
+    from heelstrike.analysis.gaits import GaitNote, find_gaits
     from heelstrike.analysis.limit_cycle import GaitNotFoundError
-    from heelstrike.analysis.model_gaits import REFERENCE_SLOPE, gait_locks
+    from heelstrike.analysis.model_gaits import REFERENCE_SLOPE
 
     walker = model_from_args(args)
     backend = args.backend or ("compiled" if walker.supports("compiled") else "scipy")
@@ -176,26 +174,22 @@ def _run_gait_model(args: argparse.Namespace) -> int:
     gait = gaits[0]
     d = gait.to_dict()
     d["model"] = walker.description.name
-    hanging = [g.hanging_links for g in gaits]
     d["hanging_links"] = list(gait.hanging_links)
-    locks = gait_locks(walker, gait, backend=backend)
-    d["lock_torque_range"] = {k: list(v) for k, v in locks.ranges.items()}
+    locks = gait.locks
+    d["lock_torque_range"] = {} if locks is None else {
+        k: list(v) for k, v in locks.ranges.items()}
     # each gait's collision loss is its step's total (knee strikes included), as in d
-    d["gaits"] = [_gait_summary(g) | {"hanging_links": list(h)}
-                  for g, h in zip(gaits, hanging, strict=True)]
-    if guess is None and not gait.stable:
+    d["gaits"] = [_gait_summary(g) | {"hanging_links": list(g.hanging_links)} for g in gaits]
+    if GaitNote.NO_STABLE_GAIT in gait.notes:
         # QA sweep 10: this said "where it has a stable one" of the torso walker, which has none
-        reference = abs(float(args.slope) - REFERENCE_SLOPE) <= 1e-12 and all(
-            np.array_equal(np.asarray(v, dtype=float),
-                           np.asarray(walker.description.default_params[k], dtype=float))
-            for k, v in walker.parameters.items())
-        followed = ("" if reference else
+        followed = ("" if GaitNote.REFERENCE_FOLLOWED not in gait.notes else
                     f", nor by following the walker file's own parameters' stable gait at "
                     f"{math.degrees(REFERENCE_SLOPE):g} deg, if it has one, to these "
                     "parameters and slope")
         print(f"heelstrike: note: no stable period-one gait found (not by the automatic "
               f"search{followed}); the least unstable gait found is shown", file=sys.stderr)
-    for name, (lo, hi) in locks.two_sided.items():  # a one-sided knee stop could not hold
+    for name, (lo, hi) in ({} if locks is None else locks.two_sided).items():
+        # a one-sided knee stop could not hold it
         print(f"heelstrike: note: the lock of '{name}' holds it with torques of both signs over "
               f"the step ({lo:+.4g} to {hi:+.4g} N m): the walker file's locks are two-sided "
               "latches; a knee stop that can only push could not hold it, and the knee would "
@@ -204,12 +198,12 @@ def _run_gait_model(args: argparse.Namespace) -> int:
         print_json(d)
         return 0
     c = gait
-    _print_gait_list(list(gaits), hanging)
+    _print_gait_list(list(gaits))
     print(f"passive gait of '{d['model']}', slope = {math.degrees(args.slope):g} deg")
     print(f"  fixed point (just after heel strike): {fixed_point_text(d['fixed_point'])}")
-    if hanging[0]:
-        print(f"  note: {hanging_text(hanging[0])} in this gait: a gait of the hanging link, "
-              "not of the upright one")
+    if GaitNote.HANGING_LINKS in gait.notes:
+        print(f"  note: {hanging_text(gait.hanging_links)} in this gait: a gait of the hanging "
+              "link, not of the upright one")
     per = "step" if len(gait.steps) <= 1 else "stride"
     if per == "stride":
         print(f"  the period is a stride of {len(gait.steps)} steps (the legs differ): period, "
@@ -281,9 +275,12 @@ def _first_gait_text(gaits: Sequence[Any]) -> str:
     return "the most attracting stable one" if first.stable else "the least unstable"
 
 
-def _print_gait_list(gaits: Sequence[Any], hanging: Sequence[Sequence[str]] = ()) -> None:
-    """With several gaits found, one line each (the first is shown in detail); ``hanging``:
-    per gait, its links described upright that hang (:func:`hanging_links`)."""
+def _print_gait_list(gaits: Sequence[Any]) -> None:
+    """With several gaits found, one line each (the first is shown in detail), with the
+    notes of each (:attr:`~heelstrike.analysis.gaits.Gait.notes`: multi-swing, hanging
+    links)."""
+    from heelstrike.analysis.gaits import GaitNote
+
     if len(gaits) < 2:
         return
     print(f"{len(gaits)} period-one gaits found (the first, "
@@ -291,9 +288,10 @@ def _print_gait_list(gaits: Sequence[Any], hanging: Sequence[Sequence[str]] = ()
           "is shown in detail):")
     for i, c in enumerate(gaits):
         swings = (f", multi-swing: the legs cross {c.leg_crossings} times, the swing foot "
-                  "through the ground away from mid-stance" if c.multi_swing else "")
-        if i < len(hanging) and hanging[i]:
-            swings += f", {hanging_text(hanging[i])}"
+                  "through the ground away from mid-stance"
+                  if GaitNote.MULTI_SWING in c.notes else "")
+        if GaitNote.HANGING_LINKS in c.notes:
+            swings += f", {hanging_text(c.hanging_links)}"
         print(f"  [{i}] step length {c.step_length:.5f} m, period {c.period:.5f} s, "
               f"|multipliers| {multipliers_text(c.multipliers)}, "
               f"{'stable' if c.stable else 'unstable'}{swings}")

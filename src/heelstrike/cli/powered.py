@@ -119,9 +119,8 @@ def add_powered(sub: Any) -> None:
 
 
 def _run_powered(args: argparse.Namespace) -> int:
-    from heelstrike.analysis.gaits import find_gaits
+    from heelstrike.analysis.gaits import GaitNote, find_gaits
     from heelstrike.analysis.powered import (
-        BOOKS_NOTE,
         DEFAULT_TIME_LIMIT,
         PoweredGaitNotFoundError,
         books_gap,
@@ -217,9 +216,8 @@ def _run_powered(args: argparse.Namespace) -> int:
     print(f"    collision loss  {gait.collision_loss:12.6g} J (T_c{split})")
     print(f"    change of T + V {gait.energy_change:12.3e} J")
     print(f"    imbalance       {gait.energy_balance_error:12.3e} J")
-    gap = books_gap(gait)
-    if gap > BOOKS_NOTE:
-        print(f"  note: the books close to {gap:.1e} of the work only (change of "
+    if GaitNote.BOOKS_OPEN in gait.notes:
+        print(f"  note: the books close to {books_gap(gait):.1e} of the work only (change of "
               "T + V and imbalance): the gait is resolved no better than that; tighter tolerances "
               "(find_powered_gait's tol, rtol, atol) would resolve it further")
     print(f"  cost of transport {gait.cost_of_transport:10.6g} (net actuator work / (m g L))")
@@ -238,12 +236,13 @@ def _run_powered(args: argparse.Namespace) -> int:
                   f"{g.actuator_work:.6g} J, speed {g.speed:.5f} m/s, step length "
                   f"{g.step_length:.5f} m, stable {_verdict(g)} (|m| "
                   f"{multipliers_text([o['spectral_radius']])})"
-                  + (f", legs cross {g.leg_crossings} times a step" if g.multi_swing else ""))
-    if gait.multi_swing:
+                  + (f", legs cross {g.leg_crossings} times a step"
+                     if GaitNote.MULTI_SWING in g.notes else ""))
+    if GaitNote.MULTI_SWING in gait.notes:
         print(f"  note: the swing leg crosses the stance leg {gait.leg_crossings} times a step: "
               "its foot passes through the ground away from mid-stance, outside the scuffing "
               "convention (one crossing, near mid-stance); no ordinary step was found")
-    if not gait.stable and not gait.stability_undecided:
+    if GaitNote.NO_STABLE_GAIT in gait.notes:
         # the search is local (seeds, continuation, a few fresh starts): QA sweep 6 found a
         # stable gait needing 1/61 of this work at --step-length 0.05, reached by continuing
         # from the 0.1 m/s gait
@@ -252,7 +251,7 @@ def _run_powered(args: argparse.Namespace) -> int:
               "starts); a stable one, or a cheaper one, may be reached by continuing from "
               "another target (find_powered_gait(..., guess=(*fixed_point, parameter)) in small "
               "steps)")
-    if gait.trailing_foot_grazes:
+    if GaitNote.TRAILING_FOOT_GRAZES in gait.notes:
         print("  note: R = l (McGeer's wheel): the trailing foot's lift velocity is exactly 0; "
               "both contacts are the same point, so the step was accepted")
     return 0
@@ -260,10 +259,11 @@ def _run_powered(args: argparse.Namespace) -> int:
 
 def _note_wheel(gaits: Sequence[Any]) -> None:
     """Say on stderr what a powered gait of McGeer's wheel is (``WHEEL_FAMILY``): gaits whose
-    stability is undecided (their ``stability_undecided``)."""
+    stability is undecided (their notes' ``GaitNote.STABILITY_UNDECIDED``)."""
+    from heelstrike.analysis.gaits import GaitNote
     from heelstrike.analysis.powered import WHEEL_FAMILY
 
-    if any(g.stability_undecided for g in gaits):
+    if any(GaitNote.STABILITY_UNDECIDED in g.notes for g in gaits):
         print(f"heelstrike: note: {WHEEL_FAMILY}", file=sys.stderr)
 
 

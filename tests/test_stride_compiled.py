@@ -1,0 +1,212 @@
+"""Walkers whose legs differ on the compiled backend (issue 32, item 4: "every shipped walker
+runs every analysis on both backends").
+
+A stride walker (a ``[swap]`` table; ``examples/walkers/amputee.toml``) alternates with the
+walker after its leg swap; the compiled kernel takes both parameter vectors (one generated
+model, two value sets) and walks step ``k`` with vector ``k mod 2``. Checked against the scipy
+reference, which alternates the walkers themselves (:func:`heelstrike.dynamics.hybrid.simulate`):
+two and four steps from a given state (every impact's time, state and ``T_c``, the end state),
+the ensemble kernel (odd step counts, arrival after whole strides only), the stride gait's fixed
+point and multipliers, and the CLI; with equal legs the stride machinery (two equal rows) walks
+exactly as the plain walker.
+"""
+
+from __future__ import annotations
+
+import json
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from heelstrike.analysis.limit_cycle import PoincareMap, find_limit_cycle
+from heelstrike.dynamics.backends import simulator
+from heelstrike.dynamics.compiled_phased import (
+    _configuration,
+    _locks,
+    ensemble_walk_phased,
+    simulate_phased_compiled,
+    stride_walkers,
+)
+from heelstrike.dynamics.hybrid import WalkStatus, simulate
+from heelstrike.dynamics.phased import PhasedWalker, load_phased_walker
+from heelstrike.models.description import parse_description
+
+AMPUTEE = Path(__file__).resolve().parents[1] / "examples" / "walkers" / "amputee.toml"
+SLOPE = float(np.deg2rad(3.0))
+EQUAL = {"m1": 5.0, "b1": 0.5}  # leg A given leg B's values: the legs alike
+#: near the amputee's stable stride at 3 deg (test_unequal_legs)
+Z_NEAR = (-0.2739, 1.0878, -0.7221)
+TOL = 1e-8
+TIGHT = {"rtol": 1e-12, "atol": 1e-12}
+
+
+class _Alternating(PhasedWalker):
+    """Hands each step on to a distinct copy of itself with the same values: the stride
+    machinery (two kernel rows, ``steps_per_period`` 2) on legs that are alike."""
+
+    def after_swap(self) -> PhasedWalker:
+        return PhasedWalker(self.description, **dict(self.parameters))
+
+
+@pytest.fixture(scope="module")
+def amputee() -> PhasedWalker:
+    return load_phased_walker(AMPUTEE)
+
+
+def test_stride_walker_runs_on_both_backends(amputee: PhasedWalker) -> None:
+    """The amputee declares the generated kernel; the kernel's rows are the walker's and the
+    after-swap walker's values (foot radii of the stance leg included), in that order."""
+    w = amputee.replace(R1=0.1, R2=0.3)
+    assert w.compiled_kernel == "generated" and w.backends == ("scipy", "compiled")
+    stride = stride_walkers(w)
+    assert len(stride) == 2 and stride[0] is w and stride[1] is w.after_swap()
+    P, cfg = _configuration(w, SLOPE, None, None, None, 1e-6)
+    names = w.description.param_names
+    assert P.shape == (2, len(names)) and cfg.shape[0] == 2
+    row = dict(zip(names, P[1], strict=True))
+    assert (row["m1"], row["m2"], row["b1"], row["b2"], row["R1"], row["R2"]) == \
+        (5.0, 4.0, 0.5, 0.4, 0.3, 0.1)
+    assert dict(zip(names, P[0], strict=True))["R1"] == 0.1
+    assert (cfg[0, 1], cfg[0, 2], cfg[1, 1], cfg[1, 2]) == (0.1, 0.3, 0.3, 0.1)  # R stance, swing
+    assert _locks(w)[2].shape == (2, 4)
+    same = w.replace(**EQUAL, I1=0.0, R1=0.3)
+    assert stride_walkers(same) == (same,)
+    assert _configuration(same, SLOPE, None, None, None, 1e-6)[0].shape == (1, len(names))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("steps", [2, 4])
+def test_compiled_stride_walk_equals_scipy(amputee: PhasedWalker, steps: int) -> None:
+    """Two and four steps of the amputee (with round feet of different radii) from a given
+    state: every heel strike's time, state and T_c, and the end state, to 1e-8; each step's
+    samples conserve the energy of the walker taking it."""
+    w = amputee.replace(R1=0.05, R2=0.15)
+    q, qd = w.section_to_state(Z_NEAR)
+    ref = simulate(w, q, qd, slope=SLOPE, steps=steps, **TIGHT)
+    got = simulate_phased_compiled(w, q, qd, slope=SLOPE, steps=steps, **TIGHT)
+    assert ref.status is got.status is WalkStatus.COMPLETED
+    assert [r.step for r in got.impacts] == list(range(steps))
+    for a, b in zip(got.impacts, ref.impacts, strict=True):
+        assert a.time == pytest.approx(b.time, abs=TOL)
+        assert a.kinetic_energy_constrained == pytest.approx(b.kinetic_energy_constrained,
+                                                             abs=TOL)
+        assert a.step_length == pytest.approx(b.step_length, abs=TOL)
+        for name in ("q", "q_dot_minus", "q_dot_plus"):
+            np.testing.assert_allclose(getattr(a, name), getattr(b, name), rtol=0, atol=TOL,
+                                       err_msg=f"step {a.step}: {name}")
+    np.testing.assert_allclose(got.final_q, ref.final_q, rtol=0, atol=TOL)
+    np.testing.assert_allclose(got.final_q_dot, ref.final_q_dot, rtol=0, atol=TOL)
+    mg = float(w.total_mass * w.scale.gravity)
+    for k in range(steps):
+        assert np.ptp(got.mechanical_energy[got.step == k]) < 1e-8 * mg
+    # the steps differ (so a kernel walking one parameter set could not pass)
+    assert abs(got.impacts[0].step_duration - got.impacts[1].step_duration) > 0.02
+
+
+@pytest.mark.slow
+def test_compiled_stride_ensemble_equals_scipy_walks(amputee: PhasedWalker) -> None:
+    """The ensemble kernel (basin, the maps) alternates the walkers at every step, odd step
+    counts too: each start ends as the scipy walk of as many steps; ``stop_near`` is tested
+    after whole strides only (a walker at the stride's fixed point stops after 2 steps)."""
+    starts = [Z_NEAR, (-0.30, 1.15, -0.6), (-0.25, 0.6, -0.7)]
+    states = [amputee.section_to_state(z) for z in starts]
+    Q = np.array([s[0] for s in states])
+    QD = np.array([s[1] for s in states])
+    for steps in (1, 3):
+        ens = ensemble_walk_phased(amputee, states=(Q, QD), slope=SLOPE, steps=steps,
+                                   parallel=False, **TIGHT)
+        for i, (q, qd) in enumerate(states):
+            ref = simulate(amputee, q, qd, slope=SLOPE, steps=steps, **TIGHT)
+            assert WalkStatus.from_code(int(ens.status[i])) is ref.status, (steps, i)
+            assert int(ens.steps[i]) == ref.n_steps, (steps, i)
+            np.testing.assert_allclose(ens.q[i], ref.final_q, rtol=0, atol=TOL)
+            np.testing.assert_allclose(ens.q_dot[i], ref.final_q_dot, rtol=0, atol=TOL)
+    assert set(ens.status.tolist()) != {WalkStatus.COMPLETED.code}  # one start falls
+    # arrival: from a state one step before the stride's start, the walk passes the start's
+    # section point after 1 step, which is the other walker's section: no stop there
+    g = find_limit_cycle(amputee, slope=SLOPE, guess=np.array(Z_NEAR),
+                         simulator=simulator(amputee, "scipy"))
+    q, qd = amputee.section_to_state(g.fixed_point)
+    at_start = ensemble_walk_phased(amputee, states=(q[None], qd[None]), slope=SLOPE, steps=9,
+                                    stop_near=(g.fixed_point, 1e-6), parallel=False)
+    assert int(at_start.steps[0]) == 2
+    np.testing.assert_allclose(at_start.z[0], g.fixed_point, atol=1e-6)
+
+
+@pytest.mark.slow
+def test_stride_gait_agrees_between_backends(amputee: PhasedWalker) -> None:
+    """The stride gait (Newton on the stride map, two steps): fixed point and Floquet
+    multipliers on the compiled backend equal the scipy reference's to 1e-7, and the map's
+    Jacobians by central differences agree."""
+    guess = np.array(Z_NEAR)
+    ref = find_limit_cycle(amputee, slope=SLOPE, guess=guess,
+                           simulator=simulator(amputee, "scipy"))
+    got = find_limit_cycle(amputee, slope=SLOPE, guess=guess,
+                           simulator=simulator(amputee, "compiled"))
+    np.testing.assert_allclose(got.fixed_point, ref.fixed_point, rtol=0, atol=1e-7)
+    np.testing.assert_allclose(np.sort_complex(got.multipliers),
+                               np.sort_complex(ref.multipliers), rtol=0, atol=1e-7)
+    assert got.period == pytest.approx(ref.period, abs=1e-7)
+    assert ref.stable and got.stable
+    # the period is a stride: two steps (0.74 s on leg A, 0.65 s on leg B)
+    assert got.period == pytest.approx(1.39, abs=0.01)
+    maps = [PoincareMap(walker=amputee, slope=SLOPE, simulator=simulator(amputee, b))
+            for b in ("scipy", "compiled")]
+    np.testing.assert_allclose(maps[1].many(ref.fixed_point[None])[0], ref.fixed_point,
+                               atol=1e-7)
+
+
+def _without_swap() -> PhasedWalker:
+    """amputee.toml without its ``[swap]`` table and with the legs alike: the plain walker."""
+    text = AMPUTEE.read_text()
+    start = text.index("\n[swap]\n")
+    text = text[:start + 1] + text[text.index("\n[[link]]", start) + 1:]
+    assert "[swap]" not in text.split("\n[params]")[1]
+    text = text.replace('name = "amputee"', 'name = "amputee_plain"')
+    return PhasedWalker(parse_description(tomllib.loads(text), source="<test>"), **EQUAL)
+
+
+@pytest.mark.slow
+def test_equal_legs_stride_walks_as_the_plain_walker(amputee: PhasedWalker) -> None:
+    """A ``[swap]`` with equal values (one kernel row) and the stride machinery on equal legs
+    (two equal rows) walk as the plain walker (no ``[swap]``) on the compiled backend, 1e-12."""
+    plain = _without_swap()
+    equal = amputee.replace(**EQUAL)
+    twin = _Alternating(amputee.description, **dict(equal.parameters))
+    assert plain.steps_per_period == equal.steps_per_period == 1
+    assert twin.steps_per_period == 2
+    q, qd = plain.section_to_state(Z_NEAR)
+    base = simulate_phased_compiled(plain, q, qd, slope=SLOPE, steps=4)
+    assert base.status is WalkStatus.COMPLETED
+    for w in (equal, twin):
+        walk = simulate_phased_compiled(w, q, qd, slope=SLOPE, steps=4)
+        assert walk.status is base.status
+        np.testing.assert_allclose(walk.final_q, base.final_q, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(walk.final_q_dot, base.final_q_dot, rtol=0, atol=1e-12)
+        np.testing.assert_allclose([r.time for r in walk.impacts],
+                                   [r.time for r in base.impacts], rtol=0, atol=1e-12)
+        np.testing.assert_allclose([r.kinetic_energy_constrained for r in walk.impacts],
+                                   [r.kinetic_energy_constrained for r in base.impacts],
+                                   rtol=0, atol=1e-12)
+
+
+@pytest.mark.slow
+def test_cli_gait_of_a_stride_walker_on_compiled(capsys: pytest.CaptureFixture[str]) -> None:
+    """``heelstrike gait --model amputee.toml --backend compiled --json``: the stride gait, the
+    scipy reference's to 1e-7."""
+    from heelstrike.cli import main
+
+    args = ["gait", "--model", str(AMPUTEE), "--slope", "3deg", "--json",
+            "--guess=-0.2739,1.0878,-0.7221"]
+    assert main([*args, "--backend", "compiled"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert main([*args, "--backend", "scipy"]) == 0
+    ref = json.loads(capsys.readouterr().out)
+    assert got["steps_per_period"] == 2 and len(got["steps"]) == 2
+    assert got["per"] == "stride"
+    for k, v in ref["fixed_point"].items():
+        assert got["fixed_point"][k] == pytest.approx(v, abs=1e-7), k
+    assert got["collision_loss"] == pytest.approx(ref["collision_loss"], abs=1e-7)
+    assert abs(got["collision_loss"] - got["potential_energy_released"]) < 1e-7

@@ -235,3 +235,45 @@ def test_cli_gait_of_a_stride_walker_on_compiled(capsys: pytest.CaptureFixture[s
         assert got["fixed_point"][k] == pytest.approx(v, abs=1e-7), k
     assert got["collision_loss"] == pytest.approx(ref["collision_loss"], abs=1e-7)
     assert abs(got["collision_loss"] - got["potential_energy_released"]) < 1e-7
+
+
+@pytest.mark.slow
+def test_stride_aot_walk_and_ensemble_equal_the_jit_kernel_bit_for_bit(
+        amputee: PhasedWalker) -> None:
+    """The amputee's ahead-of-time module (built on request, ``HEELSTRIKE_AOT=all``'s path)
+    walks the stride as the JIT kernel, bit for bit: walk and ensemble (odd steps)."""
+    from heelstrike.dynamics import compiled_phased as cp
+    from heelstrike.dynamics._aot import load_library
+    from heelstrike.dynamics._phased_kernels import JitBound
+
+    aot = load_library(cp._library(amputee))
+    assert aot is not None
+    jit = JitBound(cp.numba_model(amputee))
+    stance, swing, lockv = cp._locks(amputee)
+    P, cfg = cp._configuration(amputee, SLOPE, None, None, None, 1e-6)
+    assert P.shape[0] == 2
+    locks = (np.asarray(stance, dtype=np.int64), np.asarray(swing, dtype=np.int64), lockv)
+    q, qd = amputee.section_to_state(Z_NEAR)
+    args = (P, cfg, np.ascontiguousarray(q), np.ascontiguousarray(qd), 3, *locks, 5.0, 1e-10,
+            1e-10, np.inf)
+    a, b = aot.walk(*args), jit.walk(*args)
+    status, ns, ni = a[0], a[2], a[4]
+    assert (status, ns, ni) == (b[0], b[2], b[4]) and ni == 3
+    np.testing.assert_array_equal(a[1][:ns], b[1][:ns])
+    np.testing.assert_array_equal(a[3][:ni], b[3][:ni])
+    for x, y in zip(a[5:], b[5:], strict=True):
+        np.testing.assert_array_equal(x, y)
+    Z = np.array(Z_NEAR) + np.random.default_rng(2).normal(0.0, 0.01, (4, 3))
+    states = [amputee.section_to_state(z) for z in Z]
+    Q = np.ascontiguousarray([s[0] for s in states])
+    QD = np.ascontiguousarray([s[1] for s in states])
+    outs = []
+    for kern in (aot, jit):
+        out = (np.zeros(4, np.int64), np.zeros(4, np.int64), np.zeros_like(Q), np.zeros_like(Q))
+        kern.ensemble(P, cfg, Q, QD, 3, *locks, 5.0, 1e-10, 1e-10, np.inf,
+                      np.array([2], np.int64), np.array([2, 3], np.int64), np.zeros(3), 0.0, 0,
+                      4, *out)
+        outs.append(out)
+    for x, y in zip(*outs, strict=True):
+        np.testing.assert_array_equal(x, y)
+    assert np.all(outs[0][1] == 3)

@@ -76,6 +76,37 @@ def test_stride_walker_runs_on_both_backends(amputee: PhasedWalker) -> None:
     assert _configuration(same, SLOPE, None, None, None, 1e-6)[0].shape == (1, len(names))
 
 
+def test_energy_tracking_of_one_walker_is_refused_for_a_stride(amputee: PhasedWalker) -> None:
+    """EnergyTracking evaluates ``T + V`` of its one walker (the scipy reference does so at
+    every step); the kernel evaluates the energy of the walker taking the step, which for a
+    stride walker is the other walker every second step: refused there, accepted with equal
+    legs."""
+    from heelstrike.dynamics.actuation import EnergyTracking
+    from heelstrike.dynamics.compiled_phased import check_compiled_actuation
+
+    law = EnergyTracking(walker=amputee, energy=150.0)
+    with pytest.raises(ValueError, match=r"^EnergyTracking's walker must be the walker "
+                       r"simulated at every step.*backend='scipy'"):
+        check_compiled_actuation(amputee, law, None)
+    same = amputee.replace(**EQUAL)
+    check_compiled_actuation(same, EnergyTracking(walker=same, energy=150.0), None)
+
+
+def test_stride_of_another_description_is_refused(amputee: PhasedWalker) -> None:
+    """The kernel alternates parameter vectors of one generated model: a walker handing its
+    steps on to a walker of another description is refused, naming it."""
+    compass = load_phased_walker("compass")
+
+    class _Other(PhasedWalker):
+        def after_swap(self) -> PhasedWalker:
+            return compass
+
+    w = _Other(amputee.description, **{**dict(amputee.parameters), **EQUAL})
+    with pytest.raises(ValueError, match=r"^walker 'amputee': the walker after its leg swap "
+                       r"has another description"):
+        stride_walkers(w)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("steps", [2, 4])
 def test_compiled_stride_walk_equals_scipy(amputee: PhasedWalker, steps: int) -> None:

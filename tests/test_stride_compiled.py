@@ -308,3 +308,34 @@ def test_stride_aot_walk_and_ensemble_equal_the_jit_kernel_bit_for_bit(
     for x, y in zip(*outs, strict=True):
         np.testing.assert_array_equal(x, y)
     assert np.all(outs[0][1] == 3)
+
+
+@pytest.mark.slow
+def test_cli_map_of_a_stride_walker_on_compiled(amputee: PhasedWalker, tmp_path: Path,
+                                                capsys: pytest.CaptureFixture[str]) -> None:
+    """``heelstrike map --model amputee.toml --backend compiled`` over (R1, slope): every cell
+    has a stride gait, and two cells (leg A's foot radius 0 and 0.1 m at 3 deg; stable and
+    unstable) are the scipy reference's stride gaits (fixed point, period, spectral radius)."""
+    import xarray as xr
+
+    from heelstrike.cli import main
+
+    out = tmp_path / "map"
+    assert main(["map", "--model", str(AMPUTEE), "--backend", "compiled", "--x",
+                 "R1:0:0.1:2", "--slope", "2deg:4deg:3", "--out", str(out), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["gait_found_fraction"] == 1.0
+    with xr.open_dataset(out / "gait_map.nc") as ds:
+        assert ds.attrs["backend"] == "compiled"
+        for i, R1 in enumerate((0.0, 0.1)):
+            cell = ds.isel(R1=i, slope=1)
+            assert float(cell["slope"]) == pytest.approx(SLOPE, abs=1e-15)
+            w = amputee.replace(R1=R1)
+            z = np.asarray(cell["fixed_point"].values)
+            ref = find_limit_cycle(w, slope=SLOPE, guess=z + 0.002,
+                                   simulator=simulator(w, "scipy"))
+            np.testing.assert_allclose(z, ref.fixed_point, rtol=0, atol=1e-7)
+            assert float(cell["period"]) == pytest.approx(ref.period, abs=1e-7)
+            assert float(cell["spectral_radius"]) == pytest.approx(
+                float(np.max(np.abs(ref.multipliers))), abs=1e-6)
+            assert bool(cell["stable"]) == (i == 0)

@@ -185,8 +185,9 @@ class PoincareMap:
         if compiled and kernel_walker.compiled_kernel == "generated":
             from heelstrike.dynamics.compiled_phased import ensemble_walk_phased
 
-            ens_p = ensemble_walk_phased(
+            ens_p = ensemble_walk_phased(  # one period: the stride of a walker whose legs differ
                 kernel_walker, Z_, slope=self.slope,  # type: ignore[arg-type]
+                steps=int(kernel_walker.steps_per_period),
                 torque=cast(Any, self.torque), push_off=cast(Any, self.push_off),
                 rtol=self.rtol, atol=self.atol, max_step_duration=self.max_step_duration,
                 max_step=self.max_step, parallel=False,

@@ -187,7 +187,7 @@ def _nearly_periodic(w: PhasedWalker, Z: FloatArray, backend: str,
         No seed takes a step.
     """
     if backend == "compiled":
-        ens = _coarse_ensemble(w, Z, kw, steps=1)
+        ens = _coarse_ensemble(w, Z, kw, steps=int(w.steps_per_period))  # one period
         Z1 = np.where(ens.ok[:, None], ens.z, np.nan)
     else:
         coarse = PoincareMap(walker=w, rtol=1e-7, atol=1e-8, **kw)

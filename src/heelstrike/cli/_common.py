@@ -224,9 +224,10 @@ def add_backend_option(
 
 def default_backend_for(args: argparse.Namespace, walker: Any) -> None:
     """A command's default ``--backend`` that ``walker`` does not run on becomes the one it runs
-    on (:attr:`~heelstrike.models.base.PlanarWalker.backends`: a walker file whose legs differ
-    has no compiled kernel, so its ``gait`` runs on the scipy reference); a ``--backend`` given
-    on the command line is kept (and refused later if unsupported, with the reason)."""
+    on (:attr:`~heelstrike.models.base.PlanarWalker.backends`: a walker without a compiled
+    kernel, e.g. one declaring its own step schedule, runs on the scipy reference; every walker
+    file, its legs alike or not, runs on both); a ``--backend`` given on the command line is
+    kept (and refused later if unsupported, with the reason)."""
     backend = vars(args).get("backend")
     if backend is None or "backend" in explicit_options(args) or walker.supports(backend):
         return

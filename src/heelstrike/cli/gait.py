@@ -77,9 +77,8 @@ def add_gait(sub: Any) -> None:
                    "write --guess=-0.27,1.09,-0.72 when Q3 is negative (with --model: the "
                    "walker's section coordinates)")
     add_backend_option(p, "step simulator: compiled numba kernels (default; generated from the "
-                       "walker file with --model) or the scipy reference (the default for a "
-                       "walker file whose legs differ: its stride alternates two parameter "
-                       "sets)")
+                       "walker file with --model, a walker whose legs differ alternating its "
+                       "two parameter sets) or the scipy reference")
     p.add_argument("--sensitivity", default=None, metavar="NAMES",
                    help="comma-separated walker parameters (the walker file's names: R, b, "
                    "mH, m, l, I, g): print the derivatives of the fixed point, period, step "
@@ -403,9 +402,8 @@ def _walk_model(args: argparse.Namespace, walker: Any, out: Any, to_dir: bool) -
     from heelstrike.outputs import write_model_walk_figures
     from heelstrike.plots.gait import animate_model_walk
 
-    # the default: compiled where the walker runs on it (a walker file declaring its heel
-    # strike, e.g. wheel.toml, and a walker whose legs differ, its stride alternating two
-    # parameter sets, run on the scipy reference only)
+    # the default: compiled where the walker runs on it (every walker file, a stride walker
+    # included; a walker declaring its own step schedule runs on the scipy reference only)
     backend = args.backend or ("compiled" if walker.supports("compiled") else "scipy")
     if args.guess is not None:
         z = parse_floats(args.guess, "--guess", len(walker.section_names))

@@ -703,23 +703,32 @@ def _record_impact(
 
 _F = nbt.float64
 _WALK_SIG = (
-    _DYN_T, _CON_T, _SWP_T, _GRD_T, _F[::1], _F[::1], _F[::1], _F[::1], nbt.int64, nbt.int64[::1],
-    nbt.int64[::1], _F[::1], _F, _F, _F, _F,
+    _DYN_T, _CON_T, _SWP_T, _GRD_T, _F[:, ::1], _F[:, ::1], _F[::1], _F[::1], nbt.int64,
+    nbt.int64[::1], nbt.int64[::1], _F[:, ::1], _F, _F, _F, _F,
 )
 
 
 def _walk_py(
-    dyn: Any, con: Any, swp: Any, gua: Any, p: FloatArray, cfg: FloatArray, q0: FloatArray,
+    dyn: Any, con: Any, swp: Any, gua: Any, P: FloatArray, CFG: FloatArray, q0: FloatArray,
     qd0: FloatArray, steps: int, stance_locks: IntArray, swing_locks: IntArray,
-    lockv: FloatArray, max_duration: float, rtol: float, atol: float, max_step: float,
+    LOCKV: FloatArray, max_duration: float, rtol: float, atol: float, max_step: float,
 ) -> tuple[int, FloatArray, int, FloatArray, int, FloatArray, FloatArray, FloatArray]:
     """The whole phased walk (see the module docstring).
+
+    ``P``, ``CFG`` and ``LOCKV`` (shapes (s, n_p), (s, n_cfg), (s, n)) hold the parameter
+    values, float configuration and lock angles of the ``s`` walkers of a period (``s = 1``,
+    or 2 for a walker whose legs differ: the walker and the walker after its leg swap, which
+    share the generated functions): step ``k`` is taken with row ``k mod s``.
 
     Returns ``(status, samples, n_samples, impacts, n_impacts, step_starts, q, q_dot)``;
     ``step_starts`` rows are ``(t, work, q)`` at the start of every step.
     """
     n = q0.shape[0]
-    friction = not math.isnan(cfg[_C_MU])
+    period = P.shape[0]
+    p = P[0]
+    cfg = CFG[0]
+    lockv = LOCKV[0]
+    friction = not math.isnan(cfg[_C_MU])  # the same for every walker of the period
     declared = cfg[_C_GUARD] != 0.0  # the walker's declared heel-strike guard
     graze_rule = cfg[_C_TRAIL] != 0.0  # its trailing foot may lift or graze (the projector)
     nsl = stance_locks.shape[0]
@@ -756,6 +765,9 @@ def _walk_py(
     none_idx = np.empty(0, dtype=np.int64)
     ew = _event_work(n)
     for kstep in range(steps):
+        p = P[kstep % period]  # the walker taking this step
+        cfg = CFG[kstep % period]
+        lockv = LOCKV[kstep % period]
         t_step = t
         starts[kstep, 0] = t
         starts[kstep, 1] = work
@@ -938,6 +950,7 @@ def _walk_py(
             break
         q = qn
         qd = qdn
+        lockv = LOCKV[(kstep + 1) % period]  # the next step's walker's lock angles
         for c in range(nl):
             q[all_locks[c]] = lockv[all_locks[c]]
             qd[all_locks[c]] = 0.0
@@ -996,29 +1009,46 @@ def _announced(disp: Any, what: str, *, quiet: bool, kind: str = "jit-kernel") -
 # ---------------------------------------------------------------------------------------------
 # ensembles: many walkers (initial states) in one compiled call
 # ---------------------------------------------------------------------------------------------
+@njit(cache=True, nogil=True)
+def _rows_from(A: FloatArray, r: int) -> FloatArray:
+    """``A``'s rows rolled to start at row ``r`` (``A[(r + j) mod s]``, C order)."""
+    s = A.shape[0]
+    out = np.empty_like(A)
+    for j in range(s):
+        out[j] = A[(r + j) % s]
+    return out
+
+
 def _ensemble_py(
-    dyn: Any, con: Any, swp: Any, gua: Any, p: FloatArray, cfg: FloatArray, Q0: FloatArray,
+    dyn: Any, con: Any, swp: Any, gua: Any, P: FloatArray, CFG: FloatArray, Q0: FloatArray,
     QD0: FloatArray, steps: int, stance_locks: IntArray, swing_locks: IntArray,
-    lockv: FloatArray, max_duration: float, rtol: float, atol: float, max_step: float,
+    LOCKV: FloatArray, max_duration: float, rtol: float, atol: float, max_step: float,
     sec_q: IntArray, sec_v: IntArray, target: FloatArray, stop_tol: float, i0: int, i1: int,
     status: IntArray, taken: IntArray, Qf: FloatArray, QDf: FloatArray,
 ) -> None:
     """Walk walkers ``i0 <= i < i1`` (rows of ``Q0``, ``QD0``) for up to ``steps`` steps.
 
     Every step is one call of the walk kernel (``steps = 1``) from the previous post-impact
-    state, so a walker can stop on arrival near ``target`` (section norm ``< stop_tol``; no
-    stop if ``stop_tol <= 0``). Writes ``status``, heel strikes ``taken`` and the final state.
+    state, step ``k`` with row ``k mod s`` of ``P``, ``CFG`` and ``LOCKV`` (the ``s`` walkers
+    of a period, as :func:`_walk_py`), so a walker can stop on arrival near ``target`` (section
+    norm ``< stop_tol`` after whole periods, ``k mod s = 0``; no stop if ``stop_tol <= 0``).
+    Writes ``status``, heel strikes ``taken`` and the final state.
     """
     nq = sec_q.shape[0]
     nv = sec_v.shape[0]
+    period = P.shape[0]
     for i in range(i0, i1):
         q = Q0[i].copy()
         qd = QD0[i].copy()
         st = COMPLETED
         k = 0
         while k < steps:
+            r = k % period
+            Pk = P if r == 0 else _rows_from(P, r)
+            CFGk = CFG if r == 0 else _rows_from(CFG, r)
+            LOCKVk = LOCKV if r == 0 else _rows_from(LOCKV, r)
             s, _S, _ns, Imp, ni, _starts, qn, qdn = _WALK_JIT(
-                dyn, con, swp, gua, p, cfg, q, qd, 1, stance_locks, swing_locks, lockv,
+                dyn, con, swp, gua, Pk, CFGk, q, qd, 1, stance_locks, swing_locks, LOCKVk,
                 max_duration, rtol, atol, max_step,
             )
             for r in range(ni):
@@ -1029,7 +1059,7 @@ def _ensemble_py(
             if s != COMPLETED:
                 st = s
                 break
-            if stop_tol > 0.0:
+            if stop_tol > 0.0 and k % period == 0:
                 d2 = 0.0
                 for a in range(nq):
                     d2 += (q[sec_q[a]] - target[a]) ** 2
@@ -1044,8 +1074,8 @@ def _ensemble_py(
 
 
 _ENS_SIG = (
-    _DYN_T, _CON_T, _SWP_T, _GRD_T, _F[::1], _F[::1], _F[:, ::1], _F[:, ::1], nbt.int64,
-    nbt.int64[::1], nbt.int64[::1], _F[::1], _F, _F, _F, _F, nbt.int64[::1], nbt.int64[::1],
+    _DYN_T, _CON_T, _SWP_T, _GRD_T, _F[:, ::1], _F[:, ::1], _F[:, ::1], _F[:, ::1], nbt.int64,
+    nbt.int64[::1], nbt.int64[::1], _F[:, ::1], _F, _F, _F, _F, nbt.int64[::1], nbt.int64[::1],
     _F[::1], _F, nbt.int64, nbt.int64, nbt.int64[::1], nbt.int64[::1], _F[:, ::1], _F[:, ::1],
 )
 _ENS_KERNEL: list[Any] = []
@@ -1111,21 +1141,21 @@ def bound_functions(model: NumbaModel) -> dict[str, Any]:
     ensemble = njit(nogil=True)(ns["_ensemble_py"])
 
     def walk_bound(
-        p: FloatArray, cfg: FloatArray, q0: FloatArray, qd0: FloatArray, steps: int,
-        stance_locks: IntArray, swing_locks: IntArray, lockv: FloatArray, max_duration: float,
+        P: FloatArray, CFG: FloatArray, q0: FloatArray, qd0: FloatArray, steps: int,
+        stance_locks: IntArray, swing_locks: IntArray, LOCKV: FloatArray, max_duration: float,
         rtol: float, atol: float, max_step: float,
     ) -> Any:
-        return walk(dyn, con, swp, gua, p, cfg, q0, qd0, steps, stance_locks, swing_locks, lockv,
+        return walk(dyn, con, swp, gua, P, CFG, q0, qd0, steps, stance_locks, swing_locks, LOCKV,
                     max_duration, rtol, atol, max_step)
 
     def ensemble_bound(
-        p: FloatArray, cfg: FloatArray, Q0: FloatArray, QD0: FloatArray, steps: int,
-        stance_locks: IntArray, swing_locks: IntArray, lockv: FloatArray, max_duration: float,
+        P: FloatArray, CFG: FloatArray, Q0: FloatArray, QD0: FloatArray, steps: int,
+        stance_locks: IntArray, swing_locks: IntArray, LOCKV: FloatArray, max_duration: float,
         rtol: float, atol: float, max_step: float, sec_q: IntArray, sec_v: IntArray,
         target: FloatArray, stop_tol: float, i0: int, i1: int, status: IntArray,
         taken: IntArray, Qf: FloatArray, QDf: FloatArray,
     ) -> None:
-        ensemble(dyn, con, swp, gua, p, cfg, Q0, QD0, steps, stance_locks, swing_locks, lockv,
+        ensemble(dyn, con, swp, gua, P, CFG, Q0, QD0, steps, stance_locks, swing_locks, LOCKV,
                  max_duration, rtol, atol, max_step, sec_q, sec_v, target, stop_tol, i0, i1,
                  status, taken, Qf, QDf)
 

@@ -186,13 +186,9 @@ def backend_entry(walker: PlanarWalker, backend: str) -> BackendEntry:
     if not walker.supports(backend) or entry is None:
         known = sorted({name for _, name in BACKENDS})
         what = "unknown backend" if backend not in known else "unsupported backend"
-        why = ""
-        if what == "unsupported backend" and walker.steps_per_period != 1:
-            why = ("; its legs differ, so its steps alternate two parameter sets "
-                   "(walker.after_swap()), which only the scipy reference walks")
         raise ValueError(
             f"{what} {backend!r} for this {type(walker).__name__}: it runs on "
-            f"{', '.join(repr(b) for b in declared)} (walker.backends){why}"
+            f"{', '.join(repr(b) for b in declared)} (walker.backends)"
         )
     return entry
 

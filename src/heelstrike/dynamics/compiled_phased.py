@@ -15,6 +15,14 @@ The same hybrid model as :func:`heelstrike.dynamics.phased.simulate_phased`, ste
   (the rule of :mod:`heelstrike.models._contact`, compiled); then the legs are
   relabelled (``swap``) and the locks reset exactly.
 
+A walker whose legs differ (a ``[swap]`` table, two
+:attr:`~heelstrike.models.base.PlanarWalker.steps_per_period`) alternates with the walker
+after its leg swap, as the scipy reference does: the kernel takes the parameter values, float
+configuration and lock angles of both (:func:`stride_walkers`; they share the generated
+functions) as the rows of 2-row arrays, and step ``k`` is taken with row ``k mod 2`` (the swap
+itself with the striking step's row), in the single walk and in the ensembles, whose arrival
+test is made after whole strides.
+
 A walker file declaring its heel-strike guard (``[events] heel_strike``, e.g. McGeer's wheel
 ``wheel.toml``) runs it as the scipy reference does
 (:meth:`heelstrike.models.builder.BuiltWalker.step_schedule`): the locked swing is armed when
@@ -95,6 +103,7 @@ __all__ = [
     "numba_model",
     "section_states",
     "simulate_phased_compiled",
+    "stride_walkers",
 ]
 
 # Kernel status codes beyond the compass kernel's (plain ints: numba freezes globals).
@@ -132,15 +141,16 @@ _MODE_SEPARATE, _MODE_GRAZE, _MODE_PENETRATING = 0, 3, 4
 # The kernel's entry points
 # ---------------------------------------------------------------------------------------------
 _F2 = "f8[:,::1]"
-_WALK_ARGS = ("f8[::1]", "f8[::1]", "f8[::1]", "f8[::1]", "i8", "i8[::1]", "i8[::1]", "f8[::1]",
+_WALK_ARGS = (_F2, _F2, "f8[::1]", "f8[::1]", "i8", "i8[::1]", "i8[::1]", _F2,
               "f8", "f8", "f8", "f8")
 #: A walker's entry points compiled ahead of time (its generated functions bound; see
 #: :func:`heelstrike.dynamics._phased_kernels.bound_functions`), with their signatures:
-#: ``walk(p, cfg, q0, q_dot0, steps, stance_locks, swing_locks, lock_values, max_duration,
+#: ``walk(P, CFG, q0, q_dot0, steps, stance_locks, swing_locks, LOCK_VALUES, max_duration,
 #: rtol, atol, max_step) -> (status, samples, n_samples, impacts, n_impacts, step_starts, q,
-#: q_dot)`` and ``ensemble(p, cfg, Q0, QD0, steps, stance_locks, swing_locks, lock_values,
+#: q_dot)`` and ``ensemble(P, CFG, Q0, QD0, steps, stance_locks, swing_locks, LOCK_VALUES,
 #: max_duration, rtol, atol, max_step, section_q, section_v, target, stop_tol, i0, i1, status,
-#: taken, Q, QD)``.
+#: taken, Q, QD)``. ``P``, ``CFG`` and ``LOCK_VALUES`` have one row per walker of a period
+#: (:func:`stride_walkers`): step ``k`` is taken with row ``k mod s``.
 AOT_EXPORTS: tuple[AotExport, ...] = (
     AotExport(name="walk", args=_WALK_ARGS,
               returns=f"Tuple((i8, {_F2}, i8, {_F2}, i8, {_F2}, f8[::1], f8[::1]))"),
@@ -295,10 +305,13 @@ def check_compiled_actuation(walker: BuiltWalker, torque: Any, push_off: Any) ->
             "the compiled backend evaluates SwingLegPD with a constant set point (profile=None); "
             "use backend='scipy' for a time profile"
         )
-    if type(torque) is EnergyTracking and not _same_walker(torque.walker, walker):
+    if type(torque) is EnergyTracking and not all(
+            _same_walker(torque.walker, w) for w in stride_walkers(walker)):
         raise ValueError(
-            "EnergyTracking's walker must be the walker simulated (its energy T + V is "
-            "evaluated in the kernel from the simulated walker's equations)"
+            "EnergyTracking's walker must be the walker simulated at every step (its energy "
+            "T + V is evaluated in the kernel from the equations of the walker taking the step; "
+            "a walker whose legs differ alternates with the walker after its leg swap): use "
+            "backend='scipy'"
         )
 
 
@@ -326,12 +339,54 @@ def _joint_law(walker: BuiltWalker, torque: JointLaw | None, slope: float) -> tu
             math.inf, 0.0, 0.0)
 
 
+def stride_walkers(walker: BuiltWalker) -> tuple[BuiltWalker, ...]:
+    """The walkers taking the steps of one period, in order: step ``k`` of a walk from
+    ``walker`` is taken by member ``k mod s`` (``s`` =
+    :attr:`~heelstrike.models.base.PlanarWalker.steps_per_period`).
+
+    ``(walker,)`` when the leg swap is a symmetry; for a walker whose legs differ
+    ``(walker, walker.after_swap())``, as :func:`~heelstrike.dynamics.hybrid.simulate`
+    alternates them. Both have the walker's description (the same generated equations), so one
+    kernel walks the stride with their parameter values alternating.
+
+    Parameters
+    ----------
+    walker : BuiltWalker
+
+    Returns
+    -------
+    tuple of BuiltWalker
+        Length ``walker.steps_per_period``.
+
+    Raises
+    ------
+    ValueError
+        If a walker of the period has another description (another kernel).
+    """
+    out = [walker]
+    while len(out) < int(walker.steps_per_period):
+        nxt = out[-1].after_swap()
+        if not isinstance(nxt, BuiltWalker) or (nxt.description is not walker.description
+                                                 and nxt.description != walker.description):
+            raise ValueError(
+                f"walker {walker.description.name!r}: the walker after its leg swap has another "
+                "description, so the compiled kernel cannot walk its stride")
+        out.append(nxt)
+    return tuple(out)
+
+
 def _locks(walker: BuiltWalker) -> tuple[tuple[int, ...], tuple[int, ...], FloatArray]:
-    """``(stance locks, swing locks, lock angle of every coordinate (rad, 0 if none))``."""
+    """``(stance locks, swing locks, LOCK_VALUES)``: the lock angle of every coordinate (rad,
+    0 if none), one row per walker of :func:`stride_walkers` (shape (s, n))."""
     stance_locks, swing_locks = walker.stance_and_swing_locks()
-    lockv = np.zeros(walker.n_coordinates)
-    for j, a in zip(walker.lockable_joints, walker.lock_angles, strict=True):
-        lockv[j] = float(a)
+    stride = stride_walkers(walker)
+    lockv = np.zeros((len(stride), walker.n_coordinates))
+    for r, w in enumerate(stride):
+        if w.stance_and_swing_locks() != (stance_locks, swing_locks):
+            raise ValueError(f"walker {walker.description.name!r}: the walker after its leg "
+                             "swap locks other joints")
+        for j, a in zip(w.lockable_joints, w.lock_angles, strict=True):
+            lockv[r, j] = float(a)
     return stance_locks, swing_locks, lockv
 
 
@@ -339,7 +394,19 @@ def _configuration(
     walker: BuiltWalker, slope: float, torque: JointLaw | None, push_off: PushOff | None,
     friction: float | None, knee_flex_threshold: float,
 ) -> tuple[FloatArray, FloatArray]:
-    """The kernel's parameter values ``p`` and float configuration ``cfg`` (``_C_*``)."""
+    """The kernel's parameter values ``P`` and float configurations ``CFG`` (``_C_*``), one
+    row per walker of :func:`stride_walkers`, shapes (s, n_p) and (s, n_cfg)."""
+    rows = [_one_configuration(w, slope, torque, push_off, friction, knee_flex_threshold)
+            for w in stride_walkers(walker)]
+    return (np.ascontiguousarray(np.stack([p for p, _ in rows])),
+            np.ascontiguousarray(np.stack([c for _, c in rows])))
+
+
+def _one_configuration(
+    walker: BuiltWalker, slope: float, torque: JointLaw | None, push_off: PushOff | None,
+    friction: float | None, knee_flex_threshold: float,
+) -> tuple[FloatArray, FloatArray]:
+    """One walker's parameter values ``p`` and float configuration ``cfg`` (``_C_*``)."""
     walker.check_heel_strike_detectable()  # a clearance guard must see the strike
     events = walker.description.events
     declared = events is not None
@@ -380,7 +447,9 @@ def simulate_phased_compiled(
     Parameters
     ----------
     walker : BuiltWalker
-        Any described walker (scalar parameters).
+        Any described walker (scalar parameters). A walker whose legs differ alternates with
+        the walker after its leg swap (:func:`stride_walkers`), as the scipy reference does:
+        step ``k`` is taken with the parameter values of member ``k mod 2``.
     q0, q_dot0 : array_like, shape (n,)
         State just after a heel strike (stance foot rolling, lockable joints locked).
     slope : float
@@ -442,9 +511,12 @@ def _result(
     A_lock = walker.lock_jacobian(all_locks) if all_locks else np.zeros((0, n))
     events: list[PhasedImpact] = []
     records: list[ImpactRecord] = []
+    first = walker
+    stride = stride_walkers(first)
     for row in Imp:
         kind: ImpactKind = "knee_strike" if row[0] == _KIND_KNEE else "heel_strike"
         k = int(row[1])
+        walker = stride[k % len(stride)]  # the walker taking step k
         t = float(row[2])
         nrows = int(row[8])
         q = row[_I_HEAD : _I_HEAD + n].copy()
@@ -484,6 +556,12 @@ def _result(
     st = WalkStatus.from_code(status)
     q_all = np.ascontiguousarray(S[:, 5 : 5 + n])
     qd_all = np.ascontiguousarray(S[:, 5 + n : 5 + 2 * n])
+    # each sample's energy is that of the walker taking its step (as hybrid.simulate)
+    energy = np.empty(S.shape[0])
+    of_step = S[:, 2].astype(np.int_) % len(stride)
+    for r, w in enumerate(stride):
+        at = of_step == r
+        energy[at] = np.asarray(w.mechanical_energy(q_all[at], qd_all[at], slope))
     return PhasedWalkResult(
         status=st,
         message=st.message,
@@ -499,7 +577,7 @@ def _result(
         slope=slope,
         events=tuple(events),
         phase=np.where(S[:, 4] == 0, "knee_swing", "locked_swing"),
-        mechanical_energy=np.asarray(walker.mechanical_energy(q_all, qd_all, slope)),
+        mechanical_energy=energy,
     )
 
 
@@ -594,7 +672,8 @@ def ensemble_walk_phased(
     Parameters
     ----------
     walker : BuiltWalker
-        Any described walker with scalar parameters.
+        Any described walker with scalar parameters (a walker whose legs differ alternates
+        with the walker after its leg swap, as :func:`simulate_phased_compiled`).
     z0 : array_like, shape (N, d) or (d,), optional
         Post-heel-strike section points (``PhasedWalker.section_names``; rad, rad/s).
     states : (array_like, array_like), optional
@@ -608,7 +687,9 @@ def ensemble_walk_phased(
         As :func:`simulate_phased_compiled`.
     stop_near : (array_like of shape (d,), float), optional
         ``(z_target, tol)``: a walker stops (status completed) as soon as its post-impact
-        section point is within ``tol`` of ``z_target`` (Euclidean norm).
+        section point is within ``tol`` of ``z_target`` (Euclidean norm), tested after whole
+        periods (:attr:`~heelstrike.models.base.PlanarWalker.steps_per_period` steps: a stride
+        walker's section after an odd step is the other walker's).
     parallel : bool, optional
         Split the walkers over ``os.cpu_count()`` threads (the kernel releases the GIL);
         default: parallel on the main thread, serial on other threads (e.g. Dask workers).

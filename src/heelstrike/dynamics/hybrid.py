@@ -685,7 +685,9 @@ def cut_off_profile(walker: PlanarWalker, walk: PhasedWalkResult,
     Parameters
     ----------
     walker : PlanarWalker
-        The walker of every step (a walker whose legs differ has no compiled kernel).
+        The walker of the walk's first step (a walker whose legs differ alternates with
+        :meth:`~heelstrike.models.base.PlanarWalker.after_swap`: each step's samples and heel
+        strike are checked against the ranges of the walker taking it).
     walk : PhasedWalkResult
     tol : float
         Tolerance (rad) on the range's ends.
@@ -697,16 +699,24 @@ def cut_off_profile(walker: PlanarWalker, walk: PhasedWalkResult,
     """
     if walker.is_batched or walk.t.size == 0:
         return walk
-    if walker.profile_ranges == (None, None):
+    stride = [walker]  # the walkers of a period: step k is taken by stride[k % len(stride)]
+    while len(stride) < walker.steps_per_period:
+        stride.append(stride[-1].after_swap())
+    if all(w.profile_ranges == (None, None) for w in stride):
         return walk
-    stance = np.asarray(walker.profile_margin(walk.q, "right"))
+    of_step = np.asarray(walk.step) % len(stride)
+    stance = np.full(walk.t.shape, np.inf)
+    for r, w in enumerate(stride):
+        at = of_step == r
+        stance[at] = np.asarray(w.profile_margin(walk.q[at], "right"))
     bad = np.flatnonzero(stance < -tol)
     cut: tuple[float, int, FloatArray] | None = None  # (time, step, q) of the first excursion
     if bad.size:
         i = int(bad[0])
         cut = (float(walk.t[i]), int(walk.step[i]), walk.q[i])
     for e in walk.events:
-        if e.kind == "heel_strike" and float(walker.profile_margin(e.q, "left")) < -tol:
+        w = stride[e.step % len(stride)]
+        if e.kind == "heel_strike" and float(w.profile_margin(e.q, "left")) < -tol:
             if cut is None or e.time < cut[0] or (e.time == cut[0] and e.step <= cut[1]):
                 cut = (float(e.time), int(e.step), e.q)
             break
@@ -715,7 +725,8 @@ def cut_off_profile(walker: PlanarWalker, walk: PhasedWalkResult,
     t_cut, k_cut, q_cut = cut
     keep = (walk.step < k_cut) | ((walk.step == k_cut) & (walk.t <= t_cut))
     n = max(int(np.count_nonzero(keep)), 1)
-    where = walker.profile_excursion(q_cut, tol=-tol) or "a profile foot left its range"
+    where = (stride[k_cut % len(stride)].profile_excursion(q_cut, tol=-tol)
+             or "a profile foot left its range")
     message = (f"{WalkStatus.OFF_PROFILE.message}: {where} (step {k_cut}, t = {t_cut:.6g} s; "
                "located to the integrator's samples)")
 

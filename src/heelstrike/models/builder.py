@@ -443,14 +443,13 @@ class BuiltWalker(PlanarWalker, metaclass=_FrozenAfterInit):
         (:mod:`heelstrike.dynamics.compiled_phased`).
 
         None for a subclass that declares another :meth:`step_schedule` (the kernel runs the
-        described walkers' schedule only) and for a walker whose legs differ
-        (:attr:`steps_per_period` 2: the kernel walks one parameter set): such walkers run on
-        the scipy reference only. A description declaring its heel-strike guard (``[events]``,
-        e.g. McGeer's wheel) runs it on both backends.
+        described walkers' schedule only): such walkers run on the scipy reference only. A
+        description declaring its heel-strike guard (``[events]``, e.g. McGeer's wheel) runs
+        it on both backends, and so does a walker whose legs differ (:attr:`steps_per_period`
+        2): the kernel alternates its parameter values with those of :meth:`after_swap` at
+        every heel strike.
         """
         if type(self).step_schedule is not BuiltWalker.step_schedule:
-            return None
-        if not self.is_batched and self.steps_per_period != 1:
             return None
         return "generated"
 

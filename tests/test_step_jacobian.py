@@ -387,6 +387,16 @@ def test_unknown_actuation_parameter_is_refused() -> None:
                                          r".*; its actuation's: amplitude"):
         step_jacobian(CompassGait(), Z_POWERED, slope=0.0, torque=SwingLegPD(amplitude=0.2),
                       parameters=("impulse",))
+    # the documented parameters are those differentiated
+    from heelstrike.dynamics.actuation import EnergyTracking
+    from heelstrike.dynamics.variational import ACTUATION_PARAMETERS, _Actuation
+
+    walker = CompassGait()
+    for torque, push in ((SwingLegPD(amplitude=0.2), None), (None, PushOff(impulse=1.0)),
+                         (EnergyTracking(walker=walker, energy=150.0), None)):
+        owner = push if torque is None else torque
+        assert tuple(_Actuation.of(torque, push, ()).values) == \
+            ACTUATION_PARAMETERS[type(owner).__name__]
 
 
 @pytest.mark.slow

@@ -36,6 +36,17 @@ parameters (zero rate): ``step_jacobian(..., parameters=("foot_radius", "slope")
 step quantities' partial derivatives (period, step length, speed, collision loss, ``eta``)
 in ``z`` and ``p``.
 
+An actuated step is differentiated the same way. A smooth torque law
+``u = tau(t, q, q_dot; a)`` enters ``F`` as ``B u`` (``B`` the walker's
+:meth:`~heelstrike.models.base.PlanarWalker.actuation_matrix`), so its derivatives in
+``(q, q_dot)`` enter ``D_x F`` and those in its parameters ``a`` (gains, amplitude, target
+energy: :data:`ACTUATION_PARAMETERS`) the parameter columns; the built-in laws
+(:mod:`heelstrike.dynamics.actuation`) are evaluated here without their cast to float,
+saturation by the real part (outside the limit the torque is constant: no derivative). A
+push-off impulse ``p`` just before the heel strike is part of the reset ``H``
+(``q_dot -> q_dot + P_a M^-1 A_st^T p e(q3)``, then the impact), so ``DH`` carries its
+state derivative and ``p`` is one more parameter (``"impulse"``).
+
 The *naive* product (reset Jacobians times flow Jacobians, ``Xi`` replaced by ``D Delta`` and
 ``Pi_h`` by the identity) is returned too: it is wrong (it ignores that moving the initial
 state moves the event times), and shows how much the saltation terms matter.
@@ -744,7 +755,9 @@ def step_jacobian(
     sensitivity is the event time's, ``dt = -grad g . dy / (grad g . f)``; the step length and
     the collision loss ``T_c`` (kinetic energy before minus after the inert impact:
     ``T_c`` of the split ``T = T_c + T_a``) are differentiated at the projected heel-strike
-    state. The torque law and the push-off impulse are held fixed.
+    state. Actuation parameters (``"impulse"`` of the push-off, a torque law's gains and
+    amplitude) are augmented states too: they enter the torque law in the variational
+    equations and the push-off in the heel strike's reset.
 
     Parameters
     ----------
@@ -756,13 +769,22 @@ def step_jacobian(
     slope : float
         Ground slope (rad).
     torque : TorqueLaw, optional
-        Actuator law (time since the step's start, ``q``, ``q_dot``); it must take complex
-        states (e.g. :class:`~heelstrike.dynamics.phased.TorsoPD`).
+        Actuator law (time since the step's start, ``q``, ``q_dot``). The built-in laws
+        (:class:`~heelstrike.dynamics.actuation.SwingLegPD`,
+        :class:`~heelstrike.dynamics.actuation.EnergyTracking`, their sums,
+        :class:`~heelstrike.dynamics.actuation.CustomTorque` of a complex-capable function,
+        :class:`~heelstrike.dynamics.phased.TorsoPD`) are differentiated here; any other
+        law must take complex states.
     push_off : PushOff, optional
         A :class:`~heelstrike.dynamics.actuation.PushOff` impulse before the heel strike.
     parameters : sequence of str
-        Names in :attr:`~heelstrike.models.base.PlanarWalker.parameters` (SI units), or
-        ``"slope"`` (rad), to differentiate in (default none).
+        Names in :attr:`~heelstrike.models.base.PlanarWalker.parameters` (SI units),
+        ``"slope"`` (rad), or parameters of the actuation (:data:`ACTUATION_PARAMETERS`:
+        ``"impulse"``, N s, with a push-off; ``"amplitude"`` rad, ``"kp"`` N m/rad, ``"kd"``
+        N m s/rad of a :class:`~heelstrike.dynamics.actuation.SwingLegPD`; ``"energy"`` J,
+        ``"gain"`` s/rad of an :class:`~heelstrike.dynamics.actuation.EnergyTracking`; a
+        name two laws of a sum share is not differentiable), to differentiate in (default
+        none), columns in this order. A walker parameter's name takes precedence.
     rtol, atol : float
         Tolerances of the nominal step and of the variational equations (DOP853).
     max_step_duration, max_step : float
@@ -775,7 +797,8 @@ def step_jacobian(
     Raises
     ------
     ValueError
-        For a name that is neither a parameter of the walker nor ``"slope"``.
+        For a name that is neither a parameter of the walker, ``"slope"``, nor one of the
+        actuation's, or a name given twice.
     StepFailedError
         If the step does not complete (:class:`UnscheduledStepError`, a subclass: it
         completes, but with a phase of its schedule skipped, or the variational equations

@@ -145,12 +145,18 @@ def test_errors() -> None:
 
 
 # -- a 30-digit reference: independent Lagrangian, Gragg-Bulirsch-Stoer in mpmath -----------------
-def _mp_compass_step_map(walker: CompassGait, slope_deg: float) -> Any:
+def _mp_compass_step_map(walker: CompassGait, slope_deg: float, *, pd: Any = None,
+                         impulse: float = 0.0) -> Any:
     """The compass gait's step map in 30-digit arithmetic, derived here from its Lagrangian
     (sympy; the stance foot's arc of radius ``R`` rolls: its centre at ``(-R q3, R)``),
     integrated by Gragg-Bulirsch-Stoer extrapolation (order 18, macro step 1/40 s), the heel
     strike ``2 q3 + q4 = 0`` located by ``mpmath.findroot`` and resolved by the inert impact
-    with the swing foot's rolling-contact Jacobian in floating-base coordinates."""
+    with the swing foot's rolling-contact Jacobian in floating-base coordinates.
+
+    Actuated: ``pd = (kp, kd, A)`` adds the hip torque ``u = kp (-2 A - q4) - kd q4_dot``
+    (unsaturated) to the ``q4`` equation (``B = e4``; the stance foot's rolling leaves it
+    there); ``impulse`` ``p`` adds, just before the strike, ``M^-1 A_st^T p e(q3)`` to the
+    velocities, ``A_st`` the stance foot's rolling-contact Jacobian, ``e = (-sin, cos)``."""
     import mpmath as mp
     import sympy as sp
 
@@ -176,15 +182,25 @@ def _mp_compass_step_map(walker: CompassGait, slope_deg: float) -> Any:
         + inertia * (w3**2 + (w3 + w4) ** 2) / 2
     V = sum(mi * g * (sp.sin(gam) * r[0] + sp.cos(gam) * r[1]) for mi, r in points)
     pinned = {x: -R * q3, y: R, xd: -R * w3, yd: 0}  # rolling without slip
+    if pd is not None:
+        kp, kd, amp = (sp.nsimplify(repr(float(v))) for v in pd)
+        hip_torque = sp.Matrix([0, kp * (-2 * amp - q4) - kd * w4])
+    else:
+        hip_torque = sp.zeros(2, 1)
     T2, V2 = T.subs(pinned), V.subs(pinned)
     th, om = [q3, q4], [w3, w4]
     M2 = sp.hessian(T2, om)
     rhs = -(sp.Matrix([sp.diff(T2, o) for o in om]).jacobian(th) * sp.Matrix(om)
-            - sp.Matrix([sp.diff(T2, t) for t in th]) + sp.Matrix([sp.diff(V2, t) for t in th]))
+            - sp.Matrix([sp.diff(T2, t) for t in th]) + sp.Matrix([sp.diff(V2, t) for t in th])) \
+        + hip_torque
     f_M2 = sp.lambdify((q3, q4), list(M2), "mpmath", cse=True)
     f_rhs = sp.lambdify((q3, q4, w3, w4, gam), list(rhs), "mpmath", cse=True)
     f_M = sp.lambdify((q3, q4), sp.hessian(T, qd).subs(pinned), "mpmath")
     f_A = sp.lambdify((q3, q4), (swing_centre.jacobian(q) + roll).subs(pinned), "mpmath")
+    roll_stance = sp.Matrix([[0, 0, R, 0], [0, 0, 0, 0]])
+    f_As = sp.lambdify((q3, q4), (sp.Matrix([x, y]).jacobian(q) + roll_stance).subs(pinned),
+                       "mpmath")
+    p_mp = mp.mpf(repr(float(impulse)))
     gamma = mp.radians(slope_deg)
     R_mp = mp.mpf(float(walker.foot_radius))
 
@@ -221,6 +237,9 @@ def _mp_compass_step_map(walker: CompassGait, slope_deg: float) -> Any:
         s = gbs(nodes[-1], t_e - base)
         M, A = mp.matrix(f_M(s[0], s[1])), mp.matrix(f_A(s[0], s[1]))
         v = mp.matrix([-R_mp * s[2], 0, s[2], s[3]])
+        if impulse:
+            push = mp.matrix([-mp.sin(s[0]), mp.cos(s[0])]) * p_mp
+            v = v + M**-1 * (mp.matrix(f_As(s[0], s[1])).T * push)
         MiAt = M**-1 * A.T
         vp = v - MiAt * mp.lu_solve(A * MiAt, A * v)
         return [s[0] + s[1], vp[2] + vp[3], -vp[3]]  # relabelled: (q3, q3_dot, q4_dot)
@@ -269,3 +288,219 @@ def test_passive_gait_multipliers_are_exact_by_default() -> None:
     central = floquet_multipliers(pmap.jacobian(cycle.fixed_point))
     assert np.allclose(cycle.multipliers, exact, rtol=0, atol=1e-13)
     assert not np.allclose(cycle.multipliers, central, rtol=0, atol=1e-13)
+
+
+# -- actuated steps: a torque law's derivatives in the variational equations, the push-off in
+# the heel strike's reset, actuation parameters as zero-rate states ------------------------------
+Z_POWERED = [-0.2, 1.0, -0.4]
+
+
+def _actuated_map(walker: CompassGait, torque: Any, push: Any) -> PoincareMap:
+    return PoincareMap(walker=walker, slope=0.0, torque=torque, push_off=push, rtol=1e-12,
+                       atol=1e-12)
+
+
+def _law_column(walker: CompassGait, torque: Any, push: Any, name: str, z: Any) -> np.ndarray:
+    """``dP/da`` by central differences (step 1e-6 relative) of the map with the actuation's
+    parameter ``a = name`` changed."""
+    import dataclasses
+
+    owner = push if name == "impulse" else torque
+    a = float(getattr(owner, name))
+    h = 1e-6 * max(1.0, abs(a))
+    changed = [dataclasses.replace(owner, **{name: a + s}) for s in (h, -h)]
+    maps = [_actuated_map(walker, torque, c) if name == "impulse"
+            else _actuated_map(walker, c, push) for c in changed]
+    return np.asarray((maps[0](z) - maps[1](z)) / (2.0 * h))
+
+
+@pytest.mark.parametrize("R", [0.0, 0.3])
+def test_hip_pd_step_jacobian_matches_central_differences(R: float) -> None:
+    """A compass step driven by the swing-leg PD law (the torque's derivatives in ``q4``,
+    ``q4_dot`` and in its amplitude and gains enter the variational equations): ``DP`` and
+    ``dP/d(A, kp, kd)`` agree with central differences of the map."""
+    from heelstrike.dynamics.actuation import SwingLegPD
+
+    walker = CompassGait(foot_radius=R)
+    law = SwingLegPD(amplitude=0.2)
+    names = ("amplitude", "kp", "kd")
+    res = step_jacobian(walker, Z_POWERED, slope=0.0, torque=law, parameters=names,
+                        rtol=1e-12, atol=1e-12)
+    pmap = _actuated_map(walker, law, None)
+    assert np.allclose(res.z_next, pmap(Z_POWERED), atol=1e-10)
+    assert np.max(np.abs(res.jacobian - pmap.jacobian(Z_POWERED, 1e-6))) < 1e-7
+    passive = PoincareMap(walker=walker, slope=0.0, rtol=1e-12, atol=1e-12)
+    assert np.max(np.abs(res.jacobian - passive.jacobian(Z_POWERED, 1e-6))) > 0.1  # the law acts
+    for i, name in enumerate(names):
+        column = _law_column(walker, law, None, name, Z_POWERED)
+        assert np.max(np.abs(res.parameter_jacobian[:, i] - column)) < 1e-7, name
+    assert np.max(np.abs(res.parameter_jacobian[:, 0])) > 0.1
+
+
+def test_push_off_step_jacobian_matches_central_differences() -> None:
+    """A compass step with a push-off impulse (its Jacobian in the state and in the impulse in
+    the heel strike's reset), parameters in the caller's order (``impulse`` after a walker
+    parameter)."""
+    walker = CompassGait(foot_radius=0.3)
+    push = PushOff(impulse=3.0)
+    res = step_jacobian(walker, Z_POWERED, slope=0.0, push_off=push,
+                        parameters=("leg_mass", "impulse"), rtol=1e-12, atol=1e-12)
+    pmap = _actuated_map(walker, None, push)
+    scale = max(1.0, float(np.max(np.abs(res.jacobian))))  # entries up to ~19 here
+    assert np.max(np.abs(res.jacobian - pmap.jacobian(Z_POWERED, 1e-6))) < 1e-7 * scale
+    column = _law_column(walker, None, push, "impulse", Z_POWERED)
+    assert np.max(np.abs(res.parameter_jacobian[:, 1] - column)) < 1e-7
+    assert np.max(np.abs(column)) > 1e-2
+    alone = step_jacobian(walker, Z_POWERED, slope=0.0, push_off=push, parameters=("leg_mass",),
+                          rtol=1e-12, atol=1e-12)
+    assert np.allclose(res.parameter_jacobian[:, 0], alone.parameter_jacobian[:, 0],
+                       rtol=0, atol=1e-12)
+
+
+def test_energy_tracking_and_saturated_laws_match_central_differences() -> None:
+    """The energy-tracking law (``E = T + V`` from the generated equations) with its target
+    and gain, and a sum of laws saturated for part of the step (the constant torque has no
+    derivative there), against central differences."""
+    from heelstrike.dynamics.actuation import EnergyTracking, SwingLegPD, mechanical_energy
+
+    walker = CompassGait()
+    E0 = float(mechanical_energy(walker, *walker.section_to_state(np.array(Z_POWERED))))
+    law = EnergyTracking(walker=walker, energy=E0 + 2.0)
+    res = step_jacobian(walker, Z_POWERED, slope=0.0, torque=law,
+                        parameters=("gain", "energy"), rtol=1e-12, atol=1e-12)
+    pmap = _actuated_map(walker, law, None)
+    assert np.max(np.abs(res.jacobian - pmap.jacobian(Z_POWERED, 1e-6))) < 1e-7
+    for i, name in enumerate(("gain", "energy")):
+        column = _law_column(walker, law, None, name, Z_POWERED)
+        assert np.max(np.abs(res.parameter_jacobian[:, i] - column)) < 1e-7, name
+    both = law + SwingLegPD(amplitude=0.2, kp=50.0, max_torque=8.0)
+    sat = step_jacobian(walker, Z_POWERED, slope=0.0, torque=both, rtol=1e-12, atol=1e-12)
+    central = _actuated_map(walker, both, None).jacobian(Z_POWERED, 1e-6)
+    assert np.max(np.abs(sat.jacobian - central)) < 1e-6
+    assert np.max(np.abs(sat.jacobian - res.jacobian)) > 0.1
+
+
+def test_unknown_actuation_parameter_is_refused() -> None:
+    from heelstrike.dynamics.actuation import SwingLegPD
+
+    with pytest.raises(ValueError, match=r"'impulse' is not a parameter of CompassGait "
+                                         r".*; its actuation's: amplitude"):
+        step_jacobian(CompassGait(), Z_POWERED, slope=0.0, torque=SwingLegPD(amplitude=0.2),
+                      parameters=("impulse",))
+    # the documented parameters are those differentiated
+    from heelstrike.dynamics.actuation import EnergyTracking
+    from heelstrike.dynamics.variational import ACTUATION_PARAMETERS, _Actuation
+
+    walker = CompassGait()
+    for torque, push in ((SwingLegPD(amplitude=0.2), None), (None, PushOff(impulse=1.0)),
+                         (EnergyTracking(walker=walker, energy=150.0), None)):
+        owner = push if torque is None else torque
+        assert tuple(_Actuation.of(torque, push, ()).values) == \
+            ACTUATION_PARAMETERS[type(owner).__name__]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("R", "actuation"), [(0.3, "pd"), (0.0, "push"), (0.3, "push")])
+def test_actuated_exact_jacobian_matches_30_digit_reference(R: float, actuation: str) -> None:
+    """The actuated step's exact Jacobian (rtol = atol = 1e-13) against central differences
+    (steps 1e-10) of the 30-digit step map derived independently with the hip PD torque or the
+    push-off, to 1e-10."""
+    import mpmath as mp
+
+    from heelstrike.dynamics.actuation import SwingLegPD
+
+    walker = CompassGait(foot_radius=R)
+    law = SwingLegPD(amplitude=0.2, max_torque=np.inf) if actuation == "pd" else None
+    push = PushOff(impulse=3.0) if actuation == "push" else None
+    res = step_jacobian(walker, Z_POWERED, slope=0.0, torque=law, push_off=push,
+                        rtol=1e-13, atol=1e-13)
+    with mp.workdps(30):
+        step = _mp_compass_step_map(
+            walker, 0.0, pd=None if law is None else (law.kp, law.kd, law.amplitude),
+            impulse=0.0 if push is None else push.impulse)
+        zm = [mp.mpf(repr(v)) for v in Z_POWERED]
+        t_e = res.event_times[-1]
+        delta = mp.mpf("1e-10")
+        ref = np.empty((3, 3))
+        for k in range(3):
+            zp, zn = list(zm), list(zm)
+            zp[k] += delta
+            zn[k] -= delta
+            ref[:, k] = [float((a - c) / (2 * delta))
+                         for a, c in zip(step(zp, t_e), step(zn, t_e), strict=True)]
+        assert np.allclose([float(c) for c in step(zm, t_e)], res.z_next, atol=1e-11)
+    assert np.max(np.abs(res.jacobian - ref)) < 1e-10  # measured 2e-13 to 3.5e-12
+
+
+@pytest.fixture(scope="module")
+def powered_gaits() -> dict[str, Any]:
+    from heelstrike.analysis.powered import find_powered_gait
+
+    walker = CompassGait(foot_radius=0.3)
+    return {act: find_powered_gait(walker, actuation=act, speed=0.5)
+            for act in ("hip-pd", "pushoff")}
+
+
+@pytest.mark.parametrize("actuation", ["hip-pd", "pushoff"])
+def test_powered_gait_multipliers_are_exact_and_agree_with_differences(
+        powered_gaits: dict[str, Any], actuation: str) -> None:
+    """A powered gait's multipliers come from the exact Jacobian by default, and agree with
+    those of central differences (the former default) to 1e-6."""
+    from heelstrike.analysis.powered import _Problem, _section_jacobian, actuation_family
+
+    gait = powered_gaits[actuation]
+    walker = CompassGait(foot_radius=0.3)
+    prob = _Problem(walker=walker, family=actuation_family(actuation), target="speed",
+                    rtol=1e-10, atol=1e-10)
+    x = np.append(gait.fixed_point, gait.actuation.parameter)
+    DP, kind = _section_jacobian(prob, x, 1e-6)
+    central, kind_c = _section_jacobian(prob, x, 1e-6, "central")
+    assert (kind, kind_c) == ("exact", "central")
+    np.testing.assert_array_equal(gait.multipliers, floquet_multipliers(DP))
+    np.testing.assert_allclose(gait.multipliers, floquet_multipliers(central), rtol=0,
+                               atol=1e-6)
+    # the exact Jacobian is the limit of the differences, not a copy of them
+    assert 0.0 < np.max(np.abs(DP - central)) < 1e-5
+
+
+def test_powered_limit_cycle_newton_runs_on_the_exact_jacobian(
+        powered_gaits: dict[str, Any]) -> None:
+    """``find_limit_cycle`` with the hip PD law of a powered gait: Newton on the exact
+    Jacobian (built-in laws are differentiable), to the same fixed point."""
+    from heelstrike.analysis.limit_cycle import _exact_newton_ok
+    from heelstrike.analysis.powered import actuation_family
+
+    gait = powered_gaits["hip-pd"]
+    walker = CompassGait(foot_radius=0.3)
+    law, _ = actuation_family("hip-pd").build(walker, gait.actuation.parameter)
+    assert _exact_newton_ok(PoincareMap(walker=walker, slope=0.0, torque=law))
+    cycle = find_limit_cycle(walker, slope=0.0, torque=law, guess=gait.fixed_point + 1e-3)
+    assert cycle.newton_jacobian == "exact"
+    np.testing.assert_allclose(cycle.fixed_point, gait.fixed_point, rtol=0, atol=1e-7)
+    np.testing.assert_allclose(cycle.multipliers, gait.multipliers, rtol=0, atol=1e-6)
+
+
+@pytest.mark.parametrize(("actuation", "names"), [("hip-pd", ("amplitude", "kd", "leg_mass")),
+                                                  ("pushoff", ("impulse",))])
+def test_powered_gait_sensitivity_to_actuation_parameters(
+        powered_gaits: dict[str, Any], actuation: str, names: tuple[str, ...]) -> None:
+    """``gait_sensitivity`` of a powered gait in its actuation's amplitude, gain or impulse
+    (and a walker parameter): exact, and equal to central differences of the map."""
+    from heelstrike.analysis.powered import actuation_family
+    from heelstrike.analysis.sensitivity import gait_sensitivity
+
+    gait = powered_gaits[actuation]
+    walker = CompassGait(foot_radius=0.3)
+    law, push = actuation_family(actuation).build(walker, gait.actuation.parameter)
+    kw: dict[str, Any] = {"slope": 0.0, "torque": law, "push_off": push, "multipliers": False}
+    exact = gait_sensitivity(walker, gait.fixed_point, names, **kw)
+    central = gait_sensitivity(walker, gait.fixed_point, names, method="central", **kw)
+    assert all(exact.exact) and not any(central.exact)
+    scale = np.maximum(1.0, np.abs(exact.fixed_point))
+    assert np.max(np.abs(exact.fixed_point - central.fixed_point) / scale) < 1e-6
+    assert np.max(np.abs(exact.fixed_point)) > 1e-2
+    for key in ("period", "speed", "step_length"):
+        np.testing.assert_allclose(exact.quantities[key], central.quantities[key], rtol=1e-5,
+                                   atol=1e-7)
+    with pytest.raises(ValueError, match="its actuation's"):
+        gait_sensitivity(walker, gait.fixed_point, ("nonsense",), **kw)

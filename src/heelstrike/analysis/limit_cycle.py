@@ -588,16 +588,20 @@ def _check_jacobian(jacobian: str) -> None:
 
 
 def _exact_newton_ok(pmap: PoincareMap) -> bool:
-    """Whether Newton can run on the exact Jacobian of ``pmap``: a passive walk (as
-    :func:`_multiplier_jacobian`: a torque law need not take complex states) on the scipy
-    reference (``method="scipy"``, no simulator or the scipy one) of one walker whose period is
-    one step (:func:`~heelstrike.dynamics.variational.step_jacobian` differentiates one step).
+    """Whether Newton can run on the exact Jacobian of ``pmap``: a passive walk, or one
+    actuated by a push-off impulse and the built-in torque laws
+    (:func:`~heelstrike.dynamics.variational.actuation_differentiable`: a user's law need not
+    take complex states), on the scipy reference (``method="scipy"``, no simulator or the
+    scipy one) of one walker whose period is one step
+    (:func:`~heelstrike.dynamics.variational.step_jacobian` differentiates one step).
     Whether the walker's equations can be differentiated is found at the first iterate."""
+    from heelstrike.dynamics.variational import actuation_differentiable
+
     sim = pmap.simulator
     reference = sim is None or sim is simulate or (
         isinstance(sim, BoundSimulator) and sim.backend == "scipy")
-    passive = pmap.torque is None and pmap.push_off is None
-    return (pmap.method == "scipy" and reference and passive
+    return (pmap.method == "scipy" and reference
+            and actuation_differentiable(pmap.torque, pmap.push_off)
             and pmap.walker.steps_per_period == 1 and not pmap.walker.is_batched)
 
 

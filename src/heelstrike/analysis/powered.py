@@ -1567,19 +1567,49 @@ def _books_refined(
     return refined if books_gap(refined) < gap else gait
 
 
-def _section_jacobian(prob: _Problem, x: FloatArray, fd_step: float) -> FloatArray:
-    """``DP``, shape (d, d): the step map's Jacobian in the section point at ``x`` (shape
-    (d + 1,), the parameter held), by central differences (``2 d`` steps) with the relative
-    step ``max(fd_step, sqrt(rtol))`` (it balances truncation ``~h^2`` and integration noise
-    ``~rtol / h``)."""
+def _section_jacobian(prob: _Problem, x: FloatArray, fd_step: float,
+                      jacobian: Literal["exact", "central"] = "exact"
+                      ) -> tuple[FloatArray, str]:
+    """``(DP, kind)``: ``DP``, shape (d, d), the step map's Jacobian in the section point at
+    ``x`` (shape (d + 1,), the parameter held), and how it was formed.
+
+    ``jacobian="exact"`` (default): exact (``kind = "exact"``) where
+    :func:`~heelstrike.dynamics.variational.step_jacobian` applies (a walker with generated
+    equations and one step per period, a push-off impulse and the built-in torque laws:
+    :func:`~heelstrike.dynamics.variational.actuation_differentiable`): variational equations
+    with the torque law's derivatives and the push-off in the heel strike's reset, on the
+    scipy reference at the problem's tolerances (the same map as the compiled backend's, to
+    its integration tolerance). Elsewhere, and for ``"central"``: central differences
+    (``kind = "central"``, ``2 d`` steps) with the relative step ``max(fd_step, sqrt(rtol))``
+    (it balances truncation ``~h^2`` and integration noise ``~rtol / h``)."""
     d = x.size - 1
+    if jacobian == "exact":
+        from heelstrike.core.saltation import GrazingEventError
+        from heelstrike.dynamics.variational import (
+            ExactJacobianUnavailable,
+            StepFailedError,
+            actuation_differentiable,
+            step_jacobian,
+        )
+
+        torque, push = prob.family.build(prob.walker, float(x[-1]))
+        walker = prob.walker
+        if (actuation_differentiable(torque, push) and walker.steps_per_period == 1
+                and not walker.is_batched):
+            try:
+                sj = step_jacobian(walker, x[:-1], slope=prob.slope, torque=torque,
+                                   push_off=push, rtol=prob.rtol, atol=prob.atol)
+            except (ExactJacobianUnavailable, GrazingEventError, StepFailedError):
+                pass  # central differences below (a wheel's grazing trailing foot...)
+            else:
+                return np.asarray(sj.jacobian), "exact"
     h = max(fd_step, float(np.sqrt(prob.rtol)))
     DP = np.empty((d, d))
     for i in range(d):
         dz = np.zeros(d + 1)
         dz[i] = h * max(1.0, abs(x[i]))
         DP[:, i] = (prob.step(x + dz).z_next - prob.step(x - dz).z_next) / (2.0 * dz[i])
-    return DP
+    return DP, "central"
 
 
 def _characterise(
@@ -1587,11 +1617,12 @@ def _characterise(
 ) -> Gait:
     """The gait at ``x`` on the accurate map: books, and multipliers of ``DP``.
 
-    ``DP`` by central differences (``2 d`` steps), step ``max(fd_step, sqrt(rtol))`` times
-    ``max(1, |x_i|)``: truncation ``~h^2``, integration noise ``~rtol / h``, multipliers to
-    about 1e-6. (Forward differences from the gait's own step, ``d`` steps fewer, erred by
-    up to 5e-3 on slow gaits, whose section coordinates are small against the step, and
-    called stable gaits unstable: QA sweep 5.)
+    ``DP`` exact where :func:`_section_jacobian` can form it (variational equations through
+    the torque law and the push-off), else by central differences (``2 d`` steps), step
+    ``max(fd_step, sqrt(rtol))`` times ``max(1, |x_i|)``: truncation ``~h^2``, integration
+    noise ``~rtol / h``, multipliers to about 1e-6. (Forward differences from the gait's own
+    step, ``d`` steps fewer, erred by up to 5e-3 on slow gaits, whose section coordinates are
+    small against the step, and called stable gaits unstable: QA sweep 5.)
     """
     from heelstrike.dynamics.phased import PhasedWalkResult
 
@@ -1600,7 +1631,7 @@ def _characterise(
     rec = st.record
     assert rec is not None and st.ok
     z = x[:-1]
-    DP = _section_jacobian(prob, x, fd_step)
+    DP, _ = _section_jacobian(prob, x, fd_step)
     mult = floquet_multipliers(DP)
     m, g, _ = _scale(walker)
     L = rec.step_length

@@ -17,6 +17,10 @@ no Newton solve), the check of the exact ones; so does the exact method for a pa
 cannot be differentiated exactly (one the walker's equations do not take as one of their
 parameters, or one that moves a lock angle: see
 :func:`~heelstrike.dynamics.variational.step_jacobian`), for that parameter's column only.
+A powered gait (``torque``, ``push_off``) is differentiated the same way, in its walker's
+parameters and in its actuation's (the push-off impulse, a hip law's gains and amplitude:
+:data:`~heelstrike.dynamics.variational.ACTUATION_PARAMETERS`), exactly: the torque law's
+derivatives enter the variational equations and the impulse the heel strike's reset.
 The Floquet multipliers ``lambda_i`` (eigenvalues of ``D_z P`` with right and left eigenvectors
 ``v_i``, ``w_i``) move by ``d lambda_i = w_i^H (d D_z P) v_i / (w_i^H v_i)``, with
 ``d D_z P / dp`` central differences of the exact Jacobian along the gait,
@@ -26,7 +30,7 @@ The Floquet multipliers ``lambda_i`` (eigenvalues of ``D_z P`` with right and le
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, is_dataclass, replace
 from typing import Any, Literal
 
 import numpy as np
@@ -35,6 +39,8 @@ from numpy.typing import NDArray
 from heelstrike._results import ResultDictMixin
 from heelstrike._typing import FloatArray
 from heelstrike.analysis.limit_cycle import PoincareMap
+from heelstrike.dynamics.actuation import PushOff
+from heelstrike.dynamics.single_support import TorqueLaw
 from heelstrike.models.base import PlanarWalker
 
 __all__ = ["GAIT_QUANTITY_UNITS", "GaitSensitivity", "gait_sensitivity"]
@@ -101,11 +107,29 @@ def _quantities(pmap: PoincareMap, z: FloatArray) -> FloatArray:
     return np.array([T, L, L / T, loss, loss / L])
 
 
+def _changed_law(law: Any, name: str, value: float) -> Any:
+    """Torque law or push-off ``law`` with its parameter ``name`` set to ``value`` (in every
+    law of a :class:`~heelstrike.dynamics.actuation.TorqueSum` that has it)."""
+    from heelstrike.dynamics.actuation import TorqueSum
+
+    if isinstance(law, TorqueSum):
+        return replace(law, laws=tuple(_changed_law(part, name, value) for part in law.laws))
+    if is_dataclass(law) and name in {f.name for f in fields(law)}:
+        return replace(law, **{name: value})  # type: ignore[type-var]
+    return law
+
+
 def _changed_map(pmap: PoincareMap, name: str, value: float) -> PoincareMap:
-    """``pmap`` with parameter ``name`` (or ``"slope"``) set to ``value``."""
+    """``pmap`` with parameter ``name`` (a walker parameter, ``"slope"``, or a parameter of
+    its actuation: the push-off's ``"impulse"``, a torque law's gain or amplitude) set to
+    ``value``."""
     if name == "slope":
         return replace(pmap, slope=value)
-    return replace(pmap, walker=pmap.walker.replace(**{name: value}))
+    if name in pmap.walker.parameters:
+        return replace(pmap, walker=pmap.walker.replace(**{name: value}))
+    if name == "impulse" and pmap.push_off is not None:
+        return replace(pmap, push_off=_changed_law(pmap.push_off, "impulse", value))
+    return replace(pmap, torque=_changed_law(pmap.torque, name, value))
 
 
 def _stencil(pmap: PoincareMap, name: str, p: float, h: float
@@ -128,13 +152,16 @@ def gait_sensitivity(
     parameters: Sequence[str],
     *,
     slope: float,
+    torque: TorqueLaw | None = None,
+    push_off: PushOff | None = None,
     method: Literal["exact", "central"] = "exact",
     rel_step: float = 1e-5,
     rtol: float = 1e-12,
     atol: float = 1e-12,
     multipliers: bool = True,
 ) -> GaitSensitivity:
-    """Sensitivities of a passive gait to walker parameters (implicit function theorem).
+    """Sensitivities of a gait, passive or powered, to walker and actuation parameters
+    (implicit function theorem).
 
     Parameters
     ----------
@@ -145,10 +172,19 @@ def gait_sensitivity(
         The gait's fixed point ``z*`` (e.g. the ``fixed_point`` of a
         :class:`~heelstrike.analysis.gaits.Gait`), converged at about ``rtol``.
     parameters : sequence of str
-        Names in :attr:`~heelstrike.models.base.PlanarWalker.parameters` (SI units), or
-        ``"slope"`` (rad).
+        Names in :attr:`~heelstrike.models.base.PlanarWalker.parameters` (SI units),
+        ``"slope"`` (rad), or parameters of the actuation
+        (:data:`~heelstrike.dynamics.variational.ACTUATION_PARAMETERS`: the push-off's
+        ``"impulse"``, N s; a hip PD law's ``"amplitude"``, ``"kp"``, ``"kd"``; an
+        energy-tracking law's ``"energy"``, ``"gain"``). A walker parameter's name takes
+        precedence. The torque law is held fixed when a walker parameter changes (an
+        energy-tracking law keeps its own walker's energy).
     slope : float
         Ground slope (rad).
+    torque : TorqueLaw, optional
+        The gait's torque law (:mod:`heelstrike.dynamics.actuation`).
+    push_off : PushOff, optional
+        The gait's push-off impulse before heel strike.
     method : {"exact", "central"}
         ``"exact"`` (default): ``dP/dp`` and the quantities' partial derivatives in ``z`` and
         ``p`` by the variational equations
@@ -173,35 +209,43 @@ def gait_sensitivity(
     Raises
     ------
     ValueError
-        For a name that is not a parameter of the walker (nor ``"slope"``), an unknown
-        ``method``, or a step that fails.
+        For a name that is not a parameter of the walker (nor ``"slope"``, nor one of the
+        actuation's), an unknown ``method``, or a step that fails.
     """
     from heelstrike.dynamics.variational import (
         ExactJacobianUnavailable,
+        _Actuation,
         _parameter_entry,
         step_jacobian,
     )
 
     names = tuple(parameters)
     known = walker.parameters
+    acting = _Actuation.of(torque, push_off, ()).values  # the actuation's parameters
     for name in names:
-        if name not in known and name != "slope":
+        if name not in known and name != "slope" and name not in acting:
+            theirs = f"; its actuation's: {', '.join(acting)}" if acting else ""
             raise ValueError(f"{name!r} is not a parameter of {type(walker).__name__} "
-                             f"(its parameters: {', '.join(known)}, or 'slope')")
+                             f"(its parameters: {', '.join(known)}, or 'slope'{theirs})")
     if method not in ("exact", "central"):
         raise ValueError(f"method must be 'exact' or 'central', not {method!r}")
     z = np.asarray(fixed_point, dtype=float)
     d = z.size
-    pmap = PoincareMap(walker=walker, slope=slope, rtol=rtol, atol=atol)
+    pmap = PoincareMap(walker=walker, slope=slope, torque=torque, push_off=push_off,
+                       rtol=rtol, atol=atol)
     exact_names: list[str] = []
     if method == "exact":
         for name in names:
+            if name not in known and name != "slope":  # the actuation's: exact
+                exact_names.append(name)
+                continue
             try:
                 _parameter_entry(walker, name)
             except ExactJacobianUnavailable:
                 continue
             exact_names.append(name)
-    sj = step_jacobian(walker, z, slope=slope, parameters=exact_names, rtol=rtol, atol=atol)
+    sj = step_jacobian(walker, z, slope=slope, torque=torque, push_off=push_off,
+                       parameters=exact_names, rtol=rtol, atol=atol)
     DP = sj.jacobian
     lam, V = np.linalg.eig(DP)
     order = np.argsort(-np.abs(lam), kind="stable")
@@ -220,7 +264,8 @@ def gait_sensitivity(
                         / (2.0 * hz[i]) for i, e in enumerate(np.eye(d))], axis=-1)
         values = _quantities(pmap, z)
     for k, name in enumerate(names):
-        p = float(slope) if name == "slope" else float(np.asarray(known[name]))
+        p = (float(slope) if name == "slope" else float(np.asarray(known[name]))
+             if name in known else acting[name])
         h = rel_step * max(1.0, abs(p))
         stencil = _stencil(pmap, name, p, h)
         if name in exact_names:

@@ -36,6 +36,17 @@ parameters (zero rate): ``step_jacobian(..., parameters=("foot_radius", "slope")
 step quantities' partial derivatives (period, step length, speed, collision loss, ``eta``)
 in ``z`` and ``p``.
 
+An actuated step is differentiated the same way. A smooth torque law
+``u = tau(t, q, q_dot; a)`` enters ``F`` as ``B u`` (``B`` the walker's
+:meth:`~heelstrike.models.base.PlanarWalker.actuation_matrix`), so its derivatives in
+``(q, q_dot)`` enter ``D_x F`` and those in its parameters ``a`` (gains, amplitude, target
+energy: :data:`ACTUATION_PARAMETERS`) the parameter columns; the built-in laws
+(:mod:`heelstrike.dynamics.actuation`) are evaluated here without their cast to float,
+saturation by the real part (outside the limit the torque is constant: no derivative). A
+push-off impulse ``p`` just before the heel strike is part of the reset ``H``
+(``q_dot -> q_dot + P_a M^-1 A_st^T p e(q3)``, then the impact), so ``DH`` carries its
+state derivative and ``p`` is one more parameter (``"impulse"``).
+
 The *naive* product (reset Jacobians times flow Jacobians, ``Xi`` replaced by ``D Delta`` and
 ``Pi_h`` by the identity) is returned too: it is wrong (it ignores that moving the initial
 state moves the event times), and shows how much the saltation terms matter.
@@ -47,7 +58,7 @@ import types
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -61,11 +72,13 @@ from heelstrike.models.base import PlanarWalker
 from heelstrike.models.schedule import Phase
 
 __all__ = [
+    "ACTUATION_PARAMETERS",
     "COMPLEX_STEP",
     "ExactJacobianUnavailable",
     "StepFailedError",
     "StepJacobian",
     "UnscheduledStepError",
+    "actuation_differentiable",
     "step_jacobian",
 ]
 
@@ -353,20 +366,216 @@ def _inert_impact(M: _ComplexArray, A: _ComplexArray, qd: _ComplexArray,
     return np.asarray(qd - (1.0 + restitution) * (MiAt @ lam))
 
 
+# -- actuation: torque laws and the push-off, complex-capable ---------------------------------
+#: The parameters of the built-in actuation that :func:`step_jacobian` differentiates in, by the
+#: class that has them (the push-off's impulse; the hip laws' gains and amplitudes).
+ACTUATION_PARAMETERS: dict[str, tuple[str, ...]] = {
+    "PushOff": ("impulse",),
+    "SwingLegPD": ("amplitude", "kp", "kd"),
+    "EnergyTracking": ("energy", "gain"),
+}
+
+#: A complex-capable torque law with its parameters: ``(t, q, q_dot, values) -> u``, shapes
+#: (..., n), (..., n), a dict of name to (...) arrays, (..., n_u).
+_LawTerm = Callable[[float, _ComplexArray, _ComplexArray, dict[str, Any]], _ComplexArray]
+
+
+def _saturated(u: _ComplexArray, limit: float) -> _ComplexArray:
+    """``sat(u)`` by the real part: ``u`` inside the limit (its complex-step derivative
+    kept), the constant ``+-limit`` outside (derivative zero)."""
+    re = np.real(u)
+    if not np.isfinite(limit):
+        return u
+    return np.where(np.abs(re) > limit, np.sign(re) * limit, u)
+
+
+def _law_term(law: Any) -> tuple[dict[str, float], _LawTerm]:
+    """The built-in torque laws (:mod:`heelstrike.dynamics.actuation`) written again without
+    casting to float (their own ``__call__`` does), with their parameters as inputs; any
+    other law is called as it is (row by row on a batch: a
+    :class:`~heelstrike.dynamics.single_support.TorqueLaw` takes one state) and must take
+    complex states itself.
+
+    Returns ``(parameters, term)``: the law's parameters that can be differentiated in (names
+    of :data:`ACTUATION_PARAMETERS`, nominal values) and the complex-capable law.
+    """
+    from heelstrike.dynamics.actuation import (
+        CustomTorque,
+        EnergyTracking,
+        SwingLegPD,
+        TorqueSum,
+    )
+
+    if isinstance(law, SwingLegPD):
+        j, limit = law.joint, float(law.max_torque)
+
+        def pd(t: float, q: _ComplexArray, qd: _ComplexArray, v: dict[str, Any]
+               ) -> _ComplexArray:
+            s = 1.0 if law.profile is None else float(law.profile(t))
+            u = v["kp"] * (-2.0 * v["amplitude"] * s - q[..., j]) - v["kd"] * qd[..., j]
+            return _saturated(np.asarray(u), limit)[..., None]
+
+        return {"amplitude": float(law.amplitude), "kp": float(law.kp),
+                "kd": float(law.kd)}, pd
+    if isinstance(law, EnergyTracking):
+        eq = _Equations.of(law.walker, float(law.slope))  # the law's walker, held fixed
+        potential = eq.fn("potential_energy")
+        j_e, limit_e = int(cast(int, law.joint)), float(law.max_torque)
+
+        def energy(t: float, q: _ComplexArray, qd: _ComplexArray, v: dict[str, Any]
+                   ) -> _ComplexArray:
+            M = eq.mass_matrix(q)
+            E = 0.5 * np.einsum("...i,...ij,...j->...", qd, M, qd) \
+                + np.asarray(potential(q, eq.params, eq.slope))
+            u = -v["gain"] * (E - v["energy"]) * qd[..., j_e]
+            return _saturated(np.asarray(u), limit_e)[..., None]
+
+        return {"energy": float(law.energy), "gain": float(law.gain)}, energy
+    if isinstance(law, TorqueSum):
+        parts = [_law_term(part) for part in law.laws]
+        names = [name for values, _ in parts for name in values]
+        shared = {name for name in names if names.count(name) > 1}
+        values = {name: value for vals, _ in parts for name, value in vals.items()
+                  if name not in shared}
+        limit_s = float(law.max_torque)
+
+        def total(t: float, q: _ComplexArray, qd: _ComplexArray, v: dict[str, Any]
+                  ) -> _ComplexArray:
+            u = sum(np.asarray(term(t, q, qd, {**vals, **{k: x for k, x in v.items()
+                                                           if k in vals}}))
+                    for vals, term in parts)
+            return _saturated(np.asarray(u), limit_s)
+
+        return values, total
+    if isinstance(law, CustomTorque):
+        limit_c = float(law.max_torque)
+
+        def custom(t: float, q: _ComplexArray, qd: _ComplexArray, v: dict[str, Any]
+                   ) -> _ComplexArray:
+            if q.ndim == 1:
+                u = np.asarray(law.function(t, q, qd))
+                u = u[None] if u.ndim == 0 else u
+            else:
+                u = np.stack([np.atleast_1d(np.asarray(law.function(t, a, b)))
+                              for a, b in zip(q, qd, strict=True)])
+            return _saturated(u, limit_c)
+
+        return {}, custom
+
+    def other(t: float, q: _ComplexArray, qd: _ComplexArray, v: dict[str, Any]
+              ) -> _ComplexArray:
+        if q.ndim == 1:
+            return np.asarray(law(t, q, qd))
+        return np.stack([np.asarray(law(t, a, b)) for a, b in zip(q, qd, strict=True)])
+
+    return {}, other
+
+
+def actuation_differentiable(torque: Any, push_off: Any) -> bool:
+    """Whether :func:`step_jacobian` differentiates this actuation by its own derivation.
+
+    True for no actuation, a :class:`~heelstrike.dynamics.actuation.PushOff` impulse and the
+    built-in torque laws (:class:`~heelstrike.dynamics.actuation.SwingLegPD`,
+    :class:`~heelstrike.dynamics.actuation.EnergyTracking`,
+    :class:`~heelstrike.dynamics.phased.TorsoPD` and sums of them), which are evaluated
+    complex-capable; False for any other law (a user function may still take complex states,
+    which :func:`step_jacobian` finds out when it tries).
+
+    Parameters
+    ----------
+    torque : TorqueLaw or None
+    push_off : PushOff or None
+
+    Returns
+    -------
+    bool
+    """
+    from heelstrike.dynamics.actuation import EnergyTracking, SwingLegPD, TorqueSum
+    from heelstrike.dynamics.actuation import PushOff as PushOffImpulse
+    from heelstrike.dynamics.phased import TorsoPD
+
+    def law_ok(law: Any) -> bool:
+        if isinstance(law, TorqueSum):
+            return all(law_ok(part) for part in law.laws)
+        return law is None or isinstance(law, (SwingLegPD, EnergyTracking, TorsoPD))
+
+    return law_ok(torque) and (push_off is None or isinstance(push_off, PushOffImpulse))
+
+
+@dataclass(frozen=True, kw_only=True)
+class _Actuation:
+    """The walk's torque law and push-off impulse, with the actuation parameters
+    differentiated in (``names``, nominal values ``nominal``): the last ``k`` entries of the
+    augmented state (zero rate, as the walker's parameters)."""
+
+    names: tuple[str, ...]
+    nominal: FloatArray
+    values: dict[str, float]
+    term: _LawTerm | None
+    impulse: float | None
+
+    @property
+    def k(self) -> int:
+        return len(self.names)
+
+    @classmethod
+    def of(cls, torque: Any, push_off: Any, names: tuple[str, ...],
+           walker: PlanarWalker | None = None) -> _Actuation:
+        """The actuation of a walk, its parameters ``names`` located.
+
+        Raises
+        ------
+        ValueError
+            For a name that is no parameter of this walk's actuation (nor of ``walker``,
+            which the message names).
+        """
+        values: dict[str, float] = {}
+        term = None
+        if torque is not None:
+            values, term = _law_term(torque)
+        impulse = None if push_off is None else float(push_off.impulse)
+        if impulse is not None:
+            values = {**values, "impulse": impulse}
+        for name in names:
+            if name not in values:
+                theirs = f"; its actuation's: {', '.join(values)}" if values else ""
+                whose = "the walker" if walker is None else type(walker).__name__
+                mine = "" if walker is None else f"its parameters: {', '.join(walker.parameters)}, "
+                raise ValueError(f"{name!r} is not a parameter of {whose} ({mine}or 'slope'"
+                                 f"{theirs})")
+        return cls(names=names, nominal=np.array([values[n] for n in names], dtype=float),
+                   values=values, term=term, impulse=impulse)
+
+    def at(self, a: _ComplexArray) -> dict[str, Any]:
+        """The actuation's parameter values with ``names`` set to ``a`` (..., k)."""
+        out: dict[str, Any] = dict(self.values)
+        for i, name in enumerate(self.names):
+            out[name] = a[..., i]
+        return out
+
+    def torque(self, t: float, q: _ComplexArray, qd: _ComplexArray, a: _ComplexArray
+               ) -> _ComplexArray | None:
+        """``u`` (..., n_u) at parameter values ``a`` (..., k); None without a torque law."""
+        if self.term is None:
+            return None
+        return np.asarray(self.term(t, q, qd, self.at(a)))
+
+
 # -- one phase ---------------------------------------------------------------------------------
 @dataclass(frozen=True, kw_only=True)
 class _PhaseField:
     """The reduced single-support field of one phase on the augmented state, complex-capable.
 
-    The augmented state is ``y = (theta, theta_dot, c, p)``, shape (..., 2 m + 1 + k): the
-    integrator state, the stance angle ``c`` at the step's start (the rolling stance foot's
-    arc centre is at ``x = R (c - theta)``) and the differentiated parameters ``p``; ``c`` and
-    ``p`` have zero rate, so the variational equations carry their columns (``dP/dp``).
+    The augmented state is ``y = (theta, theta_dot, c, p, a)``, shape
+    (..., 2 m + 1 + k + k_a): the integrator state, the stance angle ``c`` at the step's start
+    (the rolling stance foot's arc centre is at ``x = R (c - theta)``), the differentiated
+    walker parameters ``p`` and actuation parameters ``a``; ``c``, ``p`` and ``a`` have zero
+    rate, so the variational equations carry their columns (``dP/dp``).
     """
 
     support: SingleSupport
     par: _Parameters
-    torque: Any
+    act: _Actuation
     q_ref: FloatArray
 
     @property
@@ -380,7 +589,7 @@ class _PhaseField:
     def unpack(self, y: _ComplexArray) -> tuple[_ComplexArray, _ComplexArray, _Equations]:
         """Full ``(q, q_dot)``, shapes (..., n), and the equations at ``y``'s parameters."""
         free, m = self.free, self.m
-        eq = self.par.at(y[..., 2 * m + 1:])
+        eq = self.par.at(y[..., 2 * m + 1: 2 * m + 1 + self.par.k])
         R = eq.radii[0]
         dtype = np.result_type(y, float)
         q = np.broadcast_to(self.q_ref, (*y.shape[:-1], self.q_ref.size)).astype(dtype)
@@ -407,17 +616,14 @@ class _PhaseField:
         return np.concatenate((q[..., free], qd[..., free], rest), axis=-1)
 
     def __call__(self, t: float, y: _ComplexArray) -> _ComplexArray:
-        """``F(t, y) = (theta_dot, (J^T M J)^-1 J^T (B u - h), 0, 0)``, shape (..., N)."""
+        """``F(t, y) = (theta_dot, (J^T M J)^-1 J^T (B u - h), 0, 0, 0)``, shape (..., N),
+        ``u = tau(t, q, q_dot; a)`` the torque law."""
         m = self.m
         q, qd, eq = self.unpack(y)
         f = -eq.bias_forces(q, qd)
-        if self.torque is not None:
+        u = self.act.torque(t, q, qd, y[..., 2 * m + 1 + self.par.k:])
+        if u is not None:
             B = np.asarray(self.support.walker.actuation_matrix(), dtype=float)
-            if y.ndim == 1:
-                u = np.asarray(self.torque(t, q, qd))
-            else:  # a law takes one state (TorqueLaw): row by row
-                u = np.stack([np.asarray(self.torque(t, a, b)) for a, b in zip(q, qd,
-                                                                                  strict=True)])
             f = f + u @ B.T
         J = self.basis(eq, y.shape[:-1])
         Mr = np.einsum("...ia,...ij,...jb->...ab", J, eq.mass_matrix(q), J)
@@ -549,7 +755,9 @@ def step_jacobian(
     sensitivity is the event time's, ``dt = -grad g . dy / (grad g . f)``; the step length and
     the collision loss ``T_c`` (kinetic energy before minus after the inert impact:
     ``T_c`` of the split ``T = T_c + T_a``) are differentiated at the projected heel-strike
-    state. The torque law and the push-off impulse are held fixed.
+    state. Actuation parameters (``"impulse"`` of the push-off, a torque law's gains and
+    amplitude) are augmented states too: they enter the torque law in the variational
+    equations and the push-off in the heel strike's reset.
 
     Parameters
     ----------
@@ -561,13 +769,22 @@ def step_jacobian(
     slope : float
         Ground slope (rad).
     torque : TorqueLaw, optional
-        Actuator law (time since the step's start, ``q``, ``q_dot``); it must take complex
-        states (e.g. :class:`~heelstrike.dynamics.phased.TorsoPD`).
+        Actuator law (time since the step's start, ``q``, ``q_dot``). The built-in laws
+        (:class:`~heelstrike.dynamics.actuation.SwingLegPD`,
+        :class:`~heelstrike.dynamics.actuation.EnergyTracking`, their sums,
+        :class:`~heelstrike.dynamics.actuation.CustomTorque` of a complex-capable function,
+        :class:`~heelstrike.dynamics.phased.TorsoPD`) are differentiated here; any other
+        law must take complex states.
     push_off : PushOff, optional
         A :class:`~heelstrike.dynamics.actuation.PushOff` impulse before the heel strike.
     parameters : sequence of str
-        Names in :attr:`~heelstrike.models.base.PlanarWalker.parameters` (SI units), or
-        ``"slope"`` (rad), to differentiate in (default none).
+        Names in :attr:`~heelstrike.models.base.PlanarWalker.parameters` (SI units),
+        ``"slope"`` (rad), or parameters of the actuation (:data:`ACTUATION_PARAMETERS`:
+        ``"impulse"``, N s, with a push-off; ``"amplitude"`` rad, ``"kp"`` N m/rad, ``"kd"``
+        N m s/rad of a :class:`~heelstrike.dynamics.actuation.SwingLegPD`; ``"energy"`` J,
+        ``"gain"`` s/rad of an :class:`~heelstrike.dynamics.actuation.EnergyTracking`; a
+        name two laws of a sum share is not differentiable), to differentiate in (default
+        none), columns in this order. A walker parameter's name takes precedence.
     rtol, atol : float
         Tolerances of the nominal step and of the variational equations (DOP853).
     max_step_duration, max_step : float
@@ -580,7 +797,8 @@ def step_jacobian(
     Raises
     ------
     ValueError
-        For a name that is neither a parameter of the walker nor ``"slope"``.
+        For a name that is neither a parameter of the walker, ``"slope"``, nor one of the
+        actuation's, or a name given twice.
     StepFailedError
         If the step does not complete (:class:`UnscheduledStepError`, a subclass: it
         completes, but with a phase of its schedule skipped, or the variational equations
@@ -603,9 +821,15 @@ def step_jacobian(
         raise ExactJacobianUnavailable(
             f"push-off {type(push_off).__name__} is not a PushOff impulse: its reset has no "
             "exact derivative here; use central differences")
-    impulse = None if push_off is None else float(push_off.impulse)
-    par, changed = _parameters(walker, names, float(slope))
-    k = par.k
+    if len(set(names)) != len(names):
+        raise ValueError(f"parameters {names} name one twice")
+    known = walker.parameters
+    walker_names = tuple(n for n in names if n == "slope" or n in known)
+    act = _Actuation.of(torque, push_off, tuple(n for n in names if n not in walker_names),
+                        walker)
+    par, changed = _parameters(walker, walker_names, float(slope))
+    kw = par.k
+    k = kw + act.k
     q0, qd0 = walker.section_to_state(z_)
     walk = simulate(walker, q0, qd0, slope=slope, steps=1, torque=torque, push_off=push_off,
                     rtol=rtol, atol=atol, max_step_duration=max_step_duration,
@@ -632,16 +856,16 @@ def step_jacobian(
     m = len(free)
     # dy0/d(z, p): the integrator state, the start's stance angle c = q0[2], the parameters
     X = np.zeros((2 * m + 1 + k, d + k))
-    X[:m, :d], X[:m, d:] = dq[free], dqp[free]
+    X[:m, :d], X[:m, d: d + kw] = dq[free], dqp[free]
     X[m: 2 * m, :d] = dqd[free]
     X[2 * m, :d] = dq[2]
     X[2 * m + 1:, d:] = np.eye(k)
     exact, naive = X, X
     t0 = 0.0
     q_ref = q0.copy()
-    y0 = np.concatenate((q0[free], qd0[free], [q0[2]], par.nominal))
+    y0 = np.concatenate((q0[free], qd0[free], [q0[2]], par.nominal, act.nominal))
     for i, (phase, ev) in enumerate(zip(phases, events, strict=True)):
-        fld = _PhaseField(support=supports[i], par=par, torque=torque, q_ref=q_ref)
+        fld = _PhaseField(support=supports[i], par=par, act=act, q_ref=q_ref)
         y_minus, Phi = fld.flow(y0, t0, float(ev.time), rtol, atol, max_step)
         exact, naive = Phi @ exact, Phi @ naive
         t_e = float(ev.time)
@@ -651,7 +875,8 @@ def step_jacobian(
             striking = min(phase.strike_joints, key=lambda j: abs(q_strike[j] - lock_angle[j]))
             for j in phase.strike_joints:
                 q_strike[j] = lock_angle[j]  # as the simulation resets them
-            nxt = _PhaseField(support=supports[i + 1], par=par, torque=torque, q_ref=q_strike)
+            nxt = _PhaseField(support=supports[i + 1], par=par, act=act,
+                              q_ref=q_strike)
             m_now = fld.m
 
             def knee(yc: _ComplexArray, fld: _PhaseField = fld, nxt: _PhaseField = nxt,
@@ -681,7 +906,8 @@ def step_jacobian(
             """``(q, q_dot-, q_dot+, equations)`` of the heel strike (after push-off)."""
             q, qd, eq = fld.unpack(yc)
             M = eq.mass_matrix(q)
-            if impulse is not None:
+            if act.impulse is not None:
+                impulse = act.at(yc[2 * fld.m + 1 + kw:])["impulse"]
                 f = eq.contact_jacobian(q, "stance").T @ (impulse * _leg_direction(q[2]))
                 dv = np.linalg.solve(M, f)
                 if A_lock.shape[0]:
@@ -736,12 +962,14 @@ def step_jacobian(
         "collision_loss": dLC[1],
         "eta": dLC[1] / float(L) - float(loss) * dLC[0] / float(L) ** 2,
     }
+    order = (*walker_names, *act.names)  # the augmented state's; the columns in ``names``'
+    cols = [d + order.index(name) for name in names]
     return StepJacobian(z=z_.copy(), z_next=z_next, jacobian=np.asarray(exact[:, :d]),
                         naive=np.asarray(naive),
                         event_times=tuple(float(e.time) for e in events),
                         events=tuple(str(e.kind) for e in events),
-                        parameters=names, parameter_jacobian=np.asarray(exact[:, d:]),
+                        parameters=names, parameter_jacobian=np.asarray(exact[:, cols]),
                         quantities=values,
                         quantity_state_gradients={q: np.asarray(g[:d]) for q, g in grads.items()},
-                        quantity_parameter_gradients={q: np.asarray(g[d:])
+                        quantity_parameter_gradients={q: np.asarray(g[cols])
                                                       for q, g in grads.items()})

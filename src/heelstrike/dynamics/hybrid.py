@@ -645,9 +645,10 @@ def _ended_message(
     ``off_profile``: which foot, its contact angle and range
     (:meth:`~heelstrike.models.builder.BuiltWalker.profile_excursion`). A stage that was to end
     in the heel strike of a guard declared by the walker file (``[events] heel_strike``): the
-    guard's expression and the values it took; ``no_heel_strike`` if it was never below zero
-    over the stage (it rises through zero at the strike, so from there it cannot fire), the
-    event that stopped the integration named in the message. Otherwise the status's message.
+    guard's expression and the values it took, and whether it was never below zero over the
+    stage (it rises through zero at the strike, so from there it cannot fire). The status is
+    what stopped the integration (a fall, lost contact...), as the compiled kernels report
+    it, so that both backends classify a walk alike. Otherwise the status's message.
     """
     if status is WalkStatus.OFF_PROFILE:
         where = walker.profile_excursion(qs[-1])
@@ -662,9 +663,9 @@ def _ended_message(
             f"did not rise through zero in step {k}: it took values in "
             f"[{float(g.min()):.6g}, {float(g.max()):.6g}]")
     if g.size > 1 and bool(np.all(g >= 0.0)):
-        return WalkStatus.NO_HEEL_STRIKE, (
-            f"no heel strike: {said}, never below zero, so it cannot rise through zero (the "
-            f"integration stopped at t = {t:.6g} s: {status.value}, {status.message})")
+        return status, (
+            f"{status.message}; no heel strike before that: {said}, never below zero, so it "
+            f"cannot rise through zero (t = {t:.6g} s)")
     return status, f"{status.message}; {said} before that (t = {t:.6g} s)"
 
 

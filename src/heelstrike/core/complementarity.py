@@ -880,6 +880,201 @@ def _enumerate(
     return [_SetSolution(f, f, (0, 0), False, [], [])], False, count
 
 
+_UNDECIDED = 9  # a contact's or a tangential row's mode not yet chosen in the mode tree
+_ACTIVE = 1  # a contact pressed (its tangential rows' modes chosen further down the tree)
+
+
+def _enumerate_pruned(
+    red: _Reduced, u0: FloatArray, tau: FloatArray, mu: FloatArray, lay: _Layout,
+    node_budget: int, vtol: float, scale: float,
+) -> list[_SetSolution] | None:
+    """Every consistent active set of finite cones by branch and bound on the mode tree.
+
+    The tree decides, contact after contact, whether it separates or is pressed, then each
+    tangential row of a pressed contact: stick (``u_t = 0``), slide with ``u_t >= 0``
+    (``lambda_t = -mu lambda_n``) or with ``u_t <= 0``. A node is pruned when
+
+    - **Carathéodory**: the directions ``Y B^T`` of its decided contacts' impulses (every one
+      bounded: finite cones, no extra normal rows) are already dependent; every completion's
+      are then too (Cauchy interlacing: the Gram matrix of a subset is a principal submatrix)
+      and :func:`_try_set` skips them all;
+    - **LP infeasibility**: no impulse ``f`` satisfies the linear conditions every completion
+      satisfies (decided contacts: their mode's equalities and inequalities; undecided ones:
+      ``lambda_n >= 0``, ``u_n >= tau``, ``|lambda_t| <= mu lambda_n``, each the union of its
+      modes' conditions), with ``u = u0 + G f``. The test is
+      :func:`scipy.optimize.linprog` (HiGHS) with a zero objective: a certificate that the
+      linear system has no solution (slackened by the tolerances :func:`_try_set` allows, so
+      that nothing it would accept is pruned), not a search for the outcome.
+
+    The leaves (every mode chosen) are decided by :func:`_try_set` itself, so the sets found
+    are exactly those of the full enumeration. Only for finite cones without extra normal
+    rows; None where that does not hold or the tree needs more than ``node_budget`` LP tests.
+
+    Not used by :func:`_enumerate` (issue #34, two sole polygons): it is exact (the same sets as
+    the full enumeration) but slow where the outcome is degenerate: a sole of four corners
+    landing flat has 160 consistent active sets of its 10^4, and the tree needs about 3,000 LP
+    tests (about 5 ms each) to find them, slower than enumerating all 10^4 sets; two such
+    soles (10^8 sets) need more than 40,000.
+    """
+    from scipy.optimize import linprog
+
+    m = mu.shape[0]
+    if any(lay.extra) or not np.all(np.isfinite(mu)):
+        return None
+    k = u0.shape[0]
+    G = red.G
+    ev = np.linalg.eigvalsh(G)
+    gmax = float(ev[-1]) if ev.size else 0.0
+    if gmax <= 0.0:
+        return None
+    pos = ev[ev > 1e-10 * gmax]
+    rank_G = int(pos.size)
+    # the LP's unknowns are x = f gmax / scale (u / scale = u0 / scale + (G / gmax) x)
+    Gs = G / gmax
+    u0s, taus = u0 / scale, tau / scale
+    ev_ = 10.0 * vtol / scale  # the velocity slack (_try_set: vtol)
+    ef = 1e-8 * gmax / float(pos[0])  # the impulse slack, relative to the largest impulse
+    friction = [bool(lay.tangential[i]) and mu[i] > 0.0 for i in range(m)]
+    nodes = 0
+
+    def lp_feasible(nst: list[int], tst: list[list[int]]) -> bool:
+        A_ub: list[FloatArray] = []
+        b_ub: list[float] = []
+        bounds: list[tuple[float | None, float | None]] = [(None, None)] * k
+
+        def le(row: FloatArray, rhs: float) -> None:  # row . x <= rhs
+            A_ub.append(row)
+            b_ub.append(rhs)
+
+        def vel(r: int, sign: float, slack: float) -> None:  # sign (u_r - tau_r) >= -slack
+            le(-sign * Gs[r], sign * (u0s[r] - taus[r]) + slack)
+
+        for i in range(m):
+            p = lay.principal[i]
+            ts = lay.tangential[i]
+            if nst[i] == _SEP:
+                bounds[p] = (0.0, 0.0)
+                for r in ts:
+                    bounds[r] = (0.0, 0.0)
+                vel(p, 1.0, ev_)
+                continue
+            bounds[p] = (-ef, None)
+            vel(p, 1.0, ev_)
+            if nst[i] == _ACTIVE:
+                vel(p, -1.0, ev_)
+            for a, r in enumerate(ts):
+                if not friction[i]:
+                    bounds[r] = (0.0, 0.0)
+                    continue
+                md = tst[i][a]
+                for s in (1.0, -1.0):  # |lambda_t| <= mu lambda_n (+ slack)
+                    row = np.zeros(k)
+                    row[r], row[p] = s, -mu[i]
+                    le(row, ef)
+                if md in (1, -1):  # sliding: on the cone's edge, lambda_t = -md mu lambda_n
+                    row = np.zeros(k)
+                    row[r], row[p] = float(md), mu[i]
+                    le(row, ef)
+                if md == 0:
+                    vel(r, 1.0, ev_)
+                    vel(r, -1.0, ev_)
+                elif md in (1, -1):
+                    vel(r, float(md), ev_)
+        res = linprog(np.zeros(k), A_ub=np.array(A_ub), b_ub=np.array(b_ub), bounds=bounds,
+                      method="highs")
+        return bool(res.status != 2)  # 2: infeasible; anything else is not a refutation
+
+    def independent(nst: list[int], tst: list[list[int]]) -> bool:
+        cols: list[FloatArray] = []
+        for i in range(m):
+            if nst[i] != _ACTIVE or _UNDECIDED in tst[i]:
+                continue
+            b = np.zeros(k)
+            b[lay.principal[i]] = 1.0
+            for a, r in enumerate(lay.tangential[i]):
+                if not friction[i]:
+                    continue
+                if tst[i][a] in (1, -1):
+                    b[r] = -tst[i][a] * mu[i]
+                else:
+                    e = np.zeros(k)
+                    e[r] = 1.0
+                    cols.append(e)
+            cols.append(b)
+        if len(cols) > rank_G:
+            return False
+        if not cols:
+            return True
+        SB = np.array(cols)
+        return _rank_psd(SB @ G @ SB.T) == len(cols)
+
+    def modes_of(nst: list[int], tst: list[list[int]]) -> list[tuple[int, ...] | int]:
+        out: list[tuple[int, ...] | int] = []
+        for i in range(m):
+            if nst[i] == _SEP:
+                out.append(_SEP)
+            elif friction[i]:
+                out.append(tuple(tst[i]))
+            else:
+                out.append((_FREE_T,) * len(lay.tangential[i]))
+        return out
+
+    # the decisions, in order: (contact, None) its normal mode, then (contact, a) its row a
+    # (deciding every normal mode first needs about as many LP tests)
+    steps: list[tuple[int, int | None]] = []
+    for i in range(m):
+        steps.append((i, None))
+        if friction[i]:
+            steps += [(i, a) for a in range(len(lay.tangential[i]))]
+    found: list[tuple[tuple[int, ...], _SetSolution]] = []
+    opts = [_options(float(mu[i]), len(lay.tangential[i])) for i in range(m)]
+
+    def order(modes: Sequence[tuple[int, ...] | int]) -> tuple[int, ...]:
+        return tuple(opts[i].index(md) for i, md in enumerate(modes))
+
+    def visit(depth: int, nst: list[int], tst: list[list[int]]) -> bool:
+        nonlocal nodes
+        while depth < len(steps) and steps[depth][1] is not None \
+                and nst[steps[depth][0]] == _SEP:
+            depth += 1  # the rows of a separating contact have no mode
+        if depth == len(steps):
+            modes = modes_of(nst, tst)
+            sol = _try_set(red, u0, tau, mu, lay, modes, vtol, np.zeros(m, dtype=bool))
+            if sol is not None:
+                found.append((order(modes), sol))
+            return True
+        i, a = steps[depth]
+        choices = (_SEP, _ACTIVE) if a is None else (0, 1, -1)
+        for c in choices:
+            if a is None:
+                nst[i] = c
+            else:
+                tst[i][a] = c
+            if not independent(nst, tst):
+                continue
+            leaf = all(s[1] is not None and nst[s[0]] == _SEP for s in steps[depth + 1:])
+            if not leaf:
+                nodes += 1
+                if nodes > node_budget:
+                    return False
+                if not lp_feasible(nst, tst):
+                    continue
+            if not visit(depth + 1, nst, tst):
+                return False
+        if a is None:
+            nst[i] = _UNDECIDED
+        else:
+            tst[i][a] = _UNDECIDED
+        return True
+
+    nst = [_UNDECIDED] * m
+    tst = [[_UNDECIDED] * len(lay.tangential[i]) for i in range(m)]
+    if not visit(0, nst, tst):
+        return None
+    found.sort(key=lambda t: (t[1].key, t[0]))
+    return [s for _, s in found]
+
+
 def _distinct(vs: list[FloatArray], scale: float) -> list[FloatArray]:
     out: list[FloatArray] = []
     for v in vs:

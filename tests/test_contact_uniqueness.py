@@ -272,3 +272,23 @@ def test_robot_landing_flat_on_two_soles_reports_the_split_undetermined(
     assert out["impulse_unique"] is False and out["unique"] is True
     assert set(out["units"]) == set(out) - {"units"}
     assert out["units"]["velocity_range"] == ["m/s"] * 3 + ["rad/s"] * 4
+
+
+def test_two_sole_polygons_with_finite_friction_landing_flat_stop_the_body() -> None:
+    """The flat landing on the soles' eight corners with ``mu = 0.5`` (10^8 active sets: one
+    outcome by Lemke's method, whose first pivot ties all eight corners). Closed form: every
+    outcome has ``lambda . u+ <= 0`` (normal complementarity, friction never does positive
+    work), so ``q_dot+^T M q_dot+ <= q_dot+^T M q_dot- = -MASS v_z+``; the corners are
+    symmetric about the centre of mass's footprint, so ``v_z+`` is the mean of their normal
+    velocities, ``>= 0``: ``q_dot+ = 0``, and the generalized impulse is ``-M q_dot-``."""
+    M = _body()
+    v = np.array([0.0, 0.0, -1.0, 0.0, 0.0, 0.0])
+    C = np.array([_point_rows(p) for p in _corners()])  # (8, 3, 6)
+    sol = solve_point_contacts(M, v, C[:, 2], tangential=C[:, :2], friction=0.5)
+    assert not sol.exhaustive and sol.active_sets == 10 ** 8 and sol.unique is None
+    np.testing.assert_allclose(sol.velocity_post, 0.0, atol=1e-12)
+    _check_flat_landing_impulse(np.einsum("kr,krn->n", sol.impulse[:, [1, 2, 0]],
+                                          C[:, [0, 1, 2]]), v)
+    assert np.all(sol.impulse[:, 0] >= -1e-12)
+    assert np.all(np.abs(sol.impulse[:, 1:]) <= 0.5 * sol.impulse[:, :1] + 1e-12)
+    assert sol.kkt_residual < 1e-10

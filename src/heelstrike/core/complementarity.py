@@ -725,7 +725,11 @@ def _lemke(Q: FloatArray, q: FloatArray, max_pivots: int = 10_000) -> FloatArray
         return np.zeros(N)
     T = np.hstack((np.eye(N), -Q, -np.ones((N, 1)), q[:, None]))
     basis = list(range(N))
-    entering, r = 2 * N, int(np.argmin(q))
+    # the first pivot by the same lexicographic rule: among the rows tied at the smallest
+    # q_i, the lexicographically smallest (q_i, e_i) is the last one (a flat landing on
+    # several corners ties them all; taking the first could end on a ray)
+    tied = np.flatnonzero(q <= q.min() + 1e-12 * max(abs(float(q.min())), 1.0))
+    entering, r = 2 * N, int(tied[-1])
     for _ in range(max_pivots):
         T[r] /= T[r, entering]
         for i in range(N):

@@ -386,11 +386,15 @@ class PointContactSolution(ResultDictMixin):
     unique : bool or None
         Whether ``q_dot+`` is determined by the law: one distinct outcome and no active set
         with a continuum of them (:attr:`continuum`); None when the enumeration was not
-        exhaustive.
+        exhaustive, except for an inelastic impact (``e = 0``) that normal impulses alone can
+        stop (``-M q_dot- = N^T y + A_b^T y_b``, ``y >= 0``, a verified LP certificate): then
+        ``q_dot+ = 0`` is the only outcome (every outcome has ``q_dot+^T M q_dot+ <= q_dot+^T
+        M q_dot- <= 0``), True.
     impulse_unique : bool or None
         Whether the contact impulses are determined too (False: the split of the impulse
         between redundant contacts is not, e.g. a rigid body landing on two soles); None when
-        the enumeration was not exhaustive.
+        the enumeration was not exhaustive, except False where the stop certificate exhibits
+        a second impulse (two soles' corners landing flat).
     continuum : bool
         Some consistent active set admits a segment of outcomes (its Delassus system is
         singular along a direction that moves ``q_dot+``, a Painlevé-type case).
@@ -1138,6 +1142,58 @@ def _kkt_residual(M: FloatArray, v: FloatArray, vc: FloatArray, R: FloatArray,
     return float(max(res))
 
 
+def _full_stop(
+    M: FloatArray, v: FloatArray, R: FloatArray, lay: _Layout, A_b: FloatArray,
+    v_plus: FloatArray, f: FloatArray, scale: float,
+) -> tuple[bool | None, bool | None]:
+    """``(unique, impulse_unique)`` of an inelastic impact not enumerated, where certified.
+
+    Every outcome of the law with ``e = 0`` has ``lambda . u+ <= 0`` (normal complementarity,
+    extra normal rows and bilateral rows held at zero velocity, friction never doing positive
+    work), so ``q_dot+^T M q_dot+ <= q_dot+^T M q_dot-``. If normal impulses alone can stop
+    the system, ``-M q_dot- = N^T y + A_b^T y_b`` with ``y >= 0`` on the principal normal rows
+    ``N`` (Farkas), then ``q_dot+^T M q_dot- = -y . N q_dot+ <= 0`` for every outcome (its
+    ``N q_dot+ >= 0``, ``A_b q_dot+ = 0``): ``q_dot+ = 0`` is the only outcome. ``y`` is found
+    by :func:`scipy.optimize.linprog` (a feasibility LP) and the certificate is verified here
+    (residual and signs). ``(y, 0)`` is itself an outcome's impulse: where the LP's smallest and
+    largest ``y_0`` differ, or differ from the returned impulses ``f``, two impulses are
+    exhibited and ``impulse_unique`` is False. (None, None) where not certified.
+    """
+    from scipy.optimize import linprog
+
+    if np.max(np.abs(v_plus), initial=0.0) > 1e-9 * scale:
+        return None, None
+    P = list(lay.principal)
+    A = np.hstack((R[P].T, A_b.T))  # (n, m + k_b)
+    rhs = -M @ v
+    s = float(np.max(np.abs(rhs), initial=0.0))
+    if s == 0.0:
+        return None, None
+    m, kb = len(P), A_b.shape[0]
+    bounds = [(0.0, None)] * m + [(None, None)] * kb
+    ys: list[FloatArray] = []
+    for sign in (1.0, -1.0):
+        c = np.zeros(m + kb)
+        c[0] = sign
+        res = linprog(c, A_eq=A / s, b_eq=rhs / s, bounds=bounds, method="highs")
+        if res.status != 0:
+            return None, None
+        y = np.asarray(res.x, dtype=float)
+        ysc = max(float(np.max(np.abs(y))), 1e-300)
+        if (np.max(np.abs(A @ y - rhs)) > 1e-9 * s
+                or np.min(y[:m], initial=0.0) < -1e-12 * ysc):
+            return None, None
+        ys.append(y)
+    fscale = max(float(np.max(np.abs(f), initial=0.0)), 1e-300)
+    tol = 1e-6 * fscale  # far above the LP's round-off: two distinct impulses
+    stop = np.zeros_like(f)
+    for y in ys:
+        stop[P] = y[:m]
+        if np.max(np.abs(stop - f)) > tol:
+            return True, False
+    return True, None
+
+
 def _solve_contacts(
     M: FloatArray, v: FloatArray, R: FloatArray, lay: _Layout, A_b: FloatArray,
     mu: FloatArray, e: FloatArray, law: RestitutionLaw, budget: int,
@@ -1211,6 +1267,8 @@ def _solve_contacts(
         impulse_unique = not continuum and not any(s.impulse_free for s in sets) and all(
             np.max(np.abs(s.f - sets[0].f), initial=0.0) <= UNIQUENESS_TOLERANCE * fscale
             for s in sets)
+    elif not np.any(e > 0.0):
+        unique, impulse_unique = _full_stop(M, v, R, lay, A_b, v_plus, f_tot, scale)
     vc0 = post(v0, sets[0].f)
     u_c = R @ vc0
     ftol = 1e-9 * float(np.max(np.abs(sets[0].fb), initial=0.0)) + 1e-300

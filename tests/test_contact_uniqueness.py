@@ -272,3 +272,57 @@ def test_robot_landing_flat_on_two_soles_reports_the_split_undetermined(
     assert out["impulse_unique"] is False and out["unique"] is True
     assert set(out["units"]) == set(out) - {"units"}
     assert out["units"]["velocity_range"] == ["m/s"] * 3 + ["rad/s"] * 4
+
+
+def test_two_sole_polygons_with_finite_friction_landing_flat_stop_the_body() -> None:
+    """The flat landing on the soles' eight corners with ``mu = 0.5`` (10^8 active sets: one
+    outcome by Lemke's method, whose first pivot ties all eight corners). Closed form: every
+    outcome has ``lambda . u+ <= 0`` (normal complementarity, friction never does positive
+    work), so ``q_dot+^T M q_dot+ <= q_dot+^T M q_dot- = -MASS v_z+``; the corners are
+    symmetric about the centre of mass's footprint, so ``v_z+`` is the mean of their normal
+    velocities, ``>= 0``: ``q_dot+ = 0``, and the generalized impulse is ``-M q_dot-``."""
+    M = _body()
+    v = np.array([0.0, 0.0, -1.0, 0.0, 0.0, 0.0])
+    C = np.array([_point_rows(p) for p in _corners()])  # (8, 3, 6)
+    sol = solve_point_contacts(M, v, C[:, 2], tangential=C[:, :2], friction=0.5)
+    assert not sol.exhaustive and sol.active_sets == 10 ** 8
+    # certified without the enumeration: the normal impulses alone stop the body
+    assert sol.unique is True and sol.impulse_unique is False
+    np.testing.assert_allclose(sol.velocity_post, 0.0, atol=1e-12)
+    _check_flat_landing_impulse(np.einsum("kr,krn->n", sol.impulse[:, [1, 2, 0]],
+                                          C[:, [0, 1, 2]]), v)
+    assert np.all(sol.impulse[:, 0] >= -1e-12)
+    assert np.all(np.abs(sol.impulse[:, 1:]) <= 0.5 * sol.impulse[:, :1] + 1e-12)
+    assert sol.kkt_residual < 1e-10
+
+
+def test_no_stop_certificate_where_normal_impulses_cannot_stop_the_body() -> None:
+    """Landing sliding at 2 m/s on the eight corners: stopping needs a horizontal impulse
+    (``MASS * 2`` N s), which normal impulses cannot give, so ``q_dot+ = 0`` is not certified
+    (nor is it the outcome: the body pitches over the front edges); 10^8 active sets, not
+    examined: ``unique`` stays None."""
+    M = _body()
+    v = np.array([2.0, 0.0, -1.0, 0.0, 0.0, 0.0])
+    C = np.array([_point_rows(p) for p in _corners()])
+    sol = solve_point_contacts(M, v, C[:, 2], tangential=C[:, :2], friction=0.5)
+    assert not sol.exhaustive and sol.unique is None and sol.impulse_unique is None
+    assert sol.velocity_post[0] > 0.1 and sol.kkt_residual < 1e-10
+
+
+def test_robot_two_sole_polygons_with_finite_friction_landing_flat(tmp_path: Path) -> None:
+    """The flat landing on the MJCF body's two soles as support polygons (``flat``: eight
+    corners, ``mu = 0.5``, 10^8 active sets): certified ``qdot_plus = 0`` and unique, the
+    split not, the vertical impulses adding up to ``MASS * 1 m/s``."""
+    from heelstrike.robots import parse_contact, robot_impact
+
+    robot = _two_sole_body(tmp_path / "block.xml")
+    q = [0.0, 0.0, HEIGHT, 0.0, 0.0, 0.0, 1.0, 0.0]
+    v = [0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0]
+    strike = [parse_contact(f"{f}:flat:{SOLE_X},{SOLE_Y}")
+              for f in ("left_sole", "right_sole")]
+    d = robot_impact(robot, q, v, strike=strike, friction=0.5).to_dict()
+    assert d["active_sets"] == 10 ** 8
+    assert d["unique"] is True and d["impulse_unique"] is False
+    np.testing.assert_allclose(d["qdot_plus"], 0.0, atol=1e-12)
+    assert sum(c["force_impulse"][2] for c in d["contacts"]) == pytest.approx(MASS, rel=1e-12)
+    assert d["kkt_residual"] < 1e-10

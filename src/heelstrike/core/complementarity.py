@@ -386,11 +386,15 @@ class PointContactSolution(ResultDictMixin):
     unique : bool or None
         Whether ``q_dot+`` is determined by the law: one distinct outcome and no active set
         with a continuum of them (:attr:`continuum`); None when the enumeration was not
-        exhaustive.
+        exhaustive, except for an inelastic impact (``e = 0``) that normal impulses alone can
+        stop (``-M q_dot- = N^T y + A_b^T y_b``, ``y >= 0``, a verified LP certificate): then
+        ``q_dot+ = 0`` is the only outcome (every outcome has ``q_dot+^T M q_dot+ <= q_dot+^T
+        M q_dot- <= 0``), True.
     impulse_unique : bool or None
         Whether the contact impulses are determined too (False: the split of the impulse
         between redundant contacts is not, e.g. a rigid body landing on two soles); None when
-        the enumeration was not exhaustive.
+        the enumeration was not exhaustive, except False where the stop certificate exhibits
+        a second impulse (two soles' corners landing flat).
     continuum : bool
         Some consistent active set admits a segment of outcomes (its Delassus system is
         singular along a direction that moves ``q_dot+``, a Painlevé-type case).
@@ -725,7 +729,11 @@ def _lemke(Q: FloatArray, q: FloatArray, max_pivots: int = 10_000) -> FloatArray
         return np.zeros(N)
     T = np.hstack((np.eye(N), -Q, -np.ones((N, 1)), q[:, None]))
     basis = list(range(N))
-    entering, r = 2 * N, int(np.argmin(q))
+    # the first pivot by the same lexicographic rule: among the rows tied at the smallest
+    # q_i, the lexicographically smallest (q_i, e_i) is the last one (a flat landing on
+    # several corners ties them all; taking the first could end on a ray)
+    tied = np.flatnonzero(q <= q.min() + 1e-12 * max(abs(float(q.min())), 1.0))
+    entering, r = 2 * N, int(tied[-1])
     for _ in range(max_pivots):
         T[r] /= T[r, entering]
         for i in range(N):
@@ -880,6 +888,202 @@ def _enumerate(
     return [_SetSolution(f, f, (0, 0), False, [], [])], False, count
 
 
+_UNDECIDED = 9  # a contact's or a tangential row's mode not yet chosen in the mode tree
+_ACTIVE = 1  # a contact pressed (its tangential rows' modes chosen further down the tree)
+
+
+def _enumerate_pruned(
+    red: _Reduced, u0: FloatArray, tau: FloatArray, mu: FloatArray, lay: _Layout,
+    node_budget: int, vtol: float, scale: float,
+) -> list[_SetSolution] | None:
+    """Every consistent active set of finite cones by branch and bound on the mode tree.
+
+    The tree decides, contact after contact, whether it separates or is pressed, then each
+    tangential row of a pressed contact: stick (``u_t = 0``), slide with ``u_t >= 0``
+    (``lambda_t = -mu lambda_n``) or with ``u_t <= 0``. A node is pruned when
+
+    - **Carathéodory**: the directions ``Y B^T`` of its decided contacts' impulses (every one
+      bounded: finite cones, no extra normal rows) are already dependent; every completion's
+      are then too (Cauchy interlacing: the Gram matrix of a subset is a principal submatrix)
+      and :func:`_try_set` skips them all;
+    - **LP infeasibility**: no impulse ``f`` satisfies the linear conditions every completion
+      satisfies (decided contacts: their mode's equalities and inequalities; undecided ones:
+      ``lambda_n >= 0``, ``u_n >= tau``, ``|lambda_t| <= mu lambda_n``, each the union of its
+      modes' conditions), with ``u = u0 + G f``. The test is
+      :func:`scipy.optimize.linprog` (HiGHS) with a zero objective: a certificate that the
+      linear system has no solution (slackened by the tolerances :func:`_try_set` allows, so
+      that nothing it would accept is pruned), not a search for the outcome.
+
+    The leaves (every mode chosen) are decided by :func:`_try_set` itself, so the sets found
+    are exactly those of the full enumeration. Only for finite cones without extra normal
+    rows; None where that does not hold or the tree needs more than ``node_budget`` LP tests.
+
+    Not used by :func:`_enumerate` (issue #34, two sole polygons): it is exact (the same sets as
+    the full enumeration) but slow where the outcome is degenerate: a sole of four corners
+    landing flat has 160 consistent active sets of its 10^4, and the tree needs about 3,000 LP
+    tests (about 5 ms each) to find them, slower than enumerating all 10^4 sets; two such
+    soles (10^8 sets) need more than 40,000, and about 10,000 (16 consistent sets) where the
+    body lands sliding at 2 m/s.
+    """
+    from scipy.optimize import linprog
+
+    m = mu.shape[0]
+    if any(lay.extra) or not np.all(np.isfinite(mu)):
+        return None
+    k = u0.shape[0]
+    G = red.G
+    ev = np.linalg.eigvalsh(G)
+    gmax = float(ev[-1]) if ev.size else 0.0
+    if gmax <= 0.0:
+        return None
+    pos = ev[ev > 1e-10 * gmax]
+    rank_G = int(pos.size)
+    # the LP's unknowns are x = f gmax / scale (u / scale = u0 / scale + (G / gmax) x)
+    Gs = G / gmax
+    u0s, taus = u0 / scale, tau / scale
+    ev_ = 10.0 * vtol / scale  # the velocity slack (_try_set: vtol)
+    ef = 1e-8 * gmax / float(pos[0])  # the impulse slack, relative to the largest impulse
+    friction = [bool(lay.tangential[i]) and mu[i] > 0.0 for i in range(m)]
+    nodes = 0
+
+    def lp_feasible(nst: list[int], tst: list[list[int]]) -> bool:
+        A_ub: list[FloatArray] = []
+        b_ub: list[float] = []
+        bounds: list[tuple[float | None, float | None]] = [(None, None)] * k
+
+        def le(row: FloatArray, rhs: float) -> None:  # row . x <= rhs
+            A_ub.append(row)
+            b_ub.append(rhs)
+
+        def vel(r: int, sign: float, slack: float) -> None:  # sign (u_r - tau_r) >= -slack
+            le(-sign * Gs[r], sign * (u0s[r] - taus[r]) + slack)
+
+        for i in range(m):
+            p = lay.principal[i]
+            ts = lay.tangential[i]
+            if nst[i] == _SEP:
+                bounds[p] = (0.0, 0.0)
+                for r in ts:
+                    bounds[r] = (0.0, 0.0)
+                vel(p, 1.0, ev_)
+                continue
+            bounds[p] = (-ef, None)
+            vel(p, 1.0, ev_)
+            if nst[i] == _ACTIVE:
+                vel(p, -1.0, ev_)
+            for a, r in enumerate(ts):
+                if not friction[i]:
+                    bounds[r] = (0.0, 0.0)
+                    continue
+                md = tst[i][a]
+                for s in (1.0, -1.0):  # |lambda_t| <= mu lambda_n (+ slack)
+                    row = np.zeros(k)
+                    row[r], row[p] = s, -mu[i]
+                    le(row, ef)
+                if md in (1, -1):  # sliding: on the cone's edge, lambda_t = -md mu lambda_n
+                    row = np.zeros(k)
+                    row[r], row[p] = float(md), mu[i]
+                    le(row, ef)
+                if md == 0:
+                    vel(r, 1.0, ev_)
+                    vel(r, -1.0, ev_)
+                elif md in (1, -1):
+                    vel(r, float(md), ev_)
+        res = linprog(np.zeros(k), A_ub=np.array(A_ub), b_ub=np.array(b_ub), bounds=bounds,
+                      method="highs")
+        return bool(res.status != 2)  # 2: infeasible; anything else is not a refutation
+
+    def independent(nst: list[int], tst: list[list[int]]) -> bool:
+        cols: list[FloatArray] = []
+        for i in range(m):
+            if nst[i] != _ACTIVE or _UNDECIDED in tst[i]:
+                continue
+            b = np.zeros(k)
+            b[lay.principal[i]] = 1.0
+            for a, r in enumerate(lay.tangential[i]):
+                if not friction[i]:
+                    continue
+                if tst[i][a] in (1, -1):
+                    b[r] = -tst[i][a] * mu[i]
+                else:
+                    e = np.zeros(k)
+                    e[r] = 1.0
+                    cols.append(e)
+            cols.append(b)
+        if len(cols) > rank_G:
+            return False
+        if not cols:
+            return True
+        SB = np.array(cols)
+        return _rank_psd(SB @ G @ SB.T) == len(cols)
+
+    def modes_of(nst: list[int], tst: list[list[int]]) -> list[tuple[int, ...] | int]:
+        out: list[tuple[int, ...] | int] = []
+        for i in range(m):
+            if nst[i] == _SEP:
+                out.append(_SEP)
+            elif friction[i]:
+                out.append(tuple(tst[i]))
+            else:
+                out.append((_FREE_T,) * len(lay.tangential[i]))
+        return out
+
+    # the decisions, in order: (contact, None) its normal mode, then (contact, a) its row a
+    # (deciding every normal mode first needs about as many LP tests)
+    steps: list[tuple[int, int | None]] = []
+    for i in range(m):
+        steps.append((i, None))
+        if friction[i]:
+            steps += [(i, a) for a in range(len(lay.tangential[i]))]
+    found: list[tuple[tuple[int, ...], _SetSolution]] = []
+    opts = [_options(float(mu[i]), len(lay.tangential[i])) for i in range(m)]
+
+    def order(modes: Sequence[tuple[int, ...] | int]) -> tuple[int, ...]:
+        return tuple(opts[i].index(md) for i, md in enumerate(modes))
+
+    def visit(depth: int, nst: list[int], tst: list[list[int]]) -> bool:
+        nonlocal nodes
+        while depth < len(steps) and steps[depth][1] is not None \
+                and nst[steps[depth][0]] == _SEP:
+            depth += 1  # the rows of a separating contact have no mode
+        if depth == len(steps):
+            modes = modes_of(nst, tst)
+            sol = _try_set(red, u0, tau, mu, lay, modes, vtol, np.zeros(m, dtype=bool))
+            if sol is not None:
+                found.append((order(modes), sol))
+            return True
+        i, a = steps[depth]
+        choices = (_SEP, _ACTIVE) if a is None else (0, 1, -1)
+        for c in choices:
+            if a is None:
+                nst[i] = c
+            else:
+                tst[i][a] = c
+            if not independent(nst, tst):
+                continue
+            leaf = all(s[1] is not None and nst[s[0]] == _SEP for s in steps[depth + 1:])
+            if not leaf:
+                nodes += 1
+                if nodes > node_budget:
+                    return False
+                if not lp_feasible(nst, tst):
+                    continue
+            if not visit(depth + 1, nst, tst):
+                return False
+        if a is None:
+            nst[i] = _UNDECIDED
+        else:
+            tst[i][a] = _UNDECIDED
+        return True
+
+    nst = [_UNDECIDED] * m
+    tst = [[_UNDECIDED] * len(lay.tangential[i]) for i in range(m)]
+    if not visit(0, nst, tst):
+        return None
+    found.sort(key=lambda t: (t[1].key, t[0]))
+    return [s for _, s in found]
+
+
 def _distinct(vs: list[FloatArray], scale: float) -> list[FloatArray]:
     out: list[FloatArray] = []
     for v in vs:
@@ -936,6 +1140,58 @@ def _kkt_residual(M: FloatArray, v: FloatArray, vc: FloatArray, R: FloatArray,
             if abs(u[r]) > 1e-9 * vs and np.isfinite(m_):  # sliding: on the cone's edge
                 res.append(abs(f[r] + np.sign(u[r]) * m_ * ln) / fs)
     return float(max(res))
+
+
+def _full_stop(
+    M: FloatArray, v: FloatArray, R: FloatArray, lay: _Layout, A_b: FloatArray,
+    v_plus: FloatArray, f: FloatArray, scale: float,
+) -> tuple[bool | None, bool | None]:
+    """``(unique, impulse_unique)`` of an inelastic impact not enumerated, where certified.
+
+    Every outcome of the law with ``e = 0`` has ``lambda . u+ <= 0`` (normal complementarity,
+    extra normal rows and bilateral rows held at zero velocity, friction never doing positive
+    work), so ``q_dot+^T M q_dot+ <= q_dot+^T M q_dot-``. If normal impulses alone can stop
+    the system, ``-M q_dot- = N^T y + A_b^T y_b`` with ``y >= 0`` on the principal normal rows
+    ``N`` (Farkas), then ``q_dot+^T M q_dot- = -y . N q_dot+ <= 0`` for every outcome (its
+    ``N q_dot+ >= 0``, ``A_b q_dot+ = 0``): ``q_dot+ = 0`` is the only outcome. ``y`` is found
+    by :func:`scipy.optimize.linprog` (a feasibility LP) and the certificate is verified here
+    (residual and signs). ``(y, 0)`` is itself an outcome's impulse: where the LP's smallest and
+    largest ``y_0`` differ, or differ from the returned impulses ``f``, two impulses are
+    exhibited and ``impulse_unique`` is False. (None, None) where not certified.
+    """
+    from scipy.optimize import linprog
+
+    if np.max(np.abs(v_plus), initial=0.0) > 1e-9 * scale:
+        return None, None
+    P = list(lay.principal)
+    A = np.hstack((R[P].T, A_b.T))  # (n, m + k_b)
+    rhs = -M @ v
+    s = float(np.max(np.abs(rhs), initial=0.0))
+    if s == 0.0:
+        return None, None
+    m, kb = len(P), A_b.shape[0]
+    bounds = [(0.0, None)] * m + [(None, None)] * kb
+    ys: list[FloatArray] = []
+    for sign in (1.0, -1.0):
+        c = np.zeros(m + kb)
+        c[0] = sign
+        res = linprog(c, A_eq=A / s, b_eq=rhs / s, bounds=bounds, method="highs")
+        if res.status != 0:
+            return None, None
+        y = np.asarray(res.x, dtype=float)
+        ysc = max(float(np.max(np.abs(y))), 1e-300)
+        if (np.max(np.abs(A @ y - rhs)) > 1e-9 * s
+                or np.min(y[:m], initial=0.0) < -1e-12 * ysc):
+            return None, None
+        ys.append(y)
+    fscale = max(float(np.max(np.abs(f), initial=0.0)), 1e-300)
+    tol = 1e-6 * fscale  # far above the LP's round-off: two distinct impulses
+    stop = np.zeros_like(f)
+    for y in ys:
+        stop[P] = y[:m]
+        if np.max(np.abs(stop - f)) > tol:
+            return True, False
+    return True, None
 
 
 def _solve_contacts(
@@ -1011,6 +1267,8 @@ def _solve_contacts(
         impulse_unique = not continuum and not any(s.impulse_free for s in sets) and all(
             np.max(np.abs(s.f - sets[0].f), initial=0.0) <= UNIQUENESS_TOLERANCE * fscale
             for s in sets)
+    elif not np.any(e > 0.0):
+        unique, impulse_unique = _full_stop(M, v, R, lay, A_b, v_plus, f_tot, scale)
     vc0 = post(v0, sets[0].f)
     u_c = R @ vc0
     ftol = 1e-9 * float(np.max(np.abs(sets[0].fb), initial=0.0)) + 1e-300

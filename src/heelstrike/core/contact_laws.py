@@ -274,6 +274,7 @@ class ContactImpact(ResultDictMixin):
     continuum: bool = False
     velocity_range: FloatArray | None = None
     kkt_residual: float = 0.0
+    _stop_unique: bool | None = field(default=None, repr=False)
 
     @property
     def outcomes(self) -> int:
@@ -283,8 +284,12 @@ class ContactImpact(ResultDictMixin):
     @property
     def unique(self) -> bool | None:
         """Whether ``q_dot+`` is determined by the law (one outcome, no continuum): None when
-        the active sets were not all examined."""
-        return len(self.solutions) == 1 and not self.continuum if self.exhaustive else None
+        the active sets were not all examined, unless the inelastic impact is certified to
+        stop everything (normal impulses alone can stop the system: then ``q_dot+ = 0`` is the
+        only outcome, True)."""
+        if self.exhaustive:
+            return len(self.solutions) == 1 and not self.continuum
+        return self._stop_unique
 
 
 def _check_M(M: ArrayLike) -> tuple[FloatArray, tuple[FloatArray, bool]]:
@@ -570,6 +575,7 @@ def _resolve_active_set(M: FloatArray, v: FloatArray, contacts: Sequence[Contact
         continuum=sol.continuum,
         velocity_range=sol.velocity_range,
         kkt_residual=sol.kkt_residual,
+        _stop_unique=None if sol.exhaustive else sol.unique,
     )
 
 

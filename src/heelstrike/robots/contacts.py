@@ -630,11 +630,13 @@ class RobotImpact(ResultDictMixin):
         pulls on the ground), ``pulling_contacts`` (``frame``, ``normal_impulse`` in N s, of
         :meth:`pulling_contacts`), ``tilting_contacts`` (:attr:`tilting`), and the outcome
         count of the law: ``restitution_law``, ``outcomes`` (distinct ``q_dot+`` found),
-        ``unique`` (true/false when every active set was examined, null when not),
+        ``unique`` (true/false when every active set was examined, null when not, unless
+        normal impulses alone stop the robot: true, ``q_dot+ = 0``),
         ``active_sets`` (their number: the bound on ``outcomes``; 0 when not counted),
         ``solutions`` (``q_dot+`` of every outcome found, the one reported first),
         ``impulse_unique`` (whether the impulses are determined too: false where contacts are
-        redundant, e.g. two soles of one body; null when not examined), ``velocity_range``
+        redundant, e.g. two soles of one body; null when not examined, unless that stop
+        certificate exhibits two impulses: false), ``velocity_range``
         (componentwise smallest and largest ``q_dot+`` over the outcomes; null entries where
         a continuum of outcomes is unbounded) and ``kkt_residual`` (the returned outcome's
         certificate: largest relative violation of the law, 0 when nothing was decided).

@@ -37,8 +37,9 @@ steps.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -247,17 +248,68 @@ class PushOff:
         return after, work
 
 
+#: ``energy(walker, q, q_dot, slope) -> E``: how a law that tracks the mechanical energy
+#: evaluates it (:func:`mechanical_energy` by default; the exact step Jacobian passes a
+#: complex-capable one, :mod:`heelstrike.dynamics.variational`).
+EnergyFunction = Callable[[PlanarWalker, Any, Any, float], Any]
+
+
+def saturate(u: Any, limit: float) -> Any:
+    """``sat(u)`` at ``+-limit`` (N m), decided by the real part: ``u`` inside the limit, the
+    constant ``+-limit`` outside. Equal to ``np.clip(u, -limit, limit)`` for real ``u``; for a
+    complex step ``u + i h du`` the derivative is kept inside and zero outside."""
+    u = np.asarray(u)
+    m = float(limit)
+    if not np.isfinite(m):
+        return u
+    re = np.real(u)
+    return np.where(np.abs(re) > m, np.sign(re) * m, u)
+
+
 class HipTorque:
-    """Base of the hip torque laws: saturation helper and ``+`` composition."""
+    """Base of the hip torque laws: saturation helper and ``+`` composition.
+
+    Each law is written once, in :meth:`evaluate`, for any array type (float, or complex for
+    the complex-step derivatives of the exact step Jacobian) and with its differentiable
+    parameters (:attr:`parameters`) overridable; calling the law evaluates it in floats.
+    """
 
     max_torque: float
 
-    def __call__(self, t: float, q: FloatArray, q_dot: FloatArray) -> FloatArray:
+    @property
+    def parameters(self) -> dict[str, float]:
+        """The law's parameters that can be differentiated in (name -> value); none here."""
+        return {}
+
+    def evaluate(self, t: float, q: Any, q_dot: Any, values: Mapping[str, Any] | None = None,
+                 *, energy: EnergyFunction | None = None) -> Any:
+        """The torque ``u`` (..., n_u) (N m) at ``(t, q, q_dot)``, any array type.
+
+        Parameters
+        ----------
+        t : float
+            Time since the step's start (s).
+        q, q_dot : array_like, shape (..., n)
+            Coordinates and velocities (float or complex).
+        values : mapping, optional
+            Values of :attr:`parameters` to use instead of the law's own (others ignored).
+        energy : callable, optional
+            ``energy(walker, q, q_dot, slope)`` for a law tracking the mechanical energy
+            (default :func:`mechanical_energy`).
+        """
         raise NotImplementedError
 
-    def _saturate(self, u: FloatArray) -> FloatArray:
-        m = float(self.max_torque)
-        return np.asarray(np.clip(u, -m, m))
+    def __call__(self, t: float, q: FloatArray, q_dot: FloatArray) -> FloatArray:
+        return np.asarray(self.evaluate(t, np.asarray(q, dtype=float),
+                                        np.asarray(q_dot, dtype=float)), dtype=float)
+
+    def _values(self, values: Mapping[str, Any] | None) -> dict[str, Any]:
+        """:attr:`parameters` with ``values`` (those of its names) in their place."""
+        own = self.parameters
+        return own if values is None else {k: values.get(k, v) for k, v in own.items()}
+
+    def _saturate(self, u: Any) -> Any:
+        return saturate(u, float(self.max_torque))
 
     def __add__(self, other: HipTorque) -> TorqueSum:
         return TorqueSum(laws=(self, other))
@@ -291,9 +343,22 @@ class TorqueSum(HipTorque):
     def __post_init__(self) -> None:
         object.__setattr__(self, "max_torque", _check_limit(self.max_torque))
 
-    def __call__(self, t: float, q: FloatArray, q_dot: FloatArray) -> FloatArray:
-        u = sum(np.asarray(law(t, q, q_dot), dtype=float) for law in self.laws)
-        return self._saturate(np.asarray(u, dtype=float))
+    @property
+    def parameters(self) -> dict[str, float]:
+        """The parts' differentiable parameters, but a name two parts share (ambiguous)."""
+        names = [k for law in self.laws if isinstance(law, HipTorque) for k in law.parameters]
+        return {k: v for law in self.laws if isinstance(law, HipTorque)
+                for k, v in law.parameters.items() if names.count(k) == 1}
+
+    def evaluate(self, t: float, q: Any, q_dot: Any, values: Mapping[str, Any] | None = None,
+                 *, energy: EnergyFunction | None = None) -> Any:
+        """``sat(sum of the parts' torques)`` (:meth:`HipTorque.evaluate`); ``values`` of a
+        name two parts share are ignored (each part keeps its own)."""
+        mine = self._values(values)
+        u = sum(np.asarray(law.evaluate(t, q, q_dot, mine, energy=energy)
+                           if isinstance(law, HipTorque) else law(t, q, q_dot))
+                for law in self.laws)
+        return self._saturate(np.asarray(u))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -340,10 +405,19 @@ class EnergyTracking(HipTorque):
         joint = self.walker.hip_joint if self.joint is None else self.joint
         object.__setattr__(self, "joint", _check_joint(joint, self.walker.n_coordinates))
 
-    def __call__(self, t: float, q: FloatArray, q_dot: FloatArray) -> FloatArray:
-        qd = np.asarray(q_dot, dtype=float)
-        E = mechanical_energy(self.walker, q, qd, self.slope)
-        u = -self.gain * (E - self.energy) * qd[..., self.joint]
+    @property
+    def parameters(self) -> dict[str, float]:
+        """``energy`` (J) and ``gain`` (s/rad)."""
+        return {"energy": float(self.energy), "gain": float(self.gain)}
+
+    def evaluate(self, t: float, q: Any, q_dot: Any, values: Mapping[str, Any] | None = None,
+                 *, energy: EnergyFunction | None = None) -> Any:
+        """``sat(-k (E - E_ref) q_j_dot)`` (:meth:`HipTorque.evaluate`), ``E`` of the law's
+        own walker and slope."""
+        v = self._values(values)
+        qd = np.asarray(q_dot)
+        E = (mechanical_energy if energy is None else energy)(self.walker, q, qd, self.slope)
+        u = -v["gain"] * (E - v["energy"]) * qd[..., self.joint]
         return self._saturate(np.asarray(u)[..., None])
 
 
@@ -392,14 +466,25 @@ class SwingLegPD(HipTorque):
 
     def reference(self, t: float) -> float:
         """``q4_ref(t)`` (rad)."""
-        s = 1.0 if self.profile is None else float(self.profile(t))
-        return -2.0 * float(self.amplitude) * s
+        return -2.0 * float(self.amplitude) * self._profile(t)
 
-    def __call__(self, t: float, q: FloatArray, q_dot: FloatArray) -> FloatArray:
-        q_ = np.asarray(q, dtype=float)
-        qd = np.asarray(q_dot, dtype=float)
+    def _profile(self, t: float) -> float:
+        """``s(t)`` (1 without a profile)."""
+        return 1.0 if self.profile is None else float(self.profile(t))
+
+    @property
+    def parameters(self) -> dict[str, float]:
+        """``amplitude`` (rad), ``kp`` (N m/rad) and ``kd`` (N m s/rad)."""
+        return {"amplitude": float(self.amplitude), "kp": float(self.kp), "kd": float(self.kd)}
+
+    def evaluate(self, t: float, q: Any, q_dot: Any, values: Mapping[str, Any] | None = None,
+                 *, energy: EnergyFunction | None = None) -> Any:
+        """``sat(kp (q_ref(t) - q_j) - kd q_j_dot)`` (:meth:`HipTorque.evaluate`)."""
+        v = self._values(values)
+        q_, qd = np.asarray(q), np.asarray(q_dot)
         j = self.joint
-        u = self.kp * (self.reference(t) - q_[..., j]) - self.kd * qd[..., j]
+        u = v["kp"] * (-2.0 * v["amplitude"] * self._profile(t) - q_[..., j]) \
+            - v["kd"] * qd[..., j]
         return self._saturate(np.asarray(u)[..., None])
 
 
@@ -416,8 +501,11 @@ class CustomTorque(HipTorque):
     def __post_init__(self) -> None:
         object.__setattr__(self, "max_torque", _check_limit(self.max_torque))
 
-    def __call__(self, t: float, q: FloatArray, q_dot: FloatArray) -> FloatArray:
-        u = np.asarray(self.function(t, q, q_dot), dtype=float)
+    def evaluate(self, t: float, q: Any, q_dot: Any, values: Mapping[str, Any] | None = None,
+                 *, energy: EnergyFunction | None = None) -> Any:
+        """``sat(function(t, q, q_dot))`` (:meth:`HipTorque.evaluate`): complex states reach
+        the function as they are (it may or may not take them)."""
+        u = np.asarray(self.function(t, q, q_dot))
         if u.ndim == 0:
             u = u[None]
         return self._saturate(u)

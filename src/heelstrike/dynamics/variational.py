@@ -58,7 +58,7 @@ import types
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -380,95 +380,47 @@ ACTUATION_PARAMETERS: dict[str, tuple[str, ...]] = {
 _LawTerm = Callable[[float, _ComplexArray, _ComplexArray, dict[str, Any]], _ComplexArray]
 
 
-def _saturated(u: _ComplexArray, limit: float) -> _ComplexArray:
-    """``sat(u)`` by the real part: ``u`` inside the limit (its complex-step derivative
-    kept), the constant ``+-limit`` outside (derivative zero)."""
-    re = np.real(u)
-    if not np.isfinite(limit):
-        return u
-    return np.where(np.abs(re) > limit, np.sign(re) * limit, u)
+def _complex_energy(walker: PlanarWalker, q: _ComplexArray, qd: _ComplexArray,
+                    slope: float) -> _ComplexArray:
+    """``E = T + V`` of ``walker`` on ``slope``, complex-capable (the generated equations):
+    the energy a tracking law reads (:data:`~heelstrike.dynamics.actuation.EnergyFunction`)."""
+    eq = _Equations.of(walker, float(slope))
+    M = eq.mass_matrix(q)
+    return 0.5 * np.einsum("...i,...ij,...j->...", qd, M, qd) \
+        + np.asarray(eq.fn("potential_energy")(q, eq.params, eq.slope))
 
 
 def _law_term(law: Any) -> tuple[dict[str, float], _LawTerm]:
-    """The built-in torque laws (:mod:`heelstrike.dynamics.actuation`) written again without
-    casting to float (their own ``__call__`` does), with their parameters as inputs; any
-    other law is called as it is (row by row on a batch: a
-    :class:`~heelstrike.dynamics.single_support.TorqueLaw` takes one state) and must take
-    complex states itself.
+    """The torque law as a term ``(t, q, qd, values) -> u`` taking complex states, with the
+    parameters that can be differentiated in (names of :data:`ACTUATION_PARAMETERS`, nominal
+    values).
 
-    Returns ``(parameters, term)``: the law's parameters that can be differentiated in (names
-    of :data:`ACTUATION_PARAMETERS`, nominal values) and the complex-capable law.
+    The built-in laws (:class:`~heelstrike.dynamics.actuation.HipTorque`) are evaluated by
+    their own :meth:`~heelstrike.dynamics.actuation.HipTorque.evaluate` (written once, for any
+    array type), the energy of a tracking law by the generated equations; a user function
+    (:class:`~heelstrike.dynamics.actuation.CustomTorque`, or any other law) is called row by
+    row on a batch (a :class:`~heelstrike.dynamics.single_support.TorqueLaw` takes one state)
+    and must take complex states itself.
     """
-    from heelstrike.dynamics.actuation import (
-        CustomTorque,
-        EnergyTracking,
-        SwingLegPD,
-        TorqueSum,
-    )
+    from heelstrike.dynamics.actuation import CustomTorque, HipTorque
 
-    if isinstance(law, SwingLegPD):
-        j, limit = law.joint, float(law.max_torque)
+    if isinstance(law, HipTorque) and not isinstance(law, CustomTorque):
+        def builtin(t: float, q: _ComplexArray, qd: _ComplexArray, v: dict[str, Any]
+                    ) -> _ComplexArray:
+            return np.asarray(law.evaluate(t, q, qd, v, energy=_complex_energy))
 
-        def pd(t: float, q: _ComplexArray, qd: _ComplexArray, v: dict[str, Any]
-               ) -> _ComplexArray:
-            s = 1.0 if law.profile is None else float(law.profile(t))
-            u = v["kp"] * (-2.0 * v["amplitude"] * s - q[..., j]) - v["kd"] * qd[..., j]
-            return _saturated(np.asarray(u), limit)[..., None]
+        return law.parameters, builtin
+    call = law.evaluate if isinstance(law, CustomTorque) else law
 
-        return {"amplitude": float(law.amplitude), "kp": float(law.kp),
-                "kd": float(law.kd)}, pd
-    if isinstance(law, EnergyTracking):
-        eq = _Equations.of(law.walker, float(law.slope))  # the law's walker, held fixed
-        potential = eq.fn("potential_energy")
-        j_e, limit_e = int(cast(int, law.joint)), float(law.max_torque)
-
-        def energy(t: float, q: _ComplexArray, qd: _ComplexArray, v: dict[str, Any]
-                   ) -> _ComplexArray:
-            M = eq.mass_matrix(q)
-            E = 0.5 * np.einsum("...i,...ij,...j->...", qd, M, qd) \
-                + np.asarray(potential(q, eq.params, eq.slope))
-            u = -v["gain"] * (E - v["energy"]) * qd[..., j_e]
-            return _saturated(np.asarray(u), limit_e)[..., None]
-
-        return {"energy": float(law.energy), "gain": float(law.gain)}, energy
-    if isinstance(law, TorqueSum):
-        parts = [_law_term(part) for part in law.laws]
-        names = [name for values, _ in parts for name in values]
-        shared = {name for name in names if names.count(name) > 1}
-        values = {name: value for vals, _ in parts for name, value in vals.items()
-                  if name not in shared}
-        limit_s = float(law.max_torque)
-
-        def total(t: float, q: _ComplexArray, qd: _ComplexArray, v: dict[str, Any]
-                  ) -> _ComplexArray:
-            u = sum(np.asarray(term(t, q, qd, {**vals, **{k: x for k, x in v.items()
-                                                           if k in vals}}))
-                    for vals, term in parts)
-            return _saturated(np.asarray(u), limit_s)
-
-        return values, total
-    if isinstance(law, CustomTorque):
-        limit_c = float(law.max_torque)
-
-        def custom(t: float, q: _ComplexArray, qd: _ComplexArray, v: dict[str, Any]
-                   ) -> _ComplexArray:
-            if q.ndim == 1:
-                u = np.asarray(law.function(t, q, qd))
-                u = u[None] if u.ndim == 0 else u
-            else:
-                u = np.stack([np.atleast_1d(np.asarray(law.function(t, a, b)))
-                              for a, b in zip(q, qd, strict=True)])
-            return _saturated(u, limit_c)
-
-        return {}, custom
-
-    def other(t: float, q: _ComplexArray, qd: _ComplexArray, v: dict[str, Any]
-              ) -> _ComplexArray:
+    def rows(t: float, q: _ComplexArray, qd: _ComplexArray, v: dict[str, Any]
+             ) -> _ComplexArray:
         if q.ndim == 1:
-            return np.asarray(law(t, q, qd))
-        return np.stack([np.asarray(law(t, a, b)) for a, b in zip(q, qd, strict=True)])
+            u = np.asarray(call(t, q, qd))
+            return u[None] if u.ndim == 0 else u
+        return np.stack([np.atleast_1d(np.asarray(call(t, a, b)))
+                         for a, b in zip(q, qd, strict=True)])
 
-    return {}, other
+    return {}, rows
 
 
 def actuation_differentiable(torque: Any, push_off: Any) -> bool:

@@ -504,3 +504,52 @@ def test_powered_gait_sensitivity_to_actuation_parameters(
                                    atol=1e-7)
     with pytest.raises(ValueError, match="its actuation's"):
         gait_sensitivity(walker, gait.fixed_point, ("nonsense",), **kw)
+
+
+@pytest.mark.parametrize("function", [
+    # reduces over its input: on a batch of states it would mix them
+    lambda t, q, qd: -0.3 * np.sum(qd * np.array([0.0, 0.0, 0.0, 1.0])),
+    # written for one state
+    lambda t, q, qd: -3.0 * qd[3] + 2.0 * np.sin(q[2]),
+])
+def test_a_sum_with_a_user_function_matches_central_differences(function: Any) -> None:
+    """Review finding: in a sum, a :class:`CustomTorque` part was handed the whole batch of
+    complex states, so a function reducing over its input mixed the Jacobian's columns (off
+    by 0.25, silently) and a one-state function crashed. Every user function is called state
+    by state (a torque law takes one state)."""
+    from heelstrike.dynamics.actuation import CustomTorque, SwingLegPD
+
+    walker = CompassGait(foot_radius=0.3)
+    law = SwingLegPD(amplitude=0.0675) + CustomTorque(function=function)
+    res = step_jacobian(walker, Z_POWERED, slope=0.0, torque=law, rtol=1e-12, atol=1e-12)
+    pmap = _actuated_map(walker, law, None)
+    assert np.allclose(res.z_next, pmap(Z_POWERED), atol=1e-10)
+    assert np.max(np.abs(res.jacobian - pmap.jacobian(Z_POWERED, 1e-6))) < 1e-6
+
+
+def test_a_law_written_as_its_own_call_still_works() -> None:
+    """Review finding: a :class:`HipTorque` subclass written as ``__call__`` (the one way
+    before ``evaluate``) raised ``NotImplementedError`` in a sum and in the exact Jacobian.
+    It is called as it is: the sum is the sum of the parts, and a law that takes complex
+    states gets an exact Jacobian equal to central differences."""
+    from dataclasses import dataclass
+
+    from heelstrike.dynamics.actuation import HipTorque, SwingLegPD
+
+    @dataclass(frozen=True, kw_only=True)
+    class Damper(HipTorque):
+        c: float = 0.5
+        max_torque: float = np.inf
+
+        def __call__(self, t: float, q: Any, q_dot: Any) -> Any:
+            return np.asarray(-self.c * np.asarray(q_dot)[..., 3])[..., None]
+
+    pd = SwingLegPD(amplitude=0.2)
+    q, qd = np.array([0.0, 0.0, -0.2, 0.4]), np.array([0.0, 0.0, 1.0, -2.0])
+    total = (pd + Damper())(0.1, q, qd)
+    np.testing.assert_allclose(total, pd(0.1, q, qd) + Damper()(0.1, q, qd), rtol=1e-15)
+    walker = CompassGait(foot_radius=0.3)
+    law = pd + Damper(c=0.1)  # the walk of the PD law, with some damping
+    res = step_jacobian(walker, Z_POWERED, slope=0.0, torque=law, rtol=1e-12, atol=1e-12)
+    pmap = _actuated_map(walker, law, None)
+    assert np.max(np.abs(res.jacobian - pmap.jacobian(Z_POWERED, 1e-6))) < 1e-6

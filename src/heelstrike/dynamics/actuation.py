@@ -266,6 +266,20 @@ def saturate(u: Any, limit: float) -> Any:
     return np.where(np.abs(re) > m, np.sign(re) * m, u)
 
 
+def call_by_rows(law: Callable[[float, Any, Any], Any], t: float, q: Any, q_dot: Any) -> Any:
+    """``law(t, q, q_dot)`` for one state (shape (n,)) or, on a batch (shape (..., n)), state
+    by state, stacked to (..., n_u): a torque law takes one state (a scalar ``u`` is returned
+    as shape (1,)), so a function reducing over its input (``np.sum``) cannot mix states."""
+    q, q_dot = np.asarray(q), np.asarray(q_dot)
+    if q.ndim <= 1:
+        u = np.asarray(law(t, q, q_dot))
+        return u[None] if u.ndim == 0 else u
+    rows = [np.atleast_1d(np.asarray(law(t, a, b)))
+            for a, b in zip(q.reshape(-1, q.shape[-1]), q_dot.reshape(-1, q.shape[-1]),
+                            strict=True)]
+    return np.stack(rows).reshape(*q.shape[:-1], -1)
+
+
 class HipTorque:
     """Base of the hip torque laws: saturation helper and ``+`` composition.
 
@@ -296,8 +310,14 @@ class HipTorque:
         energy : callable, optional
             ``energy(walker, q, q_dot, slope)`` for a law tracking the mechanical energy
             (default :func:`mechanical_energy`).
+
+        A law written before this method, as its own ``__call__`` (the one way before), is
+        called state by state (:func:`call_by_rows`): it must then take complex states itself
+        for an exact step Jacobian.
         """
-        raise NotImplementedError
+        if type(self).__call__ is not HipTorque.__call__:
+            return call_by_rows(self, t, q, q_dot)
+        raise NotImplementedError(f"{type(self).__name__} defines neither evaluate nor __call__")
 
     def __call__(self, t: float, q: FloatArray, q_dot: FloatArray) -> FloatArray:
         return np.asarray(self.evaluate(t, np.asarray(q, dtype=float),
@@ -356,7 +376,7 @@ class TorqueSum(HipTorque):
         name two parts share are ignored (each part keeps its own)."""
         mine = self._values(values)
         u = sum(np.asarray(law.evaluate(t, q, q_dot, mine, energy=energy)
-                           if isinstance(law, HipTorque) else law(t, q, q_dot))
+                           if isinstance(law, HipTorque) else call_by_rows(law, t, q, q_dot))
                 for law in self.laws)
         return self._saturate(np.asarray(u))
 
@@ -503,9 +523,7 @@ class CustomTorque(HipTorque):
 
     def evaluate(self, t: float, q: Any, q_dot: Any, values: Mapping[str, Any] | None = None,
                  *, energy: EnergyFunction | None = None) -> Any:
-        """``sat(function(t, q, q_dot))`` (:meth:`HipTorque.evaluate`): complex states reach
-        the function as they are (it may or may not take them)."""
-        u = np.asarray(self.function(t, q, q_dot))
-        if u.ndim == 0:
-            u = u[None]
-        return self._saturate(u)
+        """``sat(function(t, q, q_dot))`` (:meth:`HipTorque.evaluate`), the function called
+        state by state (:func:`call_by_rows`); complex states reach it as they are (it may or
+        may not take them)."""
+        return self._saturate(call_by_rows(self.function, t, q, q_dot))

@@ -402,23 +402,18 @@ def _law_term(law: Any) -> tuple[dict[str, float], _LawTerm]:
     row on a batch (a :class:`~heelstrike.dynamics.single_support.TorqueLaw` takes one state)
     and must take complex states itself.
     """
-    from heelstrike.dynamics.actuation import CustomTorque, HipTorque
+    from heelstrike.dynamics.actuation import HipTorque, call_by_rows
 
-    if isinstance(law, HipTorque) and not isinstance(law, CustomTorque):
+    if isinstance(law, HipTorque):
         def builtin(t: float, q: _ComplexArray, qd: _ComplexArray, v: dict[str, Any]
                     ) -> _ComplexArray:
             return np.asarray(law.evaluate(t, q, qd, v, energy=_complex_energy))
 
         return law.parameters, builtin
-    call = law.evaluate if isinstance(law, CustomTorque) else law
 
     def rows(t: float, q: _ComplexArray, qd: _ComplexArray, v: dict[str, Any]
              ) -> _ComplexArray:
-        if q.ndim == 1:
-            u = np.asarray(call(t, q, qd))
-            return u[None] if u.ndim == 0 else u
-        return np.stack([np.atleast_1d(np.asarray(call(t, a, b)))
-                         for a, b in zip(q, qd, strict=True)])
+        return np.asarray(call_by_rows(law, t, q, qd))
 
     return {}, rows
 

@@ -71,7 +71,7 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -366,12 +366,12 @@ def stride_walkers(walker: BuiltWalker) -> tuple[BuiltWalker, ...]:
     out = [walker]
     while len(out) < int(walker.steps_per_period):
         nxt = out[-1].after_swap()
-        if not isinstance(nxt, BuiltWalker) or (nxt.description is not walker.description
-                                                 and nxt.description != walker.description):
+        if nxt.description is None or (nxt.description is not walker.description
+                                       and nxt.description != walker.description):
             raise ValueError(
                 f"walker {walker.description.name!r}: the walker after its leg swap has another "
                 "description, so the compiled kernel cannot walk its stride")
-        out.append(nxt)
+        out.append(cast(BuiltWalker, nxt))
     return tuple(out)
 
 

@@ -644,11 +644,13 @@ def _ended_message(
 
     ``off_profile``: which foot, its contact angle and range
     (:meth:`~heelstrike.models.builder.BuiltWalker.profile_excursion`). A stage that was to end
-    in the heel strike of a guard declared by the walker file (``[events] heel_strike``): the
-    guard's expression and the values it took, and whether it was never below zero over the
-    stage (it rises through zero at the strike, so from there it cannot fire). The status is
-    what stopped the integration (a fall, lost contact...), as the compiled kernels report
-    it, so that both backends classify a walk alike. Otherwise the status's message.
+    in the heel strike of a guard declared by the walker file (``[events] heel_strike``) that
+    was never below zero over the stage (it rises through zero at the strike, so from there it
+    cannot fire): the guard's expression and the values it took. The status is what stopped
+    the integration (a fall, lost contact...), as the compiled kernels report it, so that both
+    backends classify a walk alike; a guard that was below zero (armed) when the walker failed
+    is not the reason, and the message is the status's, as on the compiled kernels. Otherwise
+    the status's message.
     """
     if status is WalkStatus.OFF_PROFILE:
         where = walker.profile_excursion(qs[-1])
@@ -666,7 +668,7 @@ def _ended_message(
         return status, (
             f"{status.message}; no heel strike before that: {said}, never below zero, so it "
             f"cannot rise through zero (t = {t:.6g} s)")
-    return status, f"{status.message}; {said} before that (t = {t:.6g} s)"
+    return status, status.message
 
 
 def cut_off_profile(walker: PlanarWalker, walk: PhasedWalkResult,

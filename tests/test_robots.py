@@ -699,7 +699,7 @@ def test_readme_robot_example_runs(tmp_path) -> None:
     keys = {"robot", "nq", "nv", "T", "T_c", "T_a", "T_plus", "energy_lost", "qdot_plus",
             "impulse", "contacts", "units", "loss_beyond_T_c", "admissible", "pulling_contacts",
             "outcomes", "unique", "active_sets", "solutions", "restitution_law",
-            "tilting_contacts"}
+            "tilting_contacts", "impulse_unique", "velocity_range", "kkt_residual"}
     assert set(d) == keys  # the keys the README lists, no more
     assert d["T"] == pytest.approx(d["T_c"] + d["T_a"], rel=1e-12)
     shares = sum(c["T_c_normal"] + c["T_c_tangential"] for c in d["contacts"])

@@ -120,16 +120,17 @@ def print_stability_lines(gait: Any) -> None:
     from heelstrike.analysis.limit_cycle import MULTIPLIER_ACCURACY
 
     print(f"  |multipliers|   {multipliers_text(gait.multipliers)}")
+    largest = max((abs(m) for m in gait.multipliers), default=0.0)
+    accuracy = format(MULTIPLIER_ACCURACY, ".0e").replace("e-0", "e-")
+    within = (f"the largest |multiplier| is within {accuracy} of 1, the multipliers' accuracy"
+              if abs(largest - 1.0) < MULTIPLIER_ACCURACY else "")
     if gait.stability_undecided:  # McGeer's wheel: a neutral family of gaits at one target
-        print("  stable          undecided (a neutral family of gaits: a multiplier of 1 to "
-              "round-off)")
+        print("  stable          undecided" + (f": {within}" if within else "")
+              + " (a neutral family of gaits)")
         return
     verdict = "yes" if gait.stable else "no"
-    largest = max((abs(m) for m in gait.multipliers), default=0.0)
-    if abs(largest - 1.0) < MULTIPLIER_ACCURACY:
-        accuracy = format(MULTIPLIER_ACCURACY, ".0e").replace("e-0", "e-")
-        verdict += (f", barely: the largest |multiplier| is within {accuracy} of 1, "
-                    "the multipliers' accuracy (neutral to that accuracy)")
+    if within:
+        verdict += f", barely: {within} (neutral to that accuracy)"
     print(f"  stable          {verdict}")
 
 
